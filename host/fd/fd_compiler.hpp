@@ -1,0 +1,115 @@
+// trajcore host: forward-difference segment compiler.
+//
+// Turns a per-axis polynomial in time into the engine's fixed-point difference
+// registers, with exact rational arithmetic (GMP) for every rounding, an exact
+// prediction of every output sample, and a proven error bound.
+//
+// Number format (all axes):
+//   output sample  : OutWidth = Width - GuardBits bits, two's complement,
+//                    1 LSB = 2^-FracBits position units
+//   register r[i]  : Width bits, 1 LSB = 2^-GuardBits output LSB (one common LSB
+//                    for every register, so the run-time path never shifts and
+//                    the prediction is a closed form)
+//   r[0] holds (x * 2^FracBits + 1/2) * 2^GuardBits: the engine's floor
+//   (r[0] >> GuardBits) is then round-to-nearest of the position.
+//
+// Error analysis. Let the ideal register values be the exact forward
+// differences D_i of the target q (see below) and r_i = D_i + e_i with
+// |e_i| <= 1/2 (round to nearest) for i >= 1. Since r0(k) = sum_i r_i C(k,i)
+// exactly (wrapping arithmetic is exact modulo 2^Width and r0 is range-checked),
+// the register error at tick k is
+//     E_k = e0 (1 - k/K) + sum_{i=1..N} e_i C(k,i),
+//     |E_k| <= |e0| + Q(K),   Q(K) = 1/2 sum_{i=1..N} C(K,i)   (register LSB)
+// where e0 is the start error carried in from the previous segment. The
+// target is q(t) = x(t) 2^(F+G) + 2^(G-1) + e0 (1 - t/T): the carried error is
+// blended out linearly, so the end state is within Q(K) of the exact end and
+// chained segments never accumulate error. The compiler accepts a segment
+// only if Q(K) <= tol/2 * 2^G and |e0| <= tol/2 * 2^G; every register error is
+// then <= tol output LSB and every output sample is within 1/2 + tol LSB of the
+// exact polynomial (the 1/2 is the output rounding).
+#pragma once
+#include <gmpxx.h>
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "traj_common.hpp"
+
+namespace traj::fd {
+
+class CompileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct Format {
+  int axes = 3;            // 1..8
+  int degree = 3;          // engine degree N, 1..7
+  int width = 64;          // register width W, multiple of chunk_width, <= 128
+  int chunk_width = 16;    // 16, 32 or 64
+  int guard_bits = 32;     // G, register bits below the output LSB
+  int frac_bits = 16;      // F, output LSB = 2^-F position units
+  double tol_lsb = 0.5;    // register error budget per sample, output LSB
+  uint32_t max_ticks = 1u << 20;  // longest segment accepted
+
+  int out_width() const { return width - guard_bits; }
+  // Throws CompileError naming the field if the format is not buildable.
+  void validate() const;
+};
+
+// Per axis, coefficients c[j] of t^j (t in seconds from the segment start).
+// Fewer than degree+1 coefficients are padded with zeros.
+struct PolySegment {
+  std::vector<std::vector<double>> coef;
+  double h = 1e-3;        // tick period, seconds
+  uint64_t ticks = 0;     // K
+};
+
+struct Compiled {
+  uint32_t ticks = 0;
+  std::vector<std::vector<mpz_class>> regs;  // [axis][i], signed exact values
+  std::vector<mpz_class> end;                // r0 after K ticks: the next start
+  double carried_lsb = 0;                    // |e0| in output LSB
+  double bound_lsb = 0;                      // |e0| + Q(K), output LSB (register error bound)
+};
+
+class Compiler {
+ public:
+  explicit Compiler(Format f);
+  const Format& format() const { return f_; }
+
+  // Exact state r0 for a position, as the compiler rounds it.
+  mpz_class position_to_state(double x) const;
+
+  // Compile one segment. `start` (per axis) is the exact r0 the engine holds at
+  // the segment start (the previous segment's `end`); null means start from
+  // the polynomial's own value (first segment after a preset).
+  // `where` names the segment in error messages.
+  Compiled compile(const PolySegment& seg, const std::vector<mpz_class>* start = nullptr,
+                   const std::string& where = "segment") const;
+
+  // The engine's stream words for a compiled segment (header, then registers).
+  std::vector<uint64_t> words(const Compiled& c) const;
+
+  // Exact prediction: r0 at tick k (0 <= k <= K) and the output sample there.
+  static mpz_class state_at(const Compiled& c, int axis, uint64_t k);
+  mpz_class sample_at(const Compiled& c, int axis, uint64_t k) const;
+
+  // Q(K) of the error analysis in register LSB (exact) and in output LSB.
+  static mpz_class quant_bound_x2(int degree, uint64_t k);  // 2 Q(K) = sum C(K,i)
+  double quant_bound_lsb(uint64_t k) const;
+  // Longest K with Q(K) <= tol/2 (not capped by max_ticks); 0 if none.
+  static uint64_t longest_segment(int degree, int guard_bits, double tol_lsb);
+  // Guard bits needed for K ticks at this degree and tolerance.
+  static int guard_bits_needed(int degree, uint64_t k, double tol_lsb);
+
+ private:
+  Format f_;
+};
+
+// Binomial C(k, i) exactly.
+mpz_class binom(uint64_t k, int i);
+
+}  // namespace traj::fd

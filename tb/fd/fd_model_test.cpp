@@ -1,0 +1,417 @@
+// Test groups 2, 4 and 5 (hls model against the host), plus the compiler's
+// refusals. References: the host's exact closed-form prediction (GMP) for the
+// bit-exact checks, and the double-coefficient polynomial evaluated in
+// binary128 (113-bit significand) for the error-bound checks.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <tuple>
+
+#include "fd/fd_compiler.hpp"
+#include "fd_drive.hpp"
+#include "traj_fd_engine.hpp"
+
+using traj::u128;
+using traj::fd::Compiled;
+using traj::fd::CompileError;
+using traj::fd::Compiler;
+using traj::fd::Format;
+using traj::fd::PolySegment;
+
+namespace {
+
+using f128 = __float128;
+
+f128 horner128(const std::vector<double>& c, f128 t) {
+  f128 v = 0;
+  for (size_t j = c.size(); j-- > 0;) v = v * t + f128(c[j]);
+  return v;
+}
+double to_d(f128 v) { return static_cast<double>(v); }
+f128 mpz_to_f128(const mpz_class& z) {
+  // exact enough: split into 64-bit limbs
+  mpz_class a = abs(z);
+  f128 r = 0, w = 1;
+  while (a != 0) {
+    mpz_class lo = a & mpz_class("18446744073709551615");
+    r += f128(static_cast<double>(mpz_class(lo >> 32).get_ui())) * 4294967296.0Q * w +
+         f128(static_cast<double>(mpz_class(lo & 0xffffffffUL).get_ui())) * w;
+    a >>= 64;
+    w *= 18446744073709551616.0Q;
+  }
+  return z < 0 ? -r : r;
+}
+
+// A random polynomial x(t) on [0, T] with |x| well inside `range` units and
+// x(0) = x0; coefficients scaled so that each term is O(range/4) at t = T.
+std::vector<double> random_poly(std::mt19937_64& rng, int deg, double T, double x0, double range) {
+  std::uniform_real_distribution<double> U(-1, 1);
+  std::vector<double> c(deg + 1);
+  c[0] = x0;
+  double Tj = 1;
+  for (int j = 1; j <= deg; ++j) {
+    Tj *= T;
+    c[j] = U(rng) * range / (4.0 * deg) / Tj;
+  }
+  return c;
+}
+
+template <int D, int W, int C, int G>
+struct Cfg {
+  static constexpr int kDeg = D, kW = W, kC = C, kG = G;
+};
+
+Format fmt_for(int axes, int deg, int w, int c, int g, int frac) {
+  Format f;
+  f.axes = axes;
+  f.degree = deg;
+  f.width = w;
+  f.chunk_width = c;
+  f.guard_bits = g;
+  f.frac_bits = frac;
+  return f;
+}
+
+// ---------------------------------------------------------------------------
+// Group 2: hls model == host prediction, bit for bit, random chained segments.
+// ---------------------------------------------------------------------------
+template <class Cf>
+void check_model_vs_prediction(uint64_t seed) {
+  constexpr int A = 2;
+  using Eng = traj::FdEngine<A, Cf::kDeg, Cf::kW, Cf::kC, Cf::kG>;
+  const Format f = fmt_for(A, Cf::kDeg, Cf::kW, Cf::kC, Cf::kG, 4);
+  Compiler comp(f);
+  std::mt19937_64 rng(seed);
+  const double h = 1e-3;
+  const uint64_t kmax = std::min<uint64_t>(Compiler::longest_segment(Cf::kDeg, Cf::kG, f.tol_lsb), 300);
+  ASSERT_GE(kmax, 1u);
+  std::uniform_int_distribution<uint64_t> Kd(1, kmax);
+  const double range = std::ldexp(1.0, f.out_width() - 2 - f.frac_bits);  // units
+  std::vector<Compiled> segs;
+  std::vector<double> x0(A, 0.0);
+  for (int s = 0; s < 8; ++s) {
+    PolySegment seg;
+    seg.h = h;
+    seg.ticks = Kd(rng);
+    const double T = seg.ticks * h;
+    for (int a = 0; a < A; ++a) {
+      seg.coef.push_back(random_poly(rng, Cf::kDeg, T, x0[a], range / 2));
+    }
+    const std::vector<mpz_class>* start = segs.empty() ? nullptr : &segs.back().end;
+    segs.push_back(comp.compile(seg, start));
+    for (int a = 0; a < A; ++a) {
+      // next segment starts where this target ends (continuous path)
+      const auto& c = seg.coef[a];
+      x0[a] = to_d(horner128(c, f128(T)));
+    }
+  }
+  Eng e;
+  size_t n = 0;
+  traj::test::run_segments(e, comp, segs, Eng::kWords + Eng::kChunks + 2,
+                           [&](size_t s, uint64_t k, const typename Eng::Out& o) {
+                             for (int a = 0; a < A; ++a) {
+                               const mpz_class got = traj::test::to_mpz_signed(o.sample[a], Eng::kOutWidth);
+                               ASSERT_EQ(got, comp.sample_at(segs[s], a, k))
+                                   << "seed " << seed << " segment " << s << " tick " << k << " axis " << a;
+                             }
+                             ++n;
+                           });
+  size_t total = 0;
+  for (auto& s : segs) total += s.ticks;
+  EXPECT_EQ(n, total);
+}
+
+template <class... Cs>
+void all_model_vs_prediction(uint64_t seed) {
+  (check_model_vs_prediction<Cs>(seed), ...);
+}
+
+#define FD_CONFIGS_FOR_DEGREE(D) \
+  Cfg<D, 48, 16, 20>, Cfg<D, 64, 16, 32>, Cfg<D, 96, 32, 56>, Cfg<D, 128, 64, 80>
+
+}  // namespace
+
+TEST(FdModel, MatchesHostPredictionAllDegreesAndWidths) {
+  for (uint64_t seed : {1u, 2u, 3u}) {
+    all_model_vs_prediction<FD_CONFIGS_FOR_DEGREE(1), FD_CONFIGS_FOR_DEGREE(2), FD_CONFIGS_FOR_DEGREE(3),
+                            FD_CONFIGS_FOR_DEGREE(4)>(seed);
+    all_model_vs_prediction<FD_CONFIGS_FOR_DEGREE(5), FD_CONFIGS_FOR_DEGREE(6), FD_CONFIGS_FOR_DEGREE(7)>(seed);
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Group 4: the error bound holds at every tick for the longest segment the
+// compiler accepts, at each degree and width.
+// ---------------------------------------------------------------------------
+namespace {
+
+struct BoundResult {
+  uint64_t K;
+  double bound, worst_reg, worst_out;
+};
+
+template <class Cf>
+BoundResult check_bound_longest(uint64_t seed) {
+  constexpr int A = 1;
+  using Eng = traj::FdEngine<A, Cf::kDeg, Cf::kW, Cf::kC, Cf::kG>;
+  Format f = fmt_for(A, Cf::kDeg, Cf::kW, Cf::kC, Cf::kG, 8);
+  Compiler comp(f);
+  const uint64_t K = std::min<uint64_t>(Compiler::longest_segment(Cf::kDeg, Cf::kG, f.tol_lsb), f.max_ticks);
+  // one more tick must be refused (unless capped by max_ticks)
+  std::mt19937_64 rng(seed);
+  const double h = 1e-4;
+  const double T = K * h;
+  const double range = std::ldexp(1.0, f.out_width() - 2 - f.frac_bits);
+  PolySegment seg;
+  seg.h = h;
+  seg.ticks = K;
+  seg.coef.push_back(random_poly(rng, Cf::kDeg, T, range * 0.3, range / 2));
+  const Compiled c = comp.compile(seg);
+  Eng e;
+  // load
+  auto words = comp.words(c);
+  typename Eng::In in;
+  for (size_t i = 0; i < words.size();) {
+    in.tvalid = true;
+    in.tdata = words[i];
+    if (e.outputs().tready) ++i;
+    e.clock(in);
+  }
+  in.tvalid = false;
+  const f128 sreg = f128(std::ldexp(1.0, f.frac_bits + f.guard_bits));
+  const f128 bias = f128(std::ldexp(1.0, f.guard_bits - 1));
+  const f128 sout = f128(std::ldexp(1.0, f.frac_bits));
+  const f128 lsb_reg = f128(std::ldexp(1.0, f.guard_bits));
+  BoundResult r{K, c.bound_lsb, 0, 0};
+  // binary128 evaluation error: < 2^-100 of the largest term sum, far below 1e-6 LSB here.
+  const double eval_slack = 1e-6;
+  uint64_t k = 0;
+  while (k < K) {
+    // r0 before the k-th tick's update equals the k-th sample's state
+    const mpz_class r0 = traj::test::to_mpz_signed(e.reg(0, 0), Cf::kW);
+    const f128 exact = horner128(seg.coef[0], f128(double(k)) * f128(h)) * sreg + bias;
+    const double err_reg = std::fabs(to_d((mpz_to_f128(r0) - exact) / lsb_reg));
+    r.worst_reg = std::max(r.worst_reg, err_reg);
+    if (err_reg > c.bound_lsb + eval_slack) {
+      ADD_FAILURE() << "deg " << Cf::kDeg << " W " << Cf::kW << " tick " << k << ": register error " << err_reg
+                    << " LSB > bound " << c.bound_lsb;
+      return r;
+    }
+    in.tick = true;
+    e.clock(in);
+    in.tick = false;
+    // wait for the sample, then for the update to finish
+    for (int cyc = 0; cyc < Eng::kChunks + 2; ++cyc) {
+      auto o = e.outputs();
+      if (o.sample_valid) {
+        const f128 x = horner128(seg.coef[0], f128(double(k)) * f128(h)) * sout;
+        const double err_out = std::fabs(to_d(f128(double(traj::sext(o.sample[0], Eng::kOutWidth))) - x));
+        r.worst_out = std::max(r.worst_out, err_out);
+        if (err_out > 0.5 + c.bound_lsb + eval_slack) {
+          ADD_FAILURE() << "deg " << Cf::kDeg << " W " << Cf::kW << " tick " << k << ": output error " << err_out
+                        << " LSB > 0.5 + bound " << c.bound_lsb;
+          return r;
+        }
+      }
+      e.clock(in);
+    }
+    ++k;
+  }
+  return r;
+}
+
+template <class... Cs>
+void all_bounds(uint64_t seed) {
+  (
+      [&] {
+        const auto r = check_bound_longest<Cs>(seed);
+        std::printf("  degree %d width %3d guard %2d: K=%8llu bound %.4f LSB, worst register error %.4f LSB, "
+                    "worst output error %.4f LSB\n",
+                    Cs::kDeg, Cs::kW, Cs::kG, static_cast<unsigned long long>(r.K), r.bound, r.worst_reg,
+                    r.worst_out);
+      }(),
+      ...);
+}
+
+}  // namespace
+
+TEST(FdBound, HoldsAtEveryTickForLongestAcceptedSegment) {
+  // out_width 32 (guard = width - 32) for widths 48/64/96/128.
+  all_bounds<Cfg<1, 48, 16, 16>, Cfg<1, 64, 16, 32>, Cfg<1, 96, 32, 64>, Cfg<1, 128, 64, 96>>(11);
+  all_bounds<Cfg<2, 48, 16, 16>, Cfg<2, 64, 16, 32>, Cfg<2, 96, 32, 64>, Cfg<2, 128, 64, 96>>(12);
+  all_bounds<Cfg<3, 48, 16, 16>, Cfg<3, 64, 16, 32>, Cfg<3, 96, 32, 64>, Cfg<3, 128, 64, 96>>(13);
+  all_bounds<Cfg<4, 48, 16, 16>, Cfg<4, 64, 16, 32>, Cfg<4, 96, 32, 64>, Cfg<4, 128, 64, 96>>(14);
+  all_bounds<Cfg<5, 48, 16, 16>, Cfg<5, 64, 16, 32>, Cfg<5, 96, 32, 64>, Cfg<5, 128, 64, 96>>(15);
+  all_bounds<Cfg<6, 48, 16, 16>, Cfg<6, 64, 16, 32>, Cfg<6, 96, 32, 64>, Cfg<6, 128, 64, 96>>(16);
+  all_bounds<Cfg<7, 48, 16, 16>, Cfg<7, 64, 16, 32>, Cfg<7, 96, 32, 64>, Cfg<7, 128, 64, 96>>(17);
+}
+
+TEST(FdBound, LongestSegmentIsTight) {
+  // K_max from the compiler: K_max accepted, K_max + 1 refused with a message
+  // that says what would fit. Independent check of the bound arithmetic: the
+  // refusal happens exactly where 1/2 sum C(K,i) crosses tol/2 * 2^G, computed
+  // here in long double.
+  for (int deg = 1; deg <= 7; ++deg) {
+    const int G = 32;
+    Format f = fmt_for(1, deg, 64, 16, G, 0);
+    f.max_ticks = 0xffffffffu;
+    Compiler comp(f);
+    const uint64_t K = Compiler::longest_segment(deg, G, f.tol_lsb);
+    auto sumC = [&](uint64_t k) {
+      long double s = 0, c = 1;
+      for (int i = 1; i <= deg; ++i) {
+        c = c * (long double)(k - i + 1) / i;
+        s += c;
+      }
+      return s;
+    };
+    const long double lim = 0.5L * std::ldexp(1.0L, G);
+    EXPECT_LE(sumC(K), lim) << deg;
+    EXPECT_GT(sumC(K + 1), lim) << deg;
+    PolySegment seg{{{1.0}}, 1e-3, K};
+    if (K <= f.max_ticks) EXPECT_NO_THROW(comp.compile(seg));
+    seg.ticks = K + 1;
+    try {
+      comp.compile(seg);
+      ADD_FAILURE() << "K_max+1 accepted at degree " << deg;
+    } catch (const CompileError& e) {
+      EXPECT_NE(std::string(e.what()).find("at most K=" + std::to_string(K)), std::string::npos) << e.what();
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Group 5: 100,000 chained segments never drift.
+// ---------------------------------------------------------------------------
+TEST(FdChain, HundredThousandSegmentsNoDrift) {
+  constexpr int A = 1, D = 3, W = 64, C = 16, G = 32;
+  using Eng = traj::FdEngine<A, D, W, C, G>;
+  Format f = fmt_for(A, D, W, C, G, 12);
+  Compiler comp(f);
+  std::mt19937_64 rng(424242);
+  std::uniform_int_distribution<uint64_t> Kd(1, 64);
+  const double h = 1e-3;
+  double x0 = 100.0;
+  Compiled prev;
+  bool have_prev = false;
+  Eng e;
+  typename Eng::In in;
+  uint64_t samples = 0;
+  std::vector<double> last_coef;
+  uint64_t last_K = 0;
+  double worst_end = 0;
+  for (int s = 0; s < 100000; ++s) {
+    PolySegment seg;
+    seg.h = h;
+    seg.ticks = Kd(rng);
+    const double T = seg.ticks * h;
+    seg.coef.push_back(random_poly(rng, D, T, x0, 50.0));
+    const Compiled c = comp.compile(seg, have_prev ? &prev.end : nullptr, "segment " + std::to_string(s));
+    // stream it into the model, tick through it
+    for (uint64_t w : comp.words(c)) {
+      in.tvalid = true;
+      in.tdata = w;
+      while (!e.outputs().tready) e.clock(typename Eng::In{});
+      e.clock(in);
+    }
+    in.tvalid = false;
+    for (uint64_t k = 0; k < c.ticks; ++k) {
+      in.tick = true;
+      e.clock(in);
+      in.tick = false;
+      for (int cyc = 0; cyc < Eng::kChunks + 1; ++cyc) {
+        if (e.outputs().sample_valid) {
+          ++samples;
+          ASSERT_EQ(traj::test::to_mpz_signed(e.outputs().sample[0], Eng::kOutWidth), comp.sample_at(c, 0, k))
+              << "segment " << s << " tick " << k;
+        }
+        e.clock(in);
+      }
+    }
+    // every segment's end is within its own Q(K) of the exact end
+    const f128 exact_end = horner128(seg.coef[0], f128(T)) * f128(std::ldexp(1.0, f.frac_bits + G)) +
+                           f128(std::ldexp(1.0, G - 1));
+    const double end_err = std::fabs(to_d((mpz_to_f128(c.end[0]) - exact_end) / f128(std::ldexp(1.0, G))));
+    worst_end = std::max(worst_end, end_err / comp.quant_bound_lsb(c.ticks));
+    ASSERT_LE(end_err, comp.quant_bound_lsb(c.ticks) + 1e-9) << "segment " << s;
+    prev = c;
+    have_prev = true;
+    x0 = to_d(horner128(seg.coef[0], f128(T)));
+    last_coef = seg.coef[0];
+    last_K = c.ticks;
+  }
+  // final state in the model == host prediction, and within one segment's bound
+  EXPECT_EQ(traj::test::to_mpz_signed(e.reg(0, 0), W), prev.end[0]);
+  const double final_err =
+      std::fabs(to_d((mpz_to_f128(prev.end[0]) -
+                      (f128(x0) * f128(std::ldexp(1.0, f.frac_bits + G)) + f128(std::ldexp(1.0, G - 1)))) /
+                     f128(std::ldexp(1.0, G))));
+  std::printf("  %llu samples; final position error %.3g LSB, one segment's bound %.3g LSB; "
+              "worst end error / own bound %.3f\n",
+              static_cast<unsigned long long>(samples), final_err, comp.quant_bound_lsb(last_K), worst_end);
+  EXPECT_LE(final_err, comp.quant_bound_lsb(last_K) + 1e-6);
+}
+
+// ---------------------------------------------------------------------------
+// The compiler refuses bad segments with a message naming what and where.
+// ---------------------------------------------------------------------------
+TEST(FdCompiler, RefusesBadInput) {
+  Format f = fmt_for(2, 3, 64, 16, 32, 8);
+  Compiler comp(f);
+  auto msg = [&](PolySegment s, const std::vector<mpz_class>* start = nullptr) -> std::string {
+    try {
+      comp.compile(s, start, "seg 7");
+    } catch (const CompileError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  PolySegment ok{{{1.0, 2.0}, {0.0}}, 1e-3, 100};
+  EXPECT_EQ(msg(ok), "");
+  auto s = ok;
+  s.coef[1] = {0.0, NAN};
+  EXPECT_NE(msg(s).find("seg 7: axis 1 coefficient c1"), std::string::npos) << msg(s);
+  s = ok;
+  s.coef[0][0] = INFINITY;
+  EXPECT_NE(msg(s).find("not finite"), std::string::npos);
+  s = ok;
+  s.h = 0;
+  EXPECT_NE(msg(s).find("tick period"), std::string::npos);
+  s = ok;
+  s.h = NAN;
+  EXPECT_NE(msg(s).find("tick period"), std::string::npos);
+  s = ok;
+  s.ticks = 0;
+  EXPECT_NE(msg(s).find("K=0"), std::string::npos);
+  s = ok;
+  s.ticks = 100000;
+  EXPECT_NE(msg(s).find("split into segments of at most K="), std::string::npos) << msg(s);
+  s = ok;
+  s.coef.pop_back();
+  EXPECT_NE(msg(s).find("axes"), std::string::npos);
+  s = ok;
+  s.coef[0] = {1, 2, 3, 4, 5};
+  EXPECT_NE(msg(s).find("degree"), std::string::npos);
+  s = ok;
+  s.coef[0] = {1e6};  // 2^(32-1-8) = 8.4e6 units: 1e6 fits
+  EXPECT_EQ(msg(s), "");
+  s.coef[0] = {1e7};
+  EXPECT_NE(msg(s).find("output range"), std::string::npos) << msg(s);
+  // a start state that is not where the path is: refused, not a jump
+  const Compiled c = comp.compile(ok);
+  std::vector<mpz_class> start = c.end;
+  start[0] += mpz_class(1) << 40;
+  EXPECT_NE(msg(ok, &start).find("not continuous"), std::string::npos);
+  // formats
+  Format bad = f;
+  bad.width = 70;
+  EXPECT_THROW(Compiler{bad}, CompileError);
+  bad = f;
+  bad.degree = 8;
+  EXPECT_THROW(Compiler{bad}, CompileError);
+  bad = f;
+  bad.tol_lsb = NAN;
+  EXPECT_THROW(Compiler{bad}, CompileError);
+}
