@@ -102,7 +102,7 @@ module traj_fd_engine #(
   if (Chunks == 1) begin : g_one_chunk
     assign last_phase = step;
   end else begin : g_chunks
-    assign last_phase = busy_q ? (phase_q == PhaseWidth'(Chunks - 1)) : step;
+    assign last_phase = busy_q && (phase_q == PhaseWidth'(Chunks - 1));
   end
 
   // ---------------------------------------------------------------------
@@ -138,11 +138,21 @@ module traj_fd_engine #(
       assign carry_d = sum[ChunkWidth];
     end
 
+    // Rotate right by one chunk with a new top chunk (load or sum).
+    logic [Width-1:0] load_d, step_d;
+    if (Chunks == 1) begin : g_whole
+      assign load_d = chain_in;
+      assign step_d = top_d;
+    end else begin : g_rotate
+      assign load_d = {chain_in, reg_q[n][Width-1:ChunkWidth]};
+      assign step_d = {top_d, reg_q[n][Width-1:ChunkWidth]};
+    end
+
     always_ff @(posedge clk_i) begin
       if (load_shift) begin
-        reg_q[n] <= {chain_in, reg_q[n][Width-1:ChunkWidth]};
+        reg_q[n] <= load_d;
       end else if (step) begin
-        reg_q[n] <= {top_d, reg_q[n][Width-1:ChunkWidth]};
+        reg_q[n] <= step_d;
       end
     end
     always_ff @(posedge clk_i) begin

@@ -1,0 +1,297 @@
+// Test group 3: the Verilated RTL (rtl/traj_fd_engine.sv) against the hls model
+// (hls/traj_fd_engine.hpp), every cycle. Control outputs (tready, sample_valid,
+// underrun, seg_done, tick_err) are compared on every cycle; the sample bus on
+// every cycle where sample_valid is high (it holds otherwise).
+//
+// Built once per parameter set (see CMakeLists.txt): VTOP names the Verilated
+// class, FD_AXES/FD_DEGREE/FD_WIDTH/FD_CHUNK/FD_GUARD the parameters.
+// Seeds: TRAJ_SEED=<n> reruns one seed; TRAJ_TRACE=1 writes <test>.vcd.
+#include <gtest/gtest.h>
+#include <verilated.h>
+#include <verilated_vcd_c.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "fd/fd_compiler.hpp"
+#include "traj_fd_engine.hpp"
+#include VTOP_H
+
+namespace {
+
+using Eng = traj::FdEngine<FD_AXES, FD_DEGREE, FD_WIDTH, FD_CHUNK, FD_GUARD>;
+using traj::u128;
+
+// Bits [lo, lo+n) of a Verilator signal (integral or VlWide), n <= 128.
+template <class T>
+u128 get_bits(const T& v, int lo, int n) {
+  if constexpr (std::is_integral_v<T>) {
+    return traj::bits(u128(static_cast<uint64_t>(v)), lo, n);
+  } else {
+    u128 r = 0;
+    for (int b = 0; b < n; ++b) {
+      const int bit = lo + b;
+      if ((v[bit / 32] >> (bit % 32)) & 1u) r |= u128(1) << b;
+    }
+    return r;
+  }
+}
+
+struct Stim {
+  bool rst_n, tvalid, tick;
+  uint64_t tdata;
+};
+
+class Bench {
+ public:
+  explicit Bench(const std::string& name) : ctx_(std::make_unique<VerilatedContext>()) {
+    ctx_->randReset(2);  // unreset state starts random: a dependence on it shows up as a mismatch
+    dut_ = std::make_unique<VTOP>(ctx_.get());
+    if (std::getenv("TRAJ_TRACE")) {
+      ctx_->traceEverOn(true);
+      trace_ = std::make_unique<VerilatedVcdC>();
+      dut_->trace(trace_.get(), 99);
+      trace_->open((name + ".vcd").c_str());
+    }
+    dut_->clk_i = 0;
+    dut_->rst_ni = 0;
+    dut_->eval();
+  }
+  ~Bench() {
+    if (trace_) trace_->close();
+    dut_->final();
+  }
+
+  // Returns false (with a message) on the first mismatch.
+  bool cycle(const Stim& s, std::string* why) {
+    dut_->rst_ni = s.rst_n;
+    dut_->s_axis_tvalid = s.tvalid;
+    dut_->s_axis_tdata = s.tdata;
+    dut_->tick_i = s.tick;
+    dut_->clk_i = 0;
+    dut_->eval();
+    if (trace_) trace_->dump(ctx_->time());
+    ctx_->timeInc(1);
+    const auto o = model_.outputs();
+    // Before the first reset edge the RTL's state is random (--x-initial
+    // unique): outputs are compared from the first cycle after reset on.
+    if (armed_ && !compare(o, why)) return false;
+    if (!s.rst_n) armed_ = true;
+    typename Eng::In in;
+    in.rst_n = s.rst_n;
+    in.tvalid = s.tvalid;
+    in.tdata = s.tdata;
+    in.tick = s.tick;
+    model_.clock(in);
+    dut_->clk_i = 1;
+    dut_->eval();
+    if (trace_) trace_->dump(ctx_->time());
+    ctx_->timeInc(1);
+    ++cycles_;
+    if (o.sample_valid) ++samples_;
+    if (o.underrun) ++underruns_;
+    return true;
+  }
+  bool tready() const { return model_.outputs().tready; }
+  uint64_t cycles() const { return cycles_; }
+  uint64_t samples() const { return samples_; }
+  uint64_t underruns() const { return underruns_; }
+
+ private:
+  bool compare(const typename Eng::Out& o, std::string* why) {
+    char buf[256];
+    auto diff = [&](const char* sig, unsigned long long rtl, unsigned long long hls) {
+      std::snprintf(buf, sizeof buf, "cycle %llu: %s rtl=%llx hls=%llx", static_cast<unsigned long long>(cycles_),
+                    sig, rtl, hls);
+      *why = buf;
+      return false;
+    };
+    if (dut_->s_axis_tready != o.tready) return diff("s_axis_tready", dut_->s_axis_tready, o.tready);
+    if (dut_->sample_valid_o != o.sample_valid) return diff("sample_valid_o", dut_->sample_valid_o, o.sample_valid);
+    if (dut_->underrun_o != o.underrun) return diff("underrun_o", dut_->underrun_o, o.underrun);
+    if (dut_->seg_done_o != o.seg_done) return diff("seg_done_o", dut_->seg_done_o, o.seg_done);
+    if (dut_->tick_err_o != o.tick_err) return diff("tick_err_o", dut_->tick_err_o, o.tick_err);
+    if (o.sample_valid) {
+      for (int a = 0; a < FD_AXES; ++a) {
+        const u128 r = get_bits(dut_->sample_o, a * Eng::kOutWidth, Eng::kOutWidth);
+        if (r != o.sample[a]) {
+          std::snprintf(buf, sizeof buf, "cycle %llu: sample_o axis %d rtl=%llx.. hls=%llx..",
+                        static_cast<unsigned long long>(cycles_), a, static_cast<unsigned long long>(r),
+                        static_cast<unsigned long long>(o.sample[a]));
+          *why = buf;
+          return false;
+        }
+      }
+    }
+    return true;
+  }
+
+  std::unique_ptr<VerilatedContext> ctx_;
+  std::unique_ptr<VTOP> dut_;
+  std::unique_ptr<VerilatedVcdC> trace_;
+  Eng model_;
+  bool armed_ = false;
+  uint64_t cycles_ = 0, samples_ = 0, underruns_ = 0;
+};
+
+// Segment word source: compiled segments from the host compiler (a continuous
+// random path) interleaved with raw random segments (random register bits,
+// K in 0..20, K = 0 included) that exercise wrap-around.
+class Source {
+ public:
+  explicit Source(uint64_t seed) : rng_(seed), comp_(format()) {}
+
+  static traj::fd::Format format() {
+    traj::fd::Format f;
+    f.axes = FD_AXES;
+    f.degree = FD_DEGREE;
+    f.width = FD_WIDTH;
+    f.chunk_width = FD_CHUNK;
+    f.guard_bits = FD_GUARD;
+    f.frac_bits = 4;
+    return f;
+  }
+
+  uint64_t next_word() {
+    if (pos_ >= words_.size()) refill();
+    return words_[pos_];
+  }
+  void advance() { ++pos_; }
+  // After a reset the engine expects a header: drop the rest of this segment.
+  void restart() {
+    words_.clear();
+    pos_ = 0;
+    have_prev_ = false;
+  }
+
+ private:
+  void refill() {
+    words_.clear();
+    pos_ = 0;
+    std::uniform_int_distribution<int> coin(0, 3);
+    if (coin(rng_) == 0) {
+      // raw random segment
+      const uint64_t K = std::uniform_int_distribution<uint64_t>(0, 20)(rng_);
+      if (FD_CHUNK < 32) {
+        for (int s = 0; s < 32; s += FD_CHUNK) words_.push_back((K >> s) & traj::mask(FD_CHUNK));
+      } else {
+        words_.push_back(K | (FD_CHUNK > 32 ? (rng_() << 32) : 0));  // reserved header bits: random
+      }
+      for (int n = 0; n < Eng::kRegs * Eng::kChunks; ++n)
+        words_.push_back(static_cast<uint64_t>(rng_() & traj::mask(FD_CHUNK)));
+      have_prev_ = false;
+      return;
+    }
+    traj::fd::PolySegment seg;
+    seg.h = 1e-3;
+    const uint64_t kmax = std::min<uint64_t>(traj::fd::Compiler::longest_segment(FD_DEGREE, FD_GUARD, 0.5), 40);
+    seg.ticks = std::uniform_int_distribution<uint64_t>(1, kmax)(rng_);
+    const double T = seg.ticks * seg.h;
+    // Positions stay below 2^44 LSB so that the double-precision targets of
+    // consecutive segments meet to well within tol/2 LSB (doubles resolve
+    // 2^-52 relative; a 64-bit output range is beyond that).
+    const double range = std::ldexp(1.0, std::min(Eng::kOutWidth, 44) - 3 - 4);
+    std::uniform_real_distribution<double> U(-1, 1);
+    for (int a = 0; a < FD_AXES; ++a) {
+      std::vector<double> c(FD_DEGREE + 1);
+      c[0] = have_prev_ ? x0_[a] : U(rng_) * range / 2;
+      double Tj = 1;
+      for (int j = 1; j <= FD_DEGREE; ++j) {
+        Tj *= T;
+        c[j] = U(rng_) * range / (8.0 * FD_DEGREE) / Tj;
+      }
+      seg.coef.push_back(c);
+    }
+    const auto comp = comp_.compile(seg, have_prev_ ? &prev_end_ : nullptr);
+    words_ = comp_.words(comp);
+    prev_end_ = comp.end;
+    x0_.assign(FD_AXES, 0);
+    for (int a = 0; a < FD_AXES; ++a) {
+      long double v = 0;
+      for (int j = FD_DEGREE; j >= 0; --j) v = v * T + seg.coef[a][j];
+      x0_[a] = static_cast<double>(v);
+    }
+    have_prev_ = true;
+  }
+
+  std::mt19937_64 rng_;
+  traj::fd::Compiler comp_;
+  std::vector<uint64_t> words_;
+  size_t pos_ = 0;
+  bool have_prev_ = false;
+  std::vector<mpz_class> prev_end_;
+  std::vector<double> x0_;
+};
+
+struct Mode {
+  const char* name;
+  double p_valid;      // probability the stream offers a word (idle insertion / back-pressure)
+  int gap_lo, gap_hi;  // tick spacing in cycles
+  double p_reset;      // probability of a reset pulse per cycle
+  int stall_every;     // every N cycles the stream stops for stall_len cycles (underrun and recovery); 0 = never
+  int stall_len;
+};
+
+void run_mode(const Mode& m, uint64_t seed, uint64_t cycles) {
+  std::printf("  [%s] seed %llu (rerun: TRAJ_SEED=%llu)\n", m.name, static_cast<unsigned long long>(seed),
+              static_cast<unsigned long long>(seed));
+  std::mt19937_64 rng(seed ^ 0x9e3779b97f4a7c15ull);
+  Bench b(std::string("fd_cosim_") + m.name);
+  Source src(seed);
+  std::uniform_real_distribution<double> U(0, 1);
+  std::uniform_int_distribution<int> gap(m.gap_lo, m.gap_hi);
+  int next_tick = gap(rng);
+  std::string why;
+  // hold reset for two cycles first
+  for (int i = 0; i < 2; ++i) ASSERT_TRUE(b.cycle({false, false, false, 0}, &why)) << why;
+  for (uint64_t c = 0; c < cycles; ++c) {
+    Stim s{};
+    s.rst_n = !(U(rng) < m.p_reset);
+    const bool stalled = m.stall_every && (c % m.stall_every) < static_cast<uint64_t>(m.stall_len);
+    s.tvalid = !stalled && U(rng) < m.p_valid;
+    s.tdata = s.tvalid ? src.next_word() : rng();  // tdata is don't-care when !tvalid
+    if (--next_tick <= 0) {
+      s.tick = true;
+      next_tick = gap(rng);
+    }
+    const bool accepted = s.tvalid && b.tready() && s.rst_n;
+    ASSERT_TRUE(b.cycle(s, &why)) << m.name << " seed " << seed << ": " << why;
+    if (accepted) src.advance();
+    if (!s.rst_n) src.restart();
+  }
+  std::printf("    %llu cycles, %llu samples, %llu underrun ticks: RTL == hls\n",
+              static_cast<unsigned long long>(b.cycles()), static_cast<unsigned long long>(b.samples()),
+              static_cast<unsigned long long>(b.underruns()));
+  EXPECT_GT(b.samples(), 0u);
+}
+
+std::vector<uint64_t> seeds() {
+  if (const char* s = std::getenv("TRAJ_SEED")) return {std::strtoull(s, nullptr, 0)};
+  std::random_device rd;
+  return {1, (static_cast<uint64_t>(rd()) << 32) | rd()};
+}
+
+constexpr int kMin = Eng::kChunks;  // minimum tick spacing of a running engine
+
+}  // namespace
+
+TEST(FdCosim, BackToBackSegmentsSteadyTicks) {
+  for (auto s : seeds()) run_mode({"back_to_back", 1.0, Eng::kWords + kMin + 1, Eng::kWords + kMin + 1, 0, 0, 0}, s, 300000);
+}
+TEST(FdCosim, RandomTickSpacingAndBackPressure) {
+  for (auto s : seeds()) run_mode({"random_ticks", 0.6, kMin, 4 * Eng::kWords, 0, 0, 0}, s, 300000);
+}
+TEST(FdCosim, FastTicksOverrun) {
+  // ticks faster than the engine can follow: tick_err must match too
+  for (auto s : seeds()) run_mode({"fast_ticks", 0.9, 1, kMin + 1, 0, 0, 0}, s, 100000);
+}
+TEST(FdCosim, UnderrunAndRecovery) {
+  for (auto s : seeds()) run_mode({"underrun", 0.8, kMin, 3 * Eng::kWords, 0, 3000, 1500}, s, 300000);
+}
+TEST(FdCosim, ResetMidSegment) {
+  for (auto s : seeds()) run_mode({"reset", 0.8, kMin, 3 * Eng::kWords, 0.002, 0, 0}, s, 300000);
+}
