@@ -40,28 +40,37 @@ module traj_fd_synth_top #(
   logic                   rst_nq, tick_q, byte_valid_q;
   logic [7:0]             byte_q;
   logic [ChunkWidth-1:0]  word_q;
-  logic [$clog2(BytesPerWord+1)-1:0] nbytes_q;
+  logic [$clog2(BytesPerWord)-1:0] nbytes_q;
   logic                   word_valid, word_ready;
   logic                   sample_valid, underrun, seg_done, tick_err;
   logic [Axes*OutWidth-1:0] sample;
   logic [7:0]             fold_q;
   logic                   sample_valid_q, underrun_q, seg_done_q, tick_err_q;
 
-  assign word_valid   = (nbytes_q == BytesPerWord[$bits(nbytes_q)-1:0]);
-  assign byte_ready_o = !word_valid;
+  // Registered tvalid (AXI-Stream practice at a unit boundary): set when a
+  // word is complete, cleared by the handshake.
+  logic word_valid_q;
+  assign word_valid   = word_valid_q;
+  assign byte_ready_o = !word_valid_q;
 
   always_ff @(posedge clk_i) begin
     rst_nq       <= rst_ni;
     tick_q       <= tick_i;
     byte_q       <= byte_i;
-    byte_valid_q <= byte_valid_i && !word_valid;
+    byte_valid_q <= byte_valid_i && !word_valid_q;
     if (!rst_nq) begin
-      nbytes_q <= '0;
-    end else if (word_valid && word_ready) begin
-      nbytes_q <= '0;
+      nbytes_q     <= '0;
+      word_valid_q <= 1'b0;
+    end else if (word_valid_q) begin
+      if (word_ready) word_valid_q <= 1'b0;
     end else if (byte_valid_q) begin
-      word_q   <= {byte_q, word_q[ChunkWidth-1:8]};
-      nbytes_q <= nbytes_q + 1'b1;
+      word_q <= {byte_q, word_q[ChunkWidth-1:8]};
+      if (nbytes_q == $bits(nbytes_q)'(BytesPerWord - 1)) begin
+        nbytes_q     <= '0;
+        word_valid_q <= 1'b1;
+      end else begin
+        nbytes_q <= nbytes_q + 1'b1;
+      end
     end
   end
 

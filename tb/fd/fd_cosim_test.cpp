@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "fd/fd_compiler.hpp"
+#include "fd/vl_bits.hpp"
 #include "traj_fd_engine.hpp"
 #include VTOP_H
 
@@ -25,21 +26,6 @@ namespace {
 
 using Eng = traj::FdEngine<FD_AXES, FD_DEGREE, FD_WIDTH, FD_CHUNK, FD_GUARD>;
 using traj::u128;
-
-// Bits [lo, lo+n) of a Verilator signal (integral or VlWide), n <= 128.
-template <class T>
-u128 get_bits(const T& v, int lo, int n) {
-  if constexpr (std::is_integral_v<T>) {
-    return traj::bits(u128(static_cast<uint64_t>(v)), lo, n);
-  } else {
-    u128 r = 0;
-    for (int b = 0; b < n; ++b) {
-      const int bit = lo + b;
-      if ((v[bit / 32] >> (bit % 32)) & 1u) r |= u128(1) << b;
-    }
-    return r;
-  }
-}
 
 struct Stim {
   bool rst_n, tvalid, tick;
@@ -117,7 +103,7 @@ class Bench {
     if (dut_->tick_err_o != o.tick_err) return diff("tick_err_o", dut_->tick_err_o, o.tick_err);
     if (o.sample_valid) {
       for (int a = 0; a < FD_AXES; ++a) {
-        const u128 r = get_bits(dut_->sample_o, a * Eng::kOutWidth, Eng::kOutWidth);
+        const u128 r = traj::vl_bits(dut_->sample_o, a * Eng::kOutWidth, Eng::kOutWidth);
         if (r != o.sample[a]) {
           std::snprintf(buf, sizeof buf, "cycle %llu: sample_o axis %d rtl=%llx.. hls=%llx..",
                         static_cast<unsigned long long>(cycles_), a, static_cast<unsigned long long>(r),
