@@ -1,0 +1,220 @@
+#include "stream/segment_stream.hpp"
+
+#include <zlib.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+namespace traj::stream {
+namespace {
+
+uint32_t crc(const uint8_t* p, size_t n) {
+  return static_cast<uint32_t>(crc32(crc32(0L, Z_NULL, 0), p, static_cast<uInt>(n)));
+}
+
+void put(std::vector<uint8_t>& b, uint64_t v, int bytes) {
+  for (int i = 0; i < bytes; ++i) b.push_back(static_cast<uint8_t>(v >> (8 * i)));
+}
+uint64_t get(const uint8_t* p, int bytes) {
+  uint64_t v = 0;
+  for (int i = 0; i < bytes; ++i) v |= uint64_t(p[i]) << (8 * i);
+  return v;
+}
+
+size_t record_bytes(const Header& h) { return 12 + size_t(h.axes) * (h.degree + 1) * (h.width / 8); }
+
+std::string at(const std::string& name, size_t off) { return name + ": byte " + std::to_string(off) + ": "; }
+
+}  // namespace
+
+fd::Format Header::format() const {
+  fd::Format f;
+  f.axes = axes;
+  f.degree = degree;
+  f.width = width;
+  f.chunk_width = chunk_width;
+  f.guard_bits = guard_bits;
+  f.frac_bits = frac_bits;
+  return f;
+}
+
+Header Header::from(const fd::Format& f, double period, const std::string& units) {
+  Header h;
+  h.axes = f.axes;
+  h.degree = f.degree;
+  h.width = f.width;
+  h.chunk_width = f.chunk_width;
+  h.guard_bits = f.guard_bits;
+  h.frac_bits = f.frac_bits;
+  h.period = period;
+  h.units = units;
+  return h;
+}
+
+std::vector<uint8_t> encode_header(const Header& h) {
+  if (h.units.size() > 15) throw StreamError("units '" + h.units + "' longer than 15 characters");
+  if (!(h.period > 0) || !std::isfinite(h.period)) throw StreamError("tick period must be positive and finite");
+  h.format().validate();
+  std::vector<uint8_t> b;
+  b.insert(b.end(), {'T', 'R', 'J', 'S'});
+  put(b, kVersion, 2);
+  put(b, kHeaderBytes, 2);
+  put(b, h.axes, 1);
+  put(b, h.degree, 1);
+  put(b, h.width, 2);
+  put(b, h.chunk_width, 2);
+  put(b, h.guard_bits, 2);
+  put(b, static_cast<uint16_t>(static_cast<int16_t>(h.frac_bits)), 2);
+  put(b, 0, 2);
+  uint64_t pbits;
+  std::memcpy(&pbits, &h.period, 8);
+  put(b, pbits, 8);
+  for (int i = 0; i < 16; ++i) b.push_back(i < static_cast<int>(h.units.size()) ? h.units[i] : 0);
+  put(b, crc(b.data(), b.size()), 4);
+  return b;
+}
+
+std::vector<uint8_t> encode_record(const Header& h, const Record& r) {
+  if (r.ticks < 1) throw StreamError("segment with K=0 ticks");
+  if (static_cast<int>(r.regs.size()) != h.axes) throw StreamError("segment has the wrong number of axes");
+  std::vector<uint8_t> b;
+  put(b, 1, 1);
+  put(b, 0, 1);
+  put(b, 0, 2);
+  put(b, r.ticks, 4);
+  const mpz_class mod = mpz_class(1) << h.width;
+  for (const auto& ax : r.regs) {
+    if (static_cast<int>(ax.size()) != h.degree + 1) throw StreamError("segment has the wrong number of registers");
+    for (const auto& v : ax) {
+      const mpz_class lim = mpz_class(1) << (h.width - 1);
+      if (v >= lim || v < -lim) throw StreamError("register value does not fit the register width");
+      mpz_class u = v < 0 ? mpz_class(v + mod) : v;
+      for (int i = 0; i < h.width / 8; ++i) {
+        b.push_back(static_cast<uint8_t>(mpz_class(u & 0xff).get_ui()));
+        u >>= 8;
+      }
+    }
+  }
+  put(b, crc(b.data(), b.size()), 4);
+  return b;
+}
+
+std::vector<uint8_t> encode_end(uint32_t segments, uint64_t total_ticks) {
+  std::vector<uint8_t> b;
+  put(b, 0xFF, 1);
+  put(b, 0, 3);
+  put(b, segments, 4);
+  put(b, static_cast<uint32_t>(total_ticks), 4);
+  put(b, crc(b.data(), b.size()), 4);
+  return b;
+}
+
+void write_file(const std::string& path, const Header& h, const std::vector<Record>& recs) {
+  std::vector<uint8_t> all = encode_header(h);
+  uint64_t ticks = 0;
+  for (const auto& r : recs) {
+    const auto b = encode_record(h, r);
+    all.insert(all.end(), b.begin(), b.end());
+    ticks += r.ticks;
+  }
+  const auto e = encode_end(static_cast<uint32_t>(recs.size()), ticks);
+  all.insert(all.end(), e.begin(), e.end());
+  std::filesystem::path p(path);
+  if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path());
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) throw StreamError("cannot write " + tmp);
+    out.write(reinterpret_cast<const char*>(all.data()), static_cast<std::streamsize>(all.size()));
+    out.close();
+    if (!out) {
+      std::filesystem::remove(tmp);
+      throw StreamError("write failed: " + tmp);
+    }
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+ReadResult decode(const std::vector<uint8_t>& b, const std::string& name) {
+  ReadResult res;
+  auto fail = [&](size_t off, const std::string& what) {
+    res.error = at(name, off) + what;
+    return res;
+  };
+  if (b.size() < kHeaderBytes) return fail(0, "truncated header (" + std::to_string(b.size()) + " bytes)");
+  if (std::memcmp(b.data(), "TRJS", 4) != 0) return fail(0, "bad magic (not a trajcore segment stream)");
+  const int version = static_cast<int>(get(&b[4], 2));
+  if (version != kVersion) return fail(4, "unsupported version " + std::to_string(version));
+  if (get(&b[6], 2) != kHeaderBytes) return fail(6, "unexpected header size " + std::to_string(get(&b[6], 2)));
+  if (get(&b[44], 4) != crc(b.data(), 44)) return fail(44, "header checksum mismatch");
+  Header& h = res.header;
+  h.axes = b[8];
+  h.degree = b[9];
+  h.width = static_cast<int>(get(&b[10], 2));
+  h.chunk_width = static_cast<int>(get(&b[12], 2));
+  h.guard_bits = static_cast<int>(get(&b[14], 2));
+  h.frac_bits = static_cast<int16_t>(get(&b[16], 2));
+  const uint64_t pbits = get(&b[20], 8);
+  std::memcpy(&h.period, &pbits, 8);
+  h.units.assign(reinterpret_cast<const char*>(&b[28]), strnlen(reinterpret_cast<const char*>(&b[28]), 16));
+  try {
+    h.format().validate();
+  } catch (const std::exception& e) {
+    return fail(8, std::string("header: ") + e.what());
+  }
+  if (h.width % 8 != 0) return fail(10, "register width not a multiple of 8");
+  if (!(h.period > 0) || !std::isfinite(h.period)) return fail(20, "tick period must be positive and finite");
+
+  const size_t rb = record_bytes(h);
+  size_t off = kHeaderBytes;
+  uint64_t ticks = 0;
+  while (true) {
+    const size_t idx = res.records.size();
+    const std::string rec = "segment " + std::to_string(idx) + ": ";
+    if (off >= b.size()) return fail(off, "truncated: no end record after " + std::to_string(idx) + " segments");
+    if (b[off] == 0xFF) {
+      if (b.size() - off < 16) return fail(off, "truncated end record");
+      if (get(&b[off + 12], 4) != crc(&b[off], 12)) return fail(off, "end record checksum mismatch");
+      if (get(&b[off + 4], 4) != idx)
+        return fail(off, "end record counts " + std::to_string(get(&b[off + 4], 4)) + " segments, stream has " +
+                             std::to_string(idx));
+      if (get(&b[off + 8], 4) != static_cast<uint32_t>(ticks)) return fail(off, "end record tick total mismatch");
+      if (off + 16 != b.size()) return fail(off + 16, "trailing bytes after the end record");
+      res.complete = true;
+      return res;
+    }
+    if (b[off] != 1) return fail(off, rec + "unknown record type " + std::to_string(b[off]));
+    if (b.size() - off < rb) return fail(off, rec + "truncated record");
+    if (get(&b[off + rb - 4], 4) != crc(&b[off], rb - 4)) return fail(off, rec + "checksum mismatch");
+    Record r;
+    r.ticks = static_cast<uint32_t>(get(&b[off + 4], 4));
+    if (r.ticks == 0) return fail(off + 4, rec + "K=0 ticks");
+    size_t p = off + 8;
+    const mpz_class mod = mpz_class(1) << h.width;
+    const mpz_class half = mpz_class(1) << (h.width - 1);
+    r.regs.assign(h.axes, std::vector<mpz_class>(h.degree + 1));
+    for (auto& ax : r.regs)
+      for (auto& v : ax) {
+        mpz_class u = 0;
+        for (int i = h.width / 8 - 1; i >= 0; --i) u = (u << 8) + b[p + i];
+        p += h.width / 8;
+        v = u >= half ? mpz_class(u - mod) : u;
+      }
+    ticks += r.ticks;
+    res.records.push_back(std::move(r));
+    off += rb;
+  }
+}
+
+ReadResult read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw StreamError(path + ": cannot open");
+  std::vector<uint8_t> b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return decode(b, path);
+}
+
+}  // namespace traj::stream
