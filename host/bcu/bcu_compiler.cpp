@@ -1,0 +1,161 @@
+#include "bcu/bcu_compiler.hpp"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace traj::bcu {
+namespace {
+
+[[noreturn]] void fail(const std::string& what) {
+  throw std::invalid_argument("traj::bcu: " + what);
+}
+
+mpz_class pow2(int e) {
+  mpz_class r = 1;
+  r <<= e;
+  return r;
+}
+
+}  // namespace
+
+void Format::validate() const {
+  std::ostringstream m;
+  if (axes < 1 || axes > 8) m << "Format.axes = " << axes << " out of range 1..8";
+  else if (chunk_width < 8 || chunk_width > 64)
+    m << "Format.chunk_width = " << chunk_width << " out of range 8..64";
+  else if (max_depth < 1 || max_depth > 30)
+    m << "Format.max_depth = " << max_depth << " out of range 1..30";
+  else if (ctrl_width < 2 || ctrl_width + 3 * max_depth > 128)
+    m << "Format.ctrl_width = " << ctrl_width << " out of range 2.." << 128 - 3 * max_depth
+      << " (ctrl_width + 3*max_depth <= 128)";
+  else if (guard_bits < 0 || guard_bits > ctrl_width - 2)
+    m << "Format.guard_bits = " << guard_bits << " out of range 0.." << ctrl_width - 2;
+  else if (out_width < ctrl_width - guard_bits + (guard_bits > 0) || out_width > 64)
+    m << "Format.out_width = " << out_width << " out of range "
+      << ctrl_width - guard_bits + (guard_bits > 0) << "..64";
+  else if (frac_bits < -64 || frac_bits > 200)
+    m << "Format.frac_bits = " << frac_bits << " out of range -64..200";
+  else
+    return;
+  fail(m.str());
+}
+
+double de_casteljau(const double b[4], double t) {
+  const double u = 1.0 - t;
+  double p0 = u * b[0] + t * b[1], p1 = u * b[1] + t * b[2], p2 = u * b[2] + t * b[3];
+  p0 = u * p0 + t * p1;
+  p1 = u * p1 + t * p2;
+  return u * p0 + t * p1;
+}
+
+double error_bound(const Format& f, double max_abs) {
+  const double eps = std::numeric_limits<double>::epsilon() / 2;  // unit roundoff 2^-53
+  return std::ldexp(1.0, -(f.frac_bits + 1)) + std::ldexp(1.0, -(f.frac_bits + f.guard_bits + 1)) +
+         8 * eps * max_abs;
+}
+
+mpq_class exact_value(const std::vector<mpz_class>& c, int depth, int64_t j) {
+  const mpz_class K = pow2(depth);
+  const mpz_class jj = j, kj = K - jj;
+  mpz_class n = kj * kj * kj * c[0] + 3 * kj * kj * jj * c[1] + 3 * kj * jj * jj * c[2] +
+                jj * jj * jj * c[3];
+  mpq_class q(n, K * K * K);
+  q.canonicalize();
+  return q;
+}
+
+int64_t predict_sample(const std::vector<mpz_class>& c, int depth, int j, int guard_bits) {
+  const mpz_class K = pow2(depth);
+  const mpz_class jj = j, kj = K - jj;
+  mpz_class n = kj * kj * kj * c[0] + 3 * kj * kj * jj * c[1] + 3 * kj * jj * jj * c[2] +
+                jj * jj * jj * c[3];
+  const int s = 3 * depth + guard_bits;
+  if (s > 0) {
+    n += pow2(s - 1);
+    mpz_fdiv_q_2exp(n.get_mpz_t(), n.get_mpz_t(), s);  // floor
+  }
+  if (!n.fits_slong_p()) fail("predicted sample does not fit 64 bits");
+  return n.get_si();
+}
+
+std::vector<uint64_t> stream_words(const std::vector<std::vector<mpz_class>>& c, int depth,
+                                   const Format& f) {
+  const int nw = f.words_per_value();
+  const mpz_class wmask = pow2(f.chunk_width) - 1;
+  std::vector<uint64_t> w;
+  w.push_back(static_cast<uint64_t>(depth));
+  for (const auto& axis : c) {
+    for (int i = 0; i < 4; ++i) {
+      // two's complement in nw*chunk_width bits
+      mpz_class v = axis[i];
+      if (v < 0) v += pow2(nw * f.chunk_width);
+      for (int k = 0; k < nw; ++k) {
+        mpz_class word = v & wmask;
+        v >>= f.chunk_width;
+        uint64_t u = 0;
+        mpz_export(&u, nullptr, -1, sizeof(u), 0, 0, word.get_mpz_t());
+        w.push_back(u);
+      }
+    }
+  }
+  return w;
+}
+
+Segment compile_segment(const Controls& b, int depth, const Format& f) {
+  f.validate();
+  if (depth < 0 || depth > f.max_depth) {
+    std::ostringstream m;
+    m << "segment depth d = " << depth << " out of range 0.." << f.max_depth
+      << " (K = 2^d ticks)";
+    fail(m.str());
+  }
+  if (b.rows() != f.axes) {
+    std::ostringstream m;
+    m << "segment has " << b.rows() << " axes, format expects " << f.axes;
+    fail(m.str());
+  }
+  Segment s;
+  s.depth = depth;
+  const mpz_class lim = pow2(f.ctrl_width - 1);
+  double max_abs = 0;
+  for (int a = 0; a < f.axes; ++a) {
+    std::vector<mpz_class> row(4);
+    for (int i = 0; i < 4; ++i) {
+      const double x = b(a, i);
+      std::ostringstream where;
+      where << "axis " << a << " control value b" << i;
+      if (std::isnan(x)) fail(where.str() + " is NaN");
+      if (std::isinf(x)) fail(where.str() + " is infinite");
+      max_abs = std::max(max_abs, std::fabs(x));
+      // exact: x * 2^(F+G) as a rational, rounded to nearest, ties away from 0
+      mpq_class q(x);
+      const int e = f.frac_bits + f.guard_bits;
+      if (e >= 0) q *= mpq_class(pow2(e));
+      else q /= mpq_class(pow2(-e));
+      mpz_class r;
+      mpq_class aq = abs(q) + mpq_class(1, 2);
+      mpz_fdiv_q(r.get_mpz_t(), aq.get_num_mpz_t(), aq.get_den_mpz_t());
+      if (q < 0) r = -r;
+      if (r >= lim || r < -lim) {
+        std::ostringstream m;
+        m << where.str() << " = " << x << " out of range: needs |x| < 2^"
+          << (f.ctrl_width - 1 - e) << " for ctrl_width " << f.ctrl_width << ", F+G = " << e;
+        fail(m.str());
+      }
+      row[i] = r;
+    }
+    s.ctrl.push_back(row);
+  }
+  s.words = stream_words(s.ctrl, depth, f);
+  const int K = 1 << depth;
+  s.samples.assign(K + 1, std::vector<int64_t>(f.axes));
+  for (int j = 0; j <= K; ++j)
+    for (int a = 0; a < f.axes; ++a) s.samples[j][a] = predict_sample(s.ctrl[a], depth, j, f.guard_bits);
+  s.bound = error_bound(f, max_abs);
+  return s;
+}
+
+}  // namespace traj::bcu

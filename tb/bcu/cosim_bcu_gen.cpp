@@ -1,0 +1,277 @@
+// Verilator co-simulation: rtl/traj_bcu_gen.sv == hls/traj_bcu_gen.hpp, every
+// cycle: control outputs (s_axis_tready, sample_valid_o, underrun_o,
+// seg_done_o, tick_err_o) always, sample_o when sample_valid_o.
+// Random control values (full range and extremes), random depths, chained and
+// unchained segments back to back, random idle cycles on the segment input,
+// random tick spacing (every cycle .. 2x the minimum, and exactly the minimum),
+// random resets (also mid-segment). Every sample is also checked against the
+// exact GMP prediction of the host (hls == host).
+//
+// usage: cosim_bcu_gen [--seed N] [--cycles N]   (or env TRAJ_BCU_SEED)
+// Prints the seed; a failure is reproducible from it.
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <deque>
+#include <gmpxx.h>
+#include <memory>
+#include <random>
+#include <string>
+#include <type_traits>
+
+#include "Vtraj_bcu_gen.h"
+#include "bcu/bcu_compiler.hpp"
+#include "traj_bcu_gen.hpp"
+#include "verilated.h"
+
+using traj::u128;
+using Gen = traj::BcuGen<BCU_AXES, BCU_CHUNK, BCU_CTRL, BCU_GUARD, BCU_OUT, BCU_DEPTH>;
+
+template <class T>
+static u128 field(const T& v, int lo, int n) {
+  if constexpr (std::is_integral_v<T>) {
+    return (u128(v) >> lo) & traj::mask(n);
+  } else {
+    u128 r = 0;
+    for (int b = 0; b < n; ++b) {
+      const int i = lo + b;
+      if ((v[i / 32] >> (i % 32)) & 1u) r |= u128(1) << b;
+    }
+    return r;
+  }
+}
+
+struct Expect {  // host prediction of one sample
+  std::vector<int64_t> v;
+  int depth, j;
+  std::vector<std::vector<mpz_class>> c;
+};
+
+int main(int argc, char** argv) {
+  uint64_t seed = 1;
+  if (const char* s = std::getenv("TRAJ_BCU_SEED")) seed = std::strtoull(s, nullptr, 0);
+  uint64_t cycles = 1000000;
+  uint64_t trace_from = 0;
+  if (const char* s = std::getenv("TRAJ_BCU_TRACE")) trace_from = std::strtoull(s, nullptr, 0);
+  for (int i = 1; i + 1 < argc; ++i) {
+    if (!std::strcmp(argv[i], "--seed")) seed = std::strtoull(argv[++i], nullptr, 0);
+    else if (!std::strcmp(argv[i], "--cycles")) cycles = std::strtoull(argv[++i], nullptr, 0);
+  }
+  std::printf("cosim_bcu_gen: Axes=%d ChunkWidth=%d CtrlWidth=%d GuardBits=%d OutWidth=%d "
+              "MaxDepth=%d seed=%llu cycles=%llu (reproduce: --seed %llu)\n",
+              BCU_AXES, BCU_CHUNK, BCU_CTRL, BCU_GUARD, BCU_OUT, BCU_DEPTH,
+              (unsigned long long)seed, (unsigned long long)cycles, (unsigned long long)seed);
+
+  auto ctx = std::make_unique<VerilatedContext>();
+  ctx->randReset(2);
+  ctx->randSeed(static_cast<int>(seed & 0x7fffffff));
+  auto top = std::make_unique<Vtraj_bcu_gen>(ctx.get());
+  Gen hls;
+  std::mt19937_64 rng(seed);
+
+  traj::bcu::Format f;
+  f.axes = BCU_AXES;
+  f.chunk_width = BCU_CHUNK;
+  f.ctrl_width = BCU_CTRL;
+  f.guard_bits = BCU_GUARD;
+  f.out_width = BCU_OUT;
+  f.max_depth = BCU_DEPTH;
+
+  std::deque<uint64_t> words;
+  std::deque<Expect> expect;      // predicted samples of queued/active segments
+  std::vector<int64_t> end_value; // end value of the last completed segment
+  std::vector<mpz_class> prevD(BCU_AXES);
+  bool have_prev = false;
+
+  auto rand_ctrl = [&](void) {
+    mpz_class lim = 1;
+    lim <<= (BCU_CTRL - 1);
+    const int kind = static_cast<int>(rng() % 8);
+    if (kind == 0) return mpz_class(lim - 1);
+    if (kind == 1) return mpz_class(-lim);
+    mpz_class v = 0;
+    for (int k = 0; k < BCU_CTRL; k += 64) {
+      v <<= 64;
+      v += static_cast<unsigned long>(rng());
+    }
+    if (kind == 2) v >>= (rng() % BCU_CTRL);  // small values too
+    v = v % (2 * lim);
+    return mpz_class(v - lim);
+  };
+  auto add_segment = [&]() {
+    int d = static_cast<int>(rng() % (std::min(BCU_DEPTH, 7) + 1));
+    if (rng() % 10 == 0) d = static_cast<int>(rng() % (BCU_DEPTH + 1));
+    std::vector<std::vector<mpz_class>> c(BCU_AXES, std::vector<mpz_class>(4));
+    const bool chain = have_prev && (rng() % 4 != 0);
+    for (int a = 0; a < BCU_AXES; ++a) {
+      for (int i = 0; i < 4; ++i) c[a][i] = rand_ctrl();
+      if (chain) c[a][0] = prevD[a];
+      prevD[a] = c[a][3];
+    }
+    have_prev = true;
+    const auto w = traj::bcu::stream_words(c, d, f);
+    words.insert(words.end(), w.begin(), w.end());
+    if (trace_from) std::printf("   add segment d=%d chain=%d queued words %zu\n", d, chain, words.size());
+    for (int j = 0; j <= (1 << d); ++j) {
+      Expect e;
+      e.depth = d;
+      e.j = j;
+      e.c = c;
+      for (int a = 0; a < BCU_AXES; ++a) e.v.push_back(traj::bcu::predict_sample(c[a], d, j, BCU_GUARD));
+      expect.push_back(e);  // j = K is the end value (consumed at seg_done)
+    }
+  };
+
+  // scenario knobs, re-drawn every phase
+  int tick_mode = 0, offer_pct = 100;
+  uint64_t next_tick = 0, phase_end = 0;
+  uint64_t n_samples = 0, n_underrun = 0, n_done = 0, n_resets = 0, n_tickerr = 0, n_checked = 0;
+  bool in_reset = true, synced = false;
+  int reset_left = 3;
+  const int S = Gen::kMinTickSpacing;
+
+  top->clk_i = 0;
+  for (uint64_t cyc = 0; cyc < cycles; ++cyc) {
+    if (cyc >= phase_end) {
+      tick_mode = static_cast<int>(rng() % 4);
+      if (rng() % 8 == 0) tick_mode = 4;  // too fast: tick_err (sticky until reset)
+      offer_pct = (rng() % 3 == 0) ? 100 : 20 + static_cast<int>(rng() % 80);
+      phase_end = cyc + 2000 + rng() % 40000;
+    }
+    // reset: at start and at random points (also mid-segment)
+    if (!in_reset && rng() % 25000 == 0) {
+      in_reset = true;
+      reset_left = 1 + static_cast<int>(rng() % 3);
+    }
+    bool rst_n = true, reset_ends = false;
+    if (in_reset) {
+      rst_n = false;
+      if (--reset_left == 0) {
+        in_reset = false;
+        reset_ends = true;
+      }
+    }
+    if (rst_n && words.size() < 64 && rng() % 4 != 0) add_segment();
+
+    bool tick = false;
+    switch (tick_mode) {
+      case 0: tick = cyc >= next_tick; if (tick) next_tick = cyc + S; break;              // exact min
+      case 1: tick = cyc >= next_tick; if (tick) next_tick = cyc + 1 + rng() % (2 * S); break;
+      case 2: tick = (rng() % 64) == 0; break;                                           // sparse
+      case 3: tick = cyc >= next_tick; if (tick) next_tick = cyc + S + rng() % (3 * S); break;
+      default: tick = (rng() % 3) == 0; break;                                           // too fast
+    }
+    const bool offer = !words.empty() && int(rng() % 100) < offer_pct;
+    const uint64_t data = offer ? words.front() : rng();  // garbage when not valid
+
+    top->rst_ni = rst_n;
+    top->tick_i = tick;
+    top->s_axis_tvalid = offer;
+    top->s_axis_tdata = data & ((BCU_CHUNK >= 64) ? ~0ull : ((1ull << BCU_CHUNK) - 1));
+    top->clk_i = 0;
+    top->eval();
+
+    // compare (from the first clock edge with reset applied on: before that
+    // the RTL holds its random initial state, --x-initial unique)
+    bool bad = false;
+    if (synced) {
+    auto chk = [&](const char* name, uint64_t r, uint64_t h) {
+      if (r != h) {
+        std::printf("MISMATCH cycle %llu %s rtl=%llu hls=%llu\n", (unsigned long long)cyc, name,
+                    (unsigned long long)r, (unsigned long long)h);
+        bad = true;
+      }
+    };
+    chk("s_axis_tready", top->s_axis_tready, hls.tready());
+    chk("sample_valid_o", top->sample_valid_o, hls.sample_valid());
+    chk("underrun_o", top->underrun_o, hls.underrun());
+    chk("seg_done_o", top->seg_done_o, hls.seg_done());
+    chk("tick_err_o", top->tick_err_o, hls.tick_err());
+    if (hls.sample_valid()) {
+      for (int a = 0; a < BCU_AXES; ++a) {
+        const u128 r = field(top->sample_o, a * BCU_OUT, BCU_OUT);
+        if (r != hls.sample_bits(a)) {
+          std::printf("MISMATCH cycle %llu sample axis %d rtl=%lld hls=%lld\n", (unsigned long long)cyc,
+                      a, (long long)traj::sext(r, BCU_OUT), (long long)hls.sample(a));
+          bad = true;
+        }
+      }
+      // hls == host prediction
+      std::vector<int64_t> got;
+      for (int a = 0; a < BCU_AXES; ++a) got.push_back(hls.sample(a));
+      if (hls.underrun()) {
+        if (got != end_value) {
+          std::printf("MISMATCH cycle %llu underrun sample is not the end value\n", (unsigned long long)cyc);
+          bad = true;
+        }
+      } else {
+        if (expect.empty() || got != expect.front().v) {
+          std::printf("MISMATCH cycle %llu sample != host prediction (state %d j %u depth %d, "
+                      "queued %zu)\n", (unsigned long long)cyc, hls.state(), hls.regs().j_q,
+                      hls.regs().depth_q, expect.size());
+          for (int a = 0; a < BCU_AXES; ++a)
+            std::printf("  axis %d got %lld want %lld\n", a, (long long)got[a],
+                        expect.empty() ? 0ll : (long long)expect.front().v[a]);
+          if (!expect.empty()) {
+            std::printf("  expected d=%d j=%d c:", expect.front().depth, expect.front().j);
+            for (auto& r : expect.front().c)
+              for (auto& v : r) std::printf(" %s", v.get_str().c_str());
+            std::printf("\n");
+          }
+          bad = true;
+        } else {
+          if (trace_from && cyc >= trace_from)
+            std::printf("   ok d=%d j=%d (hls j %u d %d)\n", expect.front().depth, expect.front().j,
+                        hls.regs().j_q, hls.regs().depth_q);
+          expect.pop_front();
+          ++n_checked;
+        }
+        if (hls.seg_done() && !expect.empty()) {
+          end_value = expect.front().v;
+          expect.pop_front();
+        }
+      }
+    }
+    n_samples += hls.sample_valid() && !hls.underrun();
+    n_underrun += hls.underrun();
+    n_done += hls.seg_done();
+    n_tickerr += hls.tick_err();
+    }
+    if (bad) {
+      std::printf("FAIL (seed %llu)\n", (unsigned long long)seed);
+      return 1;
+    }
+
+    if (trace_from && cyc >= trace_from)
+      std::printf("cyc %llu rst %d tick %d offer %d acc %d st %d lvl %d ax %d j %u tq %d\n",
+                  (unsigned long long)cyc, rst_n, tick, offer, hls.tready() && offer, hls.state(),
+                  hls.regs().lvl_q, hls.regs().ax_q, hls.regs().j_q, hls.regs().tick_q);
+    // clock edge
+    typename Gen::In in;
+    in.rst_n = rst_n;
+    in.tick = tick;
+    in.tvalid = offer;
+    in.tdata = top->s_axis_tdata;
+    const bool acc = hls.tready() && offer;
+    hls.clock(in);
+    top->clk_i = 1;
+    top->eval();
+    top->clk_i = 0;
+    if (acc && rst_n) words.pop_front();
+    if (!rst_n) synced = true;
+    if (reset_ends) {  // the host restarts its stream after a reset
+      ++n_resets;
+      words.clear();
+      expect.clear();
+      end_value.clear();
+      have_prev = false;
+    }
+  }
+  top->final();
+  std::printf("PASS: %llu samples (%llu checked against the host prediction), %llu seg_done, "
+              "%llu underrun ticks, %llu resets, %llu cycles with tick_err set\n",
+              (unsigned long long)n_samples, (unsigned long long)n_checked,
+              (unsigned long long)n_done, (unsigned long long)n_underrun,
+              (unsigned long long)n_resets, (unsigned long long)n_tickerr);
+  return 0;
+}

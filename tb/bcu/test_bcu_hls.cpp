@@ -1,0 +1,349 @@
+// hls BCU and BCU generator: exactness against GMP rationals (d = 0..16),
+// schedule/timing, interface rules (underrun, tick_err, reset).
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <gmpxx.h>
+#include <random>
+
+#include "bcu/bcu_compiler.hpp"
+#include "bcu_driver.hpp"
+#include "traj_bcu.hpp"
+#include "traj_bcu_gen.hpp"
+
+using traj::i128;
+using traj::u128;
+namespace bcu = traj::bcu;
+
+static uint64_t test_seed() {
+  const char* s = std::getenv("TRAJ_BCU_SEED");
+  const uint64_t seed = s ? std::strtoull(s, nullptr, 0) : 20240611ull;
+  static bool printed = false;
+  if (!printed) {
+    std::printf("TRAJ_BCU_SEED=%llu\n", static_cast<unsigned long long>(seed));
+    printed = true;
+  }
+  return seed;
+}
+
+// Random w-bit signed value, biased to the extremes now and then.
+static mpz_class rand_ctrl(std::mt19937_64& rng, int w) {
+  const int kind = static_cast<int>(rng() % 8);
+  mpz_class lim = 1;
+  lim <<= (w - 1);
+  if (kind == 0) return lim - 1;
+  if (kind == 1) return -lim;
+  mpz_class v = 0;
+  for (int k = 0; k < w; k += 64) {
+    v <<= 64;
+    v += static_cast<unsigned long>(rng());
+  }
+  v = v % (2 * lim);
+  return v - lim;
+}
+
+// ---------------------------------------------------------------------------
+// BCU unit: exact against the rational de Casteljau formula, outputs fit w+3.
+// ---------------------------------------------------------------------------
+static void check_bcu(const i128 v[4], int w) {
+  u128 in[4];
+  for (int k = 0; k < 4; ++k) in[k] = traj::wrap(static_cast<u128>(v[k]), w);
+  const traj::BcuOut o = traj::bcu_split(in, w);
+  const i128 A = v[0], B = v[1], C = v[2], D = v[3];
+  const i128 l[4] = {8 * A, 4 * (A + B), 2 * (A + 2 * B + C), A + 3 * B + 3 * C + D};
+  const i128 r[4] = {A + 3 * B + 3 * C + D, 2 * (B + 2 * C + D), 4 * (C + D), 8 * D};
+  for (int k = 0; k < 4; ++k) {
+    ASSERT_EQ(traj::sext(o.l[k], w + 3), l[k]) << "w=" << w << " L" << k;
+    ASSERT_EQ(traj::sext(o.r[k], w + 3), r[k]) << "w=" << w << " R" << k;
+  }
+}
+
+TEST(BcuUnit, ExhaustiveWidth4) {
+  i128 v[4];
+  for (int a = -8; a < 8; ++a)
+    for (int b = -8; b < 8; ++b)
+      for (int c = -8; c < 8; ++c)
+        for (int d = -8; d < 8; ++d) {
+          v[0] = a, v[1] = b, v[2] = c, v[3] = d;
+          check_bcu(v, 4);
+        }
+}
+
+TEST(BcuUnit, RandomWidths) {
+  std::mt19937_64 rng(test_seed());
+  for (int w : {8, 17, 32, 63, 64, 100, 125}) {
+    for (int n = 0; n < 20000; ++n) {
+      i128 v[4];
+      for (int k = 0; k < 4; ++k) {
+        const int kind = static_cast<int>(rng() % 6);
+        const i128 lim = static_cast<i128>(u128(1) << (w - 1));
+        if (kind == 0) v[k] = lim - 1;
+        else if (kind == 1) v[k] = -lim;
+        else v[k] = traj::sext((u128(rng()) << 64) | rng(), w);
+      }
+      check_bcu(v, w);
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Generator exactness: every sample == floor(exact + 1/2), exact from GMP mpq
+// sum of Bernstein terms at t = j/2^d, for d = 0..16; error <= 1/2 LSB for
+// every d (it does not grow with depth).
+// ---------------------------------------------------------------------------
+namespace {
+constexpr int kAx = 3, kChunk = 32, kCtrl = 71, kGuard = 8, kOut = 64, kMaxD = 16;
+using BigGen = traj::BcuGen<kAx, kChunk, kCtrl, kGuard, kOut, kMaxD>;
+
+bcu::Format big_format() {
+  bcu::Format f;
+  f.axes = kAx;
+  f.chunk_width = kChunk;
+  f.ctrl_width = kCtrl;
+  f.guard_bits = kGuard;
+  f.out_width = kOut;
+  f.max_depth = kMaxD;
+  f.frac_bits = 0;
+  return f;
+}
+
+// Run one segment to completion (ticks as soon as the generator is READY),
+// then one underrun tick; returns the samples, end value last.
+template <class Gen>
+std::vector<std::vector<int64_t>> run_fast(const std::vector<uint64_t>& words, int depth) {
+  bcu::test::Driver<Gen> drv;
+  drv.words = words;
+  const size_t want = (size_t(1) << depth) + 1;
+  size_t guard = 0;
+  while (drv.events.size() < want) {
+    const bool tick = (drv.gen.state() == Gen::S_READY && !drv.gen.regs().tick_q) ||
+                      (drv.wi == words.size() && drv.gen.state() == Gen::S_IDLE &&
+                       !drv.gen.regs().tick_q && drv.gen.regs().have_last_q);
+    drv.step(tick);
+    if (++guard > (size_t(200) << depth) + 1000) break;
+  }
+  std::vector<std::vector<int64_t>> out;
+  for (const auto& e : drv.events) {
+    EXPECT_TRUE(e.valid);
+    out.push_back(e.sample);
+  }
+  EXPECT_FALSE(drv.gen.tick_err());
+  return out;
+}
+}  // namespace
+
+TEST(BcuGen, ExactAgainstRationalsDepth0To16) {
+  std::mt19937_64 rng(test_seed() + 1);
+  const bcu::Format f = big_format();
+  for (int d = 0; d <= kMaxD; ++d) {
+    const int reps = d <= 10 ? 4 : (d <= 13 ? 2 : 1);
+    for (int rep = 0; rep < reps; ++rep) {
+      std::vector<std::vector<mpz_class>> c(kAx, std::vector<mpz_class>(4));
+      for (int a = 0; a < kAx; ++a)
+        for (int i = 0; i < 4; ++i) c[a][i] = rand_ctrl(rng, kCtrl);
+      if (rep == 0 && d == kMaxD) {  // worst-case growth: alternating extremes
+        mpz_class lim = 1;
+        lim <<= (kCtrl - 1);
+        c[0] = {lim - 1, -lim, lim - 1, -lim};
+        c[1] = {-lim, lim - 1, -lim, lim - 1};
+      }
+      const auto words = bcu::stream_words(c, d, f);
+      const auto got = run_fast<BigGen>(words, d);
+      const int K = 1 << d;
+      ASSERT_EQ(got.size(), size_t(K) + 1) << "d=" << d;
+      const mpz_class half_den = mpz_class(1) << kGuard;  // control LSB = 2^-G output LSB
+      mpq_class max_err = 0;
+      for (int j = 0; j <= K; ++j) {
+        const mpq_class t(j, K);
+        const mpq_class u = 1 - t;
+        for (int a = 0; a < kAx; ++a) {
+          mpq_class v = u * u * u * c[a][0] + 3 * u * u * t * c[a][1] + 3 * u * t * t * c[a][2] +
+                        t * t * t * c[a][3];
+          v /= half_den;  // in output LSBs
+          mpq_class vr = v + mpq_class(1, 2);
+          mpz_class fl;
+          mpz_fdiv_q(fl.get_mpz_t(), vr.get_num_mpz_t(), vr.get_den_mpz_t());
+          ASSERT_EQ(mpz_class(static_cast<long>(got[j][a])), fl)
+              << "d=" << d << " rep=" << rep << " j=" << j << " axis=" << a;
+          ASSERT_EQ(got[j][a], bcu::predict_sample(c[a], d, j, kGuard));
+          mpq_class e = abs(mpq_class(static_cast<long>(got[j][a])) - v);
+          if (e > max_err) max_err = e;
+        }
+      }
+      EXPECT_LE(max_err, mpq_class(1, 2)) << "d=" << d;
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Timing: back-to-back chained segments with ticks exactly kMinTickSpacing
+// apart and the stream always offered: no underrun, no tick_err, K samples per
+// segment in time order, seg_done with the K-th.
+// ---------------------------------------------------------------------------
+namespace {
+using MidGen = traj::BcuGen<3, 32, 40, 9, 32, 12>;
+bcu::Format mid_format() {
+  bcu::Format f;
+  f.axes = 3;
+  f.chunk_width = 32;
+  f.ctrl_width = 40;
+  f.guard_bits = 9;
+  f.out_width = 32;
+  f.max_depth = 12;
+  f.frac_bits = 8;
+  return f;
+}
+}  // namespace
+
+TEST(BcuGen, MinTickSpacingBackToBack) {
+  std::mt19937_64 rng(test_seed() + 2);
+  const bcu::Format f = mid_format();
+  bcu::test::Driver<MidGen> drv;
+  std::vector<std::vector<int64_t>> expect;
+  std::vector<bool> expect_done;
+  std::vector<mpz_class> prevD(3);
+  const int depths[] = {12, 0, 1, 5, 12, 3, 2, 12, 7};
+  for (int s = 0; s < 9; ++s) {
+    std::vector<std::vector<mpz_class>> c(3, std::vector<mpz_class>(4));
+    for (int a = 0; a < 3; ++a) {
+      for (int i = 0; i < 4; ++i) c[a][i] = rand_ctrl(rng, 40);
+      if (s > 0) c[a][0] = prevD[a];  // chaining: A = previous D exactly
+      prevD[a] = c[a][3];
+    }
+    const int d = depths[s];
+    const auto w = bcu::stream_words(c, d, f);
+    drv.words.insert(drv.words.end(), w.begin(), w.end());
+    for (int j = 0; j < (1 << d); ++j) {
+      std::vector<int64_t> v;
+      for (int a = 0; a < 3; ++a) v.push_back(bcu::predict_sample(c[a], d, j, 9));
+      expect.push_back(v);
+      expect_done.push_back(j == (1 << d) - 1);
+    }
+  }
+  // Let the first segment load, then tick every kMinTickSpacing cycles.
+  const int S = MidGen::kMinTickSpacing;
+  while (drv.gen.state() != MidGen::S_READY) drv.step(false);
+  std::vector<uint64_t> tick_cycles;
+  for (uint64_t c = 0; tick_cycles.size() < expect.size(); ++c) {
+    const bool tick = (c % S) == 0;
+    if (tick) tick_cycles.push_back(drv.cycle);
+    drv.step(tick);
+  }
+  for (int k = 0; k < 4; ++k) drv.step(false);
+  ASSERT_EQ(drv.events.size(), expect.size());
+  for (size_t k = 0; k < expect.size(); ++k) {
+    ASSERT_TRUE(drv.events[k].valid) << k;
+    ASSERT_EQ(drv.events[k].cycle, tick_cycles[k] + 2) << "tick " << k << " served late";
+    ASSERT_FALSE(drv.events[k].underrun) << "late tick at sample " << k;
+    ASSERT_EQ(drv.events[k].done, expect_done[k]) << k;
+    ASSERT_EQ(drv.events[k].sample, expect[k]) << k;
+  }
+  EXPECT_FALSE(drv.gen.tick_err());
+}
+
+TEST(BcuGen, MinTickSpacingIsTight) {
+  // One cycle less than the documented spacing starves at a segment switch
+  // (an underrun) or hits the in-segment worst case (tick_err / underrun).
+  std::mt19937_64 rng(test_seed() + 3);
+  const bcu::Format f = mid_format();
+  bcu::test::Driver<MidGen> drv;
+  for (int s = 0; s < 2; ++s) {
+    std::vector<std::vector<mpz_class>> c(3, std::vector<mpz_class>(4));
+    for (auto& r : c)
+      for (auto& v : r) v = rand_ctrl(rng, 40);
+    const auto w = bcu::stream_words(c, 12, f);
+    drv.words.insert(drv.words.end(), w.begin(), w.end());
+  }
+  const int S = MidGen::kMinTickSpacing - 1;
+  while (drv.gen.state() != MidGen::S_READY) drv.step(false);
+  std::vector<uint64_t> tick_cycles;
+  for (uint64_t c = 0; tick_cycles.size() < 4096 + 10; ++c) {
+    const bool tick = (c % S) == 0;
+    if (tick) tick_cycles.push_back(drv.cycle);
+    drv.step(tick);
+  }
+  for (int k = 0; k < 4; ++k) drv.step(false);
+  bool late = drv.gen.tick_err();
+  for (size_t k = 0; k < drv.events.size() && k < tick_cycles.size(); ++k)
+    late |= drv.events[k].underrun || drv.events[k].cycle != tick_cycles[k] + 2;
+  EXPECT_TRUE(late);
+}
+
+// ---------------------------------------------------------------------------
+// Interface rules.
+// ---------------------------------------------------------------------------
+TEST(BcuGen, UnderrunBeforeAndAfterSegments) {
+  const bcu::Format f = mid_format();
+  bcu::test::Driver<MidGen> drv;
+  // before any segment: underrun without sample_valid
+  drv.step(true);
+  drv.step(false);
+  drv.step(false);
+  ASSERT_EQ(drv.events.size(), 1u);
+  EXPECT_TRUE(drv.events[0].underrun);
+  EXPECT_FALSE(drv.events[0].valid);
+  // one segment d=2, then two underrun ticks: both emit the end value D
+  std::vector<std::vector<mpz_class>> c = {{100, 200, -300, 4000}, {-5, 6, 7, -8000}, {0, 0, 0, 1}};
+  drv.words = bcu::stream_words(c, 2, f);
+  drv.wi = 0;
+  for (int k = 0; k < 403; ++k) drv.step(k < 400 && k % 50 == 49);
+  ASSERT_EQ(drv.events.size(), 1u + 4 + 4);
+  for (int j = 0; j < 4; ++j) {
+    const auto& e = drv.events[1 + j];
+    EXPECT_TRUE(e.valid && !e.underrun);
+    EXPECT_EQ(e.done, j == 3);
+    for (int a = 0; a < 3; ++a) EXPECT_EQ(e.sample[a], bcu::predict_sample(c[a], 2, j, 9));
+  }
+  for (int k = 5; k < 9; ++k) {
+    const auto& e = drv.events[k];
+    EXPECT_TRUE(e.valid && e.underrun && !e.done);
+    for (int a = 0; a < 3; ++a) EXPECT_EQ(e.sample[a], bcu::predict_sample(c[a], 2, 4, 9));
+  }
+  EXPECT_FALSE(drv.gen.tick_err());
+}
+
+TEST(BcuGen, TickErrIsSticky) {
+  bcu::test::Driver<MidGen> drv;
+  const bcu::Format f = mid_format();
+  std::vector<std::vector<mpz_class>> c(3, std::vector<mpz_class>{1, 2, 3, 4});
+  drv.words = bcu::stream_words(c, 3, f);
+  drv.step(false);  // header accepted
+  drv.step(true);   // tick pending during LOAD
+  drv.step(true);   // second tick while pending -> error
+  EXPECT_TRUE(drv.gen.tick_err());
+  for (int k = 0; k < 300; ++k) drv.step(false);
+  EXPECT_TRUE(drv.gen.tick_err());
+  drv.step(false, true, false);  // reset clears it
+  EXPECT_FALSE(drv.gen.tick_err());
+}
+
+TEST(BcuGen, ResetMidSegment) {
+  std::mt19937_64 rng(test_seed() + 4);
+  const bcu::Format f = mid_format();
+  bcu::test::Driver<MidGen> drv;
+  std::vector<std::vector<mpz_class>> c(3, std::vector<mpz_class>(4));
+  for (auto& r : c)
+    for (auto& v : r) v = rand_ctrl(rng, 40);
+  drv.words = bcu::stream_words(c, 6, f);
+  for (int k = 0; k < 400; ++k) drv.step(k % 70 == 0);
+  ASSERT_GT(drv.events.size(), 2u);
+  drv.step(false, true, false);  // reset
+  EXPECT_EQ(drv.gen.state(), MidGen::S_IDLE);
+  // after reset with no segment: underrun without valid
+  drv.events.clear();
+  drv.wi = drv.words.size();
+  drv.step(true);
+  drv.step(false);
+  drv.step(false);
+  ASSERT_EQ(drv.events.size(), 1u);
+  EXPECT_FALSE(drv.events[0].valid);
+  // a fresh segment plays correctly
+  drv.words = bcu::stream_words(c, 6, f);
+  drv.wi = 0;
+  drv.events.clear();
+  for (int k = 0; k < 64 * 70 + 200; ++k) drv.step(k % 70 == 69);
+  ASSERT_GE(drv.events.size(), 64u);
+  for (int j = 0; j < 64; ++j)
+    for (int a = 0; a < 3; ++a)
+      ASSERT_EQ(drv.events[j].sample[a], bcu::predict_sample(c[a], 6, j, 9)) << j;
+}
