@@ -1,0 +1,287 @@
+#include "geometry/bspline.hpp"
+
+#include <cmath>
+#include <charconv>
+#include <string>
+
+#include "geometry/error.hpp"
+
+namespace traj::geo {
+
+namespace {
+[[noreturn]] void fail(const std::string& where, const std::string& what) {
+  throw GeometryError(where + ": " + what);
+}
+// Shortest text that reads back to the same double (0.3 prints as 0.3).
+std::string num(double v) {
+  char buf[64];
+  auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+}  // namespace
+
+bool BSpline::clamped() const {
+  const int n = n_ctrl(), p = degree;
+  for (int i = 1; i <= p; ++i)
+    if (knots[i] != knots[0] || knots[n + p - i] != knots[n + p]) return false;
+  return true;
+}
+
+Eigen::MatrixXd BSpline::homogeneous() const {
+  Eigen::MatrixXd h(n_ctrl(), dim() + 1);
+  for (int i = 0; i < n_ctrl(); ++i) {
+    const double w = rational() ? weights[i] : 1.0;
+    h.row(i).head(dim()) = w * ctrl.row(i);
+    h(i, dim()) = w;
+  }
+  return h;
+}
+
+BSpline BSpline::from_homogeneous(int degree, const Eigen::MatrixXd& hom, const Eigen::VectorXd& knots,
+                                  bool rational, std::string name) {
+  BSpline c;
+  c.degree = degree;
+  c.knots = knots;
+  c.name = std::move(name);
+  const int d = static_cast<int>(hom.cols()) - 1;
+  c.ctrl.resize(hom.rows(), d);
+  if (rational) c.weights.resize(hom.rows());
+  for (int i = 0; i < hom.rows(); ++i) {
+    const double w = hom(i, d);
+    c.ctrl.row(i) = hom.row(i).head(d) / w;
+    if (rational) c.weights[i] = w;
+  }
+  return c;
+}
+
+void validate(const BSpline& c, const std::string& where) {
+  if (c.degree < 1 || c.degree > kMaxDegree)
+    fail(where, "degree: " + std::to_string(c.degree) + " out of range 1.." + std::to_string(kMaxDegree));
+  if (c.dim() < 1) fail(where, "control_points: points have no coordinates");
+  const int n = c.n_ctrl();
+  if (n < c.degree + 1)
+    fail(where, "control_points: " + std::to_string(n) + " points, degree " + std::to_string(c.degree) +
+                    " needs at least " + std::to_string(c.degree + 1));
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < c.dim(); ++j)
+      if (!std::isfinite(c.ctrl(i, j)))
+        fail(where, "control_points[" + std::to_string(i) + "][" + std::to_string(j) + "]: not a finite number");
+  if (c.rational()) {
+    if (c.weights.size() != n)
+      fail(where, "weights: " + std::to_string(c.weights.size()) + " weights for " + std::to_string(n) +
+                      " control points");
+    for (int i = 0; i < n; ++i) {
+      if (!std::isfinite(c.weights[i]))
+        fail(where, "weights[" + std::to_string(i) + "]: not a finite number");
+      if (!(c.weights[i] > 0))
+        fail(where, "weights[" + std::to_string(i) + "]: " + num(c.weights[i]) + " (weights must be positive)");
+    }
+  }
+  const int m = n + c.degree + 1;
+  if (c.knots.size() != m)
+    fail(where, "knots: " + std::to_string(c.knots.size()) + " knots, expected n_ctrl + degree + 1 = " +
+                    std::to_string(m));
+  for (int i = 0; i < m; ++i) {
+    if (!std::isfinite(c.knots[i])) fail(where, "knots[" + std::to_string(i) + "]: not a finite number");
+    if (i > 0 && c.knots[i] < c.knots[i - 1])
+      fail(where, "knots[" + std::to_string(i) + "]: " + num(c.knots[i]) + " < previous " + num(c.knots[i - 1]) +
+                      " (knot vector must be non-decreasing)");
+  }
+  // No knot of multiplicity > degree+1, and inner multiplicity <= degree (else the curve is split).
+  for (int i = 0; i + c.degree + 1 < m; ++i)
+    if (c.knots[i] == c.knots[i + c.degree + 1])
+      fail(where, "knots[" + std::to_string(i) + "]: multiplicity exceeds degree + 1");
+  if (!(c.u_end() > c.u_begin()))
+    fail(where, "knots: empty parameter domain [knots[degree], knots[n_ctrl]] = [" + num(c.u_begin()) + ", " +
+                    num(c.u_end()) + "]");
+  for (int i = c.degree + 1; i < n; ++i)
+    if (c.knots[i] == c.knots[i + c.degree])
+      fail(where, "knots[" + std::to_string(i) + "]: interior multiplicity exceeds degree (curve would be broken)");
+}
+
+BSpline insert_knot(const BSpline& c, double u, int times) {
+  Eigen::MatrixXd P = c.homogeneous();
+  Eigen::VectorXd U = c.knots;
+  const int p = c.degree;
+  for (int r = 0; r < times; ++r) {
+    const int n = static_cast<int>(P.rows());
+    // k: last index with U[k] <= u, restricted to [p, n-1] so that u in [U_k, U_{k+1}) or u = domain end.
+    int k = p;
+    while (k + 1 < n && U[k + 1] <= u) ++k;
+    int total = 0, s = 0;  // total multiplicity of u; s = multiplicity at indices <= k (Boehm's s)
+    for (int i = 0; i < U.size(); ++i)
+      if (U[i] == u) {
+        ++total;
+        if (i <= k) ++s;
+      }
+    if (total >= p) throw GeometryError("insert_knot: multiplicity of " + num(u) + " would exceed degree");
+    Eigen::MatrixXd Q(n + 1, P.cols());
+    for (int i = 0; i <= k - p; ++i) Q.row(i) = P.row(i);
+    for (int i = k - p + 1; i <= k - s; ++i) {
+      const double a = (u - U[i]) / (U[i + p] - U[i]);
+      Q.row(i) = a * P.row(i) + (1.0 - a) * P.row(i - 1);
+    }
+    for (int i = k - s + 1; i <= n; ++i) Q.row(i) = P.row(i - 1);
+    Eigen::VectorXd V(U.size() + 1);
+    V.head(k + 1) = U.head(k + 1);
+    V[k + 1] = u;
+    V.tail(U.size() - k - 1) = U.tail(U.size() - k - 1);
+    P.swap(Q);
+    U.swap(V);
+  }
+  return BSpline::from_homogeneous(p, P, U, c.rational(), c.name);
+}
+
+BSpline clamp(const BSpline& c0) {
+  if (c0.clamped()) return c0;
+  const int p = c0.degree;
+  auto mult = [](const BSpline& c, double u) {
+    int s = 0;
+    for (int i = 0; i < c.knots.size(); ++i) s += (c.knots[i] == u);
+    return s;
+  };
+  BSpline c = c0;
+  // Front: raise the multiplicity of a = t_p to at least p; then only control points i >= l0 - p
+  // (l0 = last index of a) act on [a, ...]; keep those, with knots from l0 - p (first one set to a;
+  // N_{i,p} on [t_{i+p}, ...) does not depend on t_i).
+  {
+    const double a = c.u_begin();
+    const int s = mult(c, a);
+    if (s < p) c = insert_knot(c, a, p - s);
+    int l0 = 0;
+    while (l0 + 1 < c.knots.size() && c.knots[l0 + 1] <= a) ++l0;
+    const int i0 = l0 - p;
+    const int keep = c.n_ctrl() - i0;
+    Eigen::MatrixXd P = c.homogeneous().bottomRows(keep);
+    Eigen::VectorXd U = c.knots.tail(c.knots.size() - i0);
+    U[0] = a;
+    c = BSpline::from_homogeneous(p, P, U, c.rational(), c.name);
+  }
+  // Back: symmetric. f = first index of b; control points 0..f-1 act on [..., b]; knots 0..f+p,
+  // the last one set to b.
+  {
+    const double b = c.u_end();
+    const int s = mult(c, b);
+    if (s < p) c = insert_knot(c, b, p - s);
+    int f = 0;
+    while (c.knots[f] < b) ++f;
+    const int keep = f;
+    Eigen::MatrixXd P = c.homogeneous().topRows(keep);
+    Eigen::VectorXd U = c.knots.head(keep + p + 1);
+    U[keep + p] = b;
+    c = BSpline::from_homogeneous(p, P, U, c.rational(), c.name);
+  }
+  return c;
+}
+
+std::vector<BezierPiece> bezier_pieces(const BSpline& c0) {
+  BSpline c = clamp(c0);
+  const int p = c.degree;
+  // Raise every interior knot to multiplicity >= p. Then on each non-empty span [t_j, t_{j+1})
+  // (p <= j <= n-1) the active control points j-p..j are that span's Bezier points.
+  std::vector<double> interior;
+  for (int i = p + 1; i < c.n_ctrl(); ++i)
+    if (c.knots[i] > c.u_begin() && c.knots[i] < c.u_end() && (interior.empty() || interior.back() != c.knots[i]))
+      interior.push_back(c.knots[i]);
+  for (double u : interior) {
+    int s = 0;
+    for (int i = 0; i < c.knots.size(); ++i) s += (c.knots[i] == u);
+    if (s < p) c = insert_knot(c, u, p - s);
+  }
+  const Eigen::MatrixXd H = c.homogeneous();
+  std::vector<BezierPiece> out;
+  for (int j = p; j < c.n_ctrl(); ++j) {
+    if (!(c.knots[j] < c.knots[j + 1])) continue;
+    BezierPiece b;
+    b.u0 = c.knots[j];
+    b.u1 = c.knots[j + 1];
+    b.hom = H.middleRows(j - p, p + 1);
+    out.push_back(std::move(b));
+  }
+  return out;
+}
+
+BSpline make_bezier(const Eigen::MatrixXd& ctrl, const Eigen::VectorXd& weights) {
+  BSpline c;
+  c.degree = static_cast<int>(ctrl.rows()) - 1;
+  c.ctrl = ctrl;
+  c.weights = weights;
+  c.knots.resize(2 * ctrl.rows());
+  c.knots.head(ctrl.rows()).setZero();
+  c.knots.tail(ctrl.rows()).setOnes();
+  c.name = "bezier";
+  validate(c, "make_bezier");
+  return c;
+}
+
+BSpline make_line(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  if (a.size() != b.size()) throw GeometryError("make_line: end points of different dimension");
+  Eigen::MatrixXd P(2, a.size());
+  P.row(0) = a.transpose();
+  P.row(1) = b.transpose();
+  BSpline c = make_bezier(P);
+  c.name = "line";
+  return c;
+}
+
+BSpline make_arc(const Eigen::Vector2d& ctr, double r, double a0, double a1) {
+  const double sweep = a1 - a0;
+  if (!(r > 0) || !std::isfinite(r)) throw GeometryError("make_arc: radius must be positive and finite");
+  if (!(std::abs(sweep) > 0) || std::abs(sweep) > 2 * M_PI * (1 + 1e-15))
+    throw GeometryError("make_arc: sweep must be non-zero and at most 2 pi");
+  const int pieces = std::max(1, static_cast<int>(std::ceil(std::abs(sweep) / (M_PI / 2) - 1e-12)));
+  const double dth = sweep / pieces;
+  const double wm = std::cos(dth / 2);
+  const int n = 2 * pieces + 1;
+  BSpline c;
+  c.degree = 2;
+  c.name = "arc";
+  c.ctrl.resize(n, 2);
+  c.weights.resize(n);
+  c.knots.resize(n + 3);
+  auto on = [&](double a) { return Eigen::Vector2d(ctr + r * Eigen::Vector2d(std::cos(a), std::sin(a))); };
+  for (int k = 0; k < pieces; ++k) {
+    const double t0 = a0 + k * dth, tm = t0 + dth / 2;
+    c.ctrl.row(2 * k) = on(t0).transpose();
+    c.weights[2 * k] = 1.0;
+    // Middle control point: intersection of the end tangents, at distance r / cos(dth/2) along tm.
+    c.ctrl.row(2 * k + 1) = (ctr + (r / wm) * Eigen::Vector2d(std::cos(tm), std::sin(tm))).transpose();
+    c.weights[2 * k + 1] = wm;
+  }
+  c.ctrl.row(n - 1) = on(a1).transpose();
+  c.weights[n - 1] = 1.0;
+  c.knots.head(3).setZero();
+  c.knots.tail(3).setOnes();
+  for (int k = 1; k < pieces; ++k) c.knots[1 + 2 * k] = c.knots[2 + 2 * k] = static_cast<double>(k) / pieces;
+  validate(c, "make_arc");
+  return c;
+}
+
+BSpline make_bezier_circle(const Eigen::Vector2d& ctr, double r, int segments) {
+  if (segments < 2) throw GeometryError("make_bezier_circle: need at least 2 segments");
+  const double th = 2 * M_PI / segments;
+  const double k = 4.0 / 3.0 * std::tan(th / 4);
+  const int n = 3 * segments + 1;
+  BSpline c;
+  c.degree = 3;
+  c.name = "bezier_circle";
+  c.ctrl.resize(n, 2);
+  for (int s = 0; s < segments; ++s) {
+    const double a = s * th, b = a + th;
+    const Eigen::Vector2d p0(std::cos(a), std::sin(a)), p3(std::cos(b), std::sin(b));
+    const Eigen::Vector2d t0(-std::sin(a), std::cos(a)), t3(-std::sin(b), std::cos(b));
+    c.ctrl.row(3 * s) = (ctr + r * p0).transpose();
+    c.ctrl.row(3 * s + 1) = (ctr + r * (p0 + k * t0)).transpose();
+    c.ctrl.row(3 * s + 2) = (ctr + r * (p3 - k * t3)).transpose();
+  }
+  c.ctrl.row(n - 1) = c.ctrl.row(0);
+  c.knots.resize(n + 4);
+  c.knots.head(4).setZero();
+  c.knots.tail(4).setOnes();
+  for (int s = 1; s < segments; ++s)
+    for (int j = 0; j < 3; ++j) c.knots[1 + 3 * s + j] = static_cast<double>(s) / segments;
+  validate(c, "make_bezier_circle");
+  return c;
+}
+
+}  // namespace traj::geo

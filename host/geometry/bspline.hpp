@@ -1,0 +1,67 @@
+// B-spline / NURBS curve description and the exact (knot-insertion) operations on it.
+//
+// A curve of degree p with n control points P_i (rows of `ctrl`, any number of axes), optional
+// positive weights w_i (rational = NURBS) and knots t_0..t_{n+p} (non-decreasing). The parameter
+// domain is [t_p, t_n]. All operations here are exact up to floating-point rounding: knot insertion
+// (Boehm) is done on homogeneous points (w_i P_i, w_i), so NURBS go through unchanged.
+#pragma once
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+namespace traj::geo {
+
+constexpr int kMaxDegree = 7;
+
+struct BSpline {
+  int degree = 0;
+  Eigen::MatrixXd ctrl;     // n_ctrl x dim: row i is control point i (Cartesian, not weighted)
+  Eigen::VectorXd weights;  // empty: non-rational; else n_ctrl positive weights
+  Eigen::VectorXd knots;    // n_ctrl + degree + 1, non-decreasing
+  std::string name;
+
+  bool rational() const { return weights.size() > 0; }
+  int dim() const { return static_cast<int>(ctrl.cols()); }
+  int n_ctrl() const { return static_cast<int>(ctrl.rows()); }
+  double u_begin() const { return knots[degree]; }
+  double u_end() const { return knots[n_ctrl()]; }
+  // First p+1 knots equal and last p+1 knots equal.
+  bool clamped() const;
+  // Homogeneous control points: n_ctrl x (dim+1), rows (w P, w); w = 1 if non-rational.
+  Eigen::MatrixXd homogeneous() const;
+  static BSpline from_homogeneous(int degree, const Eigen::MatrixXd& hom, const Eigen::VectorXd& knots,
+                                  bool rational, std::string name = {});
+};
+
+// Checks degree 1..7, sizes, finite numbers, non-decreasing knots, positive weights, a non-empty
+// domain. Throws GeometryError("<where>: <field>[i]: ..."). `where` is usually the file name.
+void validate(const BSpline& c, const std::string& where = "curve");
+
+// Boehm knot insertion of u, `times` times (multiplicity after insertion must stay <= degree+1).
+BSpline insert_knot(const BSpline& c, double u, int times = 1);
+// Clamped equivalent of any B-spline on the same domain [t_p, t_n] (knot insertion at the domain
+// ends, then the control points outside the domain are dropped). Identity for clamped input.
+BSpline clamp(const BSpline& c);
+
+// One Bezier piece per non-empty knot span (clamped input; see clamp()). Homogeneous control points
+// (degree+1) x (dim+1), and the span [u0, u1].
+struct BezierPiece {
+  double u0 = 0, u1 = 0;
+  Eigen::MatrixXd hom;  // (degree+1) x (dim+1): rows (w P, w)
+};
+std::vector<BezierPiece> bezier_pieces(const BSpline& clamped_curve);
+
+// Constructors of common curves.
+// Bezier of degree ctrl.rows()-1 on [0,1]; weights optional (rational Bezier).
+BSpline make_bezier(const Eigen::MatrixXd& ctrl, const Eigen::VectorXd& weights = Eigen::VectorXd());
+// Straight line a -> b, degree 1 on [0,1].
+BSpline make_line(const Eigen::VectorXd& a, const Eigen::VectorXd& b);
+// Exact circular arc in the plane as a rational quadratic NURBS on [0,1]: centre c, radius r, from
+// angle a0 to a1 (radians, a1 > a0 counter-clockwise, a1 < a0 clockwise, |a1-a0| <= 2 pi). Split in
+// pieces of at most 90 degrees, middle weight cos(half piece angle), double interior knots.
+BSpline make_arc(const Eigen::Vector2d& c, double r, double a0, double a1);
+// Cubic Bezier circle of `segments` equal arcs (classic k = 4/3 tan(theta/4) handles), joined C1
+// into one clamped cubic B-spline with triple interior knots (each piece is that Bezier); segment i on [i/segments, (i+1)/segments].
+BSpline make_bezier_circle(const Eigen::Vector2d& c, double r, int segments = 3);
+
+}  // namespace traj::geo
