@@ -16,7 +16,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "Vtraj_fd_engine.h"
+#include "Vtraj_fd_engine.h"  // the build's own parameters
 #include "fd/fd_compiler.hpp"
 #include "fd/vl_bits.hpp"
 #include "traj_fd_engine.hpp"

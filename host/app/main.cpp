@@ -1,10 +1,81 @@
 // trajcore: command-line tool.
+//   trajcore plan  <path.json> -o out.trj      plan + compile -> segment stream (+ plan report)
+//   trajcore sim   <stream.trj> --csv out.csv  segment stream -> Verilated core -> samples
+//   trajcore run   <path.json> --out-dir DIR   both, with the full report and SVG plots
+//   trajcore demo                              the built-in circle demo (cubic engine)
 #include <CLI/CLI.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
+#include <fstream>
 
 #include "demo.hpp"
+#include "planner/pipeline.hpp"
+#include "sim.hpp"
+#include "stream/segment_stream.hpp"
+
+namespace {
+
+using traj::plan::JobConfig;
+
+void add_limits(CLI::App* c, JobConfig& cfg, std::vector<double>& v_axis, std::vector<double>& a_axis,
+                std::vector<double>& j_axis) {
+  auto& L = cfg.limits;
+  c->add_option("--feed", L.feed, "commanded feed, units/s")->capture_default_str();
+  c->add_option("--period", cfg.plan.period, "tick period, s")->capture_default_str();
+  c->add_option("--v-axis", v_axis, "per-axis velocity limits x,y,z (one value: all axes)")->delimiter(',');
+  c->add_option("--a-axis", a_axis, "per-axis acceleration limits")->delimiter(',');
+  c->add_option("--j-axis", j_axis, "per-axis jerk limits")->delimiter(',');
+  c->add_option("--a-tan", L.a_tan, "tangential acceleration limit")->capture_default_str();
+  c->add_option("--j-tan", L.j_tan, "tangential jerk limit")->capture_default_str();
+  c->add_option("--a-cen", L.a_cen, "centripetal acceleration limit")->capture_default_str();
+  c->add_option("--j-cen", L.j_cen, "centripetal jerk limit")->capture_default_str();
+  c->add_option("--tol", L.tol, "path tolerance: max distance of the output from the curve, units")
+      ->capture_default_str();
+  c->add_option("--degree", cfg.degree, "segment degree: 5 (C2 joins) or 3")->capture_default_str();
+}
+
+void apply_axes(JobConfig& cfg, const std::vector<double>& v, const std::vector<double>& a,
+                const std::vector<double>& j) {
+  auto set = [](double* dst, const std::vector<double>& src, const char* name) {
+    if (src.empty()) return;
+    if (src.size() != 1 && src.size() != 3)
+      throw traj::plan::PlanError(std::string("--") + name + " takes 1 or 3 values, got " + std::to_string(src.size()));
+    for (int k = 0; k < 3; ++k) dst[k] = src.size() == 1 ? src[0] : src[k];
+  };
+  set(cfg.limits.v_axis, v, "v-axis");
+  set(cfg.limits.a_axis, a, "a-axis");
+  set(cfg.limits.j_axis, j, "j-axis");
+  cfg.format = traj::plan::engine_format(cfg.degree);
+}
+
+void progress(const std::string& stage, double f) {
+  std::fprintf(stderr, "\r[%s] %3.0f%%   ", stage.c_str(), 100 * f);
+  if (stage == "done") std::fprintf(stderr, "\n");
+}
+
+void write_csv(const std::string& path, const traj::stream::Header& h, const traj::plan::Samples& s) {
+  std::filesystem::path p(path);
+  if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path());
+  const std::string tmp = path + ".tmp";
+  std::ofstream o(tmp);
+  if (!o) throw std::runtime_error("cannot write " + tmp);
+  const double lsb = std::ldexp(1.0, -h.frac_bits);
+  o << "tick,t_s,x_lsb,y_lsb,z_lsb,x,y,z\n";
+  char b[160];
+  for (size_t k = 0; k < s.v.size(); ++k) {
+    std::snprintf(b, sizeof b, "%zu,%.6f,%lld,%lld,%lld,%.10f,%.10f,%.10f\n", k, k * h.period, s.v[k][0], s.v[k][1],
+                  s.v[k][2], s.v[k][0] * lsb, s.v[k][1] * lsb, s.v[k][2] * lsb);
+    o << b;
+  }
+  o.close();
+  if (!o) throw std::runtime_error("write failed: " + tmp);
+  std::filesystem::rename(tmp, path);
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"trajcore: FPGA motion-trajectory core, host toolchain"};
@@ -22,6 +93,26 @@ int main(int argc, char** argv) {
   d->add_option("--csv", demo.csv, "where to write the samples (CSV)");
   d->add_option("--tick-gap", demo.tick_gap, "clock cycles between ticks in the simulation")->check(CLI::Range(1, 1000000));
 
+  JobConfig cfg;
+  std::vector<double> v_axis, a_axis, j_axis;
+  std::string input, out_stream = "out/plan.trj", out_dir = "out", csv = "out/samples.csv";
+  int tick_gap = 0;
+
+  auto* pl = app.add_subcommand("plan", "Plan and compile a path (curve JSON) into a segment stream");
+  pl->add_option("path", input, "curve or path JSON (the butterfly format, or {\"curves\": [...]})")->required();
+  pl->add_option("-o,--output", out_stream, "segment stream to write")->capture_default_str();
+  add_limits(pl, cfg, v_axis, a_axis, j_axis);
+
+  auto* sm = app.add_subcommand("sim", "Run a segment stream through the Verilated core");
+  sm->add_option("stream", input, "segment stream (.trj)")->required();
+  sm->add_option("--csv", csv, "samples CSV to write")->capture_default_str();
+  sm->add_option("--tick-gap", tick_gap, "clock cycles between ticks (0: shortest safe)");
+
+  auto* rn = app.add_subcommand("run", "Plan, compile, simulate on the Verilated core, and report (text + SVG)");
+  rn->add_option("path", input, "curve or path JSON")->required();
+  rn->add_option("--out-dir", out_dir, "where to write plan.trj, samples.csv, report.txt, *.svg")->capture_default_str();
+  add_limits(rn, cfg, v_axis, a_axis, j_axis);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -29,6 +120,56 @@ int main(int argc, char** argv) {
   }
   try {
     if (*d) return traj::app::run_demo(demo);
+    if (*pl || *rn) {
+      apply_axes(cfg, v_axis, a_axis, j_axis);
+      const auto path = traj::plan::load_path(input);
+      const auto res = traj::plan::run_job(path, cfg, progress);
+      const std::string stream_path = *pl ? out_stream : out_dir + "/plan.trj";
+      traj::stream::write_file(stream_path, res.header, traj::plan::records_of(res));
+      std::printf("%s: %zu segments, %zu ticks (%.3f s of motion) -> %s\n", input.c_str(), res.segments.size(),
+                  res.ticks.size(), res.plan.duration(), stream_path.c_str());
+      if (*pl) return 0;
+      auto sr = traj::app::simulate(res.header, traj::plan::records_of(res), 0,
+                                    [](double f) { progress("sim", f); });
+      std::fprintf(stderr, "\n");
+      write_csv(out_dir + "/samples.csv", res.header, sr.samples);
+      const auto rep = traj::plan::make_report(path, cfg, res, sr.samples);
+      traj::plan::write_plots(out_dir, path, cfg, res, sr.samples);
+      std::string text = traj::plan::report_text(cfg, rep, res);
+      char b[256];
+      std::snprintf(b, sizeof b,
+                    "Core (Verilated traj_fd_engine): %llu cycles in %.2f s, RTL == hls on every cycle: %s, "
+                    "underruns %llu, tick_err %s\n",
+                    static_cast<unsigned long long>(sr.cycles), sr.seconds, sr.mismatches ? "NO" : "yes",
+                    static_cast<unsigned long long>(sr.underruns), sr.tick_err ? "SET" : "clear");
+      text += b;
+      {
+        std::ofstream o(out_dir + "/report.txt.tmp");
+        o << text;
+        o.close();
+        std::filesystem::rename(out_dir + "/report.txt.tmp", out_dir + "/report.txt");
+      }
+      std::fputs(text.c_str(), stdout);
+      std::printf("Wrote %s/{plan.trj, samples.csv, report.txt, path_feed.svg, profile.svg}\n", out_dir.c_str());
+      const bool ok = sr.mismatches == 0 && !sr.tick_err && rep.max_deviation <= cfg.limits.tol &&
+                      rep.worst_plan <= 1 + 1e-9 && rep.worst_fit <= 1 + 1e-9 && rep.worst_out <= 1 + 1e-9;
+      if (!ok) std::fprintf(stderr, "trajcore run: a check FAILED (see the report)\n");
+      return ok ? 0 : 1;
+    }
+    if (*sm) {
+      const auto rd = traj::stream::read_file(input);
+      if (!rd.complete) {
+        std::fprintf(stderr, "trajcore: error: %s (%zu segments before it were valid; nothing simulated)\n",
+                     rd.error.c_str(), rd.records.size());
+        return 1;
+      }
+      auto sr = traj::app::simulate(rd.header, rd.records, tick_gap, [](double f) { progress("sim", f); });
+      write_csv(csv, rd.header, sr.samples);
+      std::printf("%s: %zu segments, %zu samples, %llu cycles, RTL == hls: %s -> %s\n", input.c_str(),
+                  rd.records.size(), sr.samples.v.size(), static_cast<unsigned long long>(sr.cycles),
+                  sr.mismatches ? "NO" : "yes", csv.c_str());
+      return sr.mismatches ? 1 : 0;
+    }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "trajcore: error: %s\n", e.what());
     return 1;

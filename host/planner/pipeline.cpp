@@ -1,0 +1,443 @@
+#include "planner/pipeline.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace traj::plan {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double secs(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+
+std::string fmt(const char* f, double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
+}  // namespace
+
+fd::Format engine_format(int degree) {
+  fd::Format f;
+  f.axes = 3;
+  f.chunk_width = 16;
+  if (degree == 5) {
+    f.degree = 5;
+    f.width = 96;
+    f.guard_bits = 48;
+    f.frac_bits = 32;
+  } else if (degree == 3) {
+    f.degree = 3;
+    f.width = 64;
+    f.guard_bits = 32;
+    f.frac_bits = 16;
+  } else {
+    throw PlanError("segment degree " + std::to_string(degree) + ": the tool carries engines for degree 3 and 5");
+  }
+  return f;
+}
+
+JobConfig::JobConfig() : format(engine_format(5)) {}
+
+Path load_path(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw PlanError(file + ": cannot open");
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw PlanError(file + ": not valid JSON: " + e.what());
+  }
+  Path p;
+  try {
+    if (doc.is_object() && doc.contains("curves")) {
+      if (!doc["curves"].is_array() || doc["curves"].empty())
+        throw PlanError(file + ": curves: must be a non-empty array of curves");
+      for (size_t i = 0; i < doc["curves"].size(); ++i) {
+        const std::string where = file + ": curves[" + std::to_string(i) + "]";
+        p.add(geo::parse_curve(doc["curves"][i], where), where);
+      }
+    } else {
+      p.add(geo::parse_curve(doc, file), file);
+    }
+  } catch (const geo::GeometryError& e) {
+    throw PlanError(e.what());
+  }
+  return p;
+}
+
+JobResult run_job(const Path& p, const JobConfig& cfg, const Progress& progress) {
+  cfg.limits.validate();
+  const double h = cfg.plan.period;
+  if (!std::isfinite(h) || !(h > 0)) throw PlanError("tick period " + std::to_string(h) + " must be positive and finite");
+  JobResult r;
+  fd::Format f = cfg.format;
+  f.degree = cfg.degree;
+  fd::Compiler comp(f);
+  const double lsb = std::ldexp(1.0, -f.frac_bits);
+  r.fit_tol = cfg.limits.tol - (0.5 + f.tol_lsb) * lsb;
+  if (!(r.fit_tol > 0))
+    throw PlanError("path tolerance " + std::to_string(cfg.limits.tol) + " is below the output quantisation (" +
+                    std::to_string((0.5 + f.tol_lsb) * lsb) + " units)");
+  auto t0 = Clock::now();
+  if (progress) progress("plan", 0);
+  r.plan = plan_path(p, cfg.limits, cfg.plan);
+  auto t1 = Clock::now();
+  if (progress) progress("ticks", 0);
+  r.ticks = sample_ticks(p, r.plan, h);
+  auto t2 = Clock::now();
+  if (progress) progress("fit", 0);
+  SegmentOptions so;
+  so.degree = cfg.degree;
+  so.max_ticks = static_cast<uint32_t>(
+      std::min<uint64_t>(fd::Compiler::longest_segment(f.degree, f.guard_bits, f.tol_lsb), f.max_ticks));
+  so.fit_tol = r.fit_tol;
+  r.segments = fit_segments(p, r.plan, r.ticks, cfg.limits, so, h);
+  // Hold segment: one tick at the end position, so that the core's last
+  // sample is the end point (a segment emits its start, not its end).
+  {
+    TimeSegment hold;
+    hold.k0 = static_cast<long long>(r.ticks.size()) - 1;
+    hold.K = 1;
+    hold.degree = cfg.degree;
+    hold.coef.assign(kMaxAxes, std::array<double, 6>{});
+    for (int a = 0; a < p.dim(); ++a) hold.coef[a][0] = r.ticks.back().x[a];
+    r.segments.push_back(hold);
+  }
+  auto t3 = Clock::now();
+  const std::vector<mpz_class>* prev = nullptr;
+  r.compiled.reserve(r.segments.size());
+  for (size_t i = 0; i < r.segments.size(); ++i) {
+    const TimeSegment& s = r.segments[i];
+    fd::PolySegment ps;
+    ps.h = h;
+    ps.ticks = s.K;
+    for (int a = 0; a < f.axes; ++a) {
+      std::vector<double> c(f.degree + 1, 0.0);
+      if (a < p.dim())
+        for (int j = 0; j <= f.degree; ++j) c[j] = s.coef[a][j];
+      ps.coef.push_back(c);
+    }
+    try {
+      r.compiled.push_back(comp.compile(ps, prev, "segment " + std::to_string(i)));
+    } catch (const fd::CompileError& e) {
+      throw PlanError(std::string("compile: ") + e.what());
+    }
+    prev = &r.compiled.back().end;
+    if (progress && (i % 1024 == 0)) progress("compile", double(i) / r.segments.size());
+  }
+  auto t4 = Clock::now();
+  r.header = stream::Header::from(f, h, cfg.units);
+  r.t_plan = secs(t0, t1);
+  r.t_ticks = secs(t1, t2);
+  r.t_fit = secs(t2, t3);
+  r.t_compile = secs(t3, t4);
+  if (progress) progress("done", 1);
+  return r;
+}
+
+std::vector<stream::Record> records_of(const JobResult& r) {
+  std::vector<stream::Record> v;
+  v.reserve(r.compiled.size());
+  for (const auto& c : r.compiled) v.push_back({c.ticks, c.regs});
+  return v;
+}
+
+Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, const Samples& s) {
+  Report rep;
+  const int d = p.dim();
+  const double h = cfg.plan.period;
+  const double lsb = std::ldexp(1.0, -r.header.frac_bits);
+  rep.ticks = static_cast<long long>(s.v.size());
+  rep.motion_time = (rep.ticks - 1) * h;
+  rep.segments = r.segments.size();
+  rep.k_min = ~0u;
+  for (const auto& sg : r.segments) {
+    rep.k_min = std::min(rep.k_min, sg.K);
+    rep.k_max = std::max(rep.k_max, sg.K);
+  }
+  rep.fit_tol = r.fit_tol;
+  double bound = 0;
+  for (const auto& c : r.compiled) bound = std::max(bound, c.bound_lsb);
+  rep.quant = (0.5 + bound) * lsb;
+  rep.guard_needed = fd::Compiler::guard_bits_needed(r.header.degree, rep.k_max, cfg.format.tol_lsb);
+  rep.plan_peaks = peaks_of(r.ticks, d);
+  rep.worst_plan = worst_ratio(rep.plan_peaks, cfg.limits, d, &rep.worst_plan_what);
+  for (const auto& sg : r.segments)
+    for (int a = 0; a < d; ++a) {
+      rep.fit_peaks.v_axis[a] = std::max(rep.fit_peaks.v_axis[a], sg.peak_v[a]);
+      rep.fit_peaks.a_axis[a] = std::max(rep.fit_peaks.a_axis[a], sg.peak_a[a]);
+      rep.fit_peaks.j_axis[a] = std::max(rep.fit_peaks.j_axis[a], sg.peak_j[a]);
+    }
+  {
+    Peaks only_axes = rep.fit_peaks;
+    Limits big = cfg.limits;
+    big.feed = big.a_tan = big.j_tan = big.a_cen = big.j_cen = 1e300;
+    rep.worst_fit = worst_ratio(only_axes, big, d, &rep.worst_fit_what);
+  }
+  // output samples
+  const size_t n = s.v.size();
+  std::vector<std::array<double, 3>> x(n);
+  for (size_t k = 0; k < n; ++k)
+    for (int a = 0; a < 3; ++a) x[k][a] = static_cast<double>(s.v[k][a]) * lsb;
+  // distance to the exact curve: Newton on (C(u) - x).C'(u) = 0 from the planned u
+  for (size_t k = 0; k < n && k < r.ticks.size(); ++k) {
+    const geo::Curve& c = p.curve(r.ticks[k].curve);
+    double u = r.ticks[k].u;
+    double buf[9];
+    for (int it = 0; it < 8; ++it) {
+      c.eval(u, 2, buf);
+      double f = 0, fp = 0;
+      for (int a = 0; a < d; ++a) {
+        const double e = buf[a] - x[k][a];
+        f += e * buf[d + a];
+        fp += buf[d + a] * buf[d + a] + e * buf[2 * d + a];
+      }
+      if (fp <= 0) break;
+      const double un = std::clamp(u - f / fp, c.u_begin(), c.u_end());
+      if (un == u) break;
+      u = un;
+    }
+    c.eval(u, 0, buf);
+    double e2 = 0;
+    for (int a = 0; a < d; ++a) e2 += (buf[a] - x[k][a]) * (buf[a] - x[k][a]);
+    rep.max_deviation = std::max(rep.max_deviation, std::sqrt(e2));
+  }
+  // feed fluctuation: chord between consecutive samples over the planned arc length
+  double sum2 = 0;
+  long long cnt = 0;
+  rep.feed_fluct_max = -1e300;
+  rep.feed_fluct_min = 1e300;
+  for (size_t k = 0; k + 1 < n && k + 1 < r.ticks.size(); ++k) {
+    const double ds = r.ticks[k + 1].s - r.ticks[k].s;
+    if (ds < 0.01 * cfg.limits.feed * h) continue;
+    double c2 = 0;
+    for (int a = 0; a < d; ++a) c2 += (x[k + 1][a] - x[k][a]) * (x[k + 1][a] - x[k][a]);
+    const double fl = std::sqrt(c2) / ds - 1;
+    rep.feed_fluct_max = std::max(rep.feed_fluct_max, fl);
+    rep.feed_fluct_min = std::min(rep.feed_fluct_min, fl);
+    sum2 += fl * fl;
+    ++cnt;
+  }
+  rep.feed_fluct_rms = cnt ? std::sqrt(sum2 / cnt) : 0;
+  if (!cnt) rep.feed_fluct_max = rep.feed_fluct_min = 0;
+  // sampled derivatives
+  for (size_t k = 0; k + 1 < n; ++k) {
+    double v2 = 0, a2 = 0, j2 = 0;
+    for (int a = 0; a < d; ++a) {
+      const double dv = (x[k + 1][a] - x[k][a]) / h;
+      rep.out_peaks.v_axis[a] = std::max(rep.out_peaks.v_axis[a], std::fabs(dv));
+      v2 += dv * dv;
+      if (k + 2 < n) {
+        const double da = (x[k + 2][a] - 2 * x[k + 1][a] + x[k][a]) / (h * h);
+        rep.out_peaks.a_axis[a] = std::max(rep.out_peaks.a_axis[a], std::fabs(da));
+        a2 += da * da;
+      }
+      if (k + 3 < n) {
+        const double dj = (x[k + 3][a] - 3 * x[k + 2][a] + 3 * x[k + 1][a] - x[k][a]) / (h * h * h);
+        rep.out_peaks.j_axis[a] = std::max(rep.out_peaks.j_axis[a], std::fabs(dj));
+        j2 += dj * dj;
+      }
+    }
+    rep.out_path_v = std::max(rep.out_path_v, std::sqrt(v2));
+    rep.out_path_a = std::max(rep.out_path_a, std::sqrt(a2));
+    rep.out_path_j = std::max(rep.out_path_j, std::sqrt(j2));
+  }
+  rep.allow_v = 2 * rep.quant / h;
+  rep.allow_a = 4 * rep.quant / (h * h);
+  rep.allow_j = 8 * rep.quant / (h * h * h);
+  rep.worst_out = 0;
+  for (int a = 0; a < d; ++a) {
+    const std::string ax(1, "xyz"[a]);
+    auto chk = [&](double v, double allow, double lim, const std::string& what) {
+      const double q = (v - allow) / lim;
+      if (q > rep.worst_out) {
+        rep.worst_out = q;
+        rep.worst_out_what = what;
+      }
+    };
+    chk(rep.out_peaks.v_axis[a], rep.allow_v, cfg.limits.v_axis[a], "v_axis." + ax);
+    chk(rep.out_peaks.a_axis[a], rep.allow_a, cfg.limits.a_axis[a], "a_axis." + ax);
+    if (r.header.degree == 5) chk(rep.out_peaks.j_axis[a], rep.allow_j, cfg.limits.j_axis[a], "j_axis." + ax);
+  }
+  return rep;
+}
+
+std::string report_text(const JobConfig& cfg, const Report& rep, const JobResult& r) {
+  std::ostringstream o;
+  const auto& L = cfg.limits;
+  const int d = r.ticks.empty() ? 0 : 2 + (std::fabs(r.ticks.front().x[2]) > 0 || L.v_axis[2] < 0);
+  (void)d;
+  o << "Plan\n";
+  o << "  path length          " << fmt("%.6f", r.plan.length) << " " << cfg.units << "\n";
+  o << "  motion time          " << fmt("%.4f", rep.motion_time) << " s (" << rep.ticks << " samples at "
+    << fmt("%g", cfg.plan.period * 1e3) << " ms)\n";
+  o << "  stations             " << r.plan.stations.size() << " (" << r.plan.refinements << " added by refinement, "
+    << r.plan.grid_points << " grid points)\n";
+  o << "  segments             " << rep.segments << " (K " << rep.k_min << ".." << rep.k_max << " ticks, degree "
+    << r.header.degree << ")\n";
+  o << "  engine format        Width " << r.header.width << ", Guard " << r.header.guard_bits << " (K_max "
+    << rep.k_max << " needs " << rep.guard_needed << "), output " << (r.header.width - r.header.guard_bits)
+    << " bits, 1 LSB = 2^-" << r.header.frac_bits << " " << cfg.units << "\n";
+  o << "Accuracy (output samples of the core)\n";
+  o << "  max distance to the exact curve  " << fmt("%.4g", rep.max_deviation) << " " << cfg.units << "  (tolerance "
+    << fmt("%g", L.tol) << ": fit " << fmt("%.4g", rep.fit_tol) << " + quantisation " << fmt("%.3g", rep.quant)
+    << ")\n";
+  o << "  feed fluctuation (chord / planned arc - 1)  max " << fmt("%+.3e", rep.feed_fluct_max) << "  min "
+    << fmt("%+.3e", rep.feed_fluct_min) << "  RMS " << fmt("%.3e", rep.feed_fluct_rms) << "\n";
+  o << "Limits            limit       plan peak   fit peak    output peak (sample differences)\n";
+  for (int a = 0; a < 3; ++a) {
+    if (rep.plan_peaks.v_axis[a] == 0 && rep.out_peaks.v_axis[a] == 0) continue;
+    const std::string ax(1, "xyz"[a]);
+    o << "  v_" << ax << "           " << fmt("%10.4g", L.v_axis[a]) << "  " << fmt("%10.4g", rep.plan_peaks.v_axis[a])
+      << "  " << fmt("%10.4g", rep.fit_peaks.v_axis[a]) << "  " << fmt("%10.4g", rep.out_peaks.v_axis[a]) << "\n";
+    o << "  a_" << ax << "           " << fmt("%10.4g", L.a_axis[a]) << "  " << fmt("%10.4g", rep.plan_peaks.a_axis[a])
+      << "  " << fmt("%10.4g", rep.fit_peaks.a_axis[a]) << "  " << fmt("%10.4g", rep.out_peaks.a_axis[a]) << "\n";
+    o << "  j_" << ax << "           " << fmt("%10.4g", L.j_axis[a]) << "  " << fmt("%10.4g", rep.plan_peaks.j_axis[a])
+      << "  " << fmt("%10.4g", rep.fit_peaks.j_axis[a]) << "  " << fmt("%10.4g", rep.out_peaks.j_axis[a]) << "\n";
+  }
+  o << "  feed          " << fmt("%10.4g", L.feed) << "  " << fmt("%10.4g", rep.plan_peaks.feed) << "              "
+    << fmt("%10.4g", rep.out_path_v) << "\n";
+  o << "  a_tangential  " << fmt("%10.4g", L.a_tan) << "  " << fmt("%10.4g", rep.plan_peaks.a_tan) << "\n";
+  o << "  j_tangential  " << fmt("%10.4g", L.j_tan) << "  " << fmt("%10.4g", rep.plan_peaks.j_tan) << "\n";
+  o << "  a_centripetal " << fmt("%10.4g", L.a_cen) << "  " << fmt("%10.4g", rep.plan_peaks.a_cen) << "\n";
+  o << "  j_centripetal " << fmt("%10.4g", L.j_cen) << "  " << fmt("%10.4g", rep.plan_peaks.j_cen) << "\n";
+  o << "  |a| path, |j| path (output)              " << fmt("%10.4g", rep.out_path_a) << "  "
+    << fmt("%10.4g", rep.out_path_j) << "\n";
+  o << "  quantisation allowance on sample differences: v " << fmt("%.3g", rep.allow_v) << ", a "
+    << fmt("%.3g", rep.allow_a) << ", j " << fmt("%.3g", rep.allow_j) << "\n";
+  o << "  worst peak/limit: plan " << fmt("%.4f", rep.worst_plan) << " (" << rep.worst_plan_what << "), fit "
+    << fmt("%.4f", rep.worst_fit) << " (" << rep.worst_fit_what << "), output " << fmt("%.4f", rep.worst_out) << " ("
+    << rep.worst_out_what << ", after the allowance)\n";
+  o << "Host time: plan " << fmt("%.1f", r.t_plan * 1e3) << " ms, ticks " << fmt("%.1f", r.t_ticks * 1e3)
+    << " ms, fit " << fmt("%.1f", r.t_fit * 1e3) << " ms, compile " << fmt("%.1f", r.t_compile * 1e3) << " ms\n";
+  return o.str();
+}
+
+namespace {
+
+std::string colour(double f) {  // blue -> green -> yellow -> red
+  f = std::clamp(f, 0.0, 1.0);
+  const double r = std::clamp(2 * f - 0.5, 0.0, 1.0) * 255, g = std::clamp(f < 0.75 ? 2 * f : 4 * (1 - f), 0.0, 1.0) * 255,
+               b = std::clamp(1 - 2 * f, 0.0, 1.0) * 255;
+  char s[16];
+  std::snprintf(s, sizeof s, "#%02x%02x%02x", int(r), int(g), int(b));
+  return s;
+}
+
+void write_atomic(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream o(tmp);
+    if (!o) throw PlanError("cannot write " + tmp);
+    o << text;
+    o.close();
+    if (!o) throw PlanError("write failed: " + tmp);
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+}  // namespace
+
+void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, const JobResult& r, const Samples& s) {
+  std::filesystem::create_directories(dir);
+  const double lsb = std::ldexp(1.0, -r.header.frac_bits);
+  const double h = cfg.plan.period;
+  const size_t n = s.v.size();
+  // --- path coloured by feed (output feed from consecutive samples) ---
+  {
+    double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+    for (const auto& v : s.v) {
+      x0 = std::min(x0, v[0] * lsb);
+      x1 = std::max(x1, v[0] * lsb);
+      y0 = std::min(y0, v[1] * lsb);
+      y1 = std::max(y1, v[1] * lsb);
+    }
+    const double W = 800, H = 800 * std::max(0.2, (y1 - y0) / std::max(1e-12, x1 - x0)), m = 40;
+    const double sc = (W - 2 * m) / std::max(1e-12, x1 - x0);
+    std::ostringstream o;
+    o << "<svg xmlns='http://www.w3.org/2000/svg' width='" << W << "' height='" << H + 60 << "' font-family='sans-serif' font-size='12'>\n";
+    o << "<rect width='100%' height='100%' fill='white'/>\n";
+    o << "<text x='" << m << "' y='20'>path coloured by output feed (x-y), 0 to " << cfg.limits.feed << " " << cfg.units
+      << "/s</text>\n";
+    const size_t stride = std::max<size_t>(1, n / 20000);
+    for (size_t k = 0; k + stride < n; k += stride) {
+      double c2 = 0;
+      for (int a = 0; a < p.dim(); ++a) {
+        const double dd = (s.v[k + stride][a] - s.v[k][a]) * lsb;
+        c2 += dd * dd;
+      }
+      const double feed = std::sqrt(c2) / (stride * h);
+      auto X = [&](const std::array<long long, 3>& v) { return m + (v[0] * lsb - x0) * sc; };
+      auto Y = [&](const std::array<long long, 3>& v) { return 30 + H - m - (v[1] * lsb - y0) * sc; };
+      o << "<line x1='" << X(s.v[k]) << "' y1='" << Y(s.v[k]) << "' x2='" << X(s.v[k + stride]) << "' y2='"
+        << Y(s.v[k + stride]) << "' stroke='" << colour(feed / cfg.limits.feed) << "' stroke-width='2'/>\n";
+    }
+    for (int i = 0; i <= 10; ++i)
+      o << "<rect x='" << m + i * 30 << "' y='" << H + 30 << "' width='30' height='12' fill='" << colour(i / 10.0)
+        << "'/>\n";
+    o << "<text x='" << m + 340 << "' y='" << H + 41 << "'>feed / commanded feed, 0 .. 1</text>\n";
+    o << "</svg>\n";
+    write_atomic(dir + "/path_feed.svg", o.str());
+  }
+  // --- feed, acceleration, jerk against time ---
+  {
+    const double W = 900, PH = 200, m = 60;
+    const double T = r.ticks.empty() ? 1 : r.ticks.back().t;
+    std::ostringstream o;
+    o << "<svg xmlns='http://www.w3.org/2000/svg' width='" << W << "' height='" << 3 * (PH + 40) + 20
+      << "' font-family='sans-serif' font-size='12'>\n<rect width='100%' height='100%' fill='white'/>\n";
+    struct Panel {
+      const char* title;
+      double lim;
+      std::function<double(size_t)> plan;
+    };
+    const auto& L = cfg.limits;
+    Panel panels[3] = {{"feed (plan, and output chord/h in red)", L.feed, [&](size_t k) { return r.ticks[k].v; }},
+                       {"tangential acceleration (plan)", L.a_tan, [&](size_t k) { return r.ticks[k].a; }},
+                       {"tangential jerk (plan)", L.j_tan, [&](size_t k) { return r.ticks[k].j; }}};
+    const size_t stride = std::max<size_t>(1, r.ticks.size() / 4000);
+    for (int pi = 0; pi < 3; ++pi) {
+      const double top = 20 + pi * (PH + 40) + 20;
+      const double lim = panels[pi].lim;
+      const double lo = pi == 0 ? 0 : -lim * 1.1, hi = lim * 1.1;
+      auto Y = [&](double v) { return top + PH - (std::clamp(v, lo, hi) - lo) / (hi - lo) * PH; };
+      auto X = [&](double t) { return m + t / T * (W - 2 * m); };
+      o << "<text x='" << m << "' y='" << top - 6 << "'>" << panels[pi].title << ", limit " << lim << "</text>\n";
+      o << "<rect x='" << m << "' y='" << top << "' width='" << W - 2 * m << "' height='" << PH
+        << "' fill='none' stroke='#888'/>\n";
+      o << "<line x1='" << m << "' x2='" << W - m << "' y1='" << Y(lim) << "' y2='" << Y(lim)
+        << "' stroke='#c00' stroke-dasharray='4'/>\n";
+      if (pi > 0)
+        o << "<line x1='" << m << "' x2='" << W - m << "' y1='" << Y(-lim) << "' y2='" << Y(-lim)
+          << "' stroke='#c00' stroke-dasharray='4'/>\n";
+      o << "<polyline fill='none' stroke='#036' stroke-width='1' points='";
+      for (size_t k = 0; k < r.ticks.size(); k += stride) o << X(r.ticks[k].t) << "," << Y(panels[pi].plan(k)) << " ";
+      o << "'/>\n";
+      if (pi == 0) {
+        o << "<polyline fill='none' stroke='#c33' stroke-width='0.7' points='";
+        for (size_t k = 0; k + 1 < n; k += stride) {
+          double c2 = 0;
+          for (int a = 0; a < 3; ++a) {
+            const double dd = (s.v[k + 1][a] - s.v[k][a]) * lsb;
+            c2 += dd * dd;
+          }
+          o << X(k * h) << "," << Y(std::sqrt(c2) / h) << " ";
+        }
+        o << "'/>\n";
+      }
+      o << "<text x='" << W - m << "' y='" << top + PH + 14 << "' text-anchor='end'>" << T << " s</text>\n";
+    }
+    o << "</svg>\n";
+    write_atomic(dir + "/profile.svg", o.str());
+  }
+}
+
+}  // namespace traj::plan

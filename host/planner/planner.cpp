@@ -1,0 +1,390 @@
+#include "planner/planner.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace traj::plan {
+namespace {
+
+std::string num(double v) {
+  std::ostringstream os;
+  os.precision(6);
+  os << v;
+  return os.str();
+}
+
+void check_positive(double v, const std::string& name) {
+  if (!std::isfinite(v) || !(v > 0)) throw PlanError("limit " + name + " = " + num(v) + " must be positive and finite");
+}
+
+}  // namespace
+
+void Limits::validate() const {
+  check_positive(feed, "feed");
+  for (int a = 0; a < kMaxAxes; ++a) {
+    const std::string ax = std::string(1, "xyz"[a]);
+    check_positive(v_axis[a], "v_axis." + ax);
+    check_positive(a_axis[a], "a_axis." + ax);
+    check_positive(j_axis[a], "j_axis." + ax);
+  }
+  check_positive(a_tan, "a_tan");
+  check_positive(j_tan, "j_tan");
+  check_positive(a_cen, "a_cen");
+  check_positive(j_cen, "j_cen");
+  check_positive(tol, "tol");
+}
+
+void Path::add(const geo::BSpline& spline, const std::string& where) {
+  auto c = std::make_unique<geo::Curve>(spline, where);
+  if (c->dim() < 1 || c->dim() > kMaxAxes)
+    throw PlanError(where + ": " + std::to_string(c->dim()) + " axes; the planner drives 1.." +
+                    std::to_string(kMaxAxes));
+  if (!curves_.empty() && c->dim() != dim_)
+    throw PlanError(where + ": " + std::to_string(c->dim()) + " axes, the path so far has " + std::to_string(dim_));
+  auto al = std::make_unique<geo::ArcLength>(*c, 1e-12);
+  if (!(al->total() > 1e-9))
+    throw PlanError(where + ": zero-length curve (arc length " + num(al->total()) + ")");
+  // joins: end of the previous curve must meet this one's start
+  if (!curves_.empty()) {
+    const Eigen::VectorXd a = curves_.back()->point(curves_.back()->u_end());
+    const Eigen::VectorXd b = c->point(c->u_begin());
+    if ((a - b).norm() > 1e-9 * std::max(1.0, a.norm()))
+      throw PlanError(where + ": starts " + num((a - b).norm()) + " units away from the previous curve's end");
+  }
+  dim_ = c->dim();
+  if (offsets_.empty()) offsets_.push_back(0);
+  offsets_.push_back(offsets_.back() + al->total());
+  curves_.push_back(std::move(c));
+  al_.push_back(std::move(al));
+}
+
+size_t Path::curve_at(double s) const {
+  auto it = std::upper_bound(offsets_.begin() + 1, offsets_.end() - 1, s);
+  return static_cast<size_t>(it - (offsets_.begin() + 1));
+}
+
+Frame frame_at(const Path& p, size_t ci, double u, double s) {
+  const geo::Curve& c = p.curve(ci);
+  const int d = c.dim();
+  double buf[4 * kMaxAxes];
+  c.eval(u, 3, buf);
+  const double* C0 = buf;
+  const double* C1 = buf + d;
+  const double* C2 = buf + 2 * d;
+  const double* C3 = buf + 3 * d;
+  double s11 = 0, s12 = 0, s22 = 0, s13 = 0;
+  for (int a = 0; a < d; ++a) {
+    s11 += C1[a] * C1[a];
+    s12 += C1[a] * C2[a];
+    s22 += C2[a] * C2[a];
+    s13 += C1[a] * C3[a];
+  }
+  const double sig = std::sqrt(s11);
+  if (!(sig > 0)) throw PlanError("curve " + std::to_string(ci) + ": zero parametric speed at u = " + num(u));
+  const double sig1 = s12 / sig;
+  const double sig2 = (s22 + s13) / sig - s12 * s12 / (sig * s11);
+  const double us = 1 / sig;
+  const double uss = -sig1 / (sig * sig * sig);
+  const double usss = us * (-sig2 / (sig * sig * sig) + 3 * sig1 * sig1 / (s11 * s11));
+  Frame f;
+  f.s = s;
+  f.u = u;
+  f.curve = ci;
+  double kk = 0, qq = 0;
+  for (int a = 0; a < d; ++a) {
+    f.C[a] = C0[a];
+    f.T[a] = C1[a] * us;
+    f.K[a] = C2[a] * us * us + C1[a] * uss;
+    f.Q[a] = C3[a] * us * us * us + 3 * C2[a] * us * uss + C1[a] * usss;
+    kk += f.K[a] * f.K[a];
+    qq += f.Q[a] * f.Q[a];
+  }
+  f.kappa = std::sqrt(kk);
+  f.q_norm = std::sqrt(qq);
+  return f;
+}
+
+double speed_limit(const Frame& f, const Limits& L, const PlanOptions& o, double A_t, int dim) {
+  double v = L.feed;
+  auto cap = [&](double x) {
+    if (x >= 0 && x < v) v = x;
+  };
+  for (int a = 0; a < dim; ++a) {
+    if (std::fabs(f.T[a]) > 0) cap(L.v_axis[a] / std::fabs(f.T[a]));
+    if (std::fabs(f.K[a]) > 0) cap(std::sqrt((1 - o.beta) * L.a_axis[a] / std::fabs(f.K[a])));
+    if (std::fabs(f.Q[a]) > 0) cap(std::cbrt(o.g1 * L.j_axis[a] / std::fabs(f.Q[a])));
+    if (std::fabs(f.K[a]) > 0) cap(o.g2 * L.j_axis[a] / (3 * std::fabs(f.K[a]) * A_t));
+  }
+  if (f.kappa > 0) {
+    cap(std::sqrt(L.a_cen / f.kappa));
+    cap(0.5 * L.j_cen / (3 * f.kappa * A_t));
+  }
+  if (f.q_norm > 0) cap(std::cbrt(0.5 * L.j_cen / f.q_norm));
+  return v;
+}
+
+namespace {
+
+// Profile speed at arc length s (pieces sorted, s monotone in time).
+struct SpeedAtS {
+  const std::vector<Piece>& p;
+  size_t i = 0;
+  double operator()(double s) {
+    while (i + 1 < p.size() && p[i].s(p[i].T) < s) ++i;
+    const Piece& q = p[i];
+    if (s <= q.s0) return q.v0;
+    if (s >= q.s(q.T)) return q.v(q.T);
+    double lo = 0, hi = q.T;
+    for (int it = 0; it < 100 && hi - lo > 1e-15 * (1 + q.T); ++it) {
+      const double m = 0.5 * (lo + hi);
+      (q.s(m) < s ? lo : hi) = m;
+    }
+    return q.v(0.5 * (lo + hi));
+  }
+};
+
+struct Grid {
+  std::vector<double> s, vlim;
+  std::vector<char> corner;  // forced stop
+};
+
+Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t) {
+  Grid g;
+  const int d = p.dim();
+  for (size_t ci = 0; ci < p.size(); ++ci) {
+    const geo::Curve& c = p.curve(ci);
+    const geo::ArcLength& al = p.arclength(ci);
+    const double s_off = p.offset(ci), len = al.total();
+    // mandatory points: curvature extrema and inflections
+    std::vector<double> must;
+    for (double u : geo::split_params(c)) must.push_back(al.s(u));
+    must.push_back(len);
+    double s = 0, u = c.u_begin();
+    size_t mi = 0;
+    const double ds_max = std::min(o.max_grid_ds, len / 8);
+    while (true) {
+      const Frame f = frame_at(p, ci, u, s_off + s);
+      double vl = speed_limit(f, L, o, A_t, d);
+      bool corner = false;
+      if (s == 0) {
+        if (ci == 0) {
+          vl = 0;
+          corner = true;
+        } else {
+          // tangent break against the previous curve's end
+          const Frame e = frame_at(p, ci - 1, p.curve(ci - 1).u_end(), s_off);
+          double dot = 0;
+          for (int a = 0; a < d; ++a) dot += e.T[a] * f.T[a];
+          const double ang = std::acos(std::clamp(dot, -1.0, 1.0));
+          if (ang > o.corner_tol) {
+            vl = 0;
+            corner = true;
+          } else {
+            vl = std::min(vl, speed_limit(e, L, o, A_t, d));
+          }
+          if (!g.s.empty() && std::fabs(g.s.back() - (s_off + s)) < 1e-12) {
+            g.vlim.back() = std::min(g.vlim.back(), vl);
+            g.corner.back() = g.corner.back() || corner;
+            goto advance;
+          }
+        }
+      }
+      if (ci + 1 == p.size() && s >= len) {
+        vl = 0;
+        corner = true;
+      }
+      g.s.push_back(s_off + s);
+      g.vlim.push_back(vl);
+      g.corner.push_back(corner);
+    advance:
+      if (s >= len) break;
+      double ds = ds_max;
+      if (f.kappa > 0) ds = std::min(ds, o.grid_turn / f.kappa);
+      ds = std::max(ds, len * 1e-9);
+      while (mi < must.size() && must[mi] <= s + 1e-12) ++mi;
+      double s_next = s + ds;
+      if (mi < must.size() && must[mi] <= s_next) s_next = must[mi];
+      if (s_next > len) s_next = len;
+      u = (s_next >= len) ? c.u_end() : al.advance(u, s_next - s);
+      s = s_next;
+    }
+  }
+  return g;
+}
+
+std::vector<Station> stations_from(const Grid& g, const std::vector<char>& forced, double feed) {
+  std::vector<Station> st;
+  const size_t n = g.s.size();
+  for (size_t i = 0; i < n; ++i) {
+    bool take = i == 0 || i + 1 == n || g.corner[i] || forced[i];
+    if (!take && g.vlim[i] < feed * (1 - 1e-12) && g.vlim[i] < g.vlim[i - 1] && g.vlim[i] <= g.vlim[i + 1])
+      take = true;
+    if (take) st.push_back({g.s[i], g.vlim[i], 0});
+  }
+  return st;
+}
+
+std::vector<double> caps_for(const Grid& g, const std::vector<Station>& st, double feed) {
+  std::vector<double> cap(st.empty() ? 0 : st.size() - 1, 0.0);
+  size_t gi = 0;
+  for (size_t b = 0; b + 1 < st.size(); ++b) {
+    double m = std::max(st[b].vmax, st[b + 1].vmax);
+    while (gi < g.s.size() && g.s[gi] <= st[b + 1].s) {
+      if (g.s[gi] >= st[b].s) m = std::max(m, g.vlim[gi]);
+      ++gi;
+    }
+    if (gi > 0) --gi;
+    cap[b] = std::min(m, feed);
+  }
+  return cap;
+}
+
+}  // namespace
+
+Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o) {
+  L.validate();
+  if (!std::isfinite(o.period) || !(o.period > 0)) throw PlanError("tick period " + num(o.period) + " must be positive and finite");
+  if (p.size() == 0) throw PlanError("empty path");
+  const int d = p.dim();
+  double amin = L.a_axis[0], jmin = L.j_axis[0];
+  for (int a = 1; a < d; ++a) {
+    amin = std::min(amin, L.a_axis[a]);
+    jmin = std::min(jmin, L.j_axis[a]);
+  }
+  Plan plan;
+  plan.A_t = std::min(L.a_tan, o.beta * amin);
+  plan.J_t = std::min(L.j_tan, o.g3 * jmin);
+  plan.length = p.length();
+  Grid g = build_grid(p, L, o, plan.A_t);
+  plan.grid_points = static_cast<int>(g.s.size());
+  std::vector<char> forced(g.s.size(), 0);
+  for (int iter = 0; iter < 10000; ++iter) {
+    plan.stations = stations_from(g, forced, L.feed);
+    const auto cap = caps_for(g, plan.stations, L.feed);
+    plan.pieces = plan_blocks(plan.stations, cap, plan.A_t, plan.J_t);
+    // the profile must stay under v_lim at every grid point
+    SpeedAtS v_at{plan.pieces};
+    size_t st = 0;
+    double worst = 1;
+    size_t worst_i = 0;
+    int added = 0;
+    for (size_t i = 0; i < g.s.size(); ++i) {
+      while (st + 1 < plan.stations.size() && plan.stations[st + 1].s <= g.s[i]) {
+        if (worst > 1 + 1e-9) {
+          forced[worst_i] = 1;
+          ++added;
+        }
+        worst = 1;
+        ++st;
+      }
+      const double v = v_at(g.s[i]);
+      const double r = g.vlim[i] > 0 ? v / g.vlim[i] : (v > 1e-12 ? 1e300 : 0);
+      if (r > worst) {
+        worst = r;
+        worst_i = i;
+      }
+    }
+    if (worst > 1 + 1e-9) {
+      forced[worst_i] = 1;
+      ++added;
+    }
+    if (added == 0) return plan;
+    plan.refinements += added;
+  }
+  throw PlanError("feed planning did not converge");
+}
+
+PathState state_at(const Plan& plan, double t, int* hint) {
+  if (plan.pieces.empty() || t >= plan.duration()) return {plan.length, 0, 0, 0};
+  if (t <= 0) return {0, plan.pieces.front().v0, plan.pieces.front().a0, plan.pieces.front().j};
+  const int i = piece_at(plan.pieces, t, hint ? *hint : 0);
+  if (hint) *hint = i;
+  const Piece& q = plan.pieces[i];
+  const double tau = t - q.t0;
+  return {std::min(q.s(tau), plan.length), std::max(0.0, q.v(tau)), q.a(tau), q.j};
+}
+
+std::vector<TickSample> sample_ticks(const Path& p, const Plan& plan, double period) {
+  const long long n = static_cast<long long>(std::ceil(plan.duration() / period - 1e-9));
+  std::vector<TickSample> out;
+  out.reserve(n + 1);
+  int hint = 0;
+  size_t ci = 0;
+  double u = p.curve(0).u_begin(), s_prev = 0;
+  const int d = p.dim();
+  for (long long k = 0; k <= n; ++k) {
+    const double t = k * period;
+    const PathState ps = state_at(plan, t, &hint);
+    const size_t cj = std::min(p.curve_at(ps.s), p.size() - 1);
+    const double sl = std::clamp(ps.s - p.offset(cj), 0.0, p.arclength(cj).total());
+    if (cj != ci) {
+      ci = cj;
+      u = p.arclength(ci).u_at(sl);
+    } else {
+      u = sl >= p.arclength(ci).total() ? p.curve(ci).u_end()
+                                       : p.arclength(ci).advance(u, std::max(0.0, ps.s - s_prev), -1);
+    }
+    s_prev = ps.s;
+    const Frame f = frame_at(p, ci, u, ps.s);
+    TickSample ts{};
+    ts.t = t;
+    ts.s = ps.s;
+    ts.v = ps.v;
+    ts.a = ps.a;
+    ts.j = ps.j;
+    ts.u = u;
+    ts.curve = ci;
+    for (int a = 0; a < d; ++a) {
+      ts.x[a] = f.C[a];
+      ts.dx[a] = f.T[a] * ps.v;
+      ts.ddx[a] = f.K[a] * ps.v * ps.v + f.T[a] * ps.a;
+      ts.dddx[a] = f.Q[a] * ps.v * ps.v * ps.v + 3 * f.K[a] * ps.v * ps.a + f.T[a] * ps.j;
+    }
+    ts.a_cen = f.kappa * ps.v * ps.v;
+    ts.j_cen_geo = f.q_norm * ps.v * ps.v * ps.v + 3 * f.kappa * ps.v * std::fabs(ps.a);
+    out.push_back(ts);
+  }
+  return out;
+}
+
+Peaks peaks_of(const std::vector<TickSample>& ts, int dim) {
+  Peaks pk;
+  for (const auto& t : ts) {
+    for (int a = 0; a < dim; ++a) {
+      pk.v_axis[a] = std::max(pk.v_axis[a], std::fabs(t.dx[a]));
+      pk.a_axis[a] = std::max(pk.a_axis[a], std::fabs(t.ddx[a]));
+      pk.j_axis[a] = std::max(pk.j_axis[a], std::fabs(t.dddx[a]));
+    }
+    pk.feed = std::max(pk.feed, t.v);
+    pk.a_tan = std::max(pk.a_tan, std::fabs(t.a));
+    pk.j_tan = std::max(pk.j_tan, std::fabs(t.j));
+    pk.a_cen = std::max(pk.a_cen, t.a_cen);
+    pk.j_cen = std::max(pk.j_cen, t.j_cen_geo);
+  }
+  return pk;
+}
+
+double worst_ratio(const Peaks& pk, const Limits& L, int dim, std::string* which) {
+  double w = 0;
+  auto chk = [&](double v, double lim, const std::string& name) {
+    if (v / lim > w) {
+      w = v / lim;
+      if (which) *which = name;
+    }
+  };
+  for (int a = 0; a < dim; ++a) {
+    const std::string ax(1, "xyz"[a]);
+    chk(pk.v_axis[a], L.v_axis[a], "v_axis." + ax);
+    chk(pk.a_axis[a], L.a_axis[a], "a_axis." + ax);
+    chk(pk.j_axis[a], L.j_axis[a], "j_axis." + ax);
+  }
+  chk(pk.feed, L.feed, "feed");
+  chk(pk.a_tan, L.a_tan, "a_tan");
+  chk(pk.j_tan, L.j_tan, "j_tan");
+  chk(pk.a_cen, L.a_cen, "a_cen");
+  chk(pk.j_cen, L.j_cen, "j_cen");
+  return w;
+}
+
+}  // namespace traj::plan

@@ -1,0 +1,130 @@
+// trajcore planner: from a curve to a jerk-limited, time-parameterised motion.
+//
+// Guarantee (checked, not assumed): on the planned trajectory no per-axis
+// velocity, acceleration or jerk, no tangential acceleration or jerk, no
+// centripetal acceleration or jerk exceeds its limit. How:
+//   * tangential a and j come from the S-curve profile (profile.hpp) with
+//     a_t <= A_t = min(a_tan, beta * min_axis a_axis) and j_t <= J_t;
+//   * per axis, x' = T v, x'' = K v^2 + T a_t, x''' = Q v^3 + 3 K v a_t + T j_t
+//     (T = dC/ds, K = d2C/ds2, Q = d3C/ds3). The budget is split a priori:
+//       |T_a| v <= v_axis,
+//       |K_a| v^2 <= (1-beta) a_axis          (|T_a| |a_t| <= beta a_axis),
+//       |Q_a| v^3 <= g1 j_axis, 3 |K_a| v A_t <= g2 j_axis, |j_t| <= g3 j_axis,
+//     g1 + g2 + g3 = 1, so the sum is within the limit whatever the signs;
+//   * centripetal: kappa v^2 <= a_cen; |Q| v^3 + 3 kappa v A_t <= j_cen.
+// These give a speed bound v_lim(s), evaluated on an arc-length grid that
+// contains every curvature extremum and is refined where the curvature is high;
+// stations are added until the profile is under v_lim at every grid point, and
+// the result is verified at every tick (verify()).
+//
+// Curves meeting with a tangent break (angle > corner_tol) are joined with a
+// stop: without blending, any non-zero speed through a corner needs unbounded
+// acceleration, so zero is what the corner allows.
+#pragma once
+#include <Eigen/Dense>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "geometry/geometry.hpp"
+#include "planner/profile.hpp"
+
+namespace traj::plan {
+
+class PlanError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+constexpr int kMaxAxes = 3;
+
+struct Limits {
+  double feed = 50;                        // commanded feed, units/s
+  double v_axis[kMaxAxes] = {200, 200, 200};
+  double a_axis[kMaxAxes] = {2000, 2000, 2000};
+  double j_axis[kMaxAxes] = {50000, 50000, 50000};
+  double a_tan = 1000, j_tan = 20000;      // tangential
+  double a_cen = 1000, j_cen = 50000;      // centripetal acceleration and its jerk
+  double tol = 1e-3;                       // path tolerance (units): deviation of the output from the curve
+  // Throws PlanError naming the field if any limit is non-positive or not finite.
+  void validate() const;
+};
+
+struct PlanOptions {
+  double period = 1e-3;       // tick period h, s
+  double corner_tol = 1e-6;   // tangent angle (rad) above which curves join with a stop
+  double beta = 0.5;          // share of a_axis for tangential acceleration
+  double g1 = 0.3, g2 = 0.2, g3 = 0.5;  // shares of j_axis (geometric, coupling, tangential)
+  double max_grid_ds = 0.25;  // arc-length grid step, units
+  double grid_turn = 0.02;    // grid step <= grid_turn / kappa (radians of turning per step)
+};
+
+// A path: curves joined end to end (each a B-spline/NURBS/Bezier/line/arc).
+class Path {
+ public:
+  void add(const geo::BSpline& spline, const std::string& where);
+  int dim() const { return dim_; }
+  size_t size() const { return curves_.size(); }
+  double length() const { return offsets_.empty() ? 0 : offsets_.back(); }
+  const geo::Curve& curve(size_t i) const { return *curves_[i]; }
+  const geo::ArcLength& arclength(size_t i) const { return *al_[i]; }
+  double offset(size_t i) const { return offsets_[i]; }  // s at the start of curve i
+  size_t curve_at(double s) const;
+
+ private:
+  int dim_ = 0;
+  std::vector<std::unique_ptr<geo::Curve>> curves_;
+  std::vector<std::unique_ptr<geo::ArcLength>> al_;
+  std::vector<double> offsets_;  // size() + 1 entries
+};
+
+// Geometry at one arc length: position and derivatives with respect to s.
+struct Frame {
+  double s = 0, u = 0;
+  size_t curve = 0;
+  double C[kMaxAxes] = {0, 0, 0}, T[kMaxAxes] = {0, 0, 0}, K[kMaxAxes] = {0, 0, 0}, Q[kMaxAxes] = {0, 0, 0};
+  double kappa = 0, q_norm = 0;
+};
+
+// Frame at curve parameter u of curve i (s given for bookkeeping).
+Frame frame_at(const Path& p, size_t curve, double u, double s);
+
+struct Plan {
+  std::vector<Piece> pieces;  // s(t), from t = 0 to duration()
+  std::vector<Station> stations;
+  double length = 0;
+  double duration() const { return pieces.empty() ? 0 : pieces.back().t0 + pieces.back().T; }
+  int grid_points = 0, refinements = 0;
+  double A_t = 0, J_t = 0;    // effective tangential limits used
+};
+
+// Speed bound at a frame (see the header comment).
+double speed_limit(const Frame& f, const Limits& L, const PlanOptions& o, double A_t, int dim);
+
+Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o);
+
+// Kinematic state along the path at time t.
+struct PathState {
+  double s, v, a, j;
+};
+PathState state_at(const Plan& plan, double t, int* hint = nullptr);
+
+// Per-tick samples of the planned trajectory: position and time derivatives.
+struct TickSample {
+  double t, s, v, a, j;  // path
+  double u;
+  size_t curve;
+  double x[kMaxAxes], dx[kMaxAxes], ddx[kMaxAxes], dddx[kMaxAxes];
+  double a_cen, j_cen_geo;  // centripetal acceleration kappa v^2, jerk bound |Q| v^3 + 3 kappa v |a|
+};
+std::vector<TickSample> sample_ticks(const Path& p, const Plan& plan, double period);
+
+struct Peaks {
+  double v_axis[kMaxAxes] = {0, 0, 0}, a_axis[kMaxAxes] = {0, 0, 0}, j_axis[kMaxAxes] = {0, 0, 0};
+  double feed = 0, a_tan = 0, j_tan = 0, a_cen = 0, j_cen = 0;
+};
+Peaks peaks_of(const std::vector<TickSample>& ts, int dim);
+// Largest ratio of a peak to its limit (<= 1 means every limit holds).
+double worst_ratio(const Peaks& pk, const Limits& L, int dim, std::string* which = nullptr);
+
+}  // namespace traj::plan

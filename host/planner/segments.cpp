@@ -1,0 +1,182 @@
+#include "planner/segments.hpp"
+
+#include <unsupported/Eigen/Polynomials>
+
+#include <algorithm>
+#include <cmath>
+
+namespace traj::plan {
+
+double TimeSegment::eval(int axis, double tau, int deriv) const {
+  const auto& c = coef[axis];
+  double d[6];
+  for (int j = 0; j < 6; ++j) d[j] = c[j];
+  for (int r = 0; r < deriv; ++r)
+    for (int j = 0; j < 6; ++j) d[j] = j + 1 < 6 ? d[j + 1] * (j + 1) : 0;
+  double v = 0;
+  for (int j = 5; j >= 0; --j) v = v * tau + d[j];
+  return v;
+}
+
+double max_abs_poly(const double* c, int n, double T) {
+  auto val = [&](double t) {
+    double v = 0;
+    for (int j = n; j >= 0; --j) v = v * t + c[j];
+    return v;
+  };
+  double m = std::max(std::fabs(val(0)), std::fabs(val(T)));
+  // critical points: real roots of q' in (0, T)
+  int dn = n - 1;
+  std::vector<double> dc;
+  for (int j = 1; j <= n; ++j) dc.push_back(c[j] * j);
+  while (dn >= 1 && dc[dn] == 0) --dn;
+  if (dn <= 0) return m;
+  if (dn == 1) {
+    const double r = -dc[0] / dc[1];
+    if (r > 0 && r < T) m = std::max(m, std::fabs(val(r)));
+    return m;
+  }
+  Eigen::VectorXd coeffs(dn + 1);
+  for (int j = 0; j <= dn; ++j) coeffs[j] = dc[j];
+  Eigen::PolynomialSolver<double, Eigen::Dynamic> solver;
+  solver.compute(coeffs);
+  for (const auto& r : solver.roots()) {
+    // accept near-real roots; polish with Newton on q'
+    if (std::fabs(r.imag()) > 1e-6 * (1 + std::fabs(r.real()))) continue;
+    double t = r.real();
+    for (int it = 0; it < 3; ++it) {
+      double f = 0, fp = 0;
+      for (int j = dn; j >= 0; --j) {
+        fp = fp * t + f;
+        f = f * t + dc[j];
+      }
+      if (fp != 0) t -= f / fp;
+    }
+    if (t > 0 && t < T) m = std::max(m, std::fabs(val(t)));
+  }
+  return m;
+}
+
+namespace {
+
+// Quintic (or cubic) Hermite coefficients on [0, T].
+std::array<double, 6> hermite(int degree, double x0, double v0, double a0, double x1, double v1, double a1, double T) {
+  std::array<double, 6> c{};
+  const double dx = x1 - x0, T2 = T * T, T3 = T2 * T;
+  if (degree == 3) {
+    c[0] = x0;
+    c[1] = v0;
+    c[2] = (3 * dx - (2 * v0 + v1) * T) / T2;
+    c[3] = (-2 * dx + (v0 + v1) * T) / T3;
+    return c;
+  }
+  const double T4 = T3 * T, T5 = T4 * T;
+  c[0] = x0;
+  c[1] = v0;
+  c[2] = a0 / 2;
+  c[3] = (20 * dx - (8 * v1 + 12 * v0) * T - (3 * a0 - a1) * T2) / (2 * T3);
+  c[4] = (-30 * dx + (14 * v1 + 16 * v0) * T + (3 * a0 - 2 * a1) * T2) / (2 * T4);
+  c[5] = (12 * dx - 6 * (v1 + v0) * T + (a1 - a0) * T2) / (2 * T5);
+  return c;
+}
+
+}  // namespace
+
+std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std::vector<TickSample>& ts,
+                                      const Limits& L, const SegmentOptions& o, double period) {
+  if (o.degree != 3 && o.degree != 5) throw PlanError("segment degree must be 3 or 5");
+  const int d = p.dim();
+  const long long n = static_cast<long long>(ts.size()) - 1;
+  if (n < 1) throw PlanError("motion shorter than one tick");
+  // break candidates
+  std::vector<long long> brk = {0, n};
+  for (const auto& pc : plan.pieces) brk.push_back(std::llround(pc.t0 / period));
+  for (long long k = 0; k < n; ++k) {
+    if (ts[k].curve != ts[k + 1].curve ||
+        p.curve(ts[k].curve).find_span(ts[k].u) != p.curve(ts[k + 1].curve).find_span(ts[k + 1].u))
+      brk.push_back(k + 1);
+  }
+  std::sort(brk.begin(), brk.end());
+  brk.erase(std::unique(brk.begin(), brk.end()), brk.end());
+  brk.erase(std::remove_if(brk.begin(), brk.end(), [&](long long k) { return k < 0 || k > n; }), brk.end());
+
+  std::vector<TimeSegment> out;
+  auto try_fit = [&](long long k0, long long k1, TimeSegment& seg) {
+    const double T = (k1 - k0) * period;
+    seg = TimeSegment{};
+    seg.k0 = k0;
+    seg.K = static_cast<uint32_t>(k1 - k0);
+    seg.degree = o.degree;
+    seg.coef.assign(kMaxAxes, std::array<double, 6>{});
+    const TickSample& A = ts[k0];
+    const TickSample& B = ts[k1];
+    for (int a = 0; a < d; ++a) seg.coef[a] = hermite(o.degree, A.x[a], A.dx[a], A.ddx[a], B.x[a], B.dx[a], B.ddx[a], T);
+    for (long long k = k0 + 1; k < k1; ++k) {
+      double e2 = 0;
+      for (int a = 0; a < d; ++a) {
+        const double e = seg.eval(a, (k - k0) * period) - ts[k].x[a];
+        e2 += e * e;
+      }
+      seg.max_dev = std::max(seg.max_dev, std::sqrt(e2));
+    }
+    if (seg.max_dev > o.fit_tol) return false;
+    // path feed at the output: the chord between consecutive fitted ticks may
+    // not exceed feed * h (the plan's chords are shorter than its arcs)
+    {
+      double prev[kMaxAxes];
+      for (int a = 0; a < d; ++a) prev[a] = A.x[a];
+      for (long long k = k0 + 1; k <= k1; ++k) {
+        double c2 = 0;
+        for (int a = 0; a < d; ++a) {
+          const double xk = k == k1 ? B.x[a] : seg.eval(a, (k - k0) * period);
+          c2 += (xk - prev[a]) * (xk - prev[a]);
+          prev[a] = xk;
+        }
+        if (std::sqrt(c2) > L.feed * period) return false;
+      }
+    }
+    for (int a = 0; a < d; ++a) {
+      double c1[5], c2[4], c3[3];
+      for (int j = 0; j < 5; ++j) c1[j] = seg.coef[a][j + 1] * (j + 1);
+      for (int j = 0; j < 4; ++j) c2[j] = c1[j + 1] * (j + 1);
+      for (int j = 0; j < 3; ++j) c3[j] = c2[j + 1] * (j + 1);
+      seg.peak_v[a] = max_abs_poly(c1, o.degree - 1, T);
+      seg.peak_a[a] = max_abs_poly(c2, o.degree - 2, T);
+      seg.peak_j[a] = max_abs_poly(c3, o.degree - 3, T);
+      if (seg.peak_v[a] > L.v_axis[a] || seg.peak_a[a] > L.a_axis[a]) return false;
+      if (o.degree == 5 && seg.peak_j[a] > L.j_axis[a]) return false;
+    }
+    return true;
+  };
+  for (size_t b = 0; b + 1 < brk.size(); ++b) {
+    // work list of intervals, in order
+    std::vector<std::pair<long long, long long>> todo;
+    for (long long k = brk[b]; k < brk[b + 1]; k += o.max_ticks)
+      todo.push_back({k, std::min<long long>(k + o.max_ticks, brk[b + 1])});
+    std::reverse(todo.begin(), todo.end());
+    while (!todo.empty()) {
+      auto [k0, k1] = todo.back();
+      todo.pop_back();
+      TimeSegment seg;
+      if (try_fit(k0, k1, seg)) {
+        out.push_back(std::move(seg));
+        continue;
+      }
+      if (k1 - k0 == 1)
+        {
+        std::string why = "deviation " + std::to_string(seg.max_dev);
+        for (int a = 0; a < d; ++a)
+          why += "; axis " + std::to_string(a) + ": v " + std::to_string(seg.peak_v[a]) + " a " +
+                 std::to_string(seg.peak_a[a]) + " j " + std::to_string(seg.peak_j[a]);
+        throw PlanError("tick " + std::to_string(k0) + " (t = " + std::to_string(k0 * period) +
+                        " s): no one-tick segment meets the limits (" + why + ")");
+      }
+      const long long km = k0 + (k1 - k0) / 2;
+      todo.push_back({km, k1});
+      todo.push_back({k0, km});
+    }
+  }
+  return out;
+}
+
+}  // namespace traj::plan

@@ -1,0 +1,54 @@
+// trajcore planner: per-axis time polynomials on the tick grid.
+//
+// Each segment [k0, k0+K] (integer ticks) holds, per axis, the quintic Hermite
+// interpolant of the planned x(t) = C(u(s(t))): position, velocity and
+// acceleration match at both ends, so consecutive segments join C2. A segment
+// is accepted when
+//   * at every tick inside it the fitted point is within fit_tol of the planned
+//     point (which lies on the curve), and
+//   * the chord between consecutive ticks is at most feed * h, and
+//   * per axis, the exact maxima over the segment of |x'|, |x''|, |x'''| of the
+//     fitted polynomial (end points and real roots of the next derivative) are
+//     within the limits;
+// otherwise it is split in half. Breaks are placed first at the ticks nearest
+// the profile's jerk switches and the curve's knot crossings (where the plan's
+// jerk steps), so a fit rarely spans a jerk step.
+// Degree 3 ("cubic where asked"): cubic Hermite (position and velocity at both
+// ends), C1 joins; acceleration may step at a join, so no jerk bound is
+// claimed for cubic segments.
+//
+// Sampled output: for a C2 signal, the k-th finite difference over k ticks is
+// h^k times a B-spline-weighted mean of the k-th derivative, so
+// |Delta^k x| / h^k <= max |x^(k)|: the per-axis bounds carry over to the
+// samples, up to the output quantisation (see report).
+#pragma once
+#include <array>
+#include <vector>
+
+#include "planner/planner.hpp"
+
+namespace traj::plan {
+
+struct TimeSegment {
+  long long k0 = 0;
+  uint32_t K = 0;
+  int degree = 5;
+  std::vector<std::array<double, 6>> coef;  // per axis, coefficient of tau^j, tau = t - k0 h (seconds)
+  double max_dev = 0;                       // max |fit - plan| at the ticks inside
+  double peak_v[kMaxAxes] = {0, 0, 0}, peak_a[kMaxAxes] = {0, 0, 0}, peak_j[kMaxAxes] = {0, 0, 0};
+  double eval(int axis, double tau, int deriv = 0) const;
+};
+
+struct SegmentOptions {
+  int degree = 5;              // 5 (C2 joins) or 3 (C1)
+  uint32_t max_ticks = 1000;   // from the engine format (longest segment the compiler accepts)
+  double fit_tol = 1e-3;       // deviation budget of the fit, units
+};
+
+std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std::vector<TickSample>& ts,
+                                      const Limits& L, const SegmentOptions& o, double period);
+
+// Exact max |q(t)| over [0, T] of a polynomial q (coefficients c[0..n]).
+double max_abs_poly(const double* c, int n, double T);
+
+}  // namespace traj::plan
