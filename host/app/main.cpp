@@ -152,6 +152,7 @@ int main(int argc, char** argv) {
       std::fputs(text.c_str(), stdout);
       std::printf("Wrote %s/{plan.trj, samples.csv, report.txt, path_feed.svg, profile.svg}\n", out_dir.c_str());
       const bool ok = sr.mismatches == 0 && !sr.tick_err && rep.max_deviation <= cfg.limits.tol &&
+                      rep.out_path_v <= cfg.limits.feed + rep.allow_path_v &&
                       rep.worst_plan <= 1 + 1e-9 && rep.worst_fit <= 1 + 1e-9 && rep.worst_out <= 1 + 1e-9;
       if (!ok) std::fprintf(stderr, "trajcore run: a check FAILED (see the report)\n");
       return ok ? 0 : 1;

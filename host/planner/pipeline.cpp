@@ -87,19 +87,59 @@ JobResult run_job(const Path& p, const JobConfig& cfg, const Progress& progress)
     throw PlanError("path tolerance " + std::to_string(cfg.limits.tol) + " is below the output quantisation (" +
                     std::to_string((0.5 + f.tol_lsb) * lsb) + " units)");
   auto t0 = Clock::now();
-  if (progress) progress("plan", 0);
-  r.plan = plan_path(p, cfg.limits, cfg.plan);
-  auto t1 = Clock::now();
-  if (progress) progress("ticks", 0);
-  r.ticks = sample_ticks(p, r.plan, h);
-  auto t2 = Clock::now();
-  if (progress) progress("fit", 0);
+  auto t1 = t0, t2 = t0;
   SegmentOptions so;
   so.degree = cfg.degree;
   so.max_ticks = static_cast<uint32_t>(
       std::min<uint64_t>(fd::Compiler::longest_segment(f.degree, f.guard_bits, f.tol_lsb), f.max_ticks));
   so.fit_tol = r.fit_tol;
-  r.segments = fit_segments(p, r.plan, r.ticks, cfg.limits, so, h);
+  // Plan, check every tick, fit; where a limit is exceeded (between grid
+  // points) or no one-tick segment fits, cap the speed locally and replan.
+  PlanOptions po = cfg.plan;
+  const int d = p.dim();
+  double t_plan = 0, t_ticks = 0, t_fit = 0;
+  for (int attempt = 0;; ++attempt) {
+    if (attempt > 200) throw PlanError("the limits cannot be met: " + std::to_string(po.caps.size()) + " local speed caps did not suffice");
+    if (progress) progress("plan", 0);
+    auto a0 = Clock::now();
+    r.plan = plan_path(p, cfg.limits, po);
+    auto a1 = Clock::now();
+    r.ticks = sample_ticks(p, r.plan, h);
+    auto a2 = Clock::now();
+    t_plan += secs(a0, a1);
+    t_ticks += secs(a1, a2);
+    auto cap_at = [&](long long k, double ratio, double shrink) {
+      const TickSample& t = r.ticks[static_cast<size_t>(k)];
+      const double w = std::max(5 * h * t.v, 1e-9 * r.plan.length) + 1e-9;
+      double v = t.v * shrink;
+      if (ratio > 1) v = std::min(v, t.v * 0.95 * std::pow(ratio, -1.0 / 3.0));
+      po.caps.push_back({t.s - w, t.s + w, std::max(v, 1e-6 * cfg.limits.feed)});
+    };
+    size_t before = po.caps.size();
+    long long last = -1000000;
+    for (size_t k = 0; k < r.ticks.size(); ++k) {
+      const double q = tick_ratio(r.ticks[k], cfg.limits, d);
+      if (q > 1 + 1e-9 && static_cast<long long>(k) > last + 5) {
+        cap_at(static_cast<long long>(k), q, 1.0);
+        last = static_cast<long long>(k);
+      }
+    }
+    if (po.caps.size() > before) continue;
+    if (progress) progress("fit", 0);
+    auto a3 = Clock::now();
+    try {
+      r.segments = fit_segments(p, r.plan, r.ticks, cfg.limits, so, h);
+    } catch (const FitError& e) {
+      t_fit += secs(a3, Clock::now());
+      cap_at(e.tick, 0, 0.8);
+      cap_at(std::min<long long>(e.tick + 1, static_cast<long long>(r.ticks.size()) - 1), 0, 0.8);
+      continue;
+    }
+    t_fit += secs(a3, Clock::now());
+    r.repairs = static_cast<int>(po.caps.size());
+    break;
+  }
+  t1 = t2 = Clock::now();
   // Hold segment: one tick at the end position, so that the core's last
   // sample is the end point (a segment emits its start, not its end).
   {
@@ -135,10 +175,11 @@ JobResult run_job(const Path& p, const JobConfig& cfg, const Progress& progress)
   }
   auto t4 = Clock::now();
   r.header = stream::Header::from(f, h, cfg.units);
-  r.t_plan = secs(t0, t1);
-  r.t_ticks = secs(t1, t2);
-  r.t_fit = secs(t2, t3);
+  r.t_plan = t_plan;
+  r.t_ticks = t_ticks;
+  r.t_fit = t_fit + secs(t2, t3);
   r.t_compile = secs(t3, t4);
+  (void)t0;
   if (progress) progress("done", 1);
   return r;
 }
@@ -253,6 +294,7 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
   rep.allow_v = 2 * rep.quant / h;
   rep.allow_a = 4 * rep.quant / (h * h);
   rep.allow_j = 8 * rep.quant / (h * h * h);
+  rep.allow_path_v = std::sqrt(static_cast<double>(d)) * rep.allow_v;
   rep.worst_out = 0;
   for (int a = 0; a < d; ++a) {
     const std::string ax(1, "xyz"[a]);
@@ -280,7 +322,7 @@ std::string report_text(const JobConfig& cfg, const Report& rep, const JobResult
   o << "  motion time          " << fmt("%.4f", rep.motion_time) << " s (" << rep.ticks << " samples at "
     << fmt("%g", cfg.plan.period * 1e3) << " ms)\n";
   o << "  stations             " << r.plan.stations.size() << " (" << r.plan.refinements << " added by refinement, "
-    << r.plan.grid_points << " grid points)\n";
+    << r.plan.grid_points << " grid points, " << r.repairs << " local speed caps from tick checks)\n";
   o << "  segments             " << rep.segments << " (K " << rep.k_min << ".." << rep.k_max << " ticks, degree "
     << r.header.degree << ")\n";
   o << "  engine format        Width " << r.header.width << ", Guard " << r.header.guard_bits << " (K_max "
@@ -311,7 +353,7 @@ std::string report_text(const JobConfig& cfg, const Report& rep, const JobResult
   o << "  j_centripetal " << fmt("%10.4g", L.j_cen) << "  " << fmt("%10.4g", rep.plan_peaks.j_cen) << "\n";
   o << "  |a| path, |j| path (output)              " << fmt("%10.4g", rep.out_path_a) << "  "
     << fmt("%10.4g", rep.out_path_j) << "\n";
-  o << "  quantisation allowance on sample differences: v " << fmt("%.3g", rep.allow_v) << ", a "
+  o << "  quantisation allowance on sample differences (per axis; sqrt(axes) x for the path): v " << fmt("%.3g", rep.allow_v) << ", a "
     << fmt("%.3g", rep.allow_a) << ", j " << fmt("%.3g", rep.allow_j) << "\n";
   o << "  worst peak/limit: plan " << fmt("%.4f", rep.worst_plan) << " (" << rep.worst_plan_what << "), fit "
     << fmt("%.4f", rep.worst_fit) << " (" << rep.worst_fit_what << "), output " << fmt("%.4f", rep.worst_out) << " ("

@@ -33,6 +33,7 @@ struct JobResult {
   std::vector<fd::Compiled> compiled;
   stream::Header header;
   double fit_tol = 0;
+  int repairs = 0;  // local speed caps added by the tick-level checks
   double t_plan = 0, t_ticks = 0, t_fit = 0, t_compile = 0;  // seconds
 };
 
@@ -57,7 +58,8 @@ struct Report {
   double feed_fluct_max = 0, feed_fluct_min = 0, feed_fluct_rms = 0;
   Peaks plan_peaks, fit_peaks, out_peaks;
   double out_path_v = 0, out_path_a = 0, out_path_j = 0;  // from sample differences (vector norms)
-  double allow_v = 0, allow_a = 0, allow_j = 0;           // quantisation allowance on sample differences
+  double allow_v = 0, allow_a = 0, allow_j = 0;           // quantisation allowance on sample differences, per axis
+  double allow_path_v = 0;                                // the same for the path speed (vector norm): sqrt(dim) allow_v
   double worst_plan = 0, worst_fit = 0, worst_out = 0;
   std::string worst_plan_what, worst_fit_what, worst_out_what;
   int guard_needed = 0;

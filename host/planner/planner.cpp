@@ -144,6 +144,47 @@ struct SpeedAtS {
   }
 };
 
+// Speed bound at the knot starting span `sp` of curve ci: zero at a tangent
+// break; where only the curvature jumps (a C1 knot), the per-axis acceleration
+// steps by |dK_a| v^2 within one tick, so the jerk over that tick is about
+// |dK_a| v^2 / h (times ~1.9 for the quintic that smooths it):
+// v <= sqrt(g1 j_axis h / (2 |dK_a|)). feed if the curve is C2 there.
+double knot_speed_bound(const Path& p, size_t ci, int sp, const Limits& L, const PlanOptions& o) {
+  const geo::Curve& c = p.curve(ci);
+  const int d = c.dim();
+  const double u = c.spans()[sp].u0;
+  double l[4 * kMaxAxes], r[4 * kMaxAxes];
+  c.eval_span(sp - 1, u, 2, l);
+  c.eval_span(sp, u, 2, r);
+  auto frame2 = [&](const double* b, double* T, double* K) {
+    double s11 = 0, s12 = 0;
+    for (int a = 0; a < d; ++a) {
+      s11 += b[d + a] * b[d + a];
+      s12 += b[d + a] * b[2 * d + a];
+    }
+    const double sig = std::sqrt(s11);
+    for (int a = 0; a < d; ++a) {
+      T[a] = b[d + a] / sig;
+      K[a] = (b[2 * d + a] - T[a] * s12 / sig) / s11;
+    }
+  };
+  double Tl[kMaxAxes], Kl[kMaxAxes], Tr[kMaxAxes], Kr[kMaxAxes];
+  frame2(l, Tl, Kl);
+  frame2(r, Tr, Kr);
+  double dot = 0, kscale = 0;
+  for (int a = 0; a < d; ++a) {
+    dot += Tl[a] * Tr[a];
+    kscale = std::max({kscale, std::fabs(Kl[a]), std::fabs(Kr[a])});
+  }
+  if (std::acos(std::clamp(dot, -1.0, 1.0)) > o.corner_tol) return 0;
+  double v = L.feed;
+  for (int a = 0; a < d; ++a) {
+    const double dk = std::fabs(Kr[a] - Kl[a]);
+    if (dk > 1e-9 * (1 + kscale)) v = std::min(v, std::sqrt(o.g1 * L.j_axis[a] * o.period / (2 * dk)));
+  }
+  return v;
+}
+
 struct Grid {
   std::vector<double> s, vlim;
   std::vector<char> corner;  // forced stop
@@ -156,10 +197,26 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
     const geo::Curve& c = p.curve(ci);
     const geo::ArcLength& al = p.arclength(ci);
     const double s_off = p.offset(ci), len = al.total();
-    // mandatory points: curvature extrema and inflections
+    // mandatory points: curvature extrema and inflections, and knots where
+    // the curve is not C2 (the acceleration K v^2 steps there)
     std::vector<double> must;
     for (double u : geo::split_params(c)) must.push_back(al.s(u));
+    std::vector<std::pair<double, double>> knot_bound;  // (s, speed bound)
+    for (size_t sp = 1; sp < c.spans().size(); ++sp) {
+      const double uk = c.spans()[sp].u0;
+      const double sb = knot_speed_bound(p, ci, static_cast<int>(sp), L, o);
+      if (sb < L.feed) {
+        knot_bound.push_back({al.s(uk), sb});
+        must.push_back(al.s(uk));
+      }
+    }
+    for (const auto& cp : o.caps) {
+      const double mid = 0.5 * (cp.s0 + cp.s1) - s_off;
+      if (mid > 0 && mid < len) must.push_back(mid);
+    }
+    std::sort(must.begin(), must.end());
     must.push_back(len);
+    size_t kb = 0;
     double s = 0, u = c.u_begin();
     size_t mi = 0;
     const double ds_max = std::min(o.max_grid_ds, len / 8);
@@ -193,6 +250,13 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
       if (ci + 1 == p.size() && s >= len) {
         vl = 0;
         corner = true;
+      }
+      for (const auto& cp : o.caps)
+        if (s_off + s >= cp.s0 && s_off + s <= cp.s1) vl = std::min(vl, cp.v);
+      while (kb < knot_bound.size() && knot_bound[kb].first < s - 1e-12) ++kb;
+      if (kb < knot_bound.size() && std::fabs(knot_bound[kb].first - s) <= 1e-12) {
+        vl = std::min(vl, knot_bound[kb].second);
+        corner = true;  // a station, like a corner
       }
       g.s.push_back(s_off + s);
       g.vlim.push_back(vl);
@@ -278,8 +342,12 @@ Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o) {
         worst = 1;
         ++st;
       }
+      // at a station the profile has the station's speed by construction
+      // (evaluating it there by bisection only measures rounding)
+      if (g.corner[i] || forced[i]) continue;
       const double v = v_at(g.s[i]);
-      const double r = g.vlim[i] > 0 ? v / g.vlim[i] : (v > 1e-12 ? 1e300 : 0);
+      // speeds below 1e-9 feed count as a stop (float end of an S-curve)
+      const double r = v / std::max(g.vlim[i], 1e-9 * L.feed);
       if (r > worst) {
         worst = r;
         worst_i = i;
@@ -363,6 +431,15 @@ Peaks peaks_of(const std::vector<TickSample>& ts, int dim) {
     pk.j_cen = std::max(pk.j_cen, t.j_cen_geo);
   }
   return pk;
+}
+
+double tick_ratio(const TickSample& t, const Limits& L, int dim) {
+  double w = std::max({t.v / L.feed, std::fabs(t.a) / L.a_tan, std::fabs(t.j) / L.j_tan, t.a_cen / L.a_cen,
+                       t.j_cen_geo / L.j_cen});
+  for (int a = 0; a < dim; ++a)
+    w = std::max({w, std::fabs(t.dx[a]) / L.v_axis[a], std::fabs(t.ddx[a]) / L.a_axis[a],
+                  std::fabs(t.dddx[a]) / L.j_axis[a]});
+  return w;
 }
 
 double worst_ratio(const Peaks& pk, const Limits& L, int dim, std::string* which) {

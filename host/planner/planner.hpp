@@ -50,6 +50,12 @@ struct Limits {
   void validate() const;
 };
 
+// A speed cap over an arc-length interval (added by the job's repair loop
+// where a tick-level check found a limit exceeded).
+struct SpeedCap {
+  double s0 = 0, s1 = 0, v = 0;
+};
+
 struct PlanOptions {
   double period = 1e-3;       // tick period h, s
   double corner_tol = 1e-6;   // tangent angle (rad) above which curves join with a stop
@@ -57,6 +63,7 @@ struct PlanOptions {
   double g1 = 0.3, g2 = 0.2, g3 = 0.5;  // shares of j_axis (geometric, coupling, tangential)
   double max_grid_ds = 0.25;  // arc-length grid step, units
   double grid_turn = 0.02;    // grid step <= grid_turn / kappa (radians of turning per step)
+  std::vector<SpeedCap> caps;
 };
 
 // A path: curves joined end to end (each a B-spline/NURBS/Bezier/line/arc).
@@ -124,6 +131,8 @@ struct Peaks {
   double feed = 0, a_tan = 0, j_tan = 0, a_cen = 0, j_cen = 0;
 };
 Peaks peaks_of(const std::vector<TickSample>& ts, int dim);
+// Largest ratio of a kinematic quantity at one tick to its limit.
+double tick_ratio(const TickSample& t, const Limits& L, int dim);
 // Largest ratio of a peak to its limit (<= 1 means every limit holds).
 double worst_ratio(const Peaks& pk, const Limits& L, int dim, std::string* which = nullptr);
 

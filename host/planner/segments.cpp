@@ -132,7 +132,8 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
           c2 += (xk - prev[a]) * (xk - prev[a]);
           prev[a] = xk;
         }
-        if (std::sqrt(c2) > L.feed * period) return false;
+        // relative slack 1e-9: rounding of a chord planned at exactly the feed
+        if (std::sqrt(c2) > L.feed * period * (1 + 1e-9)) return false;
       }
     }
     for (int a = 0; a < d; ++a) {
@@ -168,8 +169,9 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
         for (int a = 0; a < d; ++a)
           why += "; axis " + std::to_string(a) + ": v " + std::to_string(seg.peak_v[a]) + " a " +
                  std::to_string(seg.peak_a[a]) + " j " + std::to_string(seg.peak_j[a]);
-        throw PlanError("tick " + std::to_string(k0) + " (t = " + std::to_string(k0 * period) +
-                        " s): no one-tick segment meets the limits (" + why + ")");
+        throw FitError("tick " + std::to_string(k0) + " (t = " + std::to_string(k0 * period) +
+                           " s): no one-tick segment meets the limits (" + why + ")",
+                       k0);
       }
       const long long km = k0 + (k1 - k0) / 2;
       todo.push_back({km, k1});

@@ -39,6 +39,13 @@ struct TimeSegment {
   double eval(int axis, double tau, int deriv = 0) const;
 };
 
+// No one-tick segment meets the limits at `tick`: the plan must slow down there.
+class FitError : public PlanError {
+ public:
+  FitError(const std::string& what, long long tick) : PlanError(what), tick(tick) {}
+  long long tick;
+};
+
 struct SegmentOptions {
   int degree = 5;              // 5 (C2 joins) or 3 (C1)
   uint32_t max_ticks = 1000;   // from the engine format (longest segment the compiler accepts)

@@ -1,0 +1,224 @@
+// Planner tests. References: exact polynomial identities, dense brute-force
+// sampling, numerical integration of the S-curve pieces, the published
+// butterfly length, and the Verilated core (RTL) for the output checks.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <random>
+
+#include "planner/pipeline.hpp"
+#include "planner/profile.hpp"
+#include "planner/segments.hpp"
+#include "sim.hpp"
+
+using namespace traj;
+using namespace traj::plan;
+
+#ifndef TRAJ_ASSETS
+#error "TRAJ_ASSETS must name host/assets"
+#endif
+
+TEST(Profile, ChangeDistanceMatchesIntegratedPieces) {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> U(0, 1);
+  for (int rep = 0; rep < 500; ++rep) {
+    const double A = 10 + 1000 * U(rng), J = 100 + 1e5 * U(rng), v0 = 100 * U(rng), v1 = 100 * U(rng);
+    std::vector<Piece> p;
+    const double t_end = append_change(p, 0, 0, v0, v1, A, J);
+    // continuity of s, v, a between pieces; limits respected; end state
+    double s = 0, v = v0, a = 0;
+    for (const auto& q : p) {
+      ASSERT_NEAR(q.s0, s, 1e-9 * (1 + s));
+      ASSERT_NEAR(q.v0, v, 1e-9 * (1 + v));
+      ASSERT_NEAR(q.a0, a, 1e-9 * A);
+      ASSERT_LE(std::fabs(q.j), J * (1 + 1e-12));
+      ASSERT_LE(std::max(std::fabs(q.a(0)), std::fabs(q.a(q.T))), A * (1 + 1e-9));
+      s = q.s(q.T);
+      v = q.v(q.T);
+      a = q.a(q.T);
+    }
+    EXPECT_NEAR(v, v1, 1e-9 * (1 + v1));
+    EXPECT_NEAR(a, 0, 1e-6 * A);
+    EXPECT_NEAR(s, change_distance(v0, v1, A, J), 1e-9 * (1 + s));
+    EXPECT_NEAR(t_end, change_time(std::fabs(v1 - v0), A, J), 1e-12 * (1 + t_end));
+    // reachable is the inverse of change_distance
+    const double L = change_distance(v0, v0 + 50, A, J);
+    EXPECT_NEAR(reachable(v0, L, A, J, 1e9), v0 + 50, 1e-6 * (1 + v0));
+  }
+}
+
+TEST(Segments, HermiteReproducesPolynomialsAndMaxIsExact) {
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> U(-1, 1);
+  for (int rep = 0; rep < 200; ++rep) {
+    double c[6];
+    for (double& x : c) x = U(rng);
+    const double T = 0.5 + U(rng) * 0.4;
+    auto P = [&](double t, int d) {
+      double e[6];
+      for (int j = 0; j < 6; ++j) e[j] = c[j];
+      for (int r = 0; r < d; ++r)
+        for (int j = 0; j < 6; ++j) e[j] = j + 1 < 6 ? e[j + 1] * (j + 1) : 0;
+      double v = 0;
+      for (int j = 5; j >= 0; --j) v = v * t + e[j];
+      return v;
+    };
+    // max |p| over [0,T] vs dense sampling (sampling can only under-estimate)
+    const double m = max_abs_poly(c, 5, T);
+    double dense = 0;
+    for (int i = 0; i <= 200000; ++i) dense = std::max(dense, std::fabs(P(T * i / 200000, 0)));
+    EXPECT_GE(m, dense * (1 - 1e-12));
+    EXPECT_LE(m, dense * (1 + 1e-6) + 1e-12);
+  }
+}
+
+namespace {
+
+struct RunOut {
+  JobResult job;
+  app::SimResult sim;
+  Report rep;
+};
+
+RunOut run_through_core(const Path& p, const JobConfig& cfg) {
+  RunOut o;
+  o.job = run_job(p, cfg);
+  o.sim = app::simulate(o.job.header, records_of(o.job));
+  o.rep = make_report(p, cfg, o.job, o.sim.samples);
+  return o;
+}
+
+void expect_guarantees(const Path& p, const JobConfig& cfg, const RunOut& o, const std::string& what) {
+  SCOPED_TRACE(what);
+  EXPECT_EQ(o.sim.mismatches, 0u) << "RTL != hls";
+  EXPECT_FALSE(o.sim.tick_err);
+  EXPECT_EQ(o.sim.underruns, 0u);
+  EXPECT_EQ(o.sim.samples.v.size(), o.job.ticks.size());
+  EXPECT_LE(o.rep.worst_plan, 1 + 1e-9) << o.rep.worst_plan_what << "\n" << report_text(cfg, o.rep, o.job);
+  EXPECT_LE(o.rep.worst_fit, 1 + 1e-9) << o.rep.worst_fit_what;
+  EXPECT_LE(o.rep.worst_out, 1 + 1e-9) << o.rep.worst_out_what;
+  EXPECT_LE(o.rep.out_path_v, cfg.limits.feed + o.rep.allow_path_v);
+  EXPECT_LE(o.rep.max_deviation, cfg.limits.tol);
+  // first and last samples: the curve's ends
+  const double lsb = std::ldexp(1.0, -o.job.header.frac_bits);
+  const Eigen::VectorXd a = p.curve(0).point(p.curve(0).u_begin());
+  const Eigen::VectorXd b = p.curve(p.size() - 1).point(p.curve(p.size() - 1).u_end());
+  for (int k = 0; k < p.dim(); ++k) {
+    EXPECT_NEAR(o.sim.samples.v.front()[k] * lsb, a[k], o.rep.quant);
+    EXPECT_NEAR(o.sim.samples.v.back()[k] * lsb, b[k], o.rep.quant);
+  }
+}
+
+}  // namespace
+
+TEST(PlannerCore, ButterflyThroughVerilatedCore) {
+  const Path p = load_path(std::string(TRAJ_ASSETS) + "/butterfly_nurbs.json");
+  EXPECT_NEAR(p.length(), 382.86031, 5e-6);  // published arc length
+  JobConfig cfg;
+  cfg.limits.feed = 50;
+  const RunOut o = run_through_core(p, cfg);
+  expect_guarantees(p, cfg, o, "butterfly 50 mm/s");
+  std::printf("  butterfly: %.3f s, %zu segments, deviation %.3g mm, worst plan/fit/out %.4f/%.4f/%.4f\n",
+              o.rep.motion_time, o.rep.segments, o.rep.max_deviation, o.rep.worst_plan, o.rep.worst_fit,
+              o.rep.worst_out);
+}
+
+TEST(PlannerCore, RandomSplinesThroughVerilatedCore) {
+  std::mt19937_64 rng(std::getenv("TRAJ_SEED") ? std::strtoull(std::getenv("TRAJ_SEED"), nullptr, 0) : 99);
+  std::uniform_real_distribution<double> U(-1, 1);
+  for (int rep = 0; rep < 6; ++rep) {
+    geo::BSpline sp;
+    sp.degree = 2 + rep % 4;
+    const int dim = 2 + rep % 2, n = sp.degree + 3 + rep;
+    sp.ctrl.resize(n, dim);
+    for (int i = 0; i < n; ++i)
+      for (int a = 0; a < dim; ++a) sp.ctrl(i, a) = 20 * U(rng) + 5 * i;
+    sp.knots.resize(n + sp.degree + 1);
+    for (int i = 0; i <= sp.degree; ++i) {
+      sp.knots[i] = 0;
+      sp.knots[n + i] = 1;
+    }
+    for (int i = sp.degree + 1; i < n; ++i) sp.knots[i] = double(i - sp.degree) / (n - sp.degree);
+    if (rep % 3 == 2) {
+      sp.weights.resize(n);
+      for (int i = 0; i < n; ++i) sp.weights[i] = 1 + 0.5 * (U(rng) + 1);
+    }
+    Path p;
+    p.add(sp, "random spline " + std::to_string(rep));
+    JobConfig cfg;
+    cfg.limits.feed = 30 + 40 * (U(rng) + 1);
+    cfg.degree = rep % 3 == 1 ? 3 : 5;
+    cfg.format = engine_format(cfg.degree);
+    cfg.limits.tol = cfg.degree == 3 ? 2e-3 : 1e-3;
+    const RunOut o = run_through_core(p, cfg);
+    expect_guarantees(p, cfg, o, "random spline " + std::to_string(rep) + " degree " + std::to_string(sp.degree) +
+                                     " dim " + std::to_string(dim) + " segments of degree " + std::to_string(cfg.degree));
+  }
+}
+
+TEST(PlannerCore, CornerStopsAndLimitsHold) {
+  Path p;
+  Eigen::VectorXd a(2), b(2), c(2);
+  a << 0, 0;
+  b << 10, 0;
+  c << 10, 10;
+  p.add(geo::make_line(a, b), "line 1");
+  p.add(geo::make_line(b, c), "line 2");
+  JobConfig cfg;
+  const RunOut o = run_through_core(p, cfg);
+  expect_guarantees(p, cfg, o, "right-angle corner");
+  // the feed is zero where the lines meet
+  double v_corner = 1e9;
+  for (const auto& t : o.job.ticks)
+    if (std::fabs(t.s - 10) < 1e-3) v_corner = std::min(v_corner, t.v);
+  const double v_near = [&] {
+    double m = 1e9;
+    for (const auto& t : o.job.ticks) m = std::min(m, std::fabs(t.s - 10) < 0.02 ? t.v : 1e9);
+    return m;
+  }();
+  EXPECT_LT(v_near, 0.5) << "feed near the corner";
+  (void)v_corner;
+}
+
+TEST(PlannerInput, BadInputGetsOneClearError) {
+  const Path p = load_path(std::string(TRAJ_ASSETS) + "/butterfly_nurbs.json");
+  auto msg = [&](auto mutate) -> std::string {
+    JobConfig cfg;
+    mutate(cfg);
+    try {
+      run_job(p, cfg);
+    } catch (const PlanError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(msg([](JobConfig& c) { c.limits.feed = 0; }).find("feed"), std::string::npos);
+  EXPECT_NE(msg([](JobConfig& c) { c.limits.feed = NAN; }).find("feed"), std::string::npos);
+  EXPECT_NE(msg([](JobConfig& c) { c.limits.a_axis[1] = -5; }).find("a_axis.y"), std::string::npos);
+  EXPECT_NE(msg([](JobConfig& c) { c.limits.j_tan = INFINITY; }).find("j_tan"), std::string::npos);
+  EXPECT_NE(msg([](JobConfig& c) { c.limits.tol = 0; }).find("tol"), std::string::npos);
+  EXPECT_NE(msg([](JobConfig& c) { c.plan.period = 0; }).find("tick period"), std::string::npos);
+  EXPECT_NE(msg([](JobConfig& c) { c.plan.period = NAN; }).find("tick period"), std::string::npos);
+  // zero-length curve
+  Eigen::VectorXd a(2);
+  a << 1, 1;
+  Path z;
+  try {
+    z.add(geo::make_line(a, a), "zero");
+    ADD_FAILURE() << "zero-length curve accepted";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("zero"), std::string::npos) << e.what();
+  }
+  // unreadable and malformed files
+  EXPECT_THROW(load_path("/nonexistent/path.json"), PlanError);
+  const std::string bad = ::testing::TempDir() + "/bad_path.json";
+  std::ofstream(bad) << "{\"curves\": [ {\"degree\": 3, ";
+  try {
+    load_path(bad);
+    ADD_FAILURE();
+  } catch (const PlanError& e) {
+    EXPECT_NE(std::string(e.what()).find(bad), std::string::npos);
+  }
+}
