@@ -214,6 +214,12 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
       const double mid = 0.5 * (cp.s0 + cp.s1) - s_off;
       if (mid > 0 && mid < len) must.push_back(mid);
     }
+    std::vector<double> forced_here;
+    for (double fs : o.force_stations)
+      if (fs - s_off > 0 && fs - s_off <= len) {
+        must.push_back(fs - s_off);
+        forced_here.push_back(fs - s_off);
+      }
     std::sort(must.begin(), must.end());
     must.push_back(len);
     size_t kb = 0;
@@ -226,7 +232,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
       bool corner = false;
       if (s == 0) {
         if (ci == 0) {
-          vl = 0;
+          vl = o.v_start;
           corner = true;
         } else {
           // tangent break against the previous curve's end
@@ -239,6 +245,16 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
             corner = true;
           } else {
             vl = std::min(vl, speed_limit(e, L, o, A_t, d));
+            // curvature jump at the junction (G1, not G2): same bound as at a C1 knot
+            double kscale = 0;
+            for (int a = 0; a < d; ++a) kscale = std::max({kscale, std::fabs(e.K[a]), std::fabs(f.K[a])});
+            for (int a = 0; a < d; ++a) {
+              const double dk = std::fabs(f.K[a] - e.K[a]);
+              if (dk > 1e-9 * (1 + kscale)) {
+                vl = std::min(vl, std::sqrt(o.g1 * L.j_axis[a] * o.period / (2 * dk)));
+                corner = true;
+              }
+            }
           }
           if (!g.s.empty() && std::fabs(g.s.back() - (s_off + s)) < 1e-12) {
             g.vlim.back() = std::min(g.vlim.back(), vl);
@@ -253,6 +269,8 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
       }
       for (const auto& cp : o.caps)
         if (s_off + s >= cp.s0 && s_off + s <= cp.s1) vl = std::min(vl, cp.v);
+      for (double fs : forced_here)
+        if (std::fabs(fs - s) <= 1e-12) corner = true;
       while (kb < knot_bound.size() && knot_bound[kb].first < s - 1e-12) ++kb;
       if (kb < knot_bound.size() && std::fabs(knot_bound[kb].first - s) <= 1e-12) {
         vl = std::min(vl, knot_bound[kb].second);
@@ -282,7 +300,10 @@ std::vector<Station> stations_from(const Grid& g, const std::vector<char>& force
   const size_t n = g.s.size();
   for (size_t i = 0; i < n; ++i) {
     bool take = i == 0 || i + 1 == n || g.corner[i] || forced[i];
-    if (!take && g.vlim[i] < feed * (1 - 1e-12) && g.vlim[i] < g.vlim[i - 1] && g.vlim[i] <= g.vlim[i + 1])
+    // a local minimum of v_lim, by more than rounding noise (1e-9 relative):
+    // a plateau (constant curvature, straight line) makes no stations
+    if (!take && g.vlim[i] < feed * (1 - 1e-9) && g.vlim[i] < g.vlim[i - 1] * (1 - 1e-9) &&
+        g.vlim[i] <= g.vlim[i + 1] * (1 + 1e-9))
       take = true;
     if (take) st.push_back({g.s[i], g.vlim[i], 0});
   }
@@ -375,14 +396,20 @@ PathState state_at(const Plan& plan, double t, int* hint) {
 
 std::vector<TickSample> sample_ticks(const Path& p, const Plan& plan, double period) {
   const long long n = static_cast<long long>(std::ceil(plan.duration() / period - 1e-9));
+  return sample_ticks_range(p, plan, period, 0.0, 0, n);
+}
+
+std::vector<TickSample> sample_ticks_range(const Path& p, const Plan& plan, double period, double t_offset,
+                                           long long k_first, long long k_last) {
   std::vector<TickSample> out;
-  out.reserve(n + 1);
+  if (k_last < k_first) return out;
+  out.reserve(static_cast<size_t>(k_last - k_first + 1));
   int hint = 0;
   size_t ci = 0;
   double u = p.curve(0).u_begin(), s_prev = 0;
   const int d = p.dim();
-  for (long long k = 0; k <= n; ++k) {
-    const double t = k * period;
+  for (long long k = k_first; k <= k_last; ++k) {
+    const double t = k * period - t_offset;
     const PathState ps = state_at(plan, t, &hint);
     const size_t cj = std::min(p.curve_at(ps.s), p.size() - 1);
     const double sl = std::clamp(ps.s - p.offset(cj), 0.0, p.arclength(cj).total());
@@ -396,7 +423,7 @@ std::vector<TickSample> sample_ticks(const Path& p, const Plan& plan, double per
     s_prev = ps.s;
     const Frame f = frame_at(p, ci, u, ps.s);
     TickSample ts{};
-    ts.t = t;
+    ts.t = k * period;
     ts.s = ps.s;
     ts.v = ps.v;
     ts.a = ps.a;

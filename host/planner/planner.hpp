@@ -64,6 +64,8 @@ struct PlanOptions {
   double max_grid_ds = 0.25;  // arc-length grid step, units
   double grid_turn = 0.02;    // grid step <= grid_turn / kappa (radians of turning per step)
   std::vector<SpeedCap> caps;
+  double v_start = 0;                  // speed at the path start (a window continuing a committed plan)
+  std::vector<double> force_stations;  // arc lengths that must be stations (acceleration 0 there)
 };
 
 // A path: curves joined end to end (each a B-spline/NURBS/Bezier/line/arc).
@@ -125,6 +127,10 @@ struct TickSample {
   double a_cen, j_cen_geo;  // centripetal acceleration kappa v^2, jerk bound |Q| v^3 + 3 kappa v |a|
 };
 std::vector<TickSample> sample_ticks(const Path& p, const Plan& plan, double period);
+// Ticks k_first..k_last (global indices) of a plan that starts at global time
+// t_offset: tick k is at plan time k h - t_offset (clamped to the plan).
+std::vector<TickSample> sample_ticks_range(const Path& p, const Plan& plan, double period, double t_offset,
+                                           long long k_first, long long k_last);
 
 struct Peaks {
   double v_axis[kMaxAxes] = {0, 0, 0}, a_axis[kMaxAxes] = {0, 0, 0}, j_axis[kMaxAxes] = {0, 0, 0};

@@ -83,15 +83,23 @@ std::array<double, 6> hermite(int degree, double x0, double v0, double a0, doubl
 }  // namespace
 
 std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std::vector<TickSample>& ts,
-                                      const Limits& L, const SegmentOptions& o, double period) {
+                                      const Limits& L, const SegmentOptions& o, double period, double t_offset,
+                                      long long k_base) {
   if (o.degree != 3 && o.degree != 5) throw PlanError("segment degree must be 3 or 5");
   const int d = p.dim();
   const long long n = static_cast<long long>(ts.size()) - 1;
   if (n < 1) throw PlanError("motion shorter than one tick");
   // break candidates
   std::vector<long long> brk = {0, n};
-  for (const auto& pc : plan.pieces) brk.push_back(std::llround(pc.t0 / period));
+  // Jerk switches of the profile are not forced breaks: a fit across one is
+  // kept only if its exact jerk maximum passes the check below (else split).
+  (void)plan;
+  (void)t_offset;
   for (long long k = 0; k < n; ++k) {
+    if (ts[k].curve >= p.size() || ts[k + 1].curve >= p.size()) {
+      brk.push_back(k + 1);
+      continue;
+    }
     if (ts[k].curve != ts[k + 1].curve ||
         p.curve(ts[k].curve).find_span(ts[k].u) != p.curve(ts[k + 1].curve).find_span(ts[k + 1].u))
       brk.push_back(k + 1);
@@ -104,7 +112,7 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
   auto try_fit = [&](long long k0, long long k1, TimeSegment& seg) {
     const double T = (k1 - k0) * period;
     seg = TimeSegment{};
-    seg.k0 = k0;
+    seg.k0 = k0 + k_base;
     seg.K = static_cast<uint32_t>(k1 - k0);
     seg.degree = o.degree;
     seg.coef.assign(kMaxAxes, std::array<double, 6>{});
@@ -169,9 +177,9 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
         for (int a = 0; a < d; ++a)
           why += "; axis " + std::to_string(a) + ": v " + std::to_string(seg.peak_v[a]) + " a " +
                  std::to_string(seg.peak_a[a]) + " j " + std::to_string(seg.peak_j[a]);
-        throw FitError("tick " + std::to_string(k0) + " (t = " + std::to_string(k0 * period) +
+        throw FitError("tick " + std::to_string(k0 + k_base) + " (t = " + std::to_string((k0 + k_base) * period) +
                            " s): no one-tick segment meets the limits (" + why + ")",
-                       k0);
+                       k0 + k_base);
       }
       const long long km = k0 + (k1 - k0) / 2;
       todo.push_back({km, k1});

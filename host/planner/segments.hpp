@@ -52,8 +52,12 @@ struct SegmentOptions {
   double fit_tol = 1e-3;       // deviation budget of the fit, units
 };
 
+// ts[0] is global tick k_base; the plan starts at global time t_offset. A
+// sample whose curve index is outside the path (carried from a previous
+// window) is a break. Returned k0 are global ticks.
 std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std::vector<TickSample>& ts,
-                                      const Limits& L, const SegmentOptions& o, double period);
+                                      const Limits& L, const SegmentOptions& o, double period,
+                                      double t_offset = 0, long long k_base = 0);
 
 // Exact max |q(t)| over [0, T] of a polynomial q (coefficients c[0..n]).
 double max_abs_poly(const double* c, int n, double T);

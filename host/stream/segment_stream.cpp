@@ -139,6 +139,38 @@ void write_file(const std::string& path, const Header& h, const std::vector<Reco
   std::filesystem::rename(tmp, path);
 }
 
+StreamWriter::StreamWriter(const std::string& path, const Header& h) : path_(path), tmp_(path + ".tmp"), h_(h) {
+  const auto hdr = encode_header(h);
+  std::filesystem::path p(path);
+  if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path());
+  f_ = std::fopen(tmp_.c_str(), "wb");
+  if (!f_) throw StreamError("cannot write " + tmp_);
+  if (std::fwrite(hdr.data(), 1, hdr.size(), f_) != hdr.size()) throw StreamError("write failed: " + tmp_);
+}
+
+StreamWriter::~StreamWriter() {
+  if (f_) std::fclose(f_);
+  if (!done_) std::remove(tmp_.c_str());
+}
+
+void StreamWriter::add(const Record& r) {
+  const auto b = encode_record(h_, r);
+  if (std::fwrite(b.data(), 1, b.size(), f_) != b.size()) throw StreamError("write failed: " + tmp_);
+  ++count_;
+  ticks_ += r.ticks;
+}
+
+void StreamWriter::finish() {
+  const auto e = encode_end(static_cast<uint32_t>(count_), ticks_);
+  if (std::fwrite(e.data(), 1, e.size(), f_) != e.size() || std::fclose(f_) != 0) {
+    f_ = nullptr;
+    throw StreamError("write failed: " + tmp_);
+  }
+  f_ = nullptr;
+  std::filesystem::rename(tmp_, path_);
+  done_ = true;
+}
+
 ReadResult decode(const std::vector<uint8_t>& b, const std::string& name) {
   ReadResult res;
   auto fail = [&](size_t off, const std::string& what) {

@@ -36,6 +36,7 @@
 // accepted. A stream without its end record is reported as truncated.
 #pragma once
 #include <cstdint>
+#include <cstdio>
 #include <iosfwd>
 #include <stdexcept>
 #include <string>
@@ -73,6 +74,29 @@ std::vector<uint8_t> encode_end(uint32_t segments, uint64_t total_ticks);
 
 // Writes a whole stream to `path` atomically (temporary file, then rename).
 void write_file(const std::string& path, const Header& h, const std::vector<Record>& recs);
+
+// Incremental writer for long streams: records go to `path`.tmp as they come;
+// finish() appends the end record and renames; a writer destroyed before
+// finish() (an error upstream) removes the temporary file, so no half-written
+// stream is ever left under the final name.
+class StreamWriter {
+ public:
+  StreamWriter(const std::string& path, const Header& h);
+  ~StreamWriter();
+  StreamWriter(const StreamWriter&) = delete;
+  StreamWriter& operator=(const StreamWriter&) = delete;
+  void add(const Record& r);
+  void finish();
+  uint64_t records() const { return count_; }
+  uint64_t ticks() const { return ticks_; }
+
+ private:
+  std::string path_, tmp_;
+  Header h_;
+  std::FILE* f_ = nullptr;
+  uint64_t count_ = 0, ticks_ = 0;
+  bool done_ = false;
+};
 
 struct ReadResult {
   Header header;

@@ -1,0 +1,163 @@
+#include "planner/streaming.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <deque>
+
+namespace traj::plan {
+
+StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOptions& so, const SegmentSink& sink,
+                          const Progress& progress) {
+  using Clock = std::chrono::steady_clock;
+  const auto t_start = Clock::now();
+  if (so.window < 2 || so.commit < 1 || so.commit >= so.window)
+    throw PlanError("streaming window: need 1 <= commit < window (got commit " + std::to_string(so.commit) +
+                    ", window " + std::to_string(so.window) + ")");
+  cfg.limits.validate();
+  const double h = cfg.plan.period;
+  if (!std::isfinite(h) || !(h > 0)) throw PlanError("tick period must be positive and finite");
+  fd::Format f = cfg.format;
+  f.degree = cfg.degree;
+  fd::Compiler comp(f);
+  const double lsb = std::ldexp(1.0, -f.frac_bits);
+  SegmentOptions sopt;
+  sopt.degree = cfg.degree;
+  sopt.max_ticks = static_cast<uint32_t>(
+      std::min<uint64_t>(fd::Compiler::longest_segment(f.degree, f.guard_bits, f.tol_lsb), f.max_ticks));
+  sopt.fit_tol = cfg.limits.tol - (0.5 + f.tol_lsb) * lsb;
+  if (!(sopt.fit_tol > 0)) throw PlanError("path tolerance is below the output quantisation");
+
+  StreamStats st;
+  std::deque<std::pair<geo::BSpline, std::string>> win;
+  bool exhausted = false;
+  double T0 = 0, v_commit = 0;
+  long long k_last = -1;  // last committed tick
+  TickSample carried{};
+  std::vector<mpz_class> end_state;
+  bool have_end = false;
+  const int dim_engine = f.axes;
+
+  auto emit = [&](const TimeSegment& seg) {
+    fd::PolySegment ps;
+    ps.h = h;
+    ps.ticks = seg.K;
+    for (int a = 0; a < dim_engine; ++a) {
+      std::vector<double> c(f.degree + 1, 0.0);
+      for (int j = 0; j <= f.degree; ++j) c[j] = seg.coef[a][j];
+      ps.coef.push_back(c);
+    }
+    fd::Compiled c;
+    try {
+      c = comp.compile(ps, have_end ? &end_state : nullptr, "segment " + std::to_string(st.segments));
+    } catch (const fd::CompileError& e) {
+      throw PlanError(std::string("compile: ") + e.what());
+    }
+    end_state = c.end;
+    have_end = true;
+    if (st.first_segment < 0) st.first_segment = std::chrono::duration<double>(Clock::now() - t_start).count();
+    sink(c, seg);
+    ++st.segments;
+    st.ticks += seg.K;
+  };
+
+  while (true) {
+    geo::BSpline b;
+    std::string where;
+    while (!exhausted && win.size() < so.window) {
+      if (src.next(b, where)) {
+        win.push_back({b, where});
+        ++st.curves;
+      } else {
+        exhausted = true;
+      }
+    }
+    if (win.empty()) break;
+    Path path;
+    for (const auto& w : win) path.add(w.first, w.second);
+    const bool last = exhausted;
+    const size_t ncommit = last ? win.size() : std::min(so.commit, win.size() - 1);
+    const double s_commit = last ? path.length() : path.offset(ncommit);
+    PlanOptions po = cfg.plan;
+    po.v_start = v_commit;
+    if (!last) po.force_stations = {s_commit};
+    Plan plan;
+    std::vector<TickSample> ts;
+    std::vector<TimeSegment> segs;
+    double Tc = 0;
+    long long k_end = 0;
+    const long long k_base = k_last < 0 ? 0 : k_last;
+    for (int attempt = 0;; ++attempt) {
+      if (attempt > 200) throw PlanError("the limits cannot be met in window " + std::to_string(st.windows));
+      plan = plan_path(path, cfg.limits, po);
+      if (last) {
+        Tc = plan.duration();
+      } else {
+        double lo = 0, hi = plan.duration();
+        for (int it = 0; it < 200 && hi - lo > 1e-15 * (1 + hi); ++it) {
+          const double mid = 0.5 * (lo + hi);
+          (state_at(plan, mid).s < s_commit ? lo : hi) = mid;
+        }
+        Tc = hi;
+      }
+      k_end = last ? static_cast<long long>(std::ceil((T0 + Tc) / h - 1e-9))
+                   : static_cast<long long>(std::floor((T0 + Tc) / h + 1e-9));
+      ts = sample_ticks_range(path, plan, h, T0, k_last + 1, k_end);
+      if (k_last >= 0) ts.insert(ts.begin(), carried);
+      size_t caps_before = po.caps.size();
+      long long lastcap = -1000000;
+      for (size_t k = (k_last >= 0 ? 1 : 0); k < ts.size(); ++k) {
+        const double q = tick_ratio(ts[k], cfg.limits, path.dim());
+        if (q > 1 + 1e-9 && static_cast<long long>(k) > lastcap + 5) {
+          const double w = std::max(5 * h * ts[k].v, 1e-9 * path.length()) + 1e-9;
+          const double sl = ts[k].s;  // window-local arc length
+          po.caps.push_back({sl - w, sl + w, std::max(ts[k].v * 0.95 * std::pow(q, -1.0 / 3.0), 1e-6 * cfg.limits.feed)});
+          lastcap = static_cast<long long>(k);
+        }
+      }
+      if (po.caps.size() > caps_before) continue;
+      if (ts.size() < 2) break;  // nothing to fit in this window (commit shorter than a tick)
+      try {
+        segs = fit_segments(path, plan, ts, cfg.limits, sopt, h, T0, k_base);
+      } catch (const FitError& e) {
+        const long long idx = e.tick - k_base;
+        if (idx <= 0 && k_last >= 0) throw;  // at the committed tick: nothing left to slow down
+        const TickSample& t = ts[static_cast<size_t>(idx)];
+        const double w = std::max(5 * h * t.v, 1e-9 * path.length()) + 1e-9;
+        po.caps.push_back({t.s - w, t.s + w, std::max(0.8 * t.v, 1e-6 * cfg.limits.feed)});
+        continue;
+      }
+      break;
+    }
+    st.caps += po.caps.size();
+    st.max_window_ticks = std::max(st.max_window_ticks, ts.size());
+    for (const auto& sg : segs) emit(sg);
+    if (!ts.empty()) {
+      carried = ts.back();
+      carried.curve = static_cast<size_t>(-1);
+      carried.s = 0;
+      k_last = k_end;
+    }
+    T0 += Tc;
+    v_commit = last ? 0 : state_at(plan, Tc).v;
+    ++st.windows;
+    for (size_t i = 0; i < ncommit; ++i) win.pop_front();
+    if (progress) progress("stream", static_cast<double>(st.curves));
+    if (last) {
+      // hold segment: the last sample is the end point
+      TimeSegment hold;
+      hold.k0 = k_last;
+      hold.K = 1;
+      hold.degree = cfg.degree;
+      hold.coef.assign(kMaxAxes, std::array<double, 6>{});
+      for (int a = 0; a < path.dim(); ++a) hold.coef[a][0] = carried.x[a];
+      emit(hold);
+      break;
+    }
+  }
+  st.motion_time = T0;
+  st.wall = std::chrono::duration<double>(Clock::now() - t_start).count();
+  return st;
+}
+
+}  // namespace traj::plan

@@ -1,0 +1,56 @@
+// Planner benchmark: planning + compilation time per second of motion, time to
+// the first segment, and memory while streaming long raster paths.
+//   usage: bench_planner [max_pieces=1000000] [butterfly.json]
+// Prints one line per run. Real-time factor = seconds of motion planned and
+// compiled per host second (one core).
+#include <sys/resource.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include "planner/pipeline.hpp"
+#include "planner/raster.hpp"
+#include "planner/streaming.hpp"
+
+using namespace traj::plan;
+
+static long rss_kib() {
+  struct rusage ru;
+  getrusage(RUSAGE_SELF, &ru);
+  return ru.ru_maxrss;
+}
+
+int main(int argc, char** argv) {
+  const size_t max_pieces = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 1000000;
+  const std::string butterfly = argc > 2 ? argv[2] : "";
+  std::printf("%-34s %10s %12s %10s %12s %12s %12s %10s\n", "case", "pieces", "motion_s", "host_s", "realtime_x",
+              "first_seg_ms", "segments", "maxrss_MiB");
+  if (!butterfly.empty()) {
+    const Path p = load_path(butterfly);
+    JobConfig cfg;
+    cfg.limits.feed = 50;
+    const auto t0 = std::chrono::steady_clock::now();
+    const JobResult r = run_job(p, cfg);
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::printf("%-34s %10d %12.3f %10.3f %12.1f %12.1f %12zu %10.1f\n", "butterfly 50 mm/s (whole path)", 1,
+                r.plan.duration(), wall, r.plan.duration() / wall, wall * 1e3, r.segments.size(), rss_kib() / 1024.0);
+    std::printf("    stages: plan %.1f ms, ticks %.1f ms, fit %.1f ms, compile %.1f ms\n", r.t_plan * 1e3,
+                r.t_ticks * 1e3, r.t_fit * 1e3, r.t_compile * 1e3);
+  }
+  for (size_t n = 1000; n <= max_pieces; n *= 10) {
+    RasterSource src(n, 20.0, 1.0);
+    JobConfig cfg;
+    cfg.limits.feed = 50;
+    StreamOptions so;
+    size_t segs = 0;
+    const StreamStats st = run_streaming(src, cfg, so, [&](const traj::fd::Compiled&, const TimeSegment&) { ++segs; });
+    char name[64];
+    std::snprintf(name, sizeof name, "raster %zu pieces (streaming)", n);
+    std::printf("%-34s %10zu %12.3f %10.3f %12.1f %12.1f %12zu %10.1f\n", name, n, st.motion_time, st.wall,
+                st.motion_time / st.wall, st.first_segment * 1e3, segs, rss_kib() / 1024.0);
+    std::fflush(stdout);
+  }
+  return 0;
+}
