@@ -1,6 +1,7 @@
 #include "fd/fd_compiler.hpp"
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <sstream>
 
@@ -88,8 +89,6 @@ void Format::validate() const {
   if (max_ticks < 1) bad("max_ticks must be at least 1");
 }
 
-Compiler::Compiler(Format f) : f_(f) { f_.validate(); }
-
 mpz_class Compiler::position_to_state(double x) const {
   if (!std::isfinite(x)) throw CompileError("position " + fmt_double(x) + " is not finite");
   // (x 2^F + 1/2) 2^G
@@ -135,8 +134,17 @@ int Compiler::guard_bits_needed(int degree, uint64_t k, double tol_lsb) {
   return 400;
 }
 
-Compiled Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>* start,
-                           const std::string& where) const {
+namespace {
+
+double quant_bound_lsb_of(const Format& f, uint64_t k) {
+  return to_lsb(mpq_class(Compiler::quant_bound_x2(f.degree, k), 2), f.guard_bits);
+}
+
+// The straightforward exact form (mpq throughout). The fast path of compile()
+// falls back to it for every refusal and every case it cannot settle itself, so
+// messages and borderline decisions are this function's by construction.
+Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::vector<mpz_class>* start,
+                           const std::string& where) {
   const int N = f_.degree;
   const int A = f_.axes;
   auto fail = [&](const std::string& what) { throw CompileError(where + ": " + what); };
@@ -163,10 +171,10 @@ Compiled Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>*
   const int G = f_.guard_bits;
   // Quantisation budget: Q(K) <= tol/2.
   if (!fits(N, K, G, f_.tol_lsb)) {
-    const uint64_t kmax = longest_segment(N, G, f_.tol_lsb);
-    const int gneed = guard_bits_needed(N, K, f_.tol_lsb);
+    const uint64_t kmax = Compiler::longest_segment(N, G, f_.tol_lsb);
+    const int gneed = Compiler::guard_bits_needed(N, K, f_.tol_lsb);
     fail("K=" + std::to_string(K) + " ticks at degree " + std::to_string(N) + " has quantisation bound " +
-         fmt_double(quant_bound_lsb(K)) + " LSB > tol/2 = " + fmt_double(f_.tol_lsb / 2) +
+         fmt_double(quant_bound_lsb_of(f_, K)) + " LSB > tol/2 = " + fmt_double(f_.tol_lsb / 2) +
          " LSB with guard_bits=" + std::to_string(G) + "; split into segments of at most K=" +
          std::to_string(kmax) + " ticks, or use guard_bits >= " + std::to_string(gneed) +
          " (width >= " + std::to_string(f_.out_width() + gneed) + ")");
@@ -205,7 +213,7 @@ Compiled Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>*
     // Range: |q(t)| + error < 2^(W-1) over [0, T].
     const long double qmax = max_abs_on(c, T);
     const long double margin = std::fabs(static_cast<long double>(e0.get_d())) +
-                               static_cast<long double>(quant_bound_x2(N, K).get_d()) + 2;
+                               static_cast<long double>(Compiler::quant_bound_x2(N, K).get_d()) + 2;
     if (qmax + margin >= static_cast<long double>(limit.get_d()))
       fail("axis " + std::to_string(a) + " leaves the output range: |x| may reach " +
            fmt_double(static_cast<double>(qmax / static_cast<long double>(scale.get_d()))) +
@@ -225,46 +233,520 @@ Compiled Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>*
       for (int m = 0; m + i <= N; ++m) y[m] = y[m + 1] - y[m];  // y[m] = Delta^i q(m h)
       out.regs[a][i] = round_nearest(y[0]);
     }
-    out.end[a] = state_at(out, a, K);
+    out.end[a] = Compiler::state_at(out, a, K);
   }
   out.carried_lsb = carried;
-  out.bound_lsb = carried + quant_bound_lsb(K);
+  out.bound_lsb = carried + quant_bound_lsb_of(f_, K);
+  return out;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------
+// Fast exact path.
+//
+// Every input is a double, so every quantity is a dyadic rational: h = m_h 2^e_h,
+// c_j 2^(G+F) = m_j 2^(e_j+G+F), and the exact forward differences of the
+// unblended target are
+//     Delta^i q(0) = sum_{j>=i} c_j 2^(G+F) h^j surj(j,i),  surj(j,i) = i! S(j,i),
+// integers over one common power of two 2^-z. The linear blend of the carried
+// error e0 (c_1 -= e0/T, T = K h) adds -e0/K to Delta^1 only; it is folded in
+// by one exact integer division by K. Rounding floor(x + 1/2) is then a shift
+// (and, for r[1], a floor division by K): the registers equal the mpq
+// reference's bit for bit, since they are the same rationals rounded the same
+// way. The sums run on fixed-size two's complement limb arrays (at most 16
+// limbs, size bounded in advance per axis; mpz otherwise), the rest on mpz
+// scratch variables held per thread (no allocation once warm).
+//
+// The range check is first tried in long double: the Bernstein coefficients of
+// the blended target are computed with an a-priori error bound (2^-48 times
+// the sum of the magnitudes of their terms, against an actual worst case below
+// 2^-51: every input is exact or carries one rounding of relative size 2^-52
+// (double conversions of r0, e0) or 2^-64 (long double operations, at most ~30
+// per coefficient)). The segment is accepted on this path only if
+//     (max_i (|b_i| + 2^-48 sum_j |term_ij|) + |e0| + 2 Q(K) + 2) (1 + 2^-40)
+//         < 2^(W-1) (1 - 2^-40),
+// which implies that the reference's own long double computation accepts too
+// (its roundings are relative 2^-52 at worst). Anything else (a refusal, or a
+// path within that margin of the limit) goes to compile_reference(), which
+// then decides and words the message exactly as before. The same holds for a
+// discontinuous start and for a carried error too small for a normal double.
+namespace {
+
+// surj(j, i) = i! S(j, i) = Delta^i m^j at m = 0, j, i <= 7.
+struct SurjTable {
+  unsigned long v[8][8] = {};
+  SurjTable() {
+    for (int j = 0; j < 8; ++j)
+      for (int i = 0; i < 8; ++i) {
+        // sum_k (-1)^(i-k) C(i,k) k^j
+        long long s = 0, cik = 1;
+        for (int k = 0; k <= i; ++k) {
+          long long kj = 1;
+          for (int e = 0; e < j; ++e) kj *= k;
+          s += ((i - k) % 2 ? -1 : 1) * cik * kj;
+          cik = cik * (i - k) / (k + 1);
+        }
+        v[j][i] = static_cast<unsigned long>(s);
+      }
+  }
+};
+const SurjTable& surj_table() {
+  static const SurjTable t;
+  return t;
+}
+
+// w[n][i][j] = C(i,j) / C(n,j): Bernstein coefficient weights (degree n).
+struct BernsteinWeights {
+  long double w[8][8][8] = {};
+  BernsteinWeights() {
+    auto C = [](int n, int k) {
+      long double r = 1;
+      for (int t = 1; t <= k; ++t) r = r * (n - k + t) / t;  // exact small integers
+      return r;
+    };
+    for (int n = 0; n < 8; ++n)
+      for (int i = 0; i <= n; ++i)
+        for (int j = 0; j <= i; ++j) w[n][i][j] = C(i, j) / C(n, j);
+  }
+};
+const BernsteinWeights& bernstein_weights() {
+  static const BernsteinWeights t;
+  return t;
+}
+
+// v = m 2^e with m odd (or m = 0, e = 0). Exact for every finite double.
+struct Dyadic {
+  int64_t m = 0;
+  int e = 0;
+};
+Dyadic dyadic(double v) {
+  Dyadic d;
+  if (v == 0) return d;
+  int e;
+  const double f = std::frexp(v, &e);  // |f| in [0.5, 1)
+  int64_t m = static_cast<int64_t>(std::ldexp(f, 53));
+  e -= 53;
+  const int tz = __builtin_ctzll(static_cast<uint64_t>(m));
+  d.m = m / (int64_t(1) << tz);
+  d.e = e + tz;
+  return d;
+}
+
+// |v| 2^p as long double, v an integer (rounded to 53 bits; exact exponent).
+long double mpz_ldexp_abs(const mpz_t v, long p) {
+  if (mpz_sgn(v) == 0) return 0;
+  long ex;
+  const double d = mpz_get_d_2exp(&ex, v);
+  return std::ldexp(std::fabs(static_cast<long double>(d)), static_cast<int>(ex + p));
+}
+long double mpz_ldexp(const mpz_t v, long p) {
+  const long double a = mpz_ldexp_abs(v, p);
+  return mpz_sgn(v) < 0 ? -a : a;
+}
+
+struct Scratch {
+  mpz_t hp[8], u[8], bin[8], x, c0, r0, e, t, half, q2, sb, sw;
+  Scratch() {
+    for (int i = 0; i < 8; ++i) {
+      mpz_init2(hp[i], 512);
+      mpz_init2(u[i], 1024);
+      mpz_init2(bin[i], 256);
+    }
+    for (mpz_ptr p : {x, c0, r0, e, t, half, q2, sb, sw}) mpz_init2(p, 1024);
+  }
+  ~Scratch() {
+    for (int i = 0; i < 8; ++i) {
+      mpz_clear(hp[i]);
+      mpz_clear(u[i]);
+      mpz_clear(bin[i]);
+    }
+    for (mpz_ptr p : {x, c0, r0, e, t, half, q2, sb, sw}) mpz_clear(p);
+  }
+};
+Scratch& scratch() {
+  thread_local Scratch s;
+  return s;
+}
+
+// Fixed-size two's complement integers (L 64-bit limbs, arithmetic modulo
+// 2^(64 L)) for the register sums: the exact values are bounded in advance so
+// that they fit in L limbs, and the ring operations (add, multiply by a
+// non-negative constant, shift) then give them exactly.
+static_assert(GMP_NUMB_BITS == 64 && sizeof(mp_limb_t) == 8, "64-bit GMP limbs expected");
+constexpr int kMaxLimbs = 16;
+using u128 = unsigned __int128;
+
+void limbs_mul1(uint64_t* out, const uint64_t* x, uint64_t m, int L) {
+  u128 c = 0;
+  for (int l = 0; l < L; ++l) {
+    c += static_cast<u128>(x[l]) * m;
+    out[l] = static_cast<uint64_t>(c);
+    c >>= 64;
+  }
+}
+void limbs_shl(uint64_t* x, unsigned long s, int L) {  // in place, x <<= s
+  const long q = static_cast<long>(s / 64);
+  const unsigned r = static_cast<unsigned>(s % 64);
+  for (long l = L - 1; l >= 0; --l) {
+    const uint64_t hi = l - q >= 0 ? x[l - q] : 0;
+    const uint64_t lo = l - q - 1 >= 0 ? x[l - q - 1] : 0;
+    x[l] = r ? (hi << r) | (lo >> (64 - r)) : hi;
+  }
+}
+void limbs_sar(uint64_t* x, unsigned long s, int L) {  // in place, x = floor(x / 2^s)
+  const uint64_t fill = static_cast<int64_t>(x[L - 1]) < 0 ? ~uint64_t(0) : 0;
+  const unsigned long q = s / 64;
+  const unsigned r = static_cast<unsigned>(s % 64);
+  for (unsigned long l = 0; l < static_cast<unsigned long>(L); ++l) {
+    const uint64_t lo = l + q < static_cast<unsigned long>(L) ? x[l + q] : fill;
+    const uint64_t hi = l + q + 1 < static_cast<unsigned long>(L) ? x[l + q + 1] : fill;
+    x[l] = r ? (lo >> r) | (hi << (64 - r)) : lo;
+  }
+}
+void limbs_neg(uint64_t* x, int L) {
+  uint64_t carry = 1;
+  for (int l = 0; l < L; ++l) {
+    x[l] = ~x[l] + carry;
+    carry = carry && x[l] == 0;
+  }
+}
+void limbs_add(uint64_t* x, const uint64_t* y, int L) {
+  u128 c = 0;
+  for (int l = 0; l < L; ++l) {
+    c += static_cast<u128>(x[l]) + y[l];
+    x[l] = static_cast<uint64_t>(c);
+    c >>= 64;
+  }
+}
+// x = (negate ? -z : z), |z| < 2^(64 L - 1).
+void limbs_from_mpz(uint64_t* x, mpz_srcptr z, bool negate, int L) {
+  const int n = static_cast<int>(mpz_size(z));
+  const mp_limb_t* p = mpz_limbs_read(z);
+  for (int l = 0; l < L; ++l) x[l] = l < n ? p[l] : 0;
+  if ((mpz_sgn(z) < 0) != negate && mpz_sgn(z) != 0) limbs_neg(x, L);
+}
+void limbs_to_mpz(mpz_ptr z, uint64_t* x, int L) {  // x is clobbered
+  const bool neg = static_cast<int64_t>(x[L - 1]) < 0;
+  if (neg) limbs_neg(x, L);
+  int n = L;
+  while (n > 0 && x[n - 1] == 0) --n;
+  mp_limb_t* p = mpz_limbs_write(z, n > 0 ? n : 1);
+  for (int l = 0; l < n; ++l) p[l] = x[l];
+  mpz_limbs_finish(z, neg ? -n : n);
+}
+int bitlen_u64(uint64_t v) { return v ? 64 - __builtin_clzll(v) : 0; }
+
+}  // namespace
+
+Compiler::Compiler(Format f) : f_(f) {
+  f_.validate();
+  // Q(K) is increasing in K, so the budget check is K <= kfit_ for every
+  // K <= max_ticks; found with the exact fits() test.
+  if (fits(f_.degree, f_.max_ticks, f_.guard_bits, f_.tol_lsb)) {
+    kfit_ = f_.max_ticks;
+  } else if (fits(f_.degree, 1, f_.guard_bits, f_.tol_lsb)) {
+    uint64_t lo = 1, hi = f_.max_ticks;  // fits(lo), !fits(hi)
+    while (hi - lo > 1) {
+      const uint64_t mid = lo + (hi - lo) / 2;
+      (fits(f_.degree, mid, f_.guard_bits, f_.tol_lsb) ? lo : hi) = mid;
+    }
+    kfit_ = lo;
+  } else {
+    kfit_ = 0;
+  }
+}
+
+Compiled Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>* start,
+                           const std::string& where) const {
+  const int N = f_.degree;
+  const int A = f_.axes;
+  auto fail = [&](const std::string& what) { throw CompileError(where + ": " + what); };
+
+  // The refusals before any arithmetic, in the reference's order and words.
+  if (static_cast<int>(seg.coef.size()) != A)
+    fail("has " + std::to_string(seg.coef.size()) + " axes, the engine has " + std::to_string(A));
+  if (!(seg.h > 0) || !std::isfinite(seg.h)) fail("tick period h=" + fmt_double(seg.h) + " must be positive and finite");
+  if (seg.ticks < 1) fail("tick count K=0: a segment needs at least one tick");
+  if (seg.ticks > f_.max_ticks)
+    fail("K=" + std::to_string(seg.ticks) + " ticks exceeds max_ticks=" + std::to_string(f_.max_ticks) +
+         "; split the segment");
+  for (int a = 0; a < A; ++a) {
+    if (static_cast<int>(seg.coef[a].size()) > N + 1)
+      fail("axis " + std::to_string(a) + " has degree " + std::to_string(seg.coef[a].size() - 1) +
+           ", the engine is built for degree " + std::to_string(N));
+    for (size_t j = 0; j < seg.coef[a].size(); ++j)
+      if (!std::isfinite(seg.coef[a][j]))
+        fail("axis " + std::to_string(a) + " coefficient c" + std::to_string(j) + " = " +
+             fmt_double(seg.coef[a][j]) + " is not finite");
+  }
+  if (start && static_cast<int>(start->size()) != A) fail("start state has the wrong number of axes");
+  if (seg.ticks > kfit_) return compile_reference(f_, seg, start, where);  // words the refusal
+
+  const uint64_t K = seg.ticks;
+  const int G = f_.guard_bits;
+  const int sigma = G + f_.frac_bits;  // scale = 2^sigma
+  Scratch& S = scratch();
+
+  // Shared by the axes: powers of m_h, C(K, i), 2 Q(K).
+  const Dyadic hd = dyadic(seg.h);  // m_h > 0, odd, < 2^53
+  mpz_set_ui(S.hp[0], 1);
+  for (int j = 1; j <= N; ++j) mpz_mul_ui(S.hp[j], S.hp[j - 1], static_cast<unsigned long>(hd.m));
+  // The same as zero-padded limb arrays (hpL = kMaxLimbs + 1 if they do not fit).
+  uint64_t hpl[8][kMaxLimbs] = {};
+  int hpL = kMaxLimbs;
+  if (mpz_size(S.hp[N]) <= static_cast<size_t>(kMaxLimbs)) {
+    for (int j = 0; j <= N; ++j) {
+      const mp_limb_t* p = mpz_limbs_read(S.hp[j]);
+      for (size_t l = 0; l < mpz_size(S.hp[j]); ++l) hpl[j][l] = p[l];
+    }
+  } else {
+    hpL = 0;
+  }
+  mpz_set_ui(S.bin[0], 1);
+  mpz_set_ui(S.q2, 0);
+  for (int i = 1; i <= N; ++i) {
+    if (static_cast<uint64_t>(i) > K) {
+      mpz_set_ui(S.bin[i], 0);
+      continue;
+    }
+    mpz_mul_ui(S.bin[i], S.bin[i - 1], K - i + 1);
+    mpz_divexact_ui(S.bin[i], S.bin[i], static_cast<unsigned long>(i));
+    mpz_add(S.q2, S.q2, S.bin[i]);
+  }
+  const double q2_d = mpz_get_d(S.q2);               // = quant_bound_x2(N, K).get_d() (truncation)
+  const double qbound_lsb = std::ldexp(q2_d, -(G + 1));  // = quant_bound_lsb(K): exact power-of-two scaling
+
+  const Dyadic htol = dyadic(f_.tol_lsb / 2);  // tol/2 output LSB = m 2^(e+G) register LSB
+  const long double T_ld = static_cast<long double>(seg.h) * static_cast<long double>(K);
+  const long double limit_ld = std::ldexp(1.0L, f_.width - 1) * (1 - std::ldexp(1.0L, -40));
+  const long double err_rel = std::ldexp(1.0L, -48);
+  const long double grow = 1 + std::ldexp(1.0L, -40);
+  const long double(*w)[8] = bernstein_weights().w[N];
+  const SurjTable& surj = surj_table();
+
+  Compiled out;
+  out.ticks = static_cast<uint32_t>(K);
+  out.regs.resize(A);
+  for (auto& r : out.regs) r.resize(N + 1);
+  out.end.resize(A);
+  const long double scale_ld = std::ldexp(1.0L, sigma);  // exact power of two
+  double carried = 0;
+  for (int a = 0; a < A; ++a) {
+    const std::vector<double>& cf = seg.coef[a];
+    Dyadic d[8];
+    for (size_t j = 0; j < cf.size(); ++j) d[j] = dyadic(cf[j]);
+    // Common exponent z <= -1 of all terms (and of the bias 2^(G-1), G >= 1).
+    long z = -1;
+    if (d[0].m) z = std::min<long>(z, d[0].e + sigma);
+    long xe[8] = {};
+    for (int j = 1; j <= N; ++j)
+      if (d[j].m) {
+        xe[j] = d[j].e + sigma + long(j) * hd.e;
+        z = std::min(z, xe[j]);
+      }
+    const unsigned long sz = static_cast<unsigned long>(-z);
+    mpz_set_ui(S.half, 0);
+    mpz_setbit(S.half, sz - 1);  // 1/2 at scale 2^-z
+    // c0 = x(0) 2^sigma + 2^(G-1), at scale 2^-z.
+    mpz_set_ui(S.c0, 0);
+    mpz_setbit(S.c0, static_cast<unsigned long>(G - 1 - z));
+    if (d[0].m) {
+      mpz_set_si(S.t, d[0].m);
+      mpz_mul_2exp(S.t, S.t, static_cast<unsigned long>(d[0].e + sigma - z));
+      mpz_add(S.c0, S.c0, S.t);
+    }
+    // Start state and carried error e0 = r0 - c0 (scale 2^-z).
+    if (start) {
+      mpz_set(S.r0, (*start)[a].get_mpz_t());
+    } else {
+      mpz_add(S.t, S.c0, S.half);
+      mpz_fdiv_q_2exp(S.r0, S.t, sz);
+    }
+    mpz_mul_2exp(S.e, S.r0, sz);
+    mpz_sub(S.e, S.e, S.c0);
+    if (start) {
+      // |e0| > tol/2 2^G  <=>  |E| 2^z > m 2^(e+G)
+      const long s = htol.e + G - z;
+      bool far;
+      if (s >= 0) {
+        mpz_set_si(S.t, htol.m);
+        mpz_mul_2exp(S.t, S.t, static_cast<unsigned long>(s));
+        far = mpz_cmpabs(S.e, S.t) > 0;
+      } else {
+        mpz_abs(S.t, S.e);
+        mpz_mul_2exp(S.t, S.t, static_cast<unsigned long>(-s));
+        far = mpz_cmp_si(S.t, htol.m) > 0;
+      }
+      if (far) return compile_reference(f_, seg, start, where);  // words the refusal
+    }
+    // to_lsb(e0, G) = |e0 / 2^G| as a double, truncated (mpq_get_d).
+    double e0_lsb = 0;
+    if (mpz_sgn(S.e) != 0) {
+      long ex;
+      const double dm = mpz_get_d_2exp(&ex, S.e);  // truncated to 53 bits
+      const long p = ex + z - G;
+      if (p - 1 < -1021 || p > 1023) return compile_reference(f_, seg, start, where);  // not a normal double
+      e0_lsb = std::fabs(std::ldexp(dm, static_cast<int>(p)));
+    }
+    carried = std::max(carried, e0_lsb);
+
+    // Range (see above): Bernstein bound of the blended target in long double.
+    {
+      const long double e0_ld = mpz_ldexp(S.e, z);
+      const long double e0_abs = std::fabs(e0_ld);
+      long double av[8], mag[8];
+      av[0] = mpz_size(S.r0) <= 2 ? static_cast<long double>(mpz_get_d(S.r0)) : mpz_ldexp(S.r0, 0);
+      mag[0] = std::fabs(av[0]);
+      long double Tj = 1;
+      for (int j = 1; j <= N; ++j) {
+        Tj *= T_ld;
+        const long double cj = j < static_cast<int>(cf.size()) ? static_cast<long double>(cf[j]) * scale_ld : 0;
+        if (j == 1) {
+          av[1] = (cj - e0_ld / T_ld) * T_ld;
+          mag[1] = (std::fabs(cj) + e0_abs / T_ld) * T_ld;
+        } else {
+          av[j] = cj * Tj;
+          mag[j] = std::fabs(av[j]);
+        }
+      }
+      long double mhi = 0;
+      for (int i = 0; i <= N; ++i) {
+        long double b = 0, sm = 0;
+        for (int j = 0; j <= i; ++j) {
+          b += av[j] * w[i][j];
+          sm += mag[j] * w[i][j];
+        }
+        mhi = std::max(mhi, std::fabs(b) + sm * err_rel);
+      }
+      const long double total = (mhi + e0_abs + static_cast<long double>(q2_d) + 2) * grow;
+      if (!(total < limit_ld)) return compile_reference(f_, seg, start, where);  // decides and words it
+    }
+
+    // Registers: exact differences at scale 2^-z, rounded to nearest.
+    std::vector<mpz_class>& r = out.regs[a];
+    // Size bound: |u_j| < 2^B, |X_i| < 2^(B+15) (sum of surj(j,i) <= 18720),
+    // for r[1]: |K X_1| < 2^(B+3+32), |E|, K 2^(sz-1) < 2^(sz+32).
+    long B = 0;
+    for (int j = 1; j <= N; ++j)
+      if (d[j].m)
+        B = std::max<long>(B, bitlen_u64(static_cast<uint64_t>(d[j].m < 0 ? -d[j].m : d[j].m)) +
+                                  static_cast<long>(mpz_sizeinbase(S.hp[j], 2)) + (xe[j] - z));
+    const long need = std::max({B + 35, static_cast<long>(mpz_sizeinbase(S.e, 2)), static_cast<long>(sz) + 33}) + 3;
+    const int L = static_cast<int>(need / 64 + 1);
+    if (L <= kMaxLimbs && L <= hpL) {
+      uint64_t u[8][kMaxLimbs], x[kMaxLimbs], y[kMaxLimbs];
+      for (int j = 1; j <= N; ++j)
+        if (d[j].m) {
+          limbs_mul1(u[j], hpl[j], static_cast<uint64_t>(d[j].m < 0 ? -d[j].m : d[j].m), L);
+          limbs_shl(u[j], static_cast<unsigned long>(xe[j] - z), L);
+          if (d[j].m < 0) limbs_neg(u[j], L);
+        }
+      for (int i = 1; i <= N; ++i) {
+        u128 c = 0;
+        for (int l = 0; l < L; ++l) {
+          u128 acc = c;
+          for (int j = i; j <= N; ++j)
+            if (d[j].m) acc += static_cast<u128>(u[j][l]) * surj.v[j][i];
+          x[l] = static_cast<uint64_t>(acc);
+          c = acc >> 64;
+        }
+        if (i == 1) {
+          // floor((X - E/K) 2^z + 1/2) = floor(floor((K X - E + K half) / 2^-z) / K)
+          limbs_mul1(x, x, K, L);
+          limbs_from_mpz(y, S.e, true, L);
+          limbs_add(x, y, L);
+          for (int l = 0; l < L; ++l) y[l] = 0;
+          y[0] = K;
+          limbs_shl(y, sz - 1, L);
+          limbs_add(x, y, L);
+          limbs_sar(x, sz, L);
+          limbs_to_mpz(S.x, x, L);
+          mpz_fdiv_q_ui(r[1].get_mpz_t(), S.x, K);
+        } else {
+          for (int l = 0; l < L; ++l) y[l] = 0;
+          y[0] = 1;
+          limbs_shl(y, sz - 1, L);
+          limbs_add(x, y, L);
+          limbs_sar(x, sz, L);
+          limbs_to_mpz(r[i].get_mpz_t(), x, L);
+        }
+      }
+    } else {
+      for (int j = 1; j <= N; ++j)
+        if (d[j].m) {
+          mpz_mul_si(S.u[j], S.hp[j], static_cast<long>(d[j].m));
+          mpz_mul_2exp(S.u[j], S.u[j], static_cast<unsigned long>(xe[j] - z));
+        }
+      for (int i = 1; i <= N; ++i) {
+        mpz_set_ui(S.x, 0);
+        for (int j = i; j <= N; ++j)
+          if (d[j].m) mpz_addmul_ui(S.x, S.u[j], surj.v[j][i]);
+        if (i == 1) {
+          mpz_mul_ui(S.x, S.x, K);
+          mpz_sub(S.x, S.x, S.e);
+          mpz_addmul_ui(S.x, S.half, K);
+          mpz_fdiv_q_2exp(S.x, S.x, sz);
+          mpz_fdiv_q_ui(r[1].get_mpz_t(), S.x, K);
+        } else {
+          mpz_add(S.x, S.x, S.half);
+          mpz_fdiv_q_2exp(r[i].get_mpz_t(), S.x, sz);
+        }
+      }
+    }
+    mpz_set(r[0].get_mpz_t(), S.r0);
+    // End state r0(K) = sum_i r_i C(K, i).
+    mpz_ptr end = out.end[a].get_mpz_t();
+    mpz_set(end, S.r0);
+    for (int i = 1; i <= N; ++i) mpz_addmul(end, r[i].get_mpz_t(), S.bin[i]);
+  }
+  out.carried_lsb = carried;
+  out.bound_lsb = carried + qbound_lsb;
   return out;
 }
 
 mpz_class Compiler::state_at(const Compiled& c, int axis, uint64_t k) {
   const auto& r = c.regs[axis];
   mpz_class s = 0;
-  for (size_t i = 0; i < r.size(); ++i) s += r[i] * binom(k, static_cast<int>(i));
+  if (r.empty()) return s;
+  mpz_ptr sp = s.get_mpz_t();
+  mpz_set(sp, r[0].get_mpz_t());
+  mpz_ptr b = scratch().sb;  // C(k, i), built incrementally
+  mpz_set_ui(b, 1);
+  for (size_t i = 1; i < r.size() && i <= k; ++i) {
+    mpz_mul_ui(b, b, k - i + 1);
+    mpz_divexact_ui(b, b, static_cast<unsigned long>(i));
+    mpz_addmul(sp, r[i].get_mpz_t(), b);
+  }
   return s;
 }
 
 mpz_class Compiler::sample_at(const Compiled& c, int axis, uint64_t k) const {
-  mpz_class s = state_at(c, axis, k), q;
-  mpz_fdiv_q_2exp(q.get_mpz_t(), s.get_mpz_t(), f_.guard_bits);
-  return q;
+  mpz_class s = state_at(c, axis, k);
+  mpz_fdiv_q_2exp(s.get_mpz_t(), s.get_mpz_t(), f_.guard_bits);
+  return s;
 }
 
 std::vector<uint64_t> Compiler::words(const Compiled& c) const {
+  static_assert(GMP_NUMB_BITS == 64, "words() reads 64-bit GMP limbs");
   const int C = f_.chunk_width;
   std::vector<uint64_t> w;
+  size_t nregs = 0;
+  for (const auto& axis : c.regs) nregs += axis.size();
+  w.reserve(2 + nregs * static_cast<size_t>(f_.width / C));
   const uint64_t cmask = C == 64 ? ~uint64_t(0) : ((uint64_t(1) << C) - 1);
   if (C < 32) {
     for (int s = 0; s < 32; s += C) w.push_back((uint64_t(c.ticks) >> s) & cmask);
   } else {
     w.push_back(c.ticks);
   }
-  const mpz_class mod = pow2(f_.width);
+  mpz_ptr v = scratch().sw;
   for (const auto& axis : c.regs) {
     for (const auto& r : axis) {
-      mpz_class v = r % mod;  // two's complement, W bits
-      if (v < 0) v += mod;
-      for (int s = 0; s < f_.width; s += C) {
-        const mpz_class chunk = (v >> s) & (pow2(C) - 1);  // fits 64 bits
-        uint64_t lo = mpz_class(chunk & mpz_class(0xffffffffUL)).get_ui();
-        uint64_t hi = mpz_class(chunk >> 32).get_ui();
-        w.push_back(lo | (hi << 32));
-      }
+      mpz_fdiv_r_2exp(v, r.get_mpz_t(), static_cast<mp_bitcnt_t>(f_.width));  // two's complement, W bits
+      // C divides 64, so a chunk never straddles two limbs.
+      for (int s = 0; s < f_.width; s += C)
+        w.push_back((static_cast<uint64_t>(mpz_getlimbn(v, s / 64)) >> (s % 64)) & cmask);
     }
   }
   return w;

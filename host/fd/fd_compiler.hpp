@@ -107,6 +107,9 @@ class Compiler {
 
  private:
   Format f_;
+  // Longest K <= max_ticks with Q(K) <= tol/2 (0 if none), computed once: the
+  // budget check of compile() is then K <= kfit_ (Q(K) is increasing in K).
+  uint64_t kfit_ = 0;
 };
 
 // Binomial C(k, i) exactly.

@@ -1,0 +1,585 @@
+// The compiler's fast exact path (integer dyadic arithmetic, long double range
+// pre-check, cached budget) against the straightforward exact mpq form kept
+// here as the reference (the compiler as it was before the fast path): on many
+// random chained segments, every degree 1..7, widths 48/64/96/128, ties,
+// near-refusal cases (range limit, continuity limit, K budget) and bad input,
+// the registers, end states, error bounds, words and predictions must be
+// identical, and a refusal must be a refusal with the same message.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <random>
+#include <sstream>
+
+#include "fd/fd_compiler.hpp"
+
+using traj::fd::Compiled;
+using traj::fd::CompileError;
+using traj::fd::Compiler;
+using traj::fd::Format;
+using traj::fd::PolySegment;
+
+namespace ref {
+
+// ---- reference: exact rationals throughout (the original implementation) ----
+std::string fmt_double(double v) {
+  std::ostringstream os;
+  os.precision(6);
+  os << v;
+  return os.str();
+}
+mpq_class exact(double v) {
+  mpq_class q;
+  mpq_set_d(q.get_mpq_t(), v);
+  return q;
+}
+mpz_class round_nearest(const mpq_class& q) {
+  mpq_class t = q + mpq_class(1, 2);
+  mpz_class r;
+  mpz_fdiv_q(r.get_mpz_t(), t.get_num_mpz_t(), t.get_den_mpz_t());
+  return r;
+}
+mpz_class pow2(int e) {
+  mpz_class r = 1;
+  r <<= e;
+  return r;
+}
+mpz_class binom(uint64_t k, int i) {
+  mpz_class r;
+  mpz_bin_uiui(r.get_mpz_t(), k, static_cast<unsigned long>(i));
+  return r;
+}
+double to_lsb(const mpq_class& reg_units, int guard_bits) {
+  mpq_class q = reg_units / mpq_class(pow2(guard_bits));
+  return std::fabs(q.get_d());
+}
+long double max_abs_on(const std::vector<mpq_class>& c, const mpq_class& T) {
+  const int n = static_cast<int>(c.size()) - 1;
+  std::vector<mpq_class> a(c.size());
+  mpq_class Tj = 1;
+  for (int j = 0; j <= n; ++j) {
+    a[j] = c[j] * Tj;
+    Tj *= T;
+  }
+  long double m = 0;
+  for (int i = 0; i <= n; ++i) {
+    mpq_class b = 0;
+    for (int j = 0; j <= i; ++j) b += a[j] * mpq_class(binom(i, j)) / mpq_class(binom(n, j));
+    m = std::max(m, std::fabs(static_cast<long double>(b.get_d())));
+  }
+  return m;
+}
+mpz_class quant_bound_x2(int degree, uint64_t k) {
+  mpz_class s = 0;
+  for (int i = 1; i <= degree; ++i) s += binom(k, i);
+  return s;
+}
+double quant_bound_lsb(const Format& f, uint64_t k) {
+  return to_lsb(mpq_class(quant_bound_x2(f.degree, k), 2), f.guard_bits);
+}
+bool fits(int degree, uint64_t k, int guard_bits, double tol_lsb) {
+  return mpq_class(quant_bound_x2(degree, k)) <= exact(tol_lsb) * mpq_class(pow2(guard_bits));
+}
+uint64_t longest_segment(int degree, int guard_bits, double tol_lsb) {
+  if (!fits(degree, 1, guard_bits, tol_lsb)) return 0;
+  uint64_t lo = 1, hi = 2;
+  while (hi < (uint64_t(1) << 62) && fits(degree, hi, guard_bits, tol_lsb)) {
+    lo = hi;
+    hi *= 2;
+  }
+  while (hi - lo > 1) {
+    uint64_t mid = lo + (hi - lo) / 2;
+    (fits(degree, mid, guard_bits, tol_lsb) ? lo : hi) = mid;
+  }
+  return lo;
+}
+int guard_bits_needed(int degree, uint64_t k, double tol_lsb) {
+  for (int g = 0; g < 400; ++g)
+    if (fits(degree, k, g, tol_lsb)) return g;
+  return 400;
+}
+mpz_class state_at(const Compiled& c, int axis, uint64_t k) {
+  const auto& r = c.regs[axis];
+  mpz_class s = 0;
+  for (size_t i = 0; i < r.size(); ++i) s += r[i] * binom(k, static_cast<int>(i));
+  return s;
+}
+
+Compiled compile(const Format& f_, const PolySegment& seg, const std::vector<mpz_class>* start,
+                 const std::string& where) {
+  const int N = f_.degree;
+  const int A = f_.axes;
+  auto fail = [&](const std::string& what) { throw CompileError(where + ": " + what); };
+  if (static_cast<int>(seg.coef.size()) != A)
+    fail("has " + std::to_string(seg.coef.size()) + " axes, the engine has " + std::to_string(A));
+  if (!(seg.h > 0) || !std::isfinite(seg.h)) fail("tick period h=" + fmt_double(seg.h) + " must be positive and finite");
+  if (seg.ticks < 1) fail("tick count K=0: a segment needs at least one tick");
+  if (seg.ticks > f_.max_ticks)
+    fail("K=" + std::to_string(seg.ticks) + " ticks exceeds max_ticks=" + std::to_string(f_.max_ticks) +
+         "; split the segment");
+  for (int a = 0; a < A; ++a) {
+    if (static_cast<int>(seg.coef[a].size()) > N + 1)
+      fail("axis " + std::to_string(a) + " has degree " + std::to_string(seg.coef[a].size() - 1) +
+           ", the engine is built for degree " + std::to_string(N));
+    for (size_t j = 0; j < seg.coef[a].size(); ++j)
+      if (!std::isfinite(seg.coef[a][j]))
+        fail("axis " + std::to_string(a) + " coefficient c" + std::to_string(j) + " = " +
+             fmt_double(seg.coef[a][j]) + " is not finite");
+  }
+  if (start && static_cast<int>(start->size()) != A) fail("start state has the wrong number of axes");
+  const uint64_t K = seg.ticks;
+  const int G = f_.guard_bits;
+  if (!fits(N, K, G, f_.tol_lsb)) {
+    const uint64_t kmax = longest_segment(N, G, f_.tol_lsb);
+    const int gneed = guard_bits_needed(N, K, f_.tol_lsb);
+    fail("K=" + std::to_string(K) + " ticks at degree " + std::to_string(N) + " has quantisation bound " +
+         fmt_double(quant_bound_lsb(f_, K)) + " LSB > tol/2 = " + fmt_double(f_.tol_lsb / 2) +
+         " LSB with guard_bits=" + std::to_string(G) + "; split into segments of at most K=" +
+         std::to_string(kmax) + " ticks, or use guard_bits >= " + std::to_string(gneed) +
+         " (width >= " + std::to_string(f_.out_width() + gneed) + ")");
+  }
+  const mpq_class h = exact(seg.h);
+  const mpq_class T = h * mpq_class(mpz_class(std::to_string(K)));
+  mpq_class scale = mpq_class(pow2(G));
+  if (f_.frac_bits >= 0) scale *= mpq_class(pow2(f_.frac_bits));
+  else scale /= mpq_class(pow2(-f_.frac_bits));
+  const mpq_class bias(pow2(G), 2);
+  const mpq_class half_tol_reg = exact(f_.tol_lsb / 2) * mpq_class(pow2(G));
+  const mpq_class limit = mpq_class(pow2(f_.width - 1));
+  Compiled out;
+  out.ticks = static_cast<uint32_t>(K);
+  out.regs.assign(A, std::vector<mpz_class>(N + 1));
+  out.end.resize(A);
+  double carried = 0;
+  for (int a = 0; a < A; ++a) {
+    std::vector<mpq_class> c(N + 1, 0);
+    for (size_t j = 0; j < seg.coef[a].size(); ++j) c[j] = exact(seg.coef[a][j]) * scale;
+    c[0] += bias;
+    mpz_class r0 = start ? (*start)[a] : round_nearest(c[0]);
+    mpq_class e0 = mpq_class(r0) - c[0];
+    if (abs(e0) > half_tol_reg && start)
+      fail("axis " + std::to_string(a) + " starts " + fmt_double(to_lsb(e0, G)) +
+           " LSB away from the previous segment's end (more than tol/2 = " + fmt_double(f_.tol_lsb / 2) +
+           " LSB): the path is not continuous here");
+    carried = std::max(carried, to_lsb(e0, G));
+    c[0] += e0;
+    c[1] -= e0 / T;
+    const long double qmax = max_abs_on(c, T);
+    const long double margin = std::fabs(static_cast<long double>(e0.get_d())) +
+                               static_cast<long double>(quant_bound_x2(N, K).get_d()) + 2;
+    if (qmax + margin >= static_cast<long double>(limit.get_d()))
+      fail("axis " + std::to_string(a) + " leaves the output range: |x| may reach " +
+           fmt_double(static_cast<double>(qmax / static_cast<long double>(scale.get_d()))) +
+           " units, the format holds |x| < " + fmt_double(std::ldexp(1.0, f_.out_width() - 1 - f_.frac_bits)) +
+           " (out_width=" + std::to_string(f_.out_width()) + ", frac_bits=" + std::to_string(f_.frac_bits) + ")");
+    std::vector<mpq_class> y(N + 1);
+    for (int m = 0; m <= N; ++m) {
+      const mpq_class t = h * m;
+      mpq_class v = 0;
+      for (int j = N; j >= 0; --j) v = v * t + c[j];
+      y[m] = v;
+    }
+    out.regs[a][0] = r0;
+    for (int i = 1; i <= N; ++i) {
+      for (int m = 0; m + i <= N; ++m) y[m] = y[m + 1] - y[m];
+      out.regs[a][i] = round_nearest(y[0]);
+    }
+    out.end[a] = state_at(out, a, K);
+  }
+  out.carried_lsb = carried;
+  out.bound_lsb = carried + quant_bound_lsb(f_, K);
+  return out;
+}
+
+std::vector<uint64_t> words(const Format& f_, const Compiled& c) {
+  const int C = f_.chunk_width;
+  std::vector<uint64_t> w;
+  const uint64_t cmask = C == 64 ? ~uint64_t(0) : ((uint64_t(1) << C) - 1);
+  if (C < 32) {
+    for (int s = 0; s < 32; s += C) w.push_back((uint64_t(c.ticks) >> s) & cmask);
+  } else {
+    w.push_back(c.ticks);
+  }
+  const mpz_class mod = pow2(f_.width);
+  for (const auto& axis : c.regs)
+    for (const auto& r : axis) {
+      mpz_class v = r % mod;
+      if (v < 0) v += mod;
+      for (int s = 0; s < f_.width; s += C) {
+        const mpz_class chunk = (v >> s) & (pow2(C) - 1);
+        uint64_t lo = mpz_class(chunk & mpz_class(0xffffffffUL)).get_ui();
+        uint64_t hi = mpz_class(chunk >> 32).get_ui();
+        w.push_back(lo | (hi << 32));
+      }
+    }
+  return w;
+}
+
+}  // namespace ref
+
+namespace {
+
+Format fmt(int axes, int deg, int w, int c, int g, int frac) {
+  Format f;
+  f.axes = axes;
+  f.degree = deg;
+  f.width = w;
+  f.chunk_width = c;
+  f.guard_bits = g;
+  f.frac_bits = frac;
+  return f;
+}
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+struct Outcome {
+  bool ok = false;
+  std::string msg;
+  Compiled c;
+};
+
+struct Stats {
+  long accepted = 0, refused = 0;
+};
+
+// Compiles with both, checks they agree in every respect; returns the outcome.
+Outcome check_same(const Compiler& comp, const PolySegment& seg, const std::vector<mpz_class>* start,
+                   const std::string& ctx, Stats* st = nullptr) {
+  Outcome fast, slow;
+  try {
+    fast.c = comp.compile(seg, start, "seg");
+    fast.ok = true;
+  } catch (const CompileError& e) {
+    fast.msg = e.what();
+  }
+  try {
+    slow.c = ref::compile(comp.format(), seg, start, "seg");
+    slow.ok = true;
+  } catch (const CompileError& e) {
+    slow.msg = e.what();
+  }
+  EXPECT_EQ(fast.ok, slow.ok) << ctx << "\n fast: " << fast.msg << "\n ref: " << slow.msg;
+  if (fast.ok != slow.ok) return slow;
+  if (!fast.ok) {
+    EXPECT_EQ(fast.msg, slow.msg) << ctx;
+    if (st) ++st->refused;
+    return slow;
+  }
+  if (st) ++st->accepted;
+  const Compiled &a = fast.c, &b = slow.c;
+  EXPECT_EQ(a.ticks, b.ticks) << ctx;
+  EXPECT_TRUE(same_bits(a.carried_lsb, b.carried_lsb)) << ctx << " " << a.carried_lsb << " vs " << b.carried_lsb;
+  EXPECT_TRUE(same_bits(a.bound_lsb, b.bound_lsb)) << ctx << " " << a.bound_lsb << " vs " << b.bound_lsb;
+  EXPECT_EQ(a.regs.size(), b.regs.size()) << ctx;
+  EXPECT_EQ(a.end.size(), b.end.size()) << ctx;
+  for (size_t ax = 0; ax < std::min(a.regs.size(), b.regs.size()); ++ax) {
+    EXPECT_EQ(a.regs[ax].size(), b.regs[ax].size()) << ctx;
+    for (size_t i = 0; i < std::min(a.regs[ax].size(), b.regs[ax].size()); ++i)
+      EXPECT_EQ(a.regs[ax][i], b.regs[ax][i]) << ctx << " axis " << ax << " r[" << i << "]";
+    if (ax < a.end.size() && ax < b.end.size()) {
+      EXPECT_EQ(a.end[ax], b.end[ax]) << ctx << " axis " << ax << " end";
+    }
+  }
+  EXPECT_EQ(comp.words(a), ref::words(comp.format(), b)) << ctx;
+  return fast;
+}
+
+// A random polynomial on [0, T] from x0 with terms of size ~ range/(4 deg) at T;
+// with some probability exactly dyadic ("nice") coefficients, zeros, or fewer
+// coefficients.
+std::vector<double> random_poly(std::mt19937_64& rng, int deg, double T, double x0, double range) {
+  std::uniform_real_distribution<double> U(-1, 1);
+  std::uniform_int_distribution<int> pick(0, 9);
+  std::vector<double> c(deg + 1);
+  c[0] = x0;
+  double Tj = 1;
+  const bool nice = pick(rng) == 0;
+  for (int j = 1; j <= deg; ++j) {
+    Tj *= T;
+    double v = U(rng) * range / (4.0 * deg) / Tj;
+    if (nice) {
+      int e;
+      std::frexp(v, &e);
+      v = std::ldexp(std::round(std::ldexp(v, 6 - e)), e - 6);  // 6-bit mantissa
+    }
+    const int p = pick(rng);
+    if (p == 1) v = 0;
+    if (p == 2 && j > 1) v = -0.0;
+    c[j] = v;
+  }
+  if (pick(rng) == 3) c.resize(1 + std::uniform_int_distribution<int>(0, deg)(rng));
+  return c;
+}
+
+double pick_h(std::mt19937_64& rng) {
+  switch (std::uniform_int_distribution<int>(0, 5)(rng)) {
+    case 0: return 1e-3;
+    case 1: return std::ldexp(1.0, -std::uniform_int_distribution<int>(4, 16)(rng));
+    case 2: return 1.0 / 3.0e3;
+    case 3: return 2.5e-4;
+    default: return std::uniform_real_distribution<double>(1e-5, 1e-2)(rng);
+  }
+}
+
+double horner_q(const std::vector<double>& c, double t) {
+  __float128 v = 0;
+  for (size_t j = c.size(); j-- > 0;) v = v * __float128(t) + __float128(c[j]);
+  return static_cast<double>(v);
+}
+
+struct WG {
+  int w, c, g;
+};
+
+void random_chain(int deg, WG wg, int frac, uint64_t seed, int nseg, Stats& st) {
+  const int axes = 1 + static_cast<int>(seed % 3);
+  const Format f = fmt(axes, deg, wg.w, wg.c, wg.g, frac);
+  const Compiler comp(f);
+  std::mt19937_64 rng(seed);
+  const uint64_t kfit = std::min<uint64_t>(ref::longest_segment(deg, wg.g, f.tol_lsb), f.max_ticks);
+  ASSERT_EQ(kfit, std::min<uint64_t>(Compiler::longest_segment(deg, wg.g, f.tol_lsb), f.max_ticks));
+  const double full = std::ldexp(1.0, f.out_width() - 1 - f.frac_bits);  // |x| limit, units
+  std::uniform_real_distribution<double> U01(0, 1);
+  std::vector<double> x0(axes, 0.0);
+  bool have_prev = false;
+  Compiled prev;
+  for (int s = 0; s < nseg; ++s) {
+    PolySegment seg;
+    seg.h = pick_h(rng);
+    const int kp = std::uniform_int_distribution<int>(0, 19)(rng);
+    if (kfit == 0) seg.ticks = 1 + kp;
+    else if (kp == 0) seg.ticks = kfit + 1 + std::uniform_int_distribution<int>(0, 3)(rng);  // budget refusal
+    else if (kp == 1) seg.ticks = kfit;
+    else seg.ticks = std::uniform_int_distribution<uint64_t>(1, std::min<uint64_t>(kfit, 3000))(rng);
+    const double T = seg.h * static_cast<double>(seg.ticks);
+    // range factor: mostly inside, sometimes at or beyond the limit
+    const int rp = std::uniform_int_distribution<int>(0, 9)(rng);
+    const double rho = rp == 0 ? 1e-9 : rp == 1 ? 3.5 : rp == 2 ? 8.0 : 0.05 + 0.9 * U01(rng);
+    for (int a = 0; a < axes; ++a) {
+      double xs = have_prev ? x0[a] : (U01(rng) - 0.5) * full;
+      if (std::fabs(xs) > 0.6 * full) xs *= 0.5;
+      seg.coef.push_back(random_poly(rng, deg, T, xs, full * rho));
+    }
+    const Outcome o = check_same(comp, seg, have_prev ? &prev.end : nullptr,
+                                 "deg " + std::to_string(deg) + " W " + std::to_string(wg.w) + " G " +
+                                     std::to_string(wg.g) + " F " + std::to_string(frac) + " seed " +
+                                     std::to_string(seed) + " seg " + std::to_string(s),
+                                 &st);
+    if (::testing::Test::HasFailure()) return;
+    if (o.ok) {
+      // predictions at a few ticks
+      for (uint64_t k : {uint64_t(0), uint64_t(1), seg.ticks / 2, seg.ticks - 1, seg.ticks}) {
+        const int a = static_cast<int>(k % axes);
+        ASSERT_EQ(Compiler::state_at(o.c, a, k), ref::state_at(o.c, a, k));
+        mpz_class q;
+        mpz_fdiv_q_2exp(q.get_mpz_t(), ref::state_at(o.c, a, k).get_mpz_t(), f.guard_bits);
+        ASSERT_EQ(comp.sample_at(o.c, a, k), q);
+      }
+      prev = o.c;
+      have_prev = std::uniform_int_distribution<int>(0, 7)(rng) != 0;
+      for (int a = 0; a < axes; ++a) {
+        x0[a] = horner_q(seg.coef[a], T);
+        // sometimes a start slightly off the end (continuity limit)
+        if (std::uniform_int_distribution<int>(0, 9)(rng) == 0)
+          x0[a] += std::ldexp((U01(rng) - 0.5) * 1.2, -f.frac_bits);
+      }
+    } else {
+      have_prev = false;
+    }
+  }
+}
+
+}  // namespace
+
+TEST(FdCompilerFast, RandomChainsAllDegreesAndWidths) {
+  const WG wgs[] = {{48, 16, 16}, {48, 16, 20}, {64, 16, 32}, {64, 32, 40}, {96, 16, 48},
+                    {96, 32, 56}, {128, 64, 80}, {128, 32, 64}, {128, 16, 100}};
+  const int fracs[] = {0, 4, 12, 16, 32, -6};
+  Stats st;
+  uint64_t seed = 1;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int deg = 1; deg <= 7; ++deg)
+    for (const WG& wg : wgs)
+      for (int frac : fracs) {
+        if (wg.w - wg.g - 1 - frac < 2) continue;
+        random_chain(deg, wg, frac, seed++, 60, st);
+        if (HasFailure()) return;
+      }
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("  %ld accepted, %ld refused segments identical (%.1f s)\n", st.accepted, st.refused, s);
+  EXPECT_GT(st.accepted, 10000);
+  EXPECT_GT(st.refused, 500);
+}
+
+// Scale a polynomial towards the range limit: bisect the reference's
+// accept/refuse boundary, then check both sides of it very closely.
+TEST(FdCompilerFast, RangeLimitBoundary) {
+  std::mt19937_64 rng(77);
+  std::uniform_real_distribution<double> U(-1, 1);
+  long checked = 0;
+  for (int deg = 1; deg <= 7; ++deg)
+    for (WG wg : {WG{48, 16, 16}, WG{64, 16, 32}, WG{96, 16, 48}, WG{128, 32, 80}}) {
+      const Format f = fmt(2, deg, wg.w, wg.c, wg.g, 8);
+      const Compiler comp(f);
+      const uint64_t kfit = std::min<uint64_t>(Compiler::longest_segment(deg, wg.g, f.tol_lsb), 500);
+      for (int rep = 0; rep < 6; ++rep) {
+        PolySegment base;
+        base.h = pick_h(rng);
+        base.ticks = std::uniform_int_distribution<uint64_t>(1, kfit)(rng);
+        const double T = base.h * static_cast<double>(base.ticks);
+        for (int a = 0; a < 2; ++a) {
+          std::vector<double> c(deg + 1);
+          double Tj = 1;
+          for (int j = 0; j <= deg; ++j, Tj *= T) c[j] = U(rng) / Tj;
+          base.coef.push_back(c);
+        }
+        auto scaled = [&](double s) {
+          PolySegment p = base;
+          for (auto& c : p.coef)
+            for (auto& v : c) v *= s;
+          return p;
+        };
+        auto accepts = [&](double s) {
+          try {
+            ref::compile(f, scaled(s), nullptr, "seg");
+            return true;
+          } catch (const CompileError&) {
+            return false;
+          }
+        };
+        double lo = 0, hi = std::ldexp(1.0, f.out_width() - f.frac_bits + 4);
+        if (!accepts(lo) || accepts(hi)) continue;
+        for (int it = 0; it < 200 && std::nextafter(lo, hi) < hi; ++it) {
+          const double mid = lo + (hi - lo) / 2;
+          (accepts(mid) ? lo : hi) = mid;
+        }
+        double s = lo;
+        for (int k = 0; k < 8; ++k) s = std::nextafter(s, 0.0);
+        for (int k = 0; k < 24; ++k, s = std::nextafter(s, 1e300)) {
+          check_same(comp, scaled(s), nullptr, "range boundary deg " + std::to_string(deg));
+          ++checked;
+        }
+        for (double r : {1 - 1e-6, 1 - 1e-9, 1 - 1e-12, 1 + 1e-12, 1 + 1e-9, 1 + 1e-6}) {
+          check_same(comp, scaled(lo * r), nullptr, "range boundary deg " + std::to_string(deg));
+          ++checked;
+        }
+        if (HasFailure()) return;
+      }
+    }
+  EXPECT_GT(checked, 2000);
+}
+
+// A start exactly at, just inside and just outside tol/2 of the target.
+TEST(FdCompilerFast, ContinuityLimitAndTies) {
+  std::mt19937_64 rng(99);
+  for (int deg = 1; deg <= 7; ++deg)
+    for (WG wg : {WG{48, 16, 16}, WG{64, 16, 32}, WG{96, 16, 48}, WG{128, 64, 80}})
+      for (double tol : {0.5, 0.1, 1.0, 1e-3}) {
+        Format f = fmt(3, deg, wg.w, wg.c, wg.g, 10);
+        f.tol_lsb = tol;
+        const Compiler comp(f);
+        const uint64_t kfit = std::min<uint64_t>(Compiler::longest_segment(deg, wg.g, tol), 200);
+        if (kfit == 0) continue;
+        for (int rep = 0; rep < 10; ++rep) {
+          PolySegment seg;
+          // dyadic h and coefficients: many exact half-LSB ties in the registers
+          seg.h = std::ldexp(1.0, -std::uniform_int_distribution<int>(2, 12)(rng));
+          seg.ticks = std::uniform_int_distribution<uint64_t>(1, kfit)(rng);
+          for (int a = 0; a < 3; ++a) {
+            std::vector<double> c(deg + 1);
+            c[0] = std::ldexp(static_cast<double>(std::uniform_int_distribution<int>(-1000, 1000)(rng)), -13);
+            for (int j = 1; j <= deg; ++j)
+              c[j] = std::ldexp(static_cast<double>(std::uniform_int_distribution<int>(-7, 7)(rng)),
+                                -std::uniform_int_distribution<int>(4, 20)(rng));
+            seg.coef.push_back(c);
+          }
+          check_same(comp, seg, nullptr, "ties");
+          // c0 in register units: (x 2^F + 1/2) 2^G; starts around c0 +- tol/2 2^G
+          const mpq_class half_tol = ref::exact(tol / 2) * mpq_class(ref::pow2(wg.g));
+          for (int d : {-2, -1, 0, 1, 2}) {
+            std::vector<mpz_class> start(3);
+            for (int a = 0; a < 3; ++a) {
+              mpq_class c0 = ref::exact(seg.coef[a][0]) * mpq_class(ref::pow2(wg.g + 10)) + mpq_class(ref::pow2(wg.g), 2);
+              const mpq_class edge = a == 1 ? mpq_class(c0 - half_tol) : mpq_class(c0 + half_tol);
+              mpz_class e;
+              mpz_fdiv_q(e.get_mpz_t(), edge.get_num_mpz_t(), edge.get_den_mpz_t());
+              start[a] = e + d;
+            }
+            check_same(comp, seg, &start, "continuity d=" + std::to_string(d));
+          }
+          if (HasFailure()) return;
+        }
+      }
+}
+
+// Odd inputs: tiny, subnormal and huge coefficients, extreme tick periods,
+// negative frac_bits, bad input of every kind.
+TEST(FdCompilerFast, EdgeCasesAndBadInput) {
+  for (int deg : {1, 3, 5, 7}) {
+    const Format f = fmt(2, deg, 64, 16, 32, 8);
+    const Compiler comp(f);
+    auto seg_of = [&](std::vector<double> c0, std::vector<double> c1, double h, uint64_t K) {
+      return PolySegment{{c0, c1}, h, K};
+    };
+    const std::vector<PolySegment> segs = {
+        seg_of({1.0, 2.0}, {0.0}, 1e-3, 100),
+        seg_of({}, {}, 1e-3, 5),
+        seg_of({1.0, 5e-324, 1e-310}, {-0.0, -1e-300}, 1e-3, 10),
+        seg_of({1e-300, 1e-200}, {3.0, 0, 0, 1e-250}, 1e-3, 10),
+        seg_of({1e300}, {0.0}, 1e-3, 10),
+        seg_of({1.0, 1e300}, {0.0}, 1e-3, 10),
+        seg_of({1.0, 1.0}, {2.0, 1.0}, 5e-324, 10),
+        seg_of({1.0, 1e-6}, {2.0, 1e-6}, 1e300, 1),
+        seg_of({1.0, 1.0}, {2.0, 1.0}, 0.0, 10),
+        seg_of({1.0, 1.0}, {2.0, 1.0}, -1e-3, 10),
+        seg_of({1.0, 1.0}, {2.0, 1.0}, NAN, 10),
+        seg_of({1.0, 1.0}, {2.0, 1.0}, INFINITY, 10),
+        seg_of({1.0, NAN}, {2.0, 1.0}, 1e-3, 10),
+        seg_of({1.0, 1.0}, {2.0, -INFINITY}, 1e-3, 10),
+        seg_of({1.0, 1.0}, {2.0, 1.0}, 1e-3, 0),
+        seg_of({1.0, 1.0}, {2.0, 1.0}, 1e-3, 100000),
+        seg_of({1.0, 1.0}, {2.0, 1.0}, 1e-3, uint64_t(1) << 21),
+        seg_of({1, 2, 3, 4, 5, 6, 7, 8, 9}, {2.0}, 1e-3, 10),
+        PolySegment{{{1.0}}, 1e-3, 10},
+    };
+    int n = 0;
+    for (const auto& s : segs) check_same(comp, s, nullptr, "edge " + std::to_string(n++) + " deg " + std::to_string(deg));
+    // starts: wrong axis count, tiny and huge offsets
+    const PolySegment s = seg_of({1.0, 2.0}, {-3.0}, 1e-3, 50);
+    std::vector<mpz_class> one(1);
+    check_same(comp, s, &one, "start axes");
+    const mpz_class c0 = (mpz_class(1) << 40) + (mpz_class(1) << 31);  // (1*2^8 + 1/2) 2^32
+    for (mpz_class off : {mpz_class(0), mpz_class(1), mpz_class(-1), mpz_class(mpz_class(1) << 30),
+                          mpz_class(mpz_class(1) << 31), mpz_class((mpz_class(1) << 30) + 1),
+                          mpz_class(mpz_class(1) << 200)})
+      for (int sign : {1, -1}) {
+        std::vector<mpz_class> st = {c0 + sign * off, (mpz_class(-3) << 40) + (mpz_class(1) << 31)};
+        check_same(comp, s, &st, "start offset");
+      }
+  }
+  // negative frac_bits, large guard, all chunk widths
+  for (int frac : {-64, -20, 0, 40}) {
+    const Format f = fmt(1, 4, 128, 64, 60, frac);
+    const Compiler comp(f);
+    PolySegment s{{{std::ldexp(1.0, 20 - frac), 3.0, -1.5, 1e-3, 7.0}}, 1e-4, 1000};
+    check_same(comp, s, nullptr, "frac " + std::to_string(frac));
+  }
+}
+
+// The public helpers keep their exact values.
+TEST(FdCompilerFast, HelpersUnchanged) {
+  for (int deg = 1; deg <= 7; ++deg)
+    for (int g : {0, 16, 32, 48, 80}) {
+      EXPECT_EQ(Compiler::longest_segment(deg, g, 0.5), ref::longest_segment(deg, g, 0.5));
+      for (uint64_t k : {uint64_t(1), uint64_t(7), uint64_t(1000), uint64_t(1) << 32}) {
+        EXPECT_EQ(Compiler::quant_bound_x2(deg, k), ref::quant_bound_x2(deg, k));
+        EXPECT_EQ(Compiler::guard_bits_needed(deg, k, 0.5), ref::guard_bits_needed(deg, k, 0.5));
+      }
+    }
+  for (uint64_t k : {uint64_t(0), uint64_t(3), uint64_t(1) << 40})
+    for (int i = 0; i <= 8; ++i) EXPECT_EQ(traj::fd::binom(k, i), ref::binom(k, i));
+}
