@@ -1,85 +1,101 @@
 // trajcore hls: BCU generator. Samples a cubic Bernstein polynomial per axis
 // at t = j/2^d, j = 0..2^d-1, in increasing time order, one sample per servo
 // tick, by depth-first de Casteljau mid-subdivision with an explicit stack.
-// Mirrors rtl/traj_bcu_gen.sv register for register, cycle for cycle.
+// Mirrors rtl/traj_bcu_gen.sv (and its digit-serial BCU, rtl/traj_bcu_serial.sv)
+// register for register, cycle for cycle.
 //
 // Parameters
 //   Axes        axes in lockstep (1..8)
-//   ChunkWidth  stream word width (8..64)
+//   ChunkWidth  stream word width AND carry-chain digit width (8..64)
 //   CtrlWidth   width of a control value (two's complement); LSB = 2^-GuardBits
 //               output LSB
 //   GuardBits   control-value bits below the output LSB
 //   OutWidth    sample width, >= CtrlWidth-GuardBits+(GuardBits>0) (sign-extended)
-//   MaxDepth    largest depth d (K = 2^d samples per segment), 1..(128-CtrlWidth)/3
+//   MaxDepth    largest depth d (K = 2^d samples per segment), 1..30
 //
 // Arithmetic (exact, scaled form)
-//   W = CtrlWidth + 3*MaxDepth is the datapath width. After loading, every
-//   control value is multiplied by 8^(MaxDepth-d) (PRE state, one <<3 per
-//   cycle), so that after the d subdivision levels every leaf coefficient is
-//   8^MaxDepth times the true value, whatever d is. A coefficient at effective
-//   level e (= MaxDepth-d + subdivisions) is 8^e times a convex combination of
-//   the control values, so it fits CtrlWidth+3e bits; the BCU input is at level
-//   <= MaxDepth-1, i.e. fits W-3 bits, its output W bits: nothing is ever
-//   rounded or lost. The leaf value A at t = j/2^d is
-//       A = 8^MaxDepth * sum_i C(3,i) (1-t)^(3-i) t^i c_i     (exactly),
+//   W = CtrlWidth + 3*MaxDepth bits are enough for every coefficient; the
+//   datapath holds Digits = ceil(W/ChunkWidth) digits of ChunkWidth bits
+//   (WP = Digits*ChunkWidth bits, two's complement; the bits above W are sign).
+//   The host sends every control value already multiplied by 8^(MaxDepth-d)
+//   (sign-extended to WP bits), so after the d subdivision levels every leaf
+//   coefficient is 8^MaxDepth times the true value whatever d is: the output is
+//   one fixed bit slice (no barrel shifter, no pre-scaling pass in hardware).
+//   A coefficient at effective level e (= MaxDepth-d + subdivisions) is 8^e
+//   times a convex combination of the control values: it fits CtrlWidth+3e
+//   bits <= W, so nothing is ever rounded or lost. The leaf value A at
+//   t = j/2^d is  A = 8^MaxDepth * sum_i C(3,i) (1-t)^(3-i) t^i c_i  (exactly),
 //   and the output is rounded once, half up:
 //       sample = floor((A + 2^(S-1)) / 2^S),  S = 3*MaxDepth + GuardBits.
 //   |A| <= 8^MaxDepth max|c| (convex hull), so the sample fits
-//   CtrlWidth-GuardBits bits, plus one when GuardBits > 0 (rounding the largest
-//   positive value up reaches 2^(CtrlWidth-1-GuardBits)): no overflow.
+//   CtrlWidth-GuardBits bits, plus one when GuardBits > 0: no overflow.
 //   Error vs the exact fixed-point polynomial: <= 1/2 output LSB for every d.
 //
-// Schedule (depth-first, explicit stack; one BCU shared by the axes)
-//   The current quaternion of every axis is held in cur_q, a ring of Axes
-//   quaternions; the BCU works on the head (axis 0 of the ring) and the ring
-//   rotates by one quaternion per cycle, so Axes cycles process all axes.
-//   stack memory: MaxDepth*Axes entries of 4*W bits, entry lvl*Axes+a holds the
-//   right half pushed when axis a descended from level lvl. Synchronous read
-//   (rd_q), one write port: it maps onto block RAM.
-//     IDLE  : accept a header word (depth d, clamped to MaxDepth); else, if a
-//             tick is pending, process it as an underrun.
-//     LOAD  : 4*Axes*ceil(CtrlWidth/ChunkWidth) words, shifted into cur_q.
-//     PRE   : MaxDepth-d cycles of cur <<= 3 (all values at once), + 1 cycle.
-//     DESC  : while lvl < d: per axis (1 cycle each) (L,R) = BCU(cur), push R
-//             at stack[lvl*Axes+a], cur = L. Then READY.
-//     READY : leaf j is ready: its A (all axes) is sample j. On a pending tick:
-//             emit round(A); if j = 2^d-1: seg_done, keep round(D) (the end
-//             value) in last_q, go IDLE. Else the next leaf is the right half
-//             pushed at stack level p = d-1-(number of trailing ones of j):
-//     POP   : Axes+1 cycles (read address, then data into the ring), lvl=p+1,
-//             then DESC (down to d) or READY.
+// Datapath (digit-serial, no adder wider than ChunkWidth)
+//   ring: four lanes (A, B, C, D) of R = N + P digit positions, N = Axes*Digits,
+//   P = 2 (BCU pipeline latency). Positions 0..N-1 hold axis a, digit k at
+//   a*Digits + k (least significant digit first); positions N..N+1 are spare.
+//   A pass shifts every lane by one position per cycle (pos[i] <- pos[i+1],
+//   pos[R-1] <- pos[0]) for R cycles, so the ring is aligned again after it.
+//   The BCU (stage 1: s1=A+B, s2=B+C, s3=C+D; stage 2: t1=s1+s2, t2=s2+s3;
+//   output: m=t1+t2 and the shifted digits) reads the head pos[0] and is
+//   pipelined: the digit-k result appears 2 cycles later and is written at
+//   pos[N-1] (instead of pos[N]): it lands exactly at position k when the
+//   pass ends. Every adder is ChunkWidth bits plus a saved carry, reset at the
+//   first digit of each value (the same trick as traj_fd_engine); the shifts
+//   <<1, <<2, <<3 take the top bits of the previous digit from 1-3 bit flops.
+//   stack: MaxDepth*N entries of 4 digits (one digit of R per lane) = block
+//   RAM, one write port, synchronous read; entry lvl*N + a*Digits + k holds
+//   digit k of the right half pushed by axis a when descending from lvl.
+//
+// Schedule (depth-first, time order)
+//   IDLE  : accept a header word (depth d, clamped to MaxDepth); else, if a
+//           tick is pending, process it as an underrun.
+//   LOAD  : 4*N words, digit by digit: axis 0 digit 0 of A, B, C, D, axis 0
+//           digit 1 of A..D, ...; every 4th word shifts the ring once, the
+//           4 digits entering at pos[N-1]. N shifts: aligned.
+//   DESC  : while lvl < d: one pass (R cycles): every axis (L,R) = BCU(cur),
+//           R -> stack[lvl*N ..], cur = L. Then READY.
+//   READY : leaf j is ready: its A (all axes) is sample j. On a pending tick:
+//           emit round(A); if j = 2^d-1: seg_done, -> IDLE (the ring keeps the
+//           last leaf; its D is the end value). Else the next leaf is the
+//           right half pushed at level p = d-1-(trailing ones of j):
+//   POP   : one pass (R cycles) reading stack[p*N ..] (data one cycle later,
+//           written at pos[N]), lvl = p+1, then DESC (down to d) or READY.
 //   Every internal node of the subdivision tree is split exactly once:
 //   2^d-1 BCU operations (6 additions each, per axis) for 2^d samples.
+//   p and p*N are computed from j in three pipeline registers every cycle; j
+//   only changes at a tick and READY is at least R cycles later.
 //
 // Timing (clock cycles)
 //   tick_i at cycle t -> tick_q at t+1 -> processed at t+1 if READY/IDLE ->
 //   sample_valid_o at t+2. Within a segment the next leaf is ready at most
-//   2 + d*Axes cycles after a tick was processed (worst at j = 2^(d-1)-1).
-//   Between segments (stream words available every cycle):
-//   3 + 4*Axes*Words + MaxDepth*Axes cycles from the last tick of one segment
-//   to READY of the next. Hence kMinTickSpacing = 3 + 4*Axes*Words +
-//   MaxDepth*Axes: with ticks at least that many cycles apart and the stream
-//   never starved, no tick is ever late, lost or flagged (tests check it).
+//   1 + d*R cycles after a tick was processed (worst at j = 2^(d-1)-1: a pop
+//   from level 0, then d-1 descents). Between segments (stream never starved):
+//   2 + 4*N + d*R cycles. Hence
+//       kMinTickSpacing = 2 + 4*N + MaxDepth*R
+//   (266 for 3 axes, 16-bit digits, 40-bit control, MaxDepth 12): with ticks
+//   at least that many cycles apart and the stream never starved, every tick
+//   is served with latency 2 (tests check it, and that one cycle less fails).
 //
 // Interface rules (shared with traj_fd_engine)
 //   * ticks are latched in tick_q; a tick while one is pending and not being
 //     processed in the same cycle sets the sticky tick_err.
 //   * a pending tick is processed only in READY, or in IDLE when no header word
 //     is being accepted in the same cycle (the header has priority, as in the
-//     FD engine); never during LOAD/PRE/DESC/POP.
+//     FD engine); never during LOAD/DESC/POP.
 //   * a tick processed in IDLE: underrun pulses; sample_valid pulses only if a
 //     segment has been completed since reset, and then the sample is the end
-//     value round(D) of the last segment (a chained segment starts with A = D,
-//     so that is the same value: no jump). So after the final segment the end
-//     value is emitted with the first underrun tick.
-//   * seg_done pulses with the K-th sample (j = K-1); the end value t=1 is the
-//     first sample (A) of the next segment.
+//     value round(D) of the last segment (read from the ring, which still holds
+//     the last leaf). A chained segment starts with A = D: no jump.
+//   * seg_done pulses with the K-th sample (j = K-1).
 //   * reset (rst_n low, synchronous) clears control state only.
 //
 // Stream: word 0 = header, depth d in bits [DepthBits-1:0] (higher bits
 // ignored; d > MaxDepth is clamped to MaxDepth, the host never sends it);
-// then axis 0..Axes-1, value A,B,C,D, each in Words words, LS word first,
-// sign-extended; the low CtrlWidth bits are used.
+// then for axis 0..Axes-1, for digit k = 0..Digits-1 (least significant
+// first): digit k of A, B, C, D, where each value is c * 8^(MaxDepth-d) in WP
+// bits two's complement (host: traj::bcu::stream_words).
 #pragma once
 #include <cstdint>
 
@@ -99,27 +115,30 @@ class BcuGen {
  public:
   static constexpr int kAxes = Axes;
   static constexpr int kOutWidth = OutWidth;
-  static constexpr int kW = CtrlWidth + 3 * MaxDepth;  // datapath width
-  static constexpr int kWords = (CtrlWidth + ChunkWidth - 1) / ChunkWidth;
-  static constexpr int kAsmWidth = kWords * ChunkWidth;
-  static constexpr int kShift = 3 * MaxDepth + GuardBits;  // output rounding shift
-  // rounded sample width: round half up of the largest positive value can
-  // reach 2^(CtrlWidth-1-GuardBits) when GuardBits > 0: one more bit then.
+  static constexpr int kW = CtrlWidth + 3 * MaxDepth;                  // value bits needed
+  static constexpr int kDigits = (kW + ChunkWidth - 1) / ChunkWidth;   // digits per value
+  static constexpr int kWP = kDigits * ChunkWidth;                     // datapath width
+  static constexpr int kWords = kDigits;                               // stream words per value
+  static constexpr int kN = Axes * kDigits;                            // digits per lane
+  static constexpr int kP = 2;                                         // BCU pipeline latency
+  static constexpr int kR = kN + kP;                                   // ring positions, pass length
+  static constexpr int kSegWords = 1 + 4 * kN;                         // words per segment
+  static constexpr int kShift = 3 * MaxDepth + GuardBits;              // output rounding shift
   static constexpr int kNarrow = CtrlWidth - GuardBits + (GuardBits > 0 ? 1 : 0);
   static constexpr int kDepthBits = bcu_clog2(MaxDepth + 1);
-  static constexpr int kStack = MaxDepth * Axes;
-  static constexpr int kMinTickSpacing = 3 + 4 * Axes * kWords + MaxDepth * Axes;
+  static constexpr int kStack = MaxDepth * kN;
+  static constexpr int kAddrBits = bcu_clog2(kStack + 1);
+  static constexpr int kMinTickSpacing = 2 + 4 * kN + MaxDepth * kR;
 
   static_assert(Axes >= 1 && Axes <= 8, "Axes must be 1..8");
   static_assert(ChunkWidth >= 8 && ChunkWidth <= 64, "ChunkWidth must be 8..64");
   static_assert(MaxDepth >= 1 && MaxDepth <= 30, "MaxDepth must be 1..30");
   static_assert(CtrlWidth >= 2, "CtrlWidth must be >= 2");
-  static_assert(kW <= 128, "CtrlWidth + 3*MaxDepth must be <= 128 (u128 model)");
-  static_assert(kAsmWidth <= 128, "Words*ChunkWidth must be <= 128");
+  static_assert(kWP <= 128, "ceil((CtrlWidth+3*MaxDepth)/ChunkWidth)*ChunkWidth must be <= 128");
   static_assert(GuardBits >= 0 && GuardBits <= CtrlWidth - 2, "GuardBits must be 0..CtrlWidth-2");
   static_assert(OutWidth >= kNarrow && OutWidth <= 64, "OutWidth must be kNarrow..64");
 
-  enum State : uint8_t { S_IDLE = 0, S_LOAD = 1, S_PRE = 2, S_DESC = 3, S_READY = 4, S_POP = 5 };
+  enum State : uint8_t { S_IDLE = 0, S_LOAD = 1, S_DESC = 3, S_READY = 4, S_POP = 5 };
 
   struct In {
     bool rst_n = true;
@@ -133,34 +152,52 @@ class BcuGen {
     uint8_t state = S_IDLE;
     bool tick_q = false, tick_err_q = false, have_last_q = false;
     bool valid_q = false, underrun_q = false, done_q = false;
-    int depth_q = 0, cnt_q = 0, lvl_q = 0, ax_q = 0, wc_q = 0, vc_q = 0, pidx_q = 0;
+    int depth_q = 0, lvl_q = 0, pc_q = 0, wc_q = 0, lc_q = 0, dg_q = 0, addr_q = 0;
     uint32_t j_q = 0;
     // datapath (not reset)
-    u128 cur_q[Axes][4] = {};
-    u128 asm_q = 0;
-    u128 rd_q[4] = {};
+    bool is_last_q = false;             // j == 2^d-1, registered
+    bool desc_last_q = false;           // lvl+1 == d, registered
+    bool lvl_eq_q = false;              // lvl == d, registered
+    uint32_t zero_oh_q = 0;             // pop address pipeline: lowest zero of j (one-hot),
+    int pop_lvl_q = 0, pop_base_q = 0;  // p = d-1-(its index), p*N
+    uint64_t ring[4][kR] = {};
+    uint64_t asm_q[3] = {};
+    // BCU stage 1
+    uint64_t s1_q = 0, s2_q = 0, s3_q = 0, a1_q = 0, d1_q = 0;
+    bool cs1_q = false, cs2_q = false, cs3_q = false, first1_q = false;
+    // BCU stage 2
+    uint64_t t1_q = 0, t2_q = 0, a2_q = 0, s12_q = 0, s32_q = 0, d2_q = 0;
+    bool ct1_q = false, ct2_q = false;
+    // BCU output stage: carry of m, top bits of the previous digit for shifts
+    bool cm_q = false;
+    uint64_t ha_q = 0, hs1_q = 0, ht1_q = 0, ht2_q = 0, hs3_q = 0, hd_q = 0;
+    uint64_t rd_q[4] = {};
     u128 sample_q[Axes] = {};
-    u128 last_q[Axes] = {};
   };
 
   BcuGen() = default;
 
-  // Combinational / registered outputs of the current cycle (before the edge).
   bool tready() const { return r_.state == S_IDLE || r_.state == S_LOAD; }
   bool sample_valid() const { return r_.valid_q; }
   bool underrun() const { return r_.underrun_q; }
   bool seg_done() const { return r_.done_q; }
   bool tick_err() const { return r_.tick_err_q; }
-  // Sample of axis a, OutWidth bits, as a signed value.
   int64_t sample(int a) const { return static_cast<int64_t>(sext(r_.sample_q[a], OutWidth)); }
   u128 sample_bits(int a) const { return r_.sample_q[a]; }
   const Regs& regs() const { return r_; }
   uint8_t state() const { return r_.state; }
 
-  // Round a W-bit leaf value once, half up, to the OutWidth-bit sample.
+  // Value of lane l (0..3 = A..D) of axis a in the aligned ring, WP bits.
+  static u128 lane_value(const Regs& q, int l, int a) {
+    u128 v = 0;
+    for (int k = 0; k < kDigits; ++k) v |= u128(q.ring[l][a * kDigits + k]) << (k * ChunkWidth);
+    return v;
+  }
+
+  // Round a WP-bit leaf value once, half up, to the OutWidth-bit sample.
   static u128 round_out(u128 x) {
-    // x >>> S, sign-extended to kNarrow bits (one more than W-S when G > 0)
-    const u128 hi = wrap(static_cast<u128>(sext(bits(x, kShift, kW - kShift), kW - kShift)), kNarrow);
+    const u128 hi =
+        wrap(static_cast<u128>(sext(bits(x, kShift, kWP - kShift), kWP - kShift)), kNarrow);
     const u128 half = bits(x, kShift - 1, 1);
     const u128 narrow = wrap(hi + half, kNarrow);
     return wrap(static_cast<u128>(sext(narrow, kNarrow)), OutWidth);
@@ -185,135 +222,180 @@ class BcuGen {
   void clock(const In& in) {
     const Regs& q = r_;
     Regs n = r_;
+    constexpr uint64_t M = ChunkWidth >= 64 ? ~uint64_t(0) : ((uint64_t(1) << ChunkWidth) - 1);
     n.valid_q = false;
     n.underrun_q = false;
     n.done_q = false;
     bool consume = false;
     const bool accept = tready() && in.tvalid;
+    const uint64_t word = static_cast<uint64_t>(in.tdata) & M;
 
-    // Stack read port: address of this cycle (POP only), data next cycle.
-    int raddr = 0;
+    // ---- digit-serial BCU (free running) ----
+    // Saved carries and shift bits are cleared when captured if the digit that
+    // will use them is the first of a value (the RTL does it there for timing).
+    auto add = [&](uint64_t x, uint64_t y, bool cin, bool& cout) {
+      const u128 s = u128(x) + u128(y) + u128(cin ? 1 : 0);
+      cout = ((s >> ChunkWidth) & 1) != 0;
+      return static_cast<uint64_t>(s) & M;
+    };
+    // digit index of the head digit (0 = first digit of a value)
+    n.dg_q = (q.state == S_DESC && q.pc_q != kR - 1) ? (q.dg_q == kDigits - 1 ? 0 : q.dg_q + 1) : 0;
+    const bool f0 = q.dg_q == 0;
+    const bool f0_next = n.dg_q == 0;
+    {
+      const uint64_t a = q.ring[0][0], b = q.ring[1][0], c = q.ring[2][0], d = q.ring[3][0];
+      n.s1_q = add(a, b, q.cs1_q, n.cs1_q);
+      n.s2_q = add(b, c, q.cs2_q, n.cs2_q);
+      n.s3_q = add(c, d, q.cs3_q, n.cs3_q);
+      n.cs1_q = n.cs1_q && !f0_next;
+      n.cs2_q = n.cs2_q && !f0_next;
+      n.cs3_q = n.cs3_q && !f0_next;
+      n.a1_q = a;
+      n.d1_q = d;
+      n.first1_q = f0;
+      n.t1_q = add(q.s1_q, q.s2_q, q.ct1_q, n.ct1_q);
+      n.t2_q = add(q.s2_q, q.s3_q, q.ct2_q, n.ct2_q);
+      n.ct1_q = n.ct1_q && !f0;
+      n.ct2_q = n.ct2_q && !f0;
+      n.a2_q = q.a1_q;
+      n.s12_q = q.s1_q;
+      n.s32_q = q.s3_q;
+      n.d2_q = q.d1_q;
+    }
+    const uint64_t mdig = add(q.t1_q, q.t2_q, q.cm_q, n.cm_q);
+    n.cm_q = n.cm_q && !q.first1_q;
+    auto shl = [&](uint64_t x, int s, uint64_t h) { return ((x << s) | h) & M; };
+    const uint64_t outl[4] = {shl(q.a2_q, 3, q.ha_q), shl(q.s12_q, 2, q.hs1_q), shl(q.t1_q, 1, q.ht1_q),
+                              mdig};
+    const uint64_t outr[4] = {mdig, shl(q.t2_q, 1, q.ht2_q), shl(q.s32_q, 2, q.hs3_q),
+                              shl(q.d2_q, 3, q.hd_q)};
+    const bool f1 = q.first1_q;
+    n.ha_q = f1 ? 0 : q.a2_q >> (ChunkWidth - 3);
+    n.hs1_q = f1 ? 0 : q.s12_q >> (ChunkWidth - 2);
+    n.ht1_q = f1 ? 0 : q.t1_q >> (ChunkWidth - 1);
+    n.ht2_q = f1 ? 0 : q.t2_q >> (ChunkWidth - 1);
+    n.hs3_q = f1 ? 0 : q.s32_q >> (ChunkWidth - 2);
+    n.hd_q = f1 ? 0 : q.d2_q >> (ChunkWidth - 3);
+
+    // ---- control ----
+    bool shift = false, ins_desc = false, ins_load = false, ins_pop = false;
     bool mem_we = false;
-    int waddr = 0;
-    u128 wdata[4] = {};
-
     switch (q.state) {
       case S_IDLE:
         if (accept) {
           int d = static_cast<int>(bits(in.tdata, 0, kDepthBits));
           if (d > MaxDepth) d = MaxDepth;
           n.depth_q = d;
-          n.cnt_q = MaxDepth - d;
           n.wc_q = 0;
-          n.vc_q = 0;
+          n.lc_q = 0;
           n.j_q = 0;
           n.lvl_q = 0;
-          n.ax_q = 0;
+          n.addr_q = 0;
           n.state = S_LOAD;
         } else if (q.tick_q) {
           consume = true;
           n.underrun_q = true;
           if (q.have_last_q) {
             n.valid_q = true;
-            for (int a = 0; a < Axes; ++a) n.sample_q[a] = q.last_q[a];
+            for (int a = 0; a < Axes; ++a) n.sample_q[a] = round_out(lane_value(q, 3, a));
           }
         }
         break;
       case S_LOAD:
         if (accept) {
-          const u128 asm_d = (q.asm_q >> ChunkWidth) |
-                             (wrap(in.tdata, ChunkWidth) << ((kWords - 1) * ChunkWidth));
-          n.asm_q = asm_d;
-          if (q.wc_q == kWords - 1) {
+          if (q.wc_q == 3) {
             n.wc_q = 0;
-            const u128 val = wrap(static_cast<u128>(sext(asm_d, CtrlWidth)), kW);
-            // flat shift chain: flat[i] <- flat[i+1], flat[last] <- val
-            for (int i = 0; i < 4 * Axes - 1; ++i)
-              n.cur_q[i / 4][i % 4] = q.cur_q[(i + 1) / 4][(i + 1) % 4];
-            n.cur_q[Axes - 1][3] = val;
-            if (q.vc_q == 4 * Axes - 1) {
-              n.vc_q = 0;
-              n.state = S_PRE;
+            shift = true;
+            ins_load = true;
+            if (q.lc_q == kN - 1) {
+              n.lc_q = 0;
+              n.pc_q = 0;
+              n.state = (q.depth_q == 0) ? S_READY : S_DESC;
             } else {
-              n.vc_q = q.vc_q + 1;
+              n.lc_q = q.lc_q + 1;
             }
           } else {
+            n.asm_q[q.wc_q] = word;
             n.wc_q = q.wc_q + 1;
           }
         }
         break;
-      case S_PRE:
-        if (q.cnt_q != 0) {
-          n.cnt_q = q.cnt_q - 1;
-          for (int a = 0; a < Axes; ++a)
-            for (int k = 0; k < 4; ++k) n.cur_q[a][k] = wrap(q.cur_q[a][k] << 3, kW);
-        } else {
-          n.state = (q.depth_q == 0) ? S_READY : S_DESC;
+      case S_DESC:
+        shift = true;
+        ins_desc = true;
+        if (q.pc_q >= kP) {
+          mem_we = true;
+          n.addr_q = wrap(q.addr_q + 1, kAddrBits);
         }
-        break;
-      case S_DESC: {
-        u128 in4[4];
-        for (int k = 0; k < 4; ++k) in4[k] = wrap(q.cur_q[0][k], kW - 3);
-        const BcuOut o = bcu_split(in4, kW - 3);
-        for (int a = 0; a < Axes - 1; ++a)
-          for (int k = 0; k < 4; ++k) n.cur_q[a][k] = q.cur_q[a + 1][k];
-        for (int k = 0; k < 4; ++k) n.cur_q[Axes - 1][k] = o.l[k];
-        mem_we = true;
-        waddr = q.lvl_q * Axes + q.ax_q;
-        for (int k = 0; k < 4; ++k) wdata[k] = o.r[k];
-        if (q.ax_q == Axes - 1) {
-          n.ax_q = 0;
+        if (q.pc_q == kR - 1) {
+          n.pc_q = 0;
           n.lvl_q = q.lvl_q + 1;
-          if (q.lvl_q + 1 == q.depth_q) n.state = S_READY;
+          if (q.desc_last_q) n.state = S_READY;
         } else {
-          n.ax_q = q.ax_q + 1;
+          n.pc_q = q.pc_q + 1;
         }
         break;
-      }
       case S_READY:
         if (q.tick_q) {
           consume = true;
           n.valid_q = true;
-          for (int a = 0; a < Axes; ++a) n.sample_q[a] = round_out(q.cur_q[a][0]);
-          const uint32_t last_j = (1u << q.depth_q) - 1u;
-          if (q.j_q == last_j) {
+          for (int a = 0; a < Axes; ++a) n.sample_q[a] = round_out(lane_value(q, 0, a));
+          if (q.is_last_q) {
             n.done_q = true;
             n.have_last_q = true;
-            for (int a = 0; a < Axes; ++a) n.last_q[a] = round_out(q.cur_q[a][3]);
             n.state = S_IDLE;
           } else {
-            const int p = q.depth_q - 1 - trailing_ones(q.j_q);
-            n.pidx_q = p;
-            n.lvl_q = p + 1;
-            n.ax_q = 0;
-            n.j_q = q.j_q + 1;
+            n.lvl_q = static_cast<int>(wrap(q.pop_lvl_q + 1, kDepthBits));
+            n.addr_q = q.pop_base_q;
+            n.pc_q = 0;
+            n.j_q = static_cast<uint32_t>(wrap(q.j_q + 1, MaxDepth));
             n.state = S_POP;
           }
         }
         break;
       case S_POP:
-        if (q.ax_q < Axes) raddr = q.pidx_q * Axes + q.ax_q;
-        if (q.ax_q != 0) {
-          for (int a = 0; a < Axes - 1; ++a)
-            for (int k = 0; k < 4; ++k) n.cur_q[a][k] = q.cur_q[a + 1][k];
-          for (int k = 0; k < 4; ++k) n.cur_q[Axes - 1][k] = q.rd_q[k];
-        }
-        if (q.ax_q == Axes) {
-          n.ax_q = 0;
-          n.state = (q.lvl_q == q.depth_q) ? S_READY : S_DESC;
+        shift = true;
+        ins_pop = true;
+        if (q.pc_q < kN) n.addr_q = wrap(q.addr_q + 1, kAddrBits);
+        if (q.pc_q == kR - 1) {
+          n.pc_q = 0;
+          n.state = q.lvl_eq_q ? S_READY : S_DESC;
         } else {
-          n.ax_q = q.ax_q + 1;
+          n.pc_q = q.pc_q + 1;
         }
         break;
       default:
         n.state = S_IDLE;
         break;
     }
+    n.desc_last_q = static_cast<int>(wrap(q.lvl_q + 1, kDepthBits)) == q.depth_q;
+    n.lvl_eq_q = q.lvl_q == q.depth_q;
+    n.is_last_q = q.j_q == static_cast<uint32_t>(wrap((u128(1) << q.depth_q) - 1, MaxDepth));
+    // pop address pipeline: lowest zero of j (one-hot), p = d-1-(its index)
+    // = d-1-(trailing ones of j), then p*N
+    n.zero_oh_q = static_cast<uint32_t>(wrap(~u128(q.j_q) & (u128(q.j_q) + 1), MaxDepth));
+    int tones = 0;
+    for (int i = 0; i < MaxDepth; ++i)
+      if ((q.zero_oh_q >> i) & 1u) tones |= i;
+    n.pop_lvl_q = static_cast<int>(wrap(static_cast<u128>(q.depth_q - 1 - tones), kDepthBits));
+    n.pop_base_q = static_cast<int>(wrap(static_cast<u128>(q.pop_lvl_q) * kN, kAddrBits));
 
-    // memory: synchronous read of the old contents, then write
-    for (int k = 0; k < 4; ++k) n.rd_q[k] = mem_[raddr][k];
+    // ---- ring ----
+    if (shift) {
+      const uint64_t quad[4] = {q.asm_q[0], q.asm_q[1], q.asm_q[2], word};
+      for (int l = 0; l < 4; ++l) {
+        for (int i = 0; i < kR - 1; ++i) n.ring[l][i] = q.ring[l][i + 1];
+        n.ring[l][kR - 1] = q.ring[l][0];
+        if (ins_desc) n.ring[l][kN - 1] = outl[l];
+        if (ins_load) n.ring[l][kN - 1] = quad[l];
+        if (ins_pop) n.ring[l][kN] = q.rd_q[l];
+      }
+    }
+
+    // ---- stack: synchronous read of the old contents, then write ----
+    for (int l = 0; l < 4; ++l) n.rd_q[l] = mem_[q.addr_q][l];
     if (mem_we)
-      for (int k = 0; k < 4; ++k) mem_[waddr][k] = wdata[k];
+      for (int l = 0; l < 4; ++l) mem_[q.addr_q][l] = outr[l];
 
     n.tick_q = (q.tick_q && !consume) || in.tick;
     n.tick_err_q = q.tick_err_q || (in.tick && q.tick_q && !consume);
@@ -322,7 +404,7 @@ class BcuGen {
       n.state = S_IDLE;
       n.tick_q = n.tick_err_q = n.have_last_q = false;
       n.valid_q = n.underrun_q = n.done_q = false;
-      n.depth_q = n.cnt_q = n.lvl_q = n.ax_q = n.wc_q = n.vc_q = n.pidx_q = 0;
+      n.depth_q = n.lvl_q = n.pc_q = n.wc_q = n.lc_q = n.dg_q = n.addr_q = 0;
       n.j_q = 0;
     }
     r_ = n;
@@ -330,7 +412,7 @@ class BcuGen {
 
  private:
   Regs r_{};
-  u128 mem_[kStack][4] = {};
+  uint64_t mem_[1 << kAddrBits][4] = {};
 };
 
 }  // namespace traj

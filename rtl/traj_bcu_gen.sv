@@ -1,26 +1,28 @@
 // trajcore: BCU generator. Samples a cubic Bernstein polynomial per axis at
 // t = j/2^d, j = 0..2^d-1, in increasing time order, one sample per tick, by
-// depth-first de Casteljau mid-subdivision (traj_bcu, scaled form) with an
+// depth-first de Casteljau mid-subdivision (scaled form, seed 000) with an
 // explicit stack. Mirrors hls/traj_bcu_gen.hpp cycle for cycle; the full
 // description (arithmetic, schedule, timing, interface rules) is there and in
 // tb/bcu/README.md. In short:
-//   * W = CtrlWidth + 3*MaxDepth bits per coefficient; after loading, values
-//     are multiplied by 8^(MaxDepth-d) (PRE), so every leaf is 8^MaxDepth times
-//     the exact value: the output is one fixed bit slice, rounded once, half up.
-//   * one BCU, shared by the axes: cur_q is a ring of Axes quaternions that
-//     rotates by one quaternion per cycle through the BCU (DESC) or the stack
-//     read port (POP).
-//   * stack: MaxDepth*Axes entries of 4*W bits, one write port, synchronous
-//     read: block RAM. Entry lvl*Axes+a = right half pushed by axis a at lvl.
-//   * ticks at least MinTickSpacing = 3 + 4*Axes*Words + MaxDepth*Axes clocks
-//     apart are always served with latency 2 (tick_i -> sample_valid_o).
+//   * values are WP = Digits*ChunkWidth bits (Digits = ceil((CtrlWidth +
+//     3*MaxDepth)/ChunkWidth)), sent by the host pre-scaled by 8^(MaxDepth-d),
+//     so every leaf is 8^MaxDepth times the exact value: the output is one
+//     fixed bit slice, rounded once, half up.
+//   * digit-serial datapath: four lanes (A, B, C, D) rotate by one ChunkWidth
+//     digit per cycle through a 2-stage pipelined BCU whose adders are
+//     ChunkWidth bits wide with saved carries (as traj_fd_engine): no carry
+//     chain longer than ChunkWidth, no chunk-select multiplexer.
+//   * stack: MaxDepth*Axes*Digits entries of 4 digits, one write port,
+//     synchronous read: block RAM.
+//   * ticks at least MinTickSpacing = 2 + 4*N + MaxDepth*(N+2) clocks apart
+//     (N = Axes*Digits) are always served with latency 2.
 `default_nettype none
 `include "traj_check.svh"
 
 module traj_bcu_gen #(
   parameter int Axes       = 3,   // axes in lockstep, 1..8
-  parameter int ChunkWidth = 32,  // stream word width, 8..64
-  parameter int CtrlWidth  = 40,  // control value width, >= 2, CtrlWidth+3*MaxDepth <= 128
+  parameter int ChunkWidth = 16,  // stream word and carry-chain digit width, 8..64
+  parameter int CtrlWidth  = 40,  // control value width, >= 2
   parameter int GuardBits  = 9,   // control bits below the output LSB, 0..CtrlWidth-2
   parameter int OutWidth   = 32,  // sample width, CtrlWidth-GuardBits+(GuardBits>0) .. 64
   parameter int MaxDepth   = 12   // largest depth d (K = 2^d samples), 1..30
@@ -41,19 +43,22 @@ module traj_bcu_gen #(
   output logic                     tick_err_o
 );
 
-  localparam int W         = CtrlWidth + 3 * MaxDepth;         // datapath width
-  localparam int Words     = (CtrlWidth + ChunkWidth - 1) / ChunkWidth;
-  localparam int AsmWidth  = Words * ChunkWidth;
-  localparam int Shift     = 3 * MaxDepth + GuardBits;         // output rounding shift
+  localparam int CW        = ChunkWidth;
+  localparam int W         = CtrlWidth + 3 * MaxDepth;         // value bits needed
+  localparam int Digits    = (W + CW - 1) / CW;                 // digits per value
+  localparam int WP        = Digits * CW;                       // datapath width
+  localparam int N         = Axes * Digits;                     // digits per lane
+  localparam int P         = 2;                                 // BCU pipeline latency
+  localparam int R         = N + P;                             // ring positions per lane
+  localparam int Shift     = 3 * MaxDepth + GuardBits;          // output rounding shift
   localparam int Narrow    = CtrlWidth - GuardBits + ((GuardBits > 0) ? 1 : 0);
   localparam int DepthBits = $clog2(MaxDepth + 1);
-  localparam int Stack     = MaxDepth * Axes;
+  localparam int Stack     = MaxDepth * N;
   localparam int AddrBits  = $clog2(Stack + 1);
-  localparam int AxBits    = $clog2(Axes + 1);
-  localparam int VcBits    = $clog2(4 * Axes);
-  localparam int WcBits    = (Words > 1) ? $clog2(Words) : 1;
-  localparam int QW        = 4 * W;                            // one quaternion
-  // Minimum tick spacing (clocks), see the header: 3 + 4*Axes*Words + MaxDepth*Axes.
+  localparam int PcBits    = $clog2(R);
+  localparam int LcBits    = (N > 1) ? $clog2(N) : 1;
+  localparam int DgBits    = (Digits > 1) ? $clog2(Digits) : 1;
+  localparam int LaneW     = R * CW;
 
   // ---------------------------------------------------------------------
   // Elaboration-time parameter checks.
@@ -63,8 +68,8 @@ module traj_bcu_gen #(
                     "traj_bcu_gen: ChunkWidth must be 8..64")
   `TRAJ_PARAM_CHECK(g_bad_depth, MaxDepth >= 1 && MaxDepth <= 30,
                     "traj_bcu_gen: MaxDepth must be 1..30")
-  `TRAJ_PARAM_CHECK(g_bad_ctrl, CtrlWidth >= 2 && CtrlWidth + 3 * MaxDepth <= 128,
-                    "traj_bcu_gen: CtrlWidth must be >= 2 with CtrlWidth+3*MaxDepth <= 128")
+  `TRAJ_PARAM_CHECK(g_bad_ctrl, CtrlWidth >= 2 && WP <= 128,
+                    "traj_bcu_gen: CtrlWidth must be >= 2 with ceil((CtrlWidth+3*MaxDepth)/ChunkWidth)*ChunkWidth <= 128")
   `TRAJ_PARAM_CHECK(g_bad_guard, GuardBits >= 0 && GuardBits <= CtrlWidth - 2,
                     "traj_bcu_gen: GuardBits must be 0..CtrlWidth-2")
   `TRAJ_PARAM_CHECK(g_bad_out, OutWidth >= Narrow && OutWidth <= 64,
@@ -74,81 +79,145 @@ module traj_bcu_gen #(
 
   localparam logic [2:0] StIdle  = 3'd0;
   localparam logic [2:0] StLoad  = 3'd1;
-  localparam logic [2:0] StPre   = 3'd2;
   localparam logic [2:0] StDesc  = 3'd3;
   localparam logic [2:0] StReady = 3'd4;
   localparam logic [2:0] StPop   = 3'd5;
 
   // ---------------------------------------------------------------------
-  // State. Control is reset; datapath (cur, asm, rd, sample, last, stack) not.
+  // State. Control is reset; datapath (ring, pipeline, asm, rd, sample,
+  // stack, pop address pipeline) is not.
   // ---------------------------------------------------------------------
   logic [2:0]           state_q, state_d;
   logic                 tick_q, tick_err_q, have_last_q, have_last_d;
   logic                 valid_q, valid_d, underrun_q, underrun_d, done_q, done_d;
-  logic [DepthBits-1:0] depth_q, depth_d, cnt_q, cnt_d, lvl_q, lvl_d, pidx_q, pidx_d;
-  logic [AxBits-1:0]    ax_q, ax_d;
-  logic [WcBits-1:0]    wc_q, wc_d;
-  logic [VcBits-1:0]    vc_q, vc_d;
+  logic [DepthBits-1:0] depth_q, depth_d, lvl_q, lvl_d, pop_lvl_q;
+  logic [PcBits-1:0]    pc_q, pc_d;
+  logic [1:0]           wc_q, wc_d;
+  logic [LcBits-1:0]    lc_q, lc_d;
+  logic [DgBits-1:0]    dg_q, dg_d;
   logic [MaxDepth-1:0]  j_q, j_d;
-  logic [AddrBits-1:0]  addr_q, addr_d;   // stack address: lvl*Axes+ax (DESC), pidx*Axes+ax (POP)
+  logic [AddrBits-1:0]  addr_q, addr_d, pop_base_q;
 
-  logic [Axes*QW-1:0]        cur_q, cur_d;
-  logic [AsmWidth-1:0]       asm_q, asm_d;
-  logic [QW-1:0]             rd_q;
-  logic [Axes*OutWidth-1:0]  sample_q, sample_d, last_q, last_d;
-  logic [QW-1:0]             stack_mem [2**AddrBits];
+  logic [4*LaneW-1:0]       ring_q, ring_d;     // lane l position i at [(l*R+i)*CW +: CW]
+  logic [3*CW-1:0]          asm_q, asm_d;
+  logic [4*CW-1:0]          rd_q;
+  logic [Axes*OutWidth-1:0] sample_q, sample_d;
+  logic [4*CW-1:0]          stack_mem [2**AddrBits];
 
-  logic                 accept, consume, mem_we;
+  logic accept, consume, mem_we, shift, ins_desc, ins_load, ins_pop;
 
   // ---------------------------------------------------------------------
-  // The BCU on the head quaternion (axis at ring position 0). Its inputs are
-  // at effective level <= MaxDepth-1, so they fit W-3 bits.
+  // Digit-serial BCU on the head digits (free running, latency 2).
+  //   stage 1: s1 = A+B, s2 = B+C, s3 = C+D
+  //   stage 2: t1 = s1+s2, t2 = s2+s3
+  //   output : m = t1+t2; L = (A<<3, s1<<2, t1<<1, m), R = (m, t2<<1, s3<<2, D<<3)
+  // Carries are saved per adder and cleared at the first digit of a value;
+  // shifts take the top bits of the previous digit from small flops.
   // ---------------------------------------------------------------------
-  logic [4*(W-3)-1:0] bcu_in;
-  logic [QW-1:0]      bcu_left, bcu_right;
-  for (genvar k = 0; k < 4; k++) begin : g_bcu_in
-    assign bcu_in[k*(W-3) +: W-3] = cur_q[k*W +: W-3];
+  logic [CW-1:0] hd_a, hd_b, hd_c, hd_d;
+  assign hd_a = ring_q[(0 * R) * CW +: CW];
+  assign hd_b = ring_q[(1 * R) * CW +: CW];
+  assign hd_c = ring_q[(2 * R) * CW +: CW];
+  assign hd_d = ring_q[(3 * R) * CW +: CW];
+
+  logic          f0, f0_next;
+  logic [CW:0]   s1_sum, s2_sum, s3_sum, t1_sum, t2_sum, m_sum;
+  logic [CW-1:0] s1_q, s2_q, s3_q, a1_q, d1_q;
+  logic          cs1_q, cs2_q, cs3_q, first1_q;
+  logic [CW-1:0] t1_q, t2_q, a2_q, s12_q, s32_q, d2_q;
+  logic          ct1_q, ct2_q, cm_q;
+  logic [2:0]    ha_q, hd_q;
+  logic [1:0]    hs1_q, hs3_q;
+  logic          ht1_q, ht2_q;
+
+  // Saved carries and shift bits are cleared when they are captured if the
+  // digit that will use them is the first of a value, so no adder carry-in
+  // and no shifted digit is gated (timing).
+  assign f0      = (dg_q == '0);
+  assign f0_next = (dg_d == '0);
+  assign s1_sum = {1'b0, hd_a} + {1'b0, hd_b} + {{CW{1'b0}}, cs1_q};
+  assign s2_sum = {1'b0, hd_b} + {1'b0, hd_c} + {{CW{1'b0}}, cs2_q};
+  assign s3_sum = {1'b0, hd_c} + {1'b0, hd_d} + {{CW{1'b0}}, cs3_q};
+  assign t1_sum = {1'b0, s1_q} + {1'b0, s2_q} + {{CW{1'b0}}, ct1_q};
+  assign t2_sum = {1'b0, s2_q} + {1'b0, s3_q} + {{CW{1'b0}}, ct2_q};
+  assign m_sum  = {1'b0, t1_q} + {1'b0, t2_q} + {{CW{1'b0}}, cm_q};
+
+  always_ff @(posedge clk_i) begin
+    s1_q     <= s1_sum[CW-1:0];
+    s2_q     <= s2_sum[CW-1:0];
+    s3_q     <= s3_sum[CW-1:0];
+    cs1_q    <= s1_sum[CW] && !f0_next;
+    cs2_q    <= s2_sum[CW] && !f0_next;
+    cs3_q    <= s3_sum[CW] && !f0_next;
+    a1_q     <= hd_a;
+    d1_q     <= hd_d;
+    first1_q <= f0;
+    t1_q     <= t1_sum[CW-1:0];
+    t2_q     <= t2_sum[CW-1:0];
+    ct1_q    <= t1_sum[CW] && !f0;
+    ct2_q    <= t2_sum[CW] && !f0;
+    a2_q     <= a1_q;
+    s12_q    <= s1_q;
+    s32_q    <= s3_q;
+    d2_q     <= d1_q;
+    cm_q     <= m_sum[CW] && !first1_q;
+    ha_q     <= first1_q ? 3'b000 : a2_q[CW-1:CW-3];
+    hs1_q    <= first1_q ? 2'b00 : s12_q[CW-1:CW-2];
+    ht1_q    <= first1_q ? 1'b0 : t1_q[CW-1];
+    ht2_q    <= first1_q ? 1'b0 : t2_q[CW-1];
+    hs3_q    <= first1_q ? 2'b00 : s32_q[CW-1:CW-2];
+    hd_q     <= first1_q ? 3'b000 : d2_q[CW-1:CW-3];
   end
-  traj_bcu #(.InWidth(W - 3)) u_bcu (
-    .coef_i(bcu_in), .left_o(bcu_left), .right_o(bcu_right)
-  );
+
+  logic [4*CW-1:0] bcu_left, bcu_right;
+  assign bcu_left  = {m_sum[CW-1:0], {t1_q[CW-2:0], ht1_q}, {s12_q[CW-3:0], hs1_q},
+                      {a2_q[CW-4:0], ha_q}};
+  assign bcu_right = {{d2_q[CW-4:0], hd_q}, {s32_q[CW-3:0], hs3_q}, {t2_q[CW-2:0], ht2_q},
+                      m_sum[CW-1:0]};
 
   // ---------------------------------------------------------------------
-  // Output rounding, once, half up: floor((x + 2^(Shift-1)) / 2^Shift).
+  // Output rounding, once, half up: floor((x + 2^(Shift-1)) / 2^Shift), of
+  // A (READY) and of D (IDLE: the end value of the last leaf) of every axis;
+  // both are computed and the result is selected (the select is off the
+  // adders' carry chains).
   // ---------------------------------------------------------------------
-  logic [Axes*OutWidth-1:0] round_a, round_d;
+  logic [Axes*OutWidth-1:0] round_x;
   for (genvar a = 0; a < Axes; a++) begin : g_round
-    logic [W-1:0]               xa, xd;
-    logic signed [W-Shift-1:0]  ha, hd;
+    // Bits of xa/xd below the rounding bit, and the sign copies of ha/hd
+    // above the Narrow result bits, are not needed (the value fits Narrow bits).
+    /* verilator lint_off UNUSEDSIGNAL */
+    logic [WP-1:0]              xa, xd;
+    logic signed [WP-Shift-1:0] ha, hd;
+    /* verilator lint_on UNUSEDSIGNAL */
     logic [Narrow-1:0]          ra, rd;
-    assign xa = cur_q[(4*a+0)*W +: W];
-    assign xd = cur_q[(4*a+3)*W +: W];
-    assign ha = xa[W-1:Shift];
-    assign hd = xd[W-1:Shift];
+    assign xa = ring_q[(0 * R + a * Digits) * CW +: WP];
+    assign xd = ring_q[(3 * R + a * Digits) * CW +: WP];
+    assign ha = xa[WP-1:Shift];
+    assign hd = xd[WP-1:Shift];
     assign ra = Narrow'(ha) + {{(Narrow-1){1'b0}}, xa[Shift-1]};
     assign rd = Narrow'(hd) + {{(Narrow-1){1'b0}}, xd[Shift-1]};
-    assign round_a[a*OutWidth +: OutWidth] = OutWidth'($signed(ra));
-    assign round_d[a*OutWidth +: OutWidth] = OutWidth'($signed(rd));
+    assign round_x[a*OutWidth +: OutWidth] = (state_q == StIdle) ? OutWidth'($signed(rd))
+                                                                 : OutWidth'($signed(ra));
   end
 
   // ---------------------------------------------------------------------
-  // Trailing ones of j: the next leaf is the right half pushed at level
-  // depth-1-trailing_ones(j).
+  // Pop address pipeline, three registers: the lowest zero bit of j (one-hot,
+  // ~j & (j+1)), its index = trailing ones of j, p = depth-1-that, then p*N.
+  // j only changes at a processed tick and READY comes at least R cycles later.
   // ---------------------------------------------------------------------
-  logic [DepthBits-1:0] tones, pop_idx;
+  logic [MaxDepth-1:0]  zero_oh_q;
+  logic [DepthBits-1:0] tones;
   always_comb begin
-    logic stop;
-    stop  = 1'b0;
     tones = '0;
     for (int i = 0; i < MaxDepth; i++) begin
-      if (!stop) begin
-        if (j_q[i]) tones = tones + 1'b1;
-        else stop = 1'b1;
-      end
+      if (zero_oh_q[i]) tones = tones | DepthBits'(i);
     end
   end
-
-  assign pop_idx = depth_q - 1'b1 - tones;
+  always_ff @(posedge clk_i) begin
+    zero_oh_q  <= ~j_q & (j_q + 1'b1);
+    pop_lvl_q  <= depth_q - 1'b1 - tones;
+    pop_base_q <= AddrBits'(pop_lvl_q) * AddrBits'(N);
+  end
 
   // Header word: depth, clamped to MaxDepth.
   logic [DepthBits-1:0] hdr_depth;
@@ -159,13 +228,16 @@ module traj_bcu_gen #(
                    ? DepthBits'(MaxDepth) : s_axis_tdata[DepthBits-1:0];
   /* verilator lint_on CMPCONST */
 
-  // Completed control value (sign-extended to W).
-  logic [W-1:0] load_val;
-  assign load_val = W'($signed(asm_d[CtrlWidth-1:0]));
-
-  // last sample index of the segment: 2^d - 1
-  logic [MaxDepth-1:0] last_j;
-  assign last_j = MaxDepth'((MaxDepth+1)'(1) << depth_q) - 1'b1;
+  // j == 2^d - 1 (the last leaf), registered: j and d are stable for many
+  // cycles before READY (at least R after a tick, 4*N after a header).
+  // Likewise the level compares of the pass ends (lvl changes at most once
+  // per pass, R cycles apart).
+  logic is_last_q, desc_last_q, lvl_eq_q;
+  always_ff @(posedge clk_i) begin
+    is_last_q   <= (j_q == ~({MaxDepth{1'b1}} << depth_q));
+    desc_last_q <= (lvl_q + 1'b1 == depth_q);
+    lvl_eq_q    <= (lvl_q == depth_q);
+  end
 
   assign s_axis_tready = (state_q == StIdle) || (state_q == StLoad);
   assign accept        = s_axis_tready && s_axis_tvalid;
@@ -180,31 +252,29 @@ module traj_bcu_gen #(
     underrun_d  = 1'b0;
     done_d      = 1'b0;
     depth_d     = depth_q;
-    cnt_d       = cnt_q;
     lvl_d       = lvl_q;
-    pidx_d      = pidx_q;
-    ax_d        = ax_q;
+    pc_d        = pc_q;
     wc_d        = wc_q;
-    vc_d        = vc_q;
+    lc_d        = lc_q;
     j_d         = j_q;
     addr_d      = addr_q;
-    cur_d       = cur_q;
-    asm_d       = (asm_q >> ChunkWidth) | (AsmWidth'(s_axis_tdata) << ((Words - 1) * ChunkWidth));
+    asm_d       = asm_q;
     sample_d    = sample_q;
-    last_d      = last_q;
     consume     = 1'b0;
     mem_we      = 1'b0;
+    shift       = 1'b0;
+    ins_desc    = 1'b0;
+    ins_load    = 1'b0;
+    ins_pop     = 1'b0;
 
     unique case (state_q)
       StIdle: begin
         if (accept) begin
           depth_d = hdr_depth;
-          cnt_d   = DepthBits'(MaxDepth) - hdr_depth;
           wc_d    = '0;
-          vc_d    = '0;
+          lc_d    = '0;
           j_d     = '0;
           lvl_d   = '0;
-          ax_d    = '0;
           addr_d  = '0;
           state_d = StLoad;
         end else if (tick_q) begin
@@ -212,84 +282,102 @@ module traj_bcu_gen #(
           underrun_d = 1'b1;
           if (have_last_q) begin
             valid_d  = 1'b1;
-            sample_d = last_q;
+            sample_d = round_x;
           end
         end
       end
       StLoad: begin
         if (accept) begin
-          if (wc_q == WcBits'(Words - 1)) begin
-            wc_d  = '0;
-            cur_d = (cur_q >> W) | ((Axes*QW)'(load_val) << ((4 * Axes - 1) * W));
-            if (vc_q == VcBits'(4 * Axes - 1)) begin
-              vc_d    = '0;
-              state_d = StPre;
+          if (wc_q == 2'd3) begin
+            wc_d     = '0;
+            shift    = 1'b1;
+            ins_load = 1'b1;
+            if (lc_q == LcBits'(N - 1)) begin
+              lc_d    = '0;
+              pc_d    = '0;
+              state_d = (depth_q == '0) ? StReady : StDesc;
             end else begin
-              vc_d = vc_q + 1'b1;
+              lc_d = lc_q + 1'b1;
             end
           end else begin
-            wc_d = wc_q + 1'b1;
+            asm_d[wc_q*CW +: CW] = s_axis_tdata;
+            wc_d                 = wc_q + 1'b1;
           end
-        end
-      end
-      StPre: begin
-        if (cnt_q != '0) begin
-          cnt_d = cnt_q - 1'b1;
-          for (int v = 0; v < 4 * Axes; v++) begin
-            cur_d[v*W +: W] = {cur_q[v*W +: W-3], 3'b000};
-          end
-        end else begin
-          state_d = (depth_q == '0) ? StReady : StDesc;
         end
       end
       StDesc: begin
-        cur_d  = (cur_q >> QW) | ((Axes*QW)'(bcu_left) << ((Axes - 1) * QW));
-        mem_we = 1'b1;
-        addr_d = addr_q + 1'b1;
-        if (ax_q == AxBits'(Axes - 1)) begin
-          ax_d  = '0;
+        shift    = 1'b1;
+        ins_desc = 1'b1;
+        if (pc_q >= PcBits'(P)) begin
+          mem_we = 1'b1;
+          addr_d = addr_q + 1'b1;
+        end
+        if (pc_q == PcBits'(R - 1)) begin
+          pc_d  = '0;
           lvl_d = lvl_q + 1'b1;
-          if (lvl_q + 1'b1 == depth_q) state_d = StReady;
+          if (desc_last_q) state_d = StReady;
         end else begin
-          ax_d = ax_q + 1'b1;
+          pc_d = pc_q + 1'b1;
         end
       end
       StReady: begin
         if (tick_q) begin
           consume  = 1'b1;
           valid_d  = 1'b1;
-          sample_d = round_a;
-          if (j_q == last_j) begin
+          sample_d = round_x;
+          if (is_last_q) begin
             done_d      = 1'b1;
             have_last_d = 1'b1;
-            last_d      = round_d;
             state_d     = StIdle;
           end else begin
-            pidx_d  = pop_idx;
-            lvl_d   = depth_q - tones;
-            addr_d  = AddrBits'(pop_idx) * AddrBits'(Axes);
-            ax_d    = '0;
+            lvl_d   = pop_lvl_q + 1'b1;
+            addr_d  = pop_base_q;
+            pc_d    = '0;
             j_d     = j_q + 1'b1;
             state_d = StPop;
           end
         end
       end
       StPop: begin
-        if (ax_q != '0) begin
-          cur_d = (cur_q >> QW) | ((Axes*QW)'(rd_q) << ((Axes - 1) * QW));
-        end
-        if (ax_q == AxBits'(Axes)) begin
-          ax_d    = '0;
-          state_d = (lvl_q == depth_q) ? StReady : StDesc;
+        shift   = 1'b1;
+        ins_pop = 1'b1;
+        if (pc_q < PcBits'(N)) addr_d = addr_q + 1'b1;
+        if (pc_q == PcBits'(R - 1)) begin
+          pc_d    = '0;
+          state_d = lvl_eq_q ? StReady : StDesc;
         end else begin
-          ax_d   = ax_q + 1'b1;
-          addr_d = addr_q + 1'b1;
+          pc_d = pc_q + 1'b1;
         end
       end
       default: begin
         state_d = StIdle;
       end
     endcase
+
+    // digit index of the head digit (0 = first digit of a value)
+    if (state_q == StDesc && pc_q != PcBits'(R - 1)) begin
+      dg_d = (dg_q == DgBits'(Digits - 1)) ? '0 : dg_q + 1'b1;
+    end else begin
+      dg_d = '0;
+    end
+  end
+
+  // ---------------------------------------------------------------------
+  // Ring: rotate every lane right by one digit; the new digits of a pass
+  // enter at position N-1 (BCU output, load) or N (stack read data).
+  // ---------------------------------------------------------------------
+  logic [4*CW-1:0] load_quad;
+  assign load_quad = {s_axis_tdata, asm_q};
+  for (genvar l = 0; l < 4; l++) begin : g_lane
+    logic [LaneW-1:0] lane, rot;
+    assign lane = ring_q[l*LaneW +: LaneW];
+    assign rot  = {lane[CW-1:0], lane[LaneW-1:CW]};
+    always_comb begin
+      ring_d[l*LaneW +: LaneW] = rot;
+      if (ins_desc) ring_d[(l*R + N - 1)*CW +: CW] = bcu_left[l*CW +: CW];
+      if (ins_load) ring_d[(l*R + N - 1)*CW +: CW] = load_quad[l*CW +: CW];
+      if (ins_pop)  ring_d[(l*R + N)*CW +: CW]     = rd_q[l*CW +: CW];
+    end
   end
 
   // ---------------------------------------------------------------------
@@ -305,12 +393,11 @@ module traj_bcu_gen #(
       underrun_q  <= 1'b0;
       done_q      <= 1'b0;
       depth_q     <= '0;
-      cnt_q       <= '0;
       lvl_q       <= '0;
-      pidx_q      <= '0;
-      ax_q        <= '0;
+      pc_q        <= '0;
       wc_q        <= '0;
-      vc_q        <= '0;
+      lc_q        <= '0;
+      dg_q        <= '0;
       j_q         <= '0;
       addr_q      <= '0;
     end else begin
@@ -322,22 +409,20 @@ module traj_bcu_gen #(
       underrun_q  <= underrun_d;
       done_q      <= done_d;
       depth_q     <= depth_d;
-      cnt_q       <= cnt_d;
       lvl_q       <= lvl_d;
-      pidx_q      <= pidx_d;
-      ax_q        <= ax_d;
+      pc_q        <= pc_d;
       wc_q        <= wc_d;
-      vc_q        <= vc_d;
+      lc_q        <= lc_d;
+      dg_q        <= dg_d;
       j_q         <= j_d;
       addr_q      <= addr_d;
     end
   end
 
   always_ff @(posedge clk_i) begin
-    cur_q    <= cur_d;
+    if (shift) ring_q <= ring_d;
+    asm_q    <= asm_d;
     sample_q <= sample_d;
-    last_q   <= last_d;
-    if (accept && state_q == StLoad) asm_q <= asm_d;
   end
 
   // Stack: one write port, synchronous read (block RAM).

@@ -36,6 +36,9 @@ void Format::validate() const {
   else if (out_width < ctrl_width - guard_bits + (guard_bits > 0) || out_width > 64)
     m << "Format.out_width = " << out_width << " out of range "
       << ctrl_width - guard_bits + (guard_bits > 0) << "..64";
+  else if (words_per_value() * chunk_width > 128)
+    m << "Format: ceil((ctrl_width + 3*max_depth)/chunk_width)*chunk_width = "
+      << words_per_value() * chunk_width << " > 128 (datapath limit)";
   else if (frac_bits < -64 || frac_bits > 200)
     m << "Format.frac_bits = " << frac_bits << " out of range -64..200";
   else
@@ -83,18 +86,25 @@ int64_t predict_sample(const std::vector<mpz_class>& c, int depth, int j, int gu
 
 std::vector<uint64_t> stream_words(const std::vector<std::vector<mpz_class>>& c, int depth,
                                    const Format& f) {
+  // Every value is sent pre-scaled by 8^(max_depth - d) (the generator then
+  // needs no pre-scaling pass), in nw*chunk_width bits two's complement, and
+  // the words are interleaved digit by digit: for each axis, for each digit k
+  // (least significant first): digit k of A, B, C, D.
   const int nw = f.words_per_value();
+  const int wp = nw * f.chunk_width;
   const mpz_class wmask = pow2(f.chunk_width) - 1;
   std::vector<uint64_t> w;
   w.push_back(static_cast<uint64_t>(depth));
   for (const auto& axis : c) {
+    mpz_class v[4];
     for (int i = 0; i < 4; ++i) {
-      // two's complement in nw*chunk_width bits
-      mpz_class v = axis[i];
-      if (v < 0) v += pow2(nw * f.chunk_width);
-      for (int k = 0; k < nw; ++k) {
-        mpz_class word = v & wmask;
-        v >>= f.chunk_width;
+      v[i] = axis[i] * pow2(3 * (f.max_depth - depth));
+      if (v[i] < 0) v[i] += pow2(wp);
+    }
+    for (int k = 0; k < nw; ++k) {
+      for (int i = 0; i < 4; ++i) {
+        mpz_class word = v[i] & wmask;
+        v[i] >>= f.chunk_width;
         uint64_t u = 0;
         mpz_export(&u, nullptr, -1, sizeof(u), 0, 0, word.get_mpz_t());
         w.push_back(u);

@@ -33,7 +33,8 @@ struct Format {
   int out_width = 32;    // sample width, >= ctrl_width - guard_bits + (guard_bits > 0)
   int max_depth = 12;    // largest d
   int frac_bits = 16;    // F: output LSB = 2^-F input units
-  int words_per_value() const { return (ctrl_width + chunk_width - 1) / chunk_width; }
+  // stream words per value: the datapath digits, ceil((ctrl_width + 3*max_depth)/chunk_width)
+  int words_per_value() const { return (ctrl_width + 3 * max_depth + chunk_width - 1) / chunk_width; }
   void validate() const;  // throws std::invalid_argument
 };
 

@@ -14,7 +14,7 @@
 
 module traj_bcu_synth_top #(
   parameter int Axes       = 3,   // axes in lockstep
-  parameter int ChunkWidth = 32,  // stream word width, multiple of 8
+  parameter int ChunkWidth = 16,  // stream word width, multiple of 8
   parameter int CtrlWidth  = 40,  // control value width
   parameter int GuardBits  = 9,   // control bits below the output LSB
   parameter int OutWidth   = 32,  // sample width

@@ -243,9 +243,9 @@ int main(int argc, char** argv) {
     }
 
     if (trace_from && cyc >= trace_from)
-      std::printf("cyc %llu rst %d tick %d offer %d acc %d st %d lvl %d ax %d j %u tq %d\n",
+      std::printf("cyc %llu rst %d tick %d offer %d acc %d st %d lvl %d pc %d j %u tq %d\n",
                   (unsigned long long)cyc, rst_n, tick, offer, hls.tready() && offer, hls.state(),
-                  hls.regs().lvl_q, hls.regs().ax_q, hls.regs().j_q, hls.regs().tick_q);
+                  hls.regs().lvl_q, hls.regs().pc_q, hls.regs().j_q, hls.regs().tick_q);
     // clock edge
     typename Gen::In in;
     in.rst_n = rst_n;

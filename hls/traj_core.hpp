@@ -1,0 +1,244 @@
+// trajcore hls: the core, one segment stream for both sampling engines.
+// Cycle-accurate model of rtl/traj_core.sv: it instantiates the
+// forward-difference engine (hls/traj_fd_engine.hpp) and the BCU generator
+// (hls/traj_bcu_gen.hpp) and adds a router and an output selector.
+//
+// Segment stream: one ChunkWidth-bit word stream (AXI4-Stream tdata, tvalid,
+// tready; behind a 2-entry register slice, so s_axis_tready is a flop) with a
+// 1-bit tuser = segment kind (0: forward differences, 1: BCU),
+// sampled on the FIRST word of every segment (later words' tuser is ignored;
+// the host keeps it constant within a segment). The words of a segment are
+// exactly those of the engine's own stream format, so a segment has a fixed
+// length per kind: FD HdrWords + Axes*(Degree+1)*Width/ChunkWidth words, BCU
+// 1 + 4*Axes*Digits words. The router counts them and forwards each segment
+// to its engine, in stream order, waiting (tready low) while that engine
+// cannot take it. An engine takes a segment only when it has none, so at most
+// two segments are in flight (one per engine): the next segment of the other
+// kind is loaded while the current one plays.
+//
+// Ticks go to the engine that owns the current segment: the oldest in flight
+// (per engine an in-flight flag, set when a segment's first word is accepted
+// and cleared on that engine's seg_done, plus which of the two is older). The
+// routing looks at this cycle's pop and push, so
+// a tick arriving with the seg_done of the previous segment already goes to
+// the next one. With nothing in flight, ticks go to the engine of the last
+// segment (which then reports underrun as it does alone).
+//
+// Output: the engines' registered outputs, combined (no extra latency:
+// tick_i -> sample_valid_o is 2 clocks, as for each engine):
+//   underrun_o / seg_done_o = OR of the engines'; tick_err_o = OR of the
+//   engines' and a sticky core flag: a segment ended while its engine still
+//   held a tick (ticks faster than the engine: that tick would be served out
+//   of order by the engine's next segment);
+//   sample_valid_o = a real sample from either engine, or an underrun once
+//   the core has emitted a sample since reset;
+//   sample_o = the sample of the engine that emitted last (sel_q). On an
+//   underrun the output therefore holds the last sample (or, if the BCU was
+//   last, its end value, as the generator alone): it never jumps to a stale
+//   value of the other engine.
+// Both engines' samples have the same width (OutWidth = Width - GuardBits, the
+// BCU is instantiated with it and checks its rounded sample fits) and, by the
+// hosts' convention, the same LSB 2^-F (traj::fd::Format::frac_bits ==
+// traj::bcu::Format::frac_bits; tb/core checks it).
+//
+// Requirements for exact, tick-for-tick play: FD segments have K >= 1 (the
+// compiler refuses K = 0), the stream is not starved, and ticks are at least
+// kMinTickSpacing = BcuGen::kMinTickSpacing clocks apart (this also covers an
+// FD reload, HdrWords + Regs*Chunks + 2 clocks).
+#pragma once
+#include <cstdint>
+
+#include "traj_bcu_gen.hpp"
+#include "traj_common.hpp"
+#include "traj_fd_engine.hpp"
+
+namespace traj {
+
+template <int Axes, int Degree, int Width, int ChunkWidth, int GuardBits, int CtrlWidth,
+          int BcuGuardBits, int MaxDepth>
+class Core {
+ public:
+  static constexpr int kAxes = Axes;
+  static constexpr int kOutWidth = Width - GuardBits;
+  using Fd = FdEngine<Axes, Degree, Width, ChunkWidth, GuardBits>;
+  using Bcu = BcuGen<Axes, ChunkWidth, CtrlWidth, BcuGuardBits, kOutWidth, MaxDepth>;
+  static constexpr int kFdWords = Fd::kWords;
+  static constexpr int kBcuWords = Bcu::kSegWords;
+  static constexpr int kMinTickSpacing =
+      Bcu::kMinTickSpacing > Fd::kWords + 2 ? Bcu::kMinTickSpacing : Fd::kWords + 2;
+  static_assert(Fd::kOutWidth == Bcu::kOutWidth, "engine output widths differ");
+
+  enum Kind : uint8_t { kFd = 0, kBcu = 1 };
+
+  struct In {
+    bool rst_n = true;
+    u128 tdata = 0;
+    bool tuser = false;  // segment kind, sampled on the first word
+    bool tvalid = false;
+    bool tick = false;
+  };
+
+  struct Regs {
+    // control (reset)
+    bool in_seg_q = false;  // a segment is being forwarded
+    bool kind_q = false;    // its kind
+    int rem_q = 0;          // words of it still to come
+    bool fl_fd_q = false, fl_bcu_q = false;  // a segment of that kind is in flight
+    bool older_q = false;               // kind of the older one when both are
+    bool last_kind_q = false;           // kind of the last segment finished
+    bool sel_q = false;                 // engine that emitted the last sample
+    bool primed_q = false;              // a sample has been emitted since reset
+    int pend_fd_q = 0, pend_bcu_q = 0;  // ticks routed to an engine not yet answered (0..3)
+    // input register slice (skid buffer): valid bits reset, data not
+    bool out_v_q = false, sk_v_q = false;
+    bool out_u_q = false, sk_u_q = false;
+    u128 out_d_q = 0, sk_d_q = 0;
+    bool err_q = false;                 // sticky: a segment ended with a tick still pending
+  };
+
+  // Combinational view of one cycle (needs the inputs: tready depends on tuser
+  // on a segment's first word).
+  struct Comb {
+    bool kind_now, tready, accept, push, pop_fd, pop_bcu, fl_fd1, fl_bcu1, last1, tick_kind, sel_now;
+  };
+
+  Comb comb(const In& in) const {
+    Comb c{};
+    const Regs& q = r_;
+    (void)in;
+    c.kind_now = q.in_seg_q ? q.kind_q : q.out_u_q;
+    c.tready = c.kind_now ? bcu_.tready() : fd_.outputs().tready;  // router side
+    c.accept = q.out_v_q && c.tready;
+    c.push = c.accept && !q.in_seg_q;
+    c.pop_fd = q.fl_fd_q && fd_.outputs().seg_done;
+    c.pop_bcu = q.fl_bcu_q && bcu_.seg_done();
+    // in flight after this cycle's pops, then the owner of the next tick
+    c.fl_fd1 = q.fl_fd_q && !c.pop_fd;
+    c.fl_bcu1 = q.fl_bcu_q && !c.pop_bcu;
+    c.last1 = c.pop_bcu ? true : (c.pop_fd ? false : q.last_kind_q);
+    c.tick_kind = (c.fl_fd1 && c.fl_bcu1) ? q.older_q
+                  : c.fl_fd1               ? false
+                  : c.fl_bcu1              ? true
+                  : c.push                 ? c.kind_now
+                                           : c.last1;
+    const auto fo = fd_.outputs();
+    const bool fd_real = fo.sample_valid && !fo.underrun;
+    const bool bcu_real = bcu_.sample_valid() && !bcu_.underrun();
+    c.sel_now = fd_real ? false : (bcu_real ? true : q.sel_q);
+    return c;
+  }
+
+  // Outputs of the current cycle.
+  // s_axis_tready: registered (skid buffer), independent of the inputs.
+  bool tready(const In& = In{}) const { return !r_.sk_v_q; }
+  bool sample_valid() const {
+    const auto fo = fd_.outputs();
+    const bool fd_real = fo.sample_valid && !fo.underrun;
+    const bool bcu_real = bcu_.sample_valid() && !bcu_.underrun();
+    return fd_real || bcu_real || ((fo.underrun || bcu_.underrun()) && r_.primed_q);
+  }
+  bool sel_now() const {
+    const auto fo = fd_.outputs();
+    if (fo.sample_valid && !fo.underrun) return false;
+    if (bcu_.sample_valid() && !bcu_.underrun()) return true;
+    return r_.sel_q;
+  }
+  u128 sample_bits(int a) const { return sel_now() ? bcu_.sample_bits(a) : fd_.outputs().sample[a]; }
+  int64_t sample(int a) const { return static_cast<int64_t>(sext(sample_bits(a), kOutWidth)); }
+  bool underrun() const { return fd_.outputs().underrun || bcu_.underrun(); }
+  bool seg_done() const { return fd_.outputs().seg_done || bcu_.seg_done(); }
+  bool tick_err() const { return fd_.outputs().tick_err || bcu_.tick_err() || r_.err_q; }
+
+  const Regs& regs() const { return r_; }
+  const Fd& fd() const { return fd_; }
+  const Bcu& bcu() const { return bcu_; }
+
+  void clock(const In& in) {
+    const Comb c = comb(in);
+    const Regs& q = r_;
+    Regs n = r_;
+    // engines
+    typename Fd::In fi;
+    fi.rst_n = in.rst_n;
+    fi.tdata = static_cast<uint64_t>(q.out_d_q);
+    fi.tvalid = q.out_v_q && !c.kind_now;
+    fi.tick = in.tick && !c.tick_kind;
+    typename Bcu::In bi;
+    bi.rst_n = in.rst_n;
+    bi.tdata = q.out_d_q;
+    bi.tvalid = q.out_v_q && c.kind_now;
+    bi.tick = in.tick && c.tick_kind;
+    // router
+    if (c.accept) {
+      if (!q.in_seg_q) {
+        n.in_seg_q = true;
+        n.kind_q = q.out_u_q;
+        n.rem_q = (q.out_u_q ? kBcuWords : kFdWords) - 1;
+      } else {
+        n.rem_q = q.rem_q - 1;
+        if (q.rem_q == 1) n.in_seg_q = false;
+      }
+    }
+    // segments in flight: finish (seg_done of their engine), then start
+    n.last_kind_q = c.last1;
+    n.fl_fd_q = c.fl_fd1 || (c.push && !c.kind_now);
+    n.fl_bcu_q = c.fl_bcu1 || (c.push && c.kind_now);
+    if (c.push) n.older_q = (c.kind_now ? c.fl_fd1 : c.fl_bcu1) ? !c.kind_now : c.kind_now;
+    // output selection
+    const auto fo = fd_.outputs();
+    n.sel_q = c.sel_now;
+    n.primed_q = q.primed_q || (fo.sample_valid && !fo.underrun) ||
+                 (bcu_.sample_valid() && !bcu_.underrun());
+    // Pending ticks per engine: +1 per routed tick, -1 per answer (every
+    // processed tick gives sample_valid or underrun one cycle later). If the
+    // owner of a finished segment still holds a tick, that tick would be
+    // served by its next segment out of order: flag it (sticky tick_err).
+    const bool ev_fd = fo.sample_valid || fo.underrun;
+    const bool ev_bcu = bcu_.sample_valid() || bcu_.underrun();
+    const int pf = q.pend_fd_q - (ev_fd ? 1 : 0);
+    const int pb = q.pend_bcu_q - (ev_bcu ? 1 : 0);
+    if ((c.pop_fd && pf > 0) || (c.pop_bcu && pb > 0)) n.err_q = true;
+    n.pend_fd_q = (pf + (fi.tick ? 1 : 0)) & 3;
+    n.pend_bcu_q = (pb + (bi.tick ? 1 : 0)) & 3;
+
+    // input register slice
+    const bool in_acc = in.tvalid && !q.sk_v_q;
+    if (!q.out_v_q || c.accept) {
+      if (q.sk_v_q) {
+        n.out_v_q = true;
+        n.out_d_q = q.sk_d_q;
+        n.out_u_q = q.sk_u_q;
+        n.sk_v_q = false;
+      } else {
+        n.out_v_q = in.tvalid;
+        if (in.tvalid) {
+          n.out_d_q = in.tdata;
+          n.out_u_q = in.tuser;
+        }
+      }
+    } else if (in_acc) {
+      n.sk_v_q = true;
+      n.sk_d_q = in.tdata;
+      n.sk_u_q = in.tuser;
+    }
+    fd_.clock(fi);
+    bcu_.clock(bi);
+    if (!in.rst_n) {  // control only: the slice data registers keep their value
+      const u128 od = n.out_d_q, sd = n.sk_d_q;
+      const bool ou = n.out_u_q, su = n.sk_u_q;
+      n = Regs{};
+      n.out_d_q = od;
+      n.sk_d_q = sd;
+      n.out_u_q = ou;
+      n.sk_u_q = su;
+    }
+    r_ = n;
+  }
+
+ private:
+  Regs r_{};
+  Fd fd_;
+  Bcu bcu_;
+};
+
+}  // namespace traj

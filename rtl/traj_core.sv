@@ -1,0 +1,221 @@
+// trajcore: the core, one segment stream for both sampling engines
+// (traj_fd_engine and traj_bcu_gen). Mirrors hls/traj_core.hpp cycle for
+// cycle; the full description is there and in tb/core/README.md. In short:
+//   * one ChunkWidth-bit AXI4-Stream segment input behind a register slice
+//     (skid buffer: s_axis_tready is a flop); s_axis_tuser = segment kind
+//     (0 = forward differences, 1 = BCU), sampled on the first word of every
+//     segment. Segment lengths are fixed per kind (each engine's own format),
+//     so the router counts words and forwards each segment, in order, to its
+//     engine (back-pressure while that engine cannot take it). The next
+//     segment of the other kind loads while the current one plays.
+//   * ticks go to the engine owning the oldest segment in flight (per engine a
+//     flag set on a segment's first word, cleared on its seg_done, both seen
+//     in the same cycle, and which is older), else to the engine of the last
+//     segment.
+//   * one sample output, same ports and latency (2) as the engines: the
+//     sample of the engine that emitted last; on an underrun it holds.
+`default_nettype none
+`include "traj_check.svh"
+
+module traj_core #(
+  parameter int Axes         = 3,   // axes in lockstep, 1..8 (both engines)
+  parameter int Degree       = 3,   // FD polynomial degree, 1..7
+  parameter int Width        = 64,  // FD register width, multiple of ChunkWidth, <= 128
+  parameter int ChunkWidth   = 16,  // stream word and carry-chain width: 16, 32 or 64
+  parameter int GuardBits    = 32,  // FD register bits below the output LSB
+  parameter int CtrlWidth    = 40,  // BCU control value width
+  parameter int BcuGuardBits = 9,   // BCU control bits below the output LSB
+  parameter int MaxDepth     = 12,  // BCU largest depth d (K = 2^d)
+  // derived, do not override: the common sample width of both engines
+  parameter int OutWidth     = Width - GuardBits
+) (
+  input  logic                     clk_i,
+  input  logic                     rst_ni,
+  // segment word stream; tuser = kind (0 FD, 1 BCU), sampled on the first word
+  input  logic [ChunkWidth-1:0]    s_axis_tdata,
+  input  logic                     s_axis_tuser,
+  input  logic                     s_axis_tvalid,
+  output logic                     s_axis_tready,
+  // servo strobe
+  input  logic                     tick_i,
+  // samples: axis a in sample_o[a*OutWidth +: OutWidth], two's complement
+  output logic                     sample_valid_o,
+  output logic [Axes*OutWidth-1:0] sample_o,
+  output logic                     underrun_o,
+  output logic                     seg_done_o,
+  output logic                     tick_err_o
+);
+
+  // Segment lengths in words (the engines' stream formats).
+  localparam int FdHdrWords = (ChunkWidth < 32) ? 32 / ChunkWidth : 1;
+  localparam int FdWords    = FdHdrWords + Axes * (Degree + 1) * (Width / ChunkWidth);
+  localparam int BcuDigits  = (CtrlWidth + 3 * MaxDepth + ChunkWidth - 1) / ChunkWidth;
+  localparam int BcuWords   = 1 + 4 * Axes * BcuDigits;
+  localparam int MaxWords   = (FdWords > BcuWords) ? FdWords : BcuWords;
+  localparam int RemBits    = $clog2(MaxWords);
+  localparam int BcuNarrow  = CtrlWidth - BcuGuardBits + ((BcuGuardBits > 0) ? 1 : 0);
+
+  // The engines check their own parameters; the core checks the shared format.
+  `TRAJ_PARAM_CHECK(g_bad_outwidth, OutWidth == Width - GuardBits,
+                    "traj_core: OutWidth is derived (Width-GuardBits); do not override it")
+  `TRAJ_PARAM_CHECK(g_bad_bcu_fit, BcuNarrow <= OutWidth,
+                    "traj_core: the BCU sample (CtrlWidth-BcuGuardBits+1 bits) must fit the FD output width")
+
+  // ---------------------------------------------------------------------
+  // Engines.
+  // ---------------------------------------------------------------------
+  logic                     fd_tvalid, fd_tready, fd_tick;
+  logic                     fd_valid, fd_underrun, fd_done, fd_err;
+  logic [Axes*OutWidth-1:0] fd_sample;
+  logic                     bcu_tvalid, bcu_tready, bcu_tick;
+  logic                     bcu_valid, bcu_underrun, bcu_done, bcu_err;
+  logic [Axes*OutWidth-1:0] bcu_sample;
+
+  traj_fd_engine #(
+    .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits)
+  ) u_fd (
+    .clk_i, .rst_ni,
+    .s_axis_tdata(out_d_q), .s_axis_tvalid(fd_tvalid), .s_axis_tready(fd_tready),
+    .tick_i(fd_tick),
+    .sample_valid_o(fd_valid), .sample_o(fd_sample),
+    .underrun_o(fd_underrun), .seg_done_o(fd_done), .tick_err_o(fd_err)
+  );
+
+  traj_bcu_gen #(
+    .Axes(Axes), .ChunkWidth(ChunkWidth), .CtrlWidth(CtrlWidth), .GuardBits(BcuGuardBits),
+    .OutWidth(OutWidth), .MaxDepth(MaxDepth)
+  ) u_bcu (
+    .clk_i, .rst_ni,
+    .s_axis_tdata(out_d_q), .s_axis_tvalid(bcu_tvalid), .s_axis_tready(bcu_tready),
+    .tick_i(bcu_tick),
+    .sample_valid_o(bcu_valid), .sample_o(bcu_sample),
+    .underrun_o(bcu_underrun), .seg_done_o(bcu_done), .tick_err_o(bcu_err)
+  );
+
+  // ---------------------------------------------------------------------
+  // Router and segments in flight (per engine a flag, set on a segment's
+  // first word, cleared on that engine's seg_done; older_q = kind of the older
+  // when both are in flight). State is control: all reset.
+  // ---------------------------------------------------------------------
+  logic               in_seg_q, kind_q, fl_fd_q, fl_bcu_q, older_q, last_kind_q, sel_q, primed_q;
+  logic [RemBits-1:0] rem_q;
+  logic [1:0]         pend_fd_q, pend_bcu_q;
+  logic               err_q;
+  logic [1:0]         pf, pb;
+
+  logic kind_now, accept, push, pop_fd, pop_bcu, fl_fd1, fl_bcu1, last1, tick_kind;
+  logic sel_now, fd_real, bcu_real;
+
+  // Input register slice (skid buffer): s_axis_tready is a flop; the router
+  // sees out_*. Valid bits are reset, data is not.
+  logic                  out_v_q, sk_v_q, out_u_q, sk_u_q, r_tready;
+  logic [ChunkWidth-1:0] out_d_q, sk_d_q;
+  assign s_axis_tready = !sk_v_q;
+  always_ff @(posedge clk_i) begin
+    if (!rst_ni) begin
+      out_v_q <= 1'b0;
+      sk_v_q  <= 1'b0;
+    end else if (!out_v_q || accept) begin
+      out_v_q <= sk_v_q || s_axis_tvalid;
+      sk_v_q  <= 1'b0;
+    end else if (s_axis_tvalid && !sk_v_q) begin
+      sk_v_q <= 1'b1;
+    end
+  end
+  always_ff @(posedge clk_i) begin
+    if (!out_v_q || accept) begin
+      if (sk_v_q) begin
+        out_d_q <= sk_d_q;
+        out_u_q <= sk_u_q;
+      end else if (s_axis_tvalid) begin
+        out_d_q <= s_axis_tdata;
+        out_u_q <= s_axis_tuser;
+      end
+    end else if (s_axis_tvalid && !sk_v_q) begin
+      sk_d_q <= s_axis_tdata;
+      sk_u_q <= s_axis_tuser;
+    end
+  end
+
+  assign kind_now      = in_seg_q ? kind_q : out_u_q;
+  assign r_tready      = kind_now ? bcu_tready : fd_tready;
+  assign accept        = out_v_q && r_tready;
+  assign push          = accept && !in_seg_q;
+  assign pop_fd        = fl_fd_q && fd_done;
+  assign pop_bcu       = fl_bcu_q && bcu_done;
+  assign fl_fd1        = fl_fd_q && !pop_fd;
+  assign fl_bcu1       = fl_bcu_q && !pop_bcu;
+  assign last1         = pop_bcu ? 1'b1 : (pop_fd ? 1'b0 : last_kind_q);
+  always_comb begin
+    if (fl_fd1 && fl_bcu1) tick_kind = older_q;
+    else if (fl_fd1)       tick_kind = 1'b0;
+    else if (fl_bcu1)      tick_kind = 1'b1;
+    else if (push)         tick_kind = kind_now;
+    else                   tick_kind = last1;
+  end
+
+  assign fd_tvalid  = out_v_q && !kind_now;
+  assign bcu_tvalid = out_v_q && kind_now;
+  assign fd_tick    = tick_i && !tick_kind;
+  assign bcu_tick   = tick_i && tick_kind;
+
+  always_ff @(posedge clk_i) begin
+    if (!rst_ni) begin
+      in_seg_q    <= 1'b0;
+      kind_q      <= 1'b0;
+      rem_q       <= '0;
+      fl_fd_q     <= 1'b0;
+      fl_bcu_q    <= 1'b0;
+      older_q     <= 1'b0;
+      last_kind_q <= 1'b0;
+      sel_q       <= 1'b0;
+      primed_q    <= 1'b0;
+      pend_fd_q   <= '0;
+      pend_bcu_q  <= '0;
+      err_q       <= 1'b0;
+    end else begin
+      if (accept) begin
+        if (!in_seg_q) begin
+          in_seg_q <= 1'b1;
+          kind_q   <= out_u_q;
+          rem_q    <= out_u_q ? RemBits'(BcuWords - 1) : RemBits'(FdWords - 1);
+        end else begin
+          rem_q <= rem_q - 1'b1;
+          if (rem_q == RemBits'(1)) in_seg_q <= 1'b0;
+        end
+      end
+      last_kind_q <= last1;
+      fl_fd_q     <= fl_fd1 || (push && !kind_now);
+      fl_bcu_q    <= fl_bcu1 || (push && kind_now);
+      if (push) older_q <= (kind_now ? fl_fd1 : fl_bcu1) ? !kind_now : kind_now;
+      sel_q      <= sel_now;
+      primed_q   <= primed_q || fd_real || bcu_real;
+      pend_fd_q  <= pf + {1'b0, fd_tick};
+      pend_bcu_q <= pb + {1'b0, bcu_tick};
+      if ((pop_fd && pf != 2'd0) || (pop_bcu && pb != 2'd0)) err_q <= 1'b1;
+    end
+  end
+
+  // Pending ticks per engine: +1 per routed tick, -1 per answer (every
+  // processed tick gives sample_valid or underrun one cycle later). If the
+  // owner of a finished segment still holds a tick, its next segment would
+  // serve it out of order: sticky error, reported on tick_err_o.
+  assign pf = pend_fd_q - {1'b0, fd_valid || fd_underrun};
+  assign pb = pend_bcu_q - {1'b0, bcu_valid || bcu_underrun};
+
+  // ---------------------------------------------------------------------
+  // Output: the engine that emitted last.
+  // ---------------------------------------------------------------------
+  assign fd_real  = fd_valid && !fd_underrun;
+  assign bcu_real = bcu_valid && !bcu_underrun;
+  assign sel_now  = fd_real ? 1'b0 : (bcu_real ? 1'b1 : sel_q);
+
+  assign sample_valid_o = fd_real || bcu_real || ((fd_underrun || bcu_underrun) && primed_q);
+  assign sample_o       = sel_now ? bcu_sample : fd_sample;
+  assign underrun_o     = fd_underrun || bcu_underrun;
+  assign seg_done_o     = fd_done || bcu_done;
+  assign tick_err_o     = fd_err || bcu_err || err_q;
+
+endmodule
+
+`default_nettype wire
