@@ -119,15 +119,18 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
     const TickSample& A = ts[k0];
     const TickSample& B = ts[k1];
     for (int a = 0; a < d; ++a) seg.coef[a] = hermite(o.degree, A.x[a], A.dx[a], A.ddx[a], B.x[a], B.dx[a], B.ddx[a], T);
+    bool feed_ok = true;
     for (long long k = k0 + 1; k < k1; ++k) {
       double e2 = 0;
       for (int a = 0; a < d; ++a) {
         const double e = seg.eval(a, (k - k0) * period) - ts[k].x[a];
         e2 += e * e;
       }
-      seg.max_dev = std::max(seg.max_dev, std::sqrt(e2));
+      const double e = std::sqrt(e2);
+      seg.max_dev = std::max(seg.max_dev, e);
+      if (e > std::max(o.feed_rel * ts[k].v * period, o.feed_abs)) feed_ok = false;
     }
-    if (seg.max_dev > o.fit_tol) return false;
+    if (seg.max_dev > o.fit_tol || !feed_ok) return false;
     // path feed at the output: the chord between consecutive fitted ticks may
     // not exceed feed * h (the plan's chords are shorter than its arcs)
     {

@@ -5,7 +5,8 @@
 // acceleration match at both ends, so consecutive segments join C2. A segment
 // is accepted when
 //   * at every tick inside it the fitted point is within fit_tol of the planned
-//     point (which lies on the curve), and
+//     point (which lies on the curve), and within feed_rel of that tick's
+//     travel v h (feed accuracy), and
 //   * the chord between consecutive ticks is at most feed * h, and
 //   * per axis, the exact maxima over the segment of |x'|, |x''|, |x'''| of the
 //     fitted polynomial (end points and real roots of the next derivative) are
@@ -50,6 +51,10 @@ struct SegmentOptions {
   int degree = 5;              // 5 (C2 joins) or 3 (C1)
   uint32_t max_ticks = 1000;   // from the engine format (longest segment the compiler accepts)
   double fit_tol = 1e-3;       // deviation budget of the fit, units
+  // Feed accuracy: at each tick the deviation is also kept below
+  // max(feed_rel * v h, feed_abs), so that the chord between consecutive
+  // output samples is within about 2 feed_rel of the planned arc.
+  double feed_rel = 0.0025, feed_abs = 1e-8;
 };
 
 // ts[0] is global tick k_base; the plan starts at global time t_offset. A
