@@ -120,6 +120,9 @@ TEST(PlannerCore, ButterflyThroughVerilatedCore) {
   cfg.limits.feed = 50;
   const RunOut o = run_through_core(p, cfg);
   expect_guarantees(p, cfg, o, "butterfly 50 mm/s");
+  // feed accuracy at the output: deviations <= 0.25% of each tick's travel give
+  // chords within 0.5% of the planned arc (plus the chord-vs-arc difference)
+  EXPECT_LE(std::max(std::fabs(o.rep.feed_fluct_max), std::fabs(o.rep.feed_fluct_min)), 0.006);
   std::printf("  butterfly: %.3f s, %zu segments, deviation %.3g mm, worst plan/fit/out %.4f/%.4f/%.4f\n",
               o.rep.motion_time, o.rep.segments, o.rep.max_deviation, o.rep.worst_plan, o.rep.worst_fit,
               o.rep.worst_out);
