@@ -135,12 +135,22 @@ struct SpeedAtS {
     const Piece& q = p[i];
     if (s <= q.s0) return q.v0;
     if (s >= q.s(q.T)) return q.v(q.T);
-    double lo = 0, hi = q.T;
-    for (int it = 0; it < 100 && hi - lo > 1e-15 * (1 + q.T); ++it) {
-      const double m = 0.5 * (lo + hi);
-      (q.s(m) < s ? lo : hi) = m;
+    // s(tau) is increasing: Newton inside the bracket, bisection fallback
+    double lo = 0, hi = q.T, t = q.T * (s - q.s0) / std::max(q.s(q.T) - q.s0, 1e-300);
+    for (int it = 0; it < 60 && hi - lo > 1e-15 * (1 + q.T); ++it) {
+      const double f = q.s(t) - s;
+      if (f < 0) lo = t;
+      else hi = t;
+      const double v = q.v(t);
+      double tn = v > 0 ? t - f / v : 0.5 * (lo + hi);
+      if (!(tn > lo && tn < hi)) tn = 0.5 * (lo + hi);
+      if (std::fabs(tn - t) <= 1e-15 * (1 + q.T)) {
+        t = tn;
+        break;
+      }
+      t = tn;
     }
-    return q.v(0.5 * (lo + hi));
+    return q.v(t);
   }
 };
 

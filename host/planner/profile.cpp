@@ -18,12 +18,38 @@ double change_distance(double v0, double v1, double A, double J) {
 double reachable(double v0, double L, double A, double J, double vmax) {
   if (vmax <= v0) return vmax;
   if (change_distance(v0, vmax, A, J) <= L) return vmax;
-  double lo = v0, hi = vmax;
-  for (int it = 0; it < 200 && hi - lo > 1e-12 * std::max(1.0, hi); ++it) {
-    const double mid = 0.5 * (lo + hi);
-    (change_distance(v0, mid, A, J) <= L ? lo : hi) = mid;
+  // Solve change_distance(v0, v1) = L for v1 in closed form.
+  //  jerk-limited (dv < A^2/J): x = sqrt(dv/J)... with y = sqrt(dv):
+  //    (2 v0 + y^2) y / sqrt(J) = L  ->  y^3 + 2 v0 y - L sqrt(J) = 0 (one real root)
+  //  acceleration-limited (dv >= A^2/J):
+  //    (v1^2 - v0^2)/A + (v0 + v1) A/J = 2L  ->  v1^2 + (A^2/J) v1 + v0 A^2/J - v0^2 - 2 L A = 0
+  const double sJ = std::sqrt(J);
+  const double p = 2 * v0, q = -L * sJ;
+  const double disc = std::sqrt(q * q / 4 + p * p * p / 27);
+  double y = std::cbrt(-q / 2 + disc) + std::cbrt(-q / 2 - disc);
+  // one Newton polish (cancellation when p^3 dominates)
+  for (int it = 0; it < 3; ++it) {
+    const double f = y * y * y + p * y + q, fp = 3 * y * y + p;
+    if (fp > 0) y -= f / fp;
   }
-  return lo;
+  double v1 = v0 + y * y;
+  if (y * y >= A * A / J) {
+    const double b = A * A / J, c = v0 * A * A / J - v0 * v0 - 2 * L * A;
+    v1 = 0.5 * (-b + std::sqrt(b * b - 4 * c));
+  }
+  v1 = std::min(std::max(v1, v0), vmax);
+  // guard the rounding (never beyond L): shrink by 1e-12 relative steps a few
+  // times, else bisect on [v0, v1]
+  for (int it = 0; it < 4 && v1 > v0 && change_distance(v0, v1, A, J) > L; ++it) v1 = v0 + (v1 - v0) * (1 - 1e-12);
+  if (v1 > v0 && change_distance(v0, v1, A, J) > L) {
+    double lo = v0, hi = v1;
+    for (int it = 0; it < 200 && hi - lo > 1e-13 * std::max(1.0, hi); ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (change_distance(v0, mid, A, J) <= L ? lo : hi) = mid;
+    }
+    v1 = lo;
+  }
+  return v1;
 }
 
 double append_change(std::vector<Piece>& out, double t, double s, double v0, double v1, double A, double J) {
@@ -83,10 +109,20 @@ std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<doubl
     double vp = std::max(cap[i], lo_peak);
     auto need = [&](double v) { return change_distance(va, v, A, J) + change_distance(v, vb, A, J); };
     if (need(vp) > L) {
-      double lo = lo_peak, hi = vp;
-      for (int it = 0; it < 200 && hi - lo > 1e-12 * std::max(1.0, hi); ++it) {
-        const double mid = 0.5 * (lo + hi);
-        (need(mid) <= L ? lo : hi) = mid;
+      // need() is increasing in v on [lo_peak, cap]: secant steps inside a
+      // shrinking bracket (falls back to bisection), to 1e-12 relative
+      double lo = lo_peak, hi = vp, flo = need(lo) - L, fhi = need(hi) - L;
+      for (int it = 0; it < 100 && hi - lo > 1e-12 * std::max(1.0, hi); ++it) {
+        double m = (fhi != flo) ? lo - flo * (hi - lo) / (fhi - flo) : 0.5 * (lo + hi);
+        if (!(m > lo && m < hi) || it % 3 == 2) m = 0.5 * (lo + hi);
+        const double fm = need(m) - L;
+        if (fm <= 0) {
+          lo = m;
+          flo = fm;
+        } else {
+          hi = m;
+          fhi = fm;
+        }
       }
       vp = lo;
     }
