@@ -1,7 +1,5 @@
 #include "planner/segments.hpp"
 
-#include <unsupported/Eigen/Polynomials>
-
 #include <algorithm>
 #include <cmath>
 
@@ -18,42 +16,78 @@ double TimeSegment::eval(int axis, double tau, int deriv) const {
   return v;
 }
 
-double max_abs_poly(const double* c, int n, double T) {
-  auto val = [&](double t) {
-    double v = 0;
-    for (int j = n; j >= 0; --j) v = v * t + c[j];
-    return v;
-  };
-  double m = std::max(std::fabs(val(0)), std::fabs(val(T)));
-  // critical points: real roots of q' in (0, T)
-  int dn = n - 1;
-  std::vector<double> dc;
-  for (int j = 1; j <= n; ++j) dc.push_back(c[j] * j);
-  while (dn >= 1 && dc[dn] == 0) --dn;
-  if (dn <= 0) return m;
-  if (dn == 1) {
-    const double r = -dc[0] / dc[1];
-    if (r > 0 && r < T) m = std::max(m, std::fabs(val(r)));
-    return m;
-  }
-  Eigen::VectorXd coeffs(dn + 1);
-  for (int j = 0; j <= dn; ++j) coeffs[j] = dc[j];
-  Eigen::PolynomialSolver<double, Eigen::Dynamic> solver;
-  solver.compute(coeffs);
-  for (const auto& r : solver.roots()) {
-    // accept near-real roots; polish with Newton on q'
-    if (std::fabs(r.imag()) > 1e-6 * (1 + std::fabs(r.real()))) continue;
-    double t = r.real();
-    for (int it = 0; it < 3; ++it) {
-      double f = 0, fp = 0;
-      for (int j = dn; j >= 0; --j) {
-        fp = fp * t + f;
-        f = f * t + dc[j];
-      }
-      if (fp != 0) t -= f / fp;
+namespace {
+
+double poly_val(const double* c, int n, double t) {
+  double v = 0;
+  for (int j = n; j >= 0; --j) v = v * t + c[j];
+  return v;
+}
+
+// Real roots of c[0..n] (n <= 5) in the open interval (a, b), ascending.
+// Recursive isolation: the roots of the derivative split (a, b) into pieces
+// where the polynomial is monotone; each piece with a sign change holds one
+// root, found by a bracketing Illinois (regula falsi) iteration.
+int roots_in(const double* c, int n, double a, double b, double* out) {
+  while (n > 0 && c[n] == 0) --n;
+  if (n <= 0) return 0;
+  if (n == 1) {
+    const double r = -c[0] / c[1];
+    if (r > a && r < b) {
+      out[0] = r;
+      return 1;
     }
-    if (t > 0 && t < T) m = std::max(m, std::fabs(val(t)));
+    return 0;
   }
+  double d[6];
+  for (int j = 0; j < n; ++j) d[j] = c[j + 1] * (j + 1);
+  double pts[8];
+  pts[0] = a;
+  const int m = roots_in(d, n - 1, a, b, pts + 1);
+  pts[m + 1] = b;
+  int k = 0;
+  for (int i = 0; i <= m; ++i) {
+    double x0 = pts[i], x1 = pts[i + 1];
+    double f0 = poly_val(c, n, x0), f1 = poly_val(c, n, x1);
+    if (i > 0 && f0 == 0) {  // root exactly at a critical point
+      out[k++] = x0;
+      continue;
+    }
+    if ((f0 < 0) == (f1 < 0) || f1 == 0) continue;
+    int side = 0;
+    for (int it = 0; it < 200 && x1 - x0 > 1e-15 * (1 + std::fabs(x0) + std::fabs(x1)); ++it) {
+      const double x = (x0 * f1 - x1 * f0) / (f1 - f0);
+      const double f = poly_val(c, n, x);
+      if (f == 0) {
+        x0 = x1 = x;
+        break;
+      }
+      if ((f < 0) == (f0 < 0)) {
+        x0 = x;
+        f0 = f;
+        if (side == -1) f1 /= 2;
+        side = -1;
+      } else {
+        x1 = x;
+        f1 = f;
+        if (side == 1) f0 /= 2;
+        side = 1;
+      }
+    }
+    out[k++] = 0.5 * (x0 + x1);
+  }
+  return k;
+}
+
+}  // namespace
+
+double max_abs_poly(const double* c, int n, double T) {
+  double m = std::max(std::fabs(poly_val(c, n, 0)), std::fabs(poly_val(c, n, T)));
+  if (n < 2) return m;
+  double d[6], r[6];
+  for (int j = 0; j < n; ++j) d[j] = c[j + 1] * (j + 1);
+  const int k = roots_in(d, n - 1, 0, T, r);
+  for (int i = 0; i < k; ++i) m = std::max(m, std::fabs(poly_val(c, n, r[i])));
   return m;
 }
 
