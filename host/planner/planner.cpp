@@ -139,6 +139,9 @@ struct SpeedAtS {
     double lo = 0, hi = q.T, t = q.T * (s - q.s0) / std::max(q.s(q.T) - q.s0, 1e-300);
     for (int it = 0; it < 60 && hi - lo > 1e-15 * (1 + q.T); ++it) {
       const double f = q.s(t) - s;
+      // |f| <= 1e-13 (1 + s): the speed there differs from the exact one by
+      // at most a * 1e-13 (1 + s) / v, far below anything checked
+      if (std::fabs(f) <= 1e-13 * (1 + std::fabs(s))) break;
       if (f < 0) lo = t;
       else hi = t;
       const double v = q.v(t);
