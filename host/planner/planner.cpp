@@ -363,33 +363,25 @@ Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o) {
     plan.pieces = plan_blocks(plan.stations, cap, plan.A_t, plan.J_t);
     // the profile must stay under v_lim at every grid point
     SpeedAtS v_at{plan.pieces};
-    size_t st = 0;
-    double worst = 1;
-    size_t worst_i = 0;
+    // every local maximum of the violation ratio becomes a station (not only
+    // the worst per block): fewer passes
     int added = 0;
-    for (size_t i = 0; i < g.s.size(); ++i) {
-      while (st + 1 < plan.stations.size() && plan.stations[st + 1].s <= g.s[i]) {
-        if (worst > 1 + 1e-9) {
-          forced[worst_i] = 1;
-          ++added;
-        }
-        worst = 1;
-        ++st;
+    double r_prev2 = 0, r_prev = 0;
+    size_t i_prev = 0;
+    for (size_t i = 0; i <= g.s.size(); ++i) {
+      double r = 0;
+      if (i < g.s.size() && !(g.corner[i] || forced[i])) {
+        // at a station the profile has the station's speed by construction
+        const double v = v_at(g.s[i]);
+        r = v / std::max(g.vlim[i], 1e-9 * L.feed);  // below 1e-9 feed counts as a stop
       }
-      // at a station the profile has the station's speed by construction
-      // (evaluating it there by bisection only measures rounding)
-      if (g.corner[i] || forced[i]) continue;
-      const double v = v_at(g.s[i]);
-      // speeds below 1e-9 feed count as a stop (float end of an S-curve)
-      const double r = v / std::max(g.vlim[i], 1e-9 * L.feed);
-      if (r > worst) {
-        worst = r;
-        worst_i = i;
+      if (r_prev > 1 + 1e-9 && r_prev >= r_prev2 && r_prev >= r) {
+        forced[i_prev] = 1;
+        ++added;
       }
-    }
-    if (worst > 1 + 1e-9) {
-      forced[worst_i] = 1;
-      ++added;
+      r_prev2 = r_prev;
+      r_prev = r;
+      i_prev = i;
     }
     if (added == 0) return plan;
     plan.refinements += added;
