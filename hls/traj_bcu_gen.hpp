@@ -53,15 +53,19 @@
 //           tick is pending, process it as an underrun.
 //   LOAD  : 4*N words, digit by digit: axis 0 digit 0 of A, B, C, D, axis 0
 //           digit 1 of A..D, ...; every 4th word shifts the ring once, the
-//           4 digits entering at pos[N-1]. N shifts: aligned.
+//           4 digits entering at pos[N-1]. N shifts: aligned. Then SETTLE
+//           (d = 0) or DESC.
 //   DESC  : while lvl < d: one pass (R cycles): every axis (L,R) = BCU(cur),
-//           R -> stack[lvl*N ..], cur = L. Then READY.
+//           R -> stack[lvl*N ..], cur = L. Then SETTLE.
+//   SETTLE: one cycle: the output rounding registers (rnd_a_q, rnd_d_q: round
+//           of A and D of every axis, computed from the ring every cycle, so
+//           no adder is in the path to sample_q) take the leaf. Then READY.
 //   READY : leaf j is ready: its A (all axes) is sample j. On a pending tick:
 //           emit round(A); if j = 2^d-1: seg_done, -> IDLE (the ring keeps the
 //           last leaf; its D is the end value). Else the next leaf is the
 //           right half pushed at level p = d-1-(trailing ones of j):
 //   POP   : one pass (R cycles) reading stack[p*N ..] (data one cycle later,
-//           written at pos[N]), lvl = p+1, then DESC (down to d) or READY.
+//           written at pos[N]), lvl = p+1, then DESC (down to d) or SETTLE.
 //   Every internal node of the subdivision tree is split exactly once:
 //   2^d-1 BCU operations (6 additions each, per axis) for 2^d samples.
 //   p and p*N are computed from j in three pipeline registers every cycle; j
@@ -70,11 +74,11 @@
 // Timing (clock cycles)
 //   tick_i at cycle t -> tick_q at t+1 -> processed at t+1 if READY/IDLE ->
 //   sample_valid_o at t+2. Within a segment the next leaf is ready at most
-//   1 + d*R cycles after a tick was processed (worst at j = 2^(d-1)-1: a pop
-//   from level 0, then d-1 descents). Between segments (stream never starved):
-//   2 + 4*N + d*R cycles. Hence
-//       kMinTickSpacing = 2 + 4*N + MaxDepth*R
-//   (266 for 3 axes, 16-bit digits, 40-bit control, MaxDepth 12): with ticks
+//   2 + d*R cycles after a tick was processed (worst at j = 2^(d-1)-1: a pop
+//   from level 0, then d-1 descents, then SETTLE). Between segments (stream
+//   never starved): 3 + 4*N + d*R cycles. Hence
+//       kMinTickSpacing = 3 + 4*N + MaxDepth*R
+//   (267 for 3 axes, 16-bit digits, 40-bit control, MaxDepth 12): with ticks
 //   at least that many cycles apart and the stream never starved, every tick
 //   is served with latency 2 (tests check it, and that one cycle less fails).
 //
@@ -128,7 +132,7 @@ class BcuGen {
   static constexpr int kDepthBits = bcu_clog2(MaxDepth + 1);
   static constexpr int kStack = MaxDepth * kN;
   static constexpr int kAddrBits = bcu_clog2(kStack + 1);
-  static constexpr int kMinTickSpacing = 2 + 4 * kN + MaxDepth * kR;
+  static constexpr int kMinTickSpacing = 3 + 4 * kN + MaxDepth * kR;
 
   static_assert(Axes >= 1 && Axes <= 8, "Axes must be 1..8");
   static_assert(ChunkWidth >= 8 && ChunkWidth <= 64, "ChunkWidth must be 8..64");
@@ -138,7 +142,7 @@ class BcuGen {
   static_assert(GuardBits >= 0 && GuardBits <= CtrlWidth - 2, "GuardBits must be 0..CtrlWidth-2");
   static_assert(OutWidth >= kNarrow && OutWidth <= 64, "OutWidth must be kNarrow..64");
 
-  enum State : uint8_t { S_IDLE = 0, S_LOAD = 1, S_DESC = 3, S_READY = 4, S_POP = 5 };
+  enum State : uint8_t { S_IDLE = 0, S_LOAD = 1, S_SETTLE = 2, S_DESC = 3, S_READY = 4, S_POP = 5 };
 
   struct In {
     bool rst_n = true;
@@ -154,6 +158,8 @@ class BcuGen {
     bool valid_q = false, underrun_q = false, done_q = false;
     int depth_q = 0, lvl_q = 0, pc_q = 0, wc_q = 0, lc_q = 0, dg_q = 0, addr_q = 0;
     uint32_t j_q = 0;
+    bool pc_last_q = false;  // == (pc_q == kR-1), a flop in the RTL (timing)
+    bool rsel_q = true;  // == (state == S_IDLE): sample from rnd_d_q, else rnd_a_q
     // datapath (not reset)
     bool is_last_q = false;             // j == 2^d-1, registered
     bool desc_last_q = false;           // lvl+1 == d, registered
@@ -172,6 +178,7 @@ class BcuGen {
     bool cm_q = false;
     uint64_t ha_q = 0, hs1_q = 0, ht1_q = 0, ht2_q = 0, hs3_q = 0, hd_q = 0;
     uint64_t rd_q[4] = {};
+    u128 rnd_a_q[Axes] = {}, rnd_d_q[Axes] = {};  // round(A), round(D) of the ring, every cycle
     u128 sample_q[Axes] = {};
   };
 
@@ -239,7 +246,7 @@ class BcuGen {
       return static_cast<uint64_t>(s) & M;
     };
     // digit index of the head digit (0 = first digit of a value)
-    n.dg_q = (q.state == S_DESC && q.pc_q != kR - 1) ? (q.dg_q == kDigits - 1 ? 0 : q.dg_q + 1) : 0;
+    n.dg_q = (q.state == S_DESC && !q.pc_last_q) ? (q.dg_q == kDigits - 1 ? 0 : q.dg_q + 1) : 0;
     const bool f0 = q.dg_q == 0;
     const bool f0_next = n.dg_q == 0;
     {
@@ -281,26 +288,29 @@ class BcuGen {
     bool shift = false, ins_desc = false, ins_load = false, ins_pop = false;
     bool mem_we = false;
     switch (q.state) {
-      case S_IDLE:
+      case S_IDLE: {
+        // Only the state (and the tick) depend on accept (timing): depth is
+        // taken from every word offered in IDLE (the accepted header is the
+        // last), j, lvl and addr are cleared in every IDLE cycle, and wc, lc
+        // and pc are always 0 in IDLE.
+        int d = static_cast<int>(bits(in.tdata, 0, kDepthBits));
+        if (d > MaxDepth) d = MaxDepth;
+        n.depth_q = d;
+        n.j_q = 0;
+        n.lvl_q = 0;
+        n.addr_q = 0;
         if (accept) {
-          int d = static_cast<int>(bits(in.tdata, 0, kDepthBits));
-          if (d > MaxDepth) d = MaxDepth;
-          n.depth_q = d;
-          n.wc_q = 0;
-          n.lc_q = 0;
-          n.j_q = 0;
-          n.lvl_q = 0;
-          n.addr_q = 0;
           n.state = S_LOAD;
         } else if (q.tick_q) {
           consume = true;
           n.underrun_q = true;
           if (q.have_last_q) {
             n.valid_q = true;
-            for (int a = 0; a < Axes; ++a) n.sample_q[a] = round_out(lane_value(q, 3, a));
+            for (int a = 0; a < Axes; ++a) n.sample_q[a] = q.rsel_q ? q.rnd_d_q[a] : q.rnd_a_q[a];
           }
         }
         break;
+      }
       case S_LOAD:
         if (accept) {
           if (q.wc_q == 3) {
@@ -309,8 +319,7 @@ class BcuGen {
             ins_load = true;
             if (q.lc_q == kN - 1) {
               n.lc_q = 0;
-              n.pc_q = 0;
-              n.state = (q.depth_q == 0) ? S_READY : S_DESC;
+              n.state = (q.depth_q == 0) ? S_SETTLE : S_DESC;
             } else {
               n.lc_q = q.lc_q + 1;
             }
@@ -327,19 +336,22 @@ class BcuGen {
           mem_we = true;
           n.addr_q = wrap(q.addr_q + 1, kAddrBits);
         }
-        if (q.pc_q == kR - 1) {
+        if (q.pc_last_q) {
           n.pc_q = 0;
           n.lvl_q = q.lvl_q + 1;
-          if (q.desc_last_q) n.state = S_READY;
+          if (q.desc_last_q) n.state = S_SETTLE;
         } else {
           n.pc_q = q.pc_q + 1;
         }
+        break;
+      case S_SETTLE:  // one cycle for rnd_a_q to see the leaf (the ring is static)
+        n.state = S_READY;
         break;
       case S_READY:
         if (q.tick_q) {
           consume = true;
           n.valid_q = true;
-          for (int a = 0; a < Axes; ++a) n.sample_q[a] = round_out(lane_value(q, 0, a));
+          for (int a = 0; a < Axes; ++a) n.sample_q[a] = q.rsel_q ? q.rnd_d_q[a] : q.rnd_a_q[a];
           if (q.is_last_q) {
             n.done_q = true;
             n.have_last_q = true;
@@ -357,9 +369,9 @@ class BcuGen {
         shift = true;
         ins_pop = true;
         if (q.pc_q < kN) n.addr_q = wrap(q.addr_q + 1, kAddrBits);
-        if (q.pc_q == kR - 1) {
+        if (q.pc_last_q) {
           n.pc_q = 0;
-          n.state = q.lvl_eq_q ? S_READY : S_DESC;
+          n.state = q.lvl_eq_q ? S_SETTLE : S_DESC;
         } else {
           n.pc_q = q.pc_q + 1;
         }
@@ -379,6 +391,13 @@ class BcuGen {
       if ((q.zero_oh_q >> i) & 1u) tones |= i;
     n.pop_lvl_q = static_cast<int>(wrap(static_cast<u128>(q.depth_q - 1 - tones), kDepthBits));
     n.pop_base_q = static_cast<int>(wrap(static_cast<u128>(q.pop_lvl_q) * kN, kAddrBits));
+
+    // ---- output rounding, registered every cycle (the ring is static in
+    // SETTLE/READY/IDLE; IDLE is entered only from READY or reset) ----
+    for (int a = 0; a < Axes; ++a) {
+      n.rnd_a_q[a] = round_out(lane_value(q, 0, a));
+      n.rnd_d_q[a] = round_out(lane_value(q, 3, a));
+    }
 
     // ---- ring ----
     if (shift) {
@@ -407,6 +426,8 @@ class BcuGen {
       n.depth_q = n.lvl_q = n.pc_q = n.wc_q = n.lc_q = n.dg_q = n.addr_q = 0;
       n.j_q = 0;
     }
+    n.rsel_q = n.state == S_IDLE;
+    n.pc_last_q = n.pc_q == kR - 1;
     r_ = n;
   }
 

@@ -4,7 +4,10 @@
 // (hls/traj_bcu_gen.hpp) and adds a router and an output selector.
 //
 // Segment stream: one ChunkWidth-bit word stream (AXI4-Stream tdata, tvalid,
-// tready; behind a 2-entry register slice, so s_axis_tready is a flop) with a
+// tready; behind a 2-entry register slice, so s_axis_tready is a flop, and so
+// is each engine's tvalid: fd_v_q/bcu_v_q = out_v_q && kind of the word in
+// the slice's output register, kept from the next-state values, a
+// re-encoding for timing that leaves the cycle schedule unchanged) with a
 // 1-bit tuser = segment kind (0: forward differences, 1: BCU),
 // sampled on the FIRST word of every segment (later words' tuser is ignored;
 // the host keeps it constant within a segment). The words of a segment are
@@ -91,6 +94,7 @@ class Core {
     int pend_fd_q = 0, pend_bcu_q = 0;  // ticks routed to an engine not yet answered (0..3)
     // input register slice (skid buffer): valid bits reset, data not
     bool out_v_q = false, sk_v_q = false;
+    bool fd_v_q = false, bcu_v_q = false;  // out_v_q && the out word's kind is FD / BCU
     bool out_u_q = false, sk_u_q = false;
     u128 out_d_q = 0, sk_d_q = 0;
     bool err_q = false;                 // sticky: a segment ended with a tick still pending
@@ -106,9 +110,11 @@ class Core {
     Comb c{};
     const Regs& q = r_;
     (void)in;
-    c.kind_now = q.in_seg_q ? q.kind_q : q.out_u_q;
+    // kind of the word in the slice's output register, where it is valid
+    // (== in_seg_q ? kind_q : out_u_q; the registered per-engine valids hold it)
+    c.kind_now = q.bcu_v_q;
     c.tready = c.kind_now ? bcu_.tready() : fd_.outputs().tready;  // router side
-    c.accept = q.out_v_q && c.tready;
+    c.accept = (q.fd_v_q && fd_.outputs().tready) || (q.bcu_v_q && bcu_.tready());
     c.push = c.accept && !q.in_seg_q;
     c.pop_fd = q.fl_fd_q && fd_.outputs().seg_done;
     c.pop_bcu = q.fl_bcu_q && bcu_.seg_done();
@@ -161,19 +167,19 @@ class Core {
     typename Fd::In fi;
     fi.rst_n = in.rst_n;
     fi.tdata = static_cast<uint64_t>(q.out_d_q);
-    fi.tvalid = q.out_v_q && !c.kind_now;
+    fi.tvalid = q.fd_v_q;
     fi.tick = in.tick && !c.tick_kind;
     typename Bcu::In bi;
     bi.rst_n = in.rst_n;
     bi.tdata = q.out_d_q;
-    bi.tvalid = q.out_v_q && c.kind_now;
+    bi.tvalid = q.bcu_v_q;
     bi.tick = in.tick && c.tick_kind;
     // router
     if (c.accept) {
       if (!q.in_seg_q) {
         n.in_seg_q = true;
-        n.kind_q = q.out_u_q;
-        n.rem_q = (q.out_u_q ? kBcuWords : kFdWords) - 1;
+        n.kind_q = c.kind_now;
+        n.rem_q = (c.kind_now ? kBcuWords : kFdWords) - 1;
       } else {
         n.rem_q = q.rem_q - 1;
         if (q.rem_q == 1) n.in_seg_q = false;
@@ -221,6 +227,10 @@ class Core {
       n.sk_d_q = in.tdata;
       n.sk_u_q = in.tuser;
     }
+    // registered per-engine valid: the next out word's kind (next state)
+    const bool kind_nx = n.in_seg_q ? n.kind_q : n.out_u_q;
+    n.fd_v_q = n.out_v_q && !kind_nx;
+    n.bcu_v_q = n.out_v_q && kind_nx;
     fd_.clock(fi);
     bcu_.clock(bi);
     if (!in.rst_n) {  // control only: the slice data registers keep their value

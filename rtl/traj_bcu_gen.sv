@@ -14,7 +14,7 @@
 //     chain longer than ChunkWidth, no chunk-select multiplexer.
 //   * stack: MaxDepth*Axes*Digits entries of 4 digits, one write port,
 //     synchronous read: block RAM.
-//   * ticks at least MinTickSpacing = 2 + 4*N + MaxDepth*(N+2) clocks apart
+//   * ticks at least MinTickSpacing = 3 + 4*N + MaxDepth*(N+2) clocks apart
 //     (N = Axes*Digits) are always served with latency 2.
 `default_nettype none
 `include "traj_check.svh"
@@ -77,11 +77,12 @@ module traj_bcu_gen #(
   `TRAJ_PARAM_CHECK(g_bad_hdr, DepthBits <= ChunkWidth,
                     "traj_bcu_gen: the depth field must fit one stream word")
 
-  localparam logic [2:0] StIdle  = 3'd0;
-  localparam logic [2:0] StLoad  = 3'd1;
-  localparam logic [2:0] StDesc  = 3'd3;
-  localparam logic [2:0] StReady = 3'd4;
-  localparam logic [2:0] StPop   = 3'd5;
+  localparam logic [2:0] StIdle   = 3'd0;
+  localparam logic [2:0] StLoad   = 3'd1;
+  localparam logic [2:0] StSettle = 3'd2;
+  localparam logic [2:0] StDesc   = 3'd3;
+  localparam logic [2:0] StReady  = 3'd4;
+  localparam logic [2:0] StPop    = 3'd5;
 
   // ---------------------------------------------------------------------
   // State. Control is reset; datapath (ring, pipeline, asm, rd, sample,
@@ -95,6 +96,7 @@ module traj_bcu_gen #(
   logic [1:0]           wc_q, wc_d;
   logic [LcBits-1:0]    lc_q, lc_d;
   logic [DgBits-1:0]    dg_q, dg_d;
+  logic                 pc_last_q;  // == (pc_q == R-1), a flop for timing
   logic [MaxDepth-1:0]  j_q, j_d;
   logic [AddrBits-1:0]  addr_q, addr_d, pop_base_q;
 
@@ -134,7 +136,8 @@ module traj_bcu_gen #(
   // digit that will use them is the first of a value, so no adder carry-in
   // and no shifted digit is gated (timing).
   assign f0      = (dg_q == '0);
-  assign f0_next = (dg_d == '0);
+  // == (dg_d == '0), from flops only (timing)
+  assign f0_next = (state_q != StDesc) || pc_last_q || (dg_q == DgBits'(Digits - 1));
   assign s1_sum = {1'b0, hd_a} + {1'b0, hd_b} + {{CW{1'b0}}, cs1_q};
   assign s2_sum = {1'b0, hd_b} + {1'b0, hd_c} + {{CW{1'b0}}, cs2_q};
   assign s3_sum = {1'b0, hd_c} + {1'b0, hd_d} + {{CW{1'b0}}, cs3_q};
@@ -177,11 +180,17 @@ module traj_bcu_gen #(
 
   // ---------------------------------------------------------------------
   // Output rounding, once, half up: floor((x + 2^(Shift-1)) / 2^Shift), of
-  // A (READY) and of D (IDLE: the end value of the last leaf) of every axis;
-  // both are computed and the result is selected (the select is off the
-  // adders' carry chains).
+  // A (READY) and of D (IDLE: the end value of the last leaf) of every axis,
+  // registered every cycle (rnd_a_q, rnd_d_q: the sum bits pack into the adders'
+  // logic cells). The ring is static in SETTLE/READY and IDLE (no pass), and
+  // a tick is processed only from the cycle after SETTLE, resp. in IDLE,
+  // which is entered only from READY (or reset, with have_last_q clear), so
+  // the registered values are those of the current ring. The sample is then
+  // selected from flops (rsel_q == (state_q == StIdle)): no adder is in the
+  // path to sample_q.
   // ---------------------------------------------------------------------
-  logic [Axes*OutWidth-1:0] round_x;
+  logic                     rsel_q;
+  logic [Axes*OutWidth-1:0] rnd_a_q, rnd_d_q, round_x;
   for (genvar a = 0; a < Axes; a++) begin : g_round
     // Bits of xa/xd below the rounding bit, and the sign copies of ha/hd
     // above the Narrow result bits, are not needed (the value fits Narrow bits).
@@ -196,9 +205,12 @@ module traj_bcu_gen #(
     assign hd = xd[WP-1:Shift];
     assign ra = Narrow'(ha) + {{(Narrow-1){1'b0}}, xa[Shift-1]};
     assign rd = Narrow'(hd) + {{(Narrow-1){1'b0}}, xd[Shift-1]};
-    assign round_x[a*OutWidth +: OutWidth] = (state_q == StIdle) ? OutWidth'($signed(rd))
-                                                                 : OutWidth'($signed(ra));
+    always_ff @(posedge clk_i) begin
+      rnd_a_q[a*OutWidth +: OutWidth] <= OutWidth'($signed(ra));
+      rnd_d_q[a*OutWidth +: OutWidth] <= OutWidth'($signed(rd));
+    end
   end
+  assign round_x = rsel_q ? rnd_d_q : rnd_a_q;
 
   // ---------------------------------------------------------------------
   // Pop address pipeline, three registers: the lowest zero bit of j (one-hot,
@@ -269,13 +281,15 @@ module traj_bcu_gen #(
 
     unique case (state_q)
       StIdle: begin
+        // Timing: only the state (and the tick) depend on accept. depth is
+        // taken from every word offered in IDLE (the accepted header is the
+        // last one), j, lvl and addr are cleared in every IDLE cycle (unused
+        // there), and wc, lc and pc are always 0 in IDLE.
+        depth_d = hdr_depth;
+        j_d     = '0;
+        lvl_d   = '0;
+        addr_d  = '0;
         if (accept) begin
-          depth_d = hdr_depth;
-          wc_d    = '0;
-          lc_d    = '0;
-          j_d     = '0;
-          lvl_d   = '0;
-          addr_d  = '0;
           state_d = StLoad;
         end else if (tick_q) begin
           consume    = 1'b1;
@@ -294,8 +308,7 @@ module traj_bcu_gen #(
             ins_load = 1'b1;
             if (lc_q == LcBits'(N - 1)) begin
               lc_d    = '0;
-              pc_d    = '0;
-              state_d = (depth_q == '0) ? StReady : StDesc;
+              state_d = (depth_q == '0) ? StSettle : StDesc;
             end else begin
               lc_d = lc_q + 1'b1;
             end
@@ -312,13 +325,17 @@ module traj_bcu_gen #(
           mem_we = 1'b1;
           addr_d = addr_q + 1'b1;
         end
-        if (pc_q == PcBits'(R - 1)) begin
+        if (pc_last_q) begin
           pc_d  = '0;
           lvl_d = lvl_q + 1'b1;
-          if (desc_last_q) state_d = StReady;
+          if (desc_last_q) state_d = StSettle;
         end else begin
           pc_d = pc_q + 1'b1;
         end
+      end
+      StSettle: begin
+        // one cycle for the registered output rounding (rnd_a_q) to see the leaf
+        state_d = StReady;
       end
       StReady: begin
         if (tick_q) begin
@@ -342,9 +359,9 @@ module traj_bcu_gen #(
         shift   = 1'b1;
         ins_pop = 1'b1;
         if (pc_q < PcBits'(N)) addr_d = addr_q + 1'b1;
-        if (pc_q == PcBits'(R - 1)) begin
+        if (pc_last_q) begin
           pc_d    = '0;
-          state_d = lvl_eq_q ? StReady : StDesc;
+          state_d = lvl_eq_q ? StSettle : StDesc;
         end else begin
           pc_d = pc_q + 1'b1;
         end
@@ -355,7 +372,7 @@ module traj_bcu_gen #(
     endcase
 
     // digit index of the head digit (0 = first digit of a value)
-    if (state_q == StDesc && pc_q != PcBits'(R - 1)) begin
+    if (state_q == StDesc && !pc_last_q) begin
       dg_d = (dg_q == DgBits'(Digits - 1)) ? '0 : dg_q + 1'b1;
     end else begin
       dg_d = '0;
@@ -398,8 +415,10 @@ module traj_bcu_gen #(
       wc_q        <= '0;
       lc_q        <= '0;
       dg_q        <= '0;
+      pc_last_q   <= 1'b0;
       j_q         <= '0;
       addr_q      <= '0;
+      rsel_q      <= 1'b1;
     end else begin
       state_q     <= state_d;
       tick_q      <= (tick_q && !consume) || tick_i;
@@ -414,8 +433,10 @@ module traj_bcu_gen #(
       wc_q        <= wc_d;
       lc_q        <= lc_d;
       dg_q        <= dg_d;
+      pc_last_q   <= (pc_d == PcBits'(R - 1));
       j_q         <= j_d;
       addr_q      <= addr_d;
+      rsel_q      <= (state_d == StIdle);
     end
   end
 

@@ -2,7 +2,9 @@
 // (traj_fd_engine and traj_bcu_gen). Mirrors hls/traj_core.hpp cycle for
 // cycle; the full description is there and in tb/core/README.md. In short:
 //   * one ChunkWidth-bit AXI4-Stream segment input behind a register slice
-//     (skid buffer: s_axis_tready is a flop); s_axis_tuser = segment kind
+//     (skid buffer: s_axis_tready is a flop, and each engine's tvalid is a
+//     flop too: no decode between the slice and the engines' load control);
+//     s_axis_tuser = segment kind
 //     (0 = forward differences, 1 = BCU), sampled on the first word of every
 //     segment. Segment lengths are fixed per kind (each engine's own format),
 //     so the router counts words and forwards each segment, in order, to its
@@ -103,43 +105,62 @@ module traj_core #(
   logic               err_q;
   logic [1:0]         pf, pb;
 
-  logic kind_now, accept, push, pop_fd, pop_bcu, fl_fd1, fl_bcu1, last1, tick_kind;
+  logic accept, push, pop_fd, pop_bcu, fl_fd1, fl_bcu1, last1, tick_kind;
   logic sel_now, fd_real, bcu_real;
 
   // Input register slice (skid buffer): s_axis_tready is a flop; the router
   // sees out_*. Valid bits are reset, data is not.
-  logic                  out_v_q, sk_v_q, out_u_q, sk_u_q, r_tready;
+  //
+  // Per-engine valid, registered (timing): fd_v_q/bcu_v_q hold exactly
+  //   out_v_q && kind of the word in out_* (in_seg_q ? kind_q : out_u_q)
+  // computed from the next-state values, so each engine's tvalid is a flop
+  // and the kind decode is off the path from the slice into the engines'
+  // load control (the BCU's ring shift enables 1088 flops). This is a
+  // re-encoding, not a new pipeline stage: the cycle schedule is unchanged.
+  // Where out_v_q is known to be set (accept, push) the word's kind is bcu_v_q.
+  logic                  out_v_q, sk_v_q, out_u_q, sk_u_q, fd_v_q, bcu_v_q;
+  logic                  load_out, out_v_d, out_u_d, in_seg_d, kind_d, kind_nx;
   logic [ChunkWidth-1:0] out_d_q, sk_d_q;
   assign s_axis_tready = !sk_v_q;
+  assign load_out      = !out_v_q || accept;
+  assign out_v_d       = load_out ? (sk_v_q || s_axis_tvalid) : 1'b1;
+  assign out_u_d       = (load_out && sk_v_q) ? sk_u_q
+                       : ((load_out && s_axis_tvalid) ? s_axis_tuser : out_u_q);
+  assign in_seg_d      = accept ? (!in_seg_q || rem_q != RemBits'(1)) : in_seg_q;
+  assign kind_d        = push ? bcu_v_q : kind_q;
+  assign kind_nx       = in_seg_d ? kind_d : out_u_d;
   always_ff @(posedge clk_i) begin
     if (!rst_ni) begin
       out_v_q <= 1'b0;
       sk_v_q  <= 1'b0;
-    end else if (!out_v_q || accept) begin
-      out_v_q <= sk_v_q || s_axis_tvalid;
-      sk_v_q  <= 1'b0;
-    end else if (s_axis_tvalid && !sk_v_q) begin
-      sk_v_q <= 1'b1;
+      fd_v_q  <= 1'b0;
+      bcu_v_q <= 1'b0;
+    end else begin
+      out_v_q <= out_v_d;
+      fd_v_q  <= out_v_d && !kind_nx;
+      bcu_v_q <= out_v_d && kind_nx;
+      if (load_out) begin
+        sk_v_q <= 1'b0;
+      end else if (s_axis_tvalid && !sk_v_q) begin
+        sk_v_q <= 1'b1;
+      end
     end
   end
   always_ff @(posedge clk_i) begin
-    if (!out_v_q || accept) begin
+    if (load_out) begin
       if (sk_v_q) begin
         out_d_q <= sk_d_q;
-        out_u_q <= sk_u_q;
       end else if (s_axis_tvalid) begin
         out_d_q <= s_axis_tdata;
-        out_u_q <= s_axis_tuser;
       end
     end else if (s_axis_tvalid && !sk_v_q) begin
       sk_d_q <= s_axis_tdata;
       sk_u_q <= s_axis_tuser;
     end
+    out_u_q <= out_u_d;
   end
 
-  assign kind_now      = in_seg_q ? kind_q : out_u_q;
-  assign r_tready      = kind_now ? bcu_tready : fd_tready;
-  assign accept        = out_v_q && r_tready;
+  assign accept        = (fd_v_q && fd_tready) || (bcu_v_q && bcu_tready);
   assign push          = accept && !in_seg_q;
   assign pop_fd        = fl_fd_q && fd_done;
   assign pop_bcu       = fl_bcu_q && bcu_done;
@@ -150,12 +171,12 @@ module traj_core #(
     if (fl_fd1 && fl_bcu1) tick_kind = older_q;
     else if (fl_fd1)       tick_kind = 1'b0;
     else if (fl_bcu1)      tick_kind = 1'b1;
-    else if (push)         tick_kind = kind_now;
+    else if (push)         tick_kind = bcu_v_q;
     else                   tick_kind = last1;
   end
 
-  assign fd_tvalid  = out_v_q && !kind_now;
-  assign bcu_tvalid = out_v_q && kind_now;
+  assign fd_tvalid  = fd_v_q;
+  assign bcu_tvalid = bcu_v_q;
   assign fd_tick    = tick_i && !tick_kind;
   assign bcu_tick   = tick_i && tick_kind;
 
@@ -174,20 +195,16 @@ module traj_core #(
       pend_bcu_q  <= '0;
       err_q       <= 1'b0;
     end else begin
+      in_seg_q <= in_seg_d;
+      kind_q   <= kind_d;
       if (accept) begin
-        if (!in_seg_q) begin
-          in_seg_q <= 1'b1;
-          kind_q   <= out_u_q;
-          rem_q    <= out_u_q ? RemBits'(BcuWords - 1) : RemBits'(FdWords - 1);
-        end else begin
-          rem_q <= rem_q - 1'b1;
-          if (rem_q == RemBits'(1)) in_seg_q <= 1'b0;
-        end
+        rem_q <= in_seg_q ? rem_q - 1'b1
+                          : (bcu_v_q ? RemBits'(BcuWords - 1) : RemBits'(FdWords - 1));
       end
       last_kind_q <= last1;
-      fl_fd_q     <= fl_fd1 || (push && !kind_now);
-      fl_bcu_q    <= fl_bcu1 || (push && kind_now);
-      if (push) older_q <= (kind_now ? fl_fd1 : fl_bcu1) ? !kind_now : kind_now;
+      fl_fd_q     <= fl_fd1 || (push && !bcu_v_q);
+      fl_bcu_q    <= fl_bcu1 || (push && bcu_v_q);
+      if (push) older_q <= (bcu_v_q ? fl_fd1 : fl_bcu1) ? !bcu_v_q : bcu_v_q;
       sel_q      <= sel_now;
       primed_q   <= primed_q || fd_real || bcu_real;
       pend_fd_q  <= pf + {1'b0, fd_tick};
