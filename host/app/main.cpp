@@ -13,8 +13,12 @@
 
 #include "demo.hpp"
 #include "planner/pipeline.hpp"
+#include "planner/raster.hpp"
+#include "planner/streaming.hpp"
 #include "sim.hpp"
 #include "stream/segment_stream.hpp"
+
+namespace fd = traj::fd;
 
 namespace {
 
@@ -98,9 +102,14 @@ int main(int argc, char** argv) {
   std::string input, out_stream = "out/plan.trj", out_dir = "out", csv = "out/samples.csv";
   int tick_gap = 0;
 
+  size_t window = 0, raster = 0;
   auto* pl = app.add_subcommand("plan", "Plan and compile a path (curve JSON) into a segment stream");
-  pl->add_option("path", input, "curve or path JSON (the butterfly format, or {\"curves\": [...]})")->required();
+  pl->add_option("path", input, "curve or path JSON (the butterfly format, or {\"curves\": [...]})");
   pl->add_option("-o,--output", out_stream, "segment stream to write")->capture_default_str();
+  pl->add_option("--window", window,
+                 "stream in bounded memory: plan a look-ahead window of this many curves, commit half of it, "
+                 "write segments as they are final (0: plan the whole path at once)");
+  pl->add_option("--raster", raster, "instead of a file: a synthetic raster toolpath of this many pieces (streamed)");
   add_limits(pl, cfg, v_axis, a_axis, j_axis);
 
   auto* sm = app.add_subcommand("sim", "Run a segment stream through the Verilated core");
@@ -120,7 +129,49 @@ int main(int argc, char** argv) {
   }
   try {
     if (*d) return traj::app::run_demo(demo);
+    if (*pl && (window > 0 || raster > 0)) {
+      apply_axes(cfg, v_axis, a_axis, j_axis);
+      struct VecSource : traj::plan::CurveSource {
+        std::vector<std::pair<traj::geo::BSpline, std::string>> v;
+        size_t i = 0;
+        bool next(traj::geo::BSpline& b, std::string& w) override {
+          if (i >= v.size()) return false;
+          b = v[i].first;
+          w = v[i].second;
+          ++i;
+          return true;
+        }
+      };
+      std::unique_ptr<traj::plan::CurveSource> src;
+      if (raster > 0) {
+        src = std::make_unique<traj::plan::RasterSource>(raster);
+      } else {
+        if (input.empty()) throw traj::plan::PlanError("plan: give a path file or --raster N");
+        const auto path = traj::plan::load_path(input);  // checks the file and the joins
+        auto vs = std::make_unique<VecSource>();
+        for (size_t i = 0; i < path.size(); ++i) vs->v.push_back({path.curve(i).spline(), input + ": curve " + std::to_string(i)});
+        src = std::move(vs);
+      }
+      traj::plan::StreamOptions so;
+      if (window > 0) {
+        so.window = std::max<size_t>(window, 2);
+        so.commit = so.window / 2;
+      }
+      fd::Format f = cfg.format;
+      traj::stream::StreamWriter w(out_stream, traj::stream::Header::from(f, cfg.plan.period, cfg.units));
+      const auto st = traj::plan::run_streaming(
+          *src, cfg, so, [&](const fd::Compiled& c, const traj::plan::TimeSegment&) { w.add({c.ticks, c.regs}); },
+          [](const std::string&, double curves) { std::fprintf(stderr, "\r[stream] %.0f curves   ", curves); });
+      w.finish();
+      std::fprintf(stderr, "\n");
+      std::printf("%s: %zu curves in %zu windows, %zu segments, %lld ticks (%.3f s of motion) -> %s\n"
+                  "host time %.3f s (%.0fx real time), first segment after %.1f ms\n",
+                  raster ? "raster" : input.c_str(), st.curves, st.windows, st.segments, st.ticks, st.motion_time,
+                  out_stream.c_str(), st.wall, st.motion_time / st.wall, st.first_segment * 1e3);
+      return 0;
+    }
     if (*pl || *rn) {
+      if (input.empty()) throw traj::plan::PlanError("give a path file");
       apply_axes(cfg, v_axis, a_axis, j_axis);
       const auto path = traj::plan::load_path(input);
       const auto res = traj::plan::run_job(path, cfg, progress);
