@@ -162,7 +162,10 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
       }
       const double e = std::sqrt(e2);
       seg.max_dev = std::max(seg.max_dev, e);
-      if (e > std::max(o.feed_rel * ts[k].v * period, o.feed_abs)) feed_ok = false;
+      if (e > std::max(o.feed_rel * ts[k].v * period, o.feed_abs) || e > o.fit_tol) {
+        feed_ok = false;
+        break;  // a failing fit needs no more ticks
+      }
     }
     if (seg.max_dev > o.fit_tol || !feed_ok) return false;
     // path feed at the output: the chord between consecutive fitted ticks may
@@ -194,22 +197,45 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
     }
     return true;
   };
+  // Greedy: from each start, the longest segment that passes (binary search
+  // over its length; a failing fit is never accepted, so the result is valid
+  // even where pass/fail is not monotone in the length).
   for (size_t b = 0; b + 1 < brk.size(); ++b) {
-    // work list of intervals, in order
-    std::vector<std::pair<long long, long long>> todo;
-    for (long long k = brk[b]; k < brk[b + 1]; k += o.max_ticks)
-      todo.push_back({k, std::min<long long>(k + o.max_ticks, brk[b + 1])});
-    std::reverse(todo.begin(), todo.end());
-    while (!todo.empty()) {
-      auto [k0, k1] = todo.back();
-      todo.pop_back();
-      TimeSegment seg;
-      if (try_fit(k0, k1, seg)) {
-        out.push_back(std::move(seg));
+    long long k0 = brk[b];
+    long long last_len = 16;
+    while (k0 < brk[b + 1]) {
+      const long long kmax = std::min<long long>(k0 + o.max_ticks, brk[b + 1]);
+      TimeSegment seg, best;
+      // exponential search from twice the previous length, then bisection
+      long long lo = k0, hi = kmax + 1;  // lo: longest known to pass (k0: none yet), hi: fails (kmax+1: unknown)
+      long long probe = std::min(kmax, k0 + std::max<long long>(1, 2 * last_len));
+      while (true) {
+        if (try_fit(k0, probe, seg)) {
+          lo = probe;
+          best = std::move(seg);
+          if (probe == kmax) break;
+          probe = std::min(kmax, k0 + 2 * (probe - k0));
+        } else {
+          hi = probe;
+          break;
+        }
+      }
+      if (lo == kmax) {
+        out.push_back(std::move(best));
+        last_len = lo - k0;
+        k0 = lo;
         continue;
       }
-      if (k1 - k0 == 1)
-        {
+      while (hi - lo > 1) {
+        const long long mid = lo + (hi - lo) / 2;
+        if (try_fit(k0, mid, seg)) {
+          lo = mid;
+          best = std::move(seg);
+        } else {
+          hi = mid;
+        }
+      }
+      if (lo == k0) {
         std::string why = "deviation " + std::to_string(seg.max_dev);
         for (int a = 0; a < d; ++a)
           why += "; axis " + std::to_string(a) + ": v " + std::to_string(seg.peak_v[a]) + " a " +
@@ -218,9 +244,9 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
                            " s): no one-tick segment meets the limits (" + why + ")",
                        k0 + k_base);
       }
-      const long long km = k0 + (k1 - k0) / 2;
-      todo.push_back({km, k1});
-      todo.push_back({k0, km});
+      out.push_back(std::move(best));
+      last_len = lo - k0;
+      k0 = lo;
     }
   }
   return out;
