@@ -248,6 +248,57 @@ module traj_fd_engine #(
     end
   end
 
+
+`ifdef FORMAL
+  // ---------------------------------------------------------------------
+  // Formal properties (yosys -formal; tb/formal). Bounded model checking
+  // from reset; see tb/formal/CMakeLists.txt.
+  // ---------------------------------------------------------------------
+  logic f_past_valid = 1'b0;
+  logic f_cnt_valid = 1'b0;  // count_q holds a value written by a header word
+  always_ff @(posedge clk_i) begin
+    f_past_valid <= 1'b1;
+    if (!rst_ni) f_cnt_valid <= f_cnt_valid;
+    if (header) f_cnt_valid <= 1'b1;
+  end
+  always_comb begin
+    if (!f_past_valid) assume (!rst_ni);
+  end
+  always_ff @(posedge clk_i) begin
+    if (f_past_valid) begin
+      // reset clears every control output and state
+      if (!$past(rst_ni)) begin
+        assert (!sample_valid_q && !underrun_q && !seg_done_q && !tick_err_q);
+        assert (!active_q && !busy_q && !primed_q && wcnt_q == '0 && !tick_q);
+      end
+      // tick_err is sticky until reset
+      if ($past(rst_ni) && $past(tick_err_q)) assert (tick_err_q);
+      // the output never moves except with a sample of an active segment:
+      // underrun, idle, loading and reset hold it (no jump)
+      if (!$past(run)) assert (sample_q == $past(sample_q));
+      // a segment-done pulse comes with its sample, never with an underrun
+      if (seg_done_q) assert (sample_valid_q && !underrun_q);
+      if (underrun_q) assert (sample_valid_q == $past(primed_q));
+    end
+    if (f_past_valid) begin
+      // registered decodes equal what they stand for (the timing fixes)
+      assert (hdr_q == (32'(wcnt_q) < 32'(HdrWords)));
+      if (f_cnt_valid) assert (cnt_one_q == (count_q == CountWidth'(1)));
+      // state bounds and consistency
+      assert (32'(wcnt_q) < 32'(Words));
+      if (Chunks > 1) assert (32'(phase_q) < 32'(Chunks));
+      if (busy_q) assert (active_q);
+      if (active_q) assert (wcnt_q == '0);
+      if (active_q && !busy_q) assert (count_q != '0);
+      assert (s_axis_tready == (!active_q && !busy_q));
+      // supporting invariants (make the properties inductive)
+      if (busy_q) assert (last_tick_q == (count_q == '0));
+      if (active_q || primed_q || 32'(wcnt_q) >= 32'(HdrWords)) assert (f_cnt_valid);
+      if (!busy_q) assert (carry_q == '0);
+    end
+  end
+`endif
+
   assign s_axis_tready  = ready;
   assign sample_valid_o = sample_valid_q;
   assign sample_o       = sample_q;
