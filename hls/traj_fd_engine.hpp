@@ -31,7 +31,8 @@
 // accepted that cycle). With a segment active it emits sample = r[0] >> Guard
 // (the top OutWidth bits), raises seg_done with the K-th sample, and starts the
 // update. With none, it raises underrun; sample_o keeps the last sample and
-// sample_valid pulses only if a segment has ever been loaded since reset: the
+// sample_valid pulses only if a sample has been emitted since reset (a K = 0
+// segment emits none): the
 // output never jumps. A tick arriving while one is pending sets the sticky
 // tick_err (the servo strobe ran faster than the engine can follow).
 //
@@ -144,7 +145,6 @@ class FdEngine {
       if (wcnt_q_ == kWords - 1) {
         wcnt_d = 0;
         active_d = count_q_ != 0;
-        primed_d = true;
       } else {
         wcnt_d = wcnt_q_ + 1;
       }
@@ -176,6 +176,7 @@ class FdEngine {
           sample_d[a] = bits(reg_q_[a * (Degree + 1)], GuardBits, kOutWidth);
         sample_valid_d = true;
         seg_done_d = count_q_ == 1;
+        primed_d = true;  // a real sample has left (a K = 0 segment emits none)
       } else {
         underrun_d = true;
         sample_valid_d = primed_q_;

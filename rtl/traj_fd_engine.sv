@@ -187,7 +187,6 @@ module traj_fd_engine #(
           wcnt_q   <= '0;
           hdr_q    <= 1'b1;
           active_q <= (count_q != '0);
-          primed_q <= 1'b1;
         end else begin
           wcnt_q <= wcnt_q + 1'b1;
           if (wcnt_q == WcntWidth'(HdrWords - 1)) hdr_q <= 1'b0;
@@ -208,6 +207,10 @@ module traj_fd_engine #(
       tick_q         <= (tick_q && !consume) || tick_i;
       tick_err_q     <= tick_err_q || (tick_i && tick_q && !consume);
       sample_valid_q <= consume && (active_q || primed_q);
+      // primed: a real sample has left since reset (a K = 0 segment emits
+      // none), so an underrun repeats a sample that was output, never the
+      // unreset register
+      primed_q       <= primed_q || run;
       underrun_q     <= consume && !active_q;
       seg_done_q     <= run && count_is_one;
     end
@@ -256,8 +259,10 @@ module traj_fd_engine #(
   // ---------------------------------------------------------------------
   logic f_past_valid = 1'b0;
   logic f_cnt_valid = 1'b0;  // count_q holds a value written by a header word
+  logic f_emitted = 1'b0;    // a sample of an active segment has left since reset
   always_ff @(posedge clk_i) begin
     f_past_valid <= 1'b1;
+    f_emitted <= rst_ni && (f_emitted || run);
     if (!rst_ni) f_cnt_valid <= f_cnt_valid;
     if (header) f_cnt_valid <= 1'b1;
   end
@@ -279,6 +284,9 @@ module traj_fd_engine #(
       // a segment-done pulse comes with its sample, never with an underrun
       if (seg_done_q) assert (sample_valid_q && !underrun_q);
       if (underrun_q) assert (sample_valid_q == $past(primed_q));
+      // a valid sample is one the engine has output since reset: never the
+      // unreset sample register (e.g. after a K = 0 first segment)
+      if (sample_valid_q) assert (f_emitted);
     end
     if (f_past_valid) begin
       // registered decodes equal what they stand for (the timing fixes)
@@ -295,6 +303,7 @@ module traj_fd_engine #(
       if (busy_q) assert (last_tick_q == (count_q == '0));
       if (active_q || primed_q || 32'(wcnt_q) >= 32'(HdrWords)) assert (f_cnt_valid);
       if (!busy_q) assert (carry_q == '0);
+      assert (primed_q == f_emitted);
     end
   end
 `endif
