@@ -35,28 +35,44 @@ void Limits::validate() const {
   check_positive(tol, "tol");
 }
 
-void Path::add(const geo::BSpline& spline, const std::string& where) {
-  auto c = std::make_unique<geo::Curve>(spline, where);
-  if (c->dim() < 1 || c->dim() > kMaxAxes)
-    throw PlanError(where + ": " + std::to_string(c->dim()) + " axes; the planner drives 1.." +
+PathCurve::PathCurve(const geo::BSpline& spline, const std::string& w) : where(w) {
+  curve = std::make_unique<geo::Curve>(spline, where);
+  if (curve->dim() < 1 || curve->dim() > kMaxAxes)
+    throw PlanError(where + ": " + std::to_string(curve->dim()) + " axes; the planner drives 1.." +
                     std::to_string(kMaxAxes));
-  if (!curves_.empty() && c->dim() != dim_)
-    throw PlanError(where + ": " + std::to_string(c->dim()) + " axes, the path so far has " + std::to_string(dim_));
-  auto al = std::make_unique<geo::ArcLength>(*c, 1e-12);
-  if (!(al->total() > 1e-9))
-    throw PlanError(where + ": zero-length curve (arc length " + num(al->total()) + ")");
+  al = std::make_unique<geo::ArcLength>(*curve, 1e-12);
+  if (!(al->total() > 1e-9)) throw PlanError(where + ": zero-length curve (arc length " + num(al->total()) + ")");
+}
+
+const std::vector<double>& PathCurve::split_s() const {
+  if (!split_done_) {
+    for (double u : geo::split_params(*curve)) split_s_.push_back(al->s(u));
+    std::sort(split_s_.begin(), split_s_.end());
+    split_done_ = true;
+  }
+  return split_s_;
+}
+
+void Path::add(const geo::BSpline& spline, const std::string& where) {
+  add(std::make_shared<const PathCurve>(spline, where));
+}
+
+void Path::add(std::shared_ptr<const PathCurve> c) {
+  if (!curves_.empty() && c->curve->dim() != dim_)
+    throw PlanError(c->where + ": " + std::to_string(c->curve->dim()) + " axes, the path so far has " +
+                    std::to_string(dim_));
   // joins: end of the previous curve must meet this one's start
   if (!curves_.empty()) {
-    const Eigen::VectorXd a = curves_.back()->point(curves_.back()->u_end());
-    const Eigen::VectorXd b = c->point(c->u_begin());
+    const geo::Curve& prev = *curves_.back()->curve;
+    const Eigen::VectorXd a = prev.point(prev.u_end());
+    const Eigen::VectorXd b = c->curve->point(c->curve->u_begin());
     if ((a - b).norm() > 1e-9 * std::max(1.0, a.norm()))
-      throw PlanError(where + ": starts " + num((a - b).norm()) + " units away from the previous curve's end");
+      throw PlanError(c->where + ": starts " + num((a - b).norm()) + " units away from the previous curve's end");
   }
-  dim_ = c->dim();
+  dim_ = c->curve->dim();
   if (offsets_.empty()) offsets_.push_back(0);
-  offsets_.push_back(offsets_.back() + al->total());
+  offsets_.push_back(offsets_.back() + c->al->total());
   curves_.push_back(std::move(c));
-  al_.push_back(std::move(al));
 }
 
 size_t Path::curve_at(double s) const {
@@ -213,7 +229,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
     // mandatory points: curvature extrema and inflections, and knots where
     // the curve is not C2 (the acceleration K v^2 steps there)
     std::vector<double> must;
-    for (double u : geo::split_params(c)) must.push_back(al.s(u));
+    must = p.entry(ci).split_s();
     std::vector<std::pair<double, double>> knot_bound;  // (s, speed bound)
     for (size_t sp = 1; sp < c.spans().size(); ++sp) {
       const double uk = c.spans()[sp].u0;

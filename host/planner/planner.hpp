@@ -69,21 +69,37 @@ struct PlanOptions {
 };
 
 // A path: curves joined end to end (each a B-spline/NURBS/Bezier/line/arc).
+// One curve of a path with what is derived from it alone (arc-length table,
+// the arc lengths of its curvature extrema and inflections), built once and
+// shared: a streaming window that re-plans a curve reuses it.
+struct PathCurve {
+  PathCurve(const geo::BSpline& spline, const std::string& where);  // checks axes and length
+  std::unique_ptr<geo::Curve> curve;
+  std::unique_ptr<geo::ArcLength> al;
+  std::string where;
+  const std::vector<double>& split_s() const;  // s of geo::split_params, ascending (computed once)
+ private:
+  mutable std::vector<double> split_s_;
+  mutable bool split_done_ = false;
+};
+
 class Path {
  public:
   void add(const geo::BSpline& spline, const std::string& where);
+  // Append a curve built before (shared, not copied); checks the join.
+  void add(std::shared_ptr<const PathCurve> c);
   int dim() const { return dim_; }
   size_t size() const { return curves_.size(); }
   double length() const { return offsets_.empty() ? 0 : offsets_.back(); }
-  const geo::Curve& curve(size_t i) const { return *curves_[i]; }
-  const geo::ArcLength& arclength(size_t i) const { return *al_[i]; }
+  const geo::Curve& curve(size_t i) const { return *curves_[i]->curve; }
+  const geo::ArcLength& arclength(size_t i) const { return *curves_[i]->al; }
+  const PathCurve& entry(size_t i) const { return *curves_[i]; }
   double offset(size_t i) const { return offsets_[i]; }  // s at the start of curve i
   size_t curve_at(double s) const;
 
  private:
   int dim_ = 0;
-  std::vector<std::unique_ptr<geo::Curve>> curves_;
-  std::vector<std::unique_ptr<geo::ArcLength>> al_;
+  std::vector<std::shared_ptr<const PathCurve>> curves_;
   std::vector<double> offsets_;  // size() + 1 entries
 };
 

@@ -29,7 +29,7 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
   if (!(sopt.fit_tol > 0)) throw PlanError("path tolerance is below the output quantisation");
 
   StreamStats st;
-  std::deque<std::pair<geo::BSpline, std::string>> win;
+  std::deque<std::shared_ptr<const PathCurve>> win;  // built once, shared by the windows
   bool exhausted = false;
   double T0 = 0, v_commit = 0;
   long long k_last = -1;  // last committed tick
@@ -66,7 +66,7 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
     std::string where;
     while (!exhausted && win.size() < so.window) {
       if (src.next(b, where)) {
-        win.push_back({b, where});
+        win.push_back(std::make_shared<const PathCurve>(b, where));
         ++st.curves;
       } else {
         exhausted = true;
@@ -74,7 +74,7 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
     }
     if (win.empty()) break;
     Path path;
-    for (const auto& w : win) path.add(w.first, w.second);
+    for (const auto& w : win) path.add(w);
     const bool last = exhausted;
     const size_t ncommit = last ? win.size() : std::min(so.commit, win.size() - 1);
     const double s_commit = last ? path.length() : path.offset(ncommit);
