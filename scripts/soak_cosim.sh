@@ -9,6 +9,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 build=${TRAJ_BUILD_DIR:-$root/build}
 n=${1:-20}
 fail=0
+runs=0
 for bin in "$build"/tb/fd/fd_cosim_*; do
   [ -x "$bin" ] && [ -f "$bin" ] || continue
   case "$bin" in *.cmake) continue ;; esac
@@ -19,6 +20,11 @@ for bin in "$build"/tb/fd/fd_cosim_*; do
       fail=1
     fi
   done
-  echo "$(basename "$bin"): $n random seeds x 6 modes done"
+  echo "$(basename "$bin"): $n random seeds x 6 tests done"
+  runs=$((runs + 1))
 done
+if [ "$runs" -eq 0 ]; then
+  echo "soak_cosim: no fd_cosim_* binaries under $build/tb/fd (run scripts/build.sh, or set TRAJ_BUILD_DIR)" >&2
+  exit 2
+fi
 exit $fail

@@ -287,7 +287,7 @@ bool ArcLength::gk_adapt(int span, double a, double b, double tol, int depth, do
   return true;
 }
 
-bool ArcLength::fast_advance(int si, double ua, double ds, double s_tol, double& u_out) const {
+bool ArcLength::fast_advance(int si, double ua, double ds, double s_tol, double& u_out, const double* d_from) const {
   const auto& spans = c_->spans();
   const int ns = static_cast<int>(spans.size());
   double rem = ds, err = 0;  // remaining length; sum of the quadrature error estimates so far
@@ -297,7 +297,14 @@ bool ArcLength::fast_advance(int si, double ua, double ds, double s_tol, double&
   for (;;) {  // one pass per span (a step may cross span ends)
     const double ub = spans[si].u1;
     double d[3];
-    speed_derivs(si, ua, d);
+    if (d_from) {  // given by the caller at the start point (first span only)
+      d[0] = d_from[0];
+      d[1] = d_from[1];
+      d[2] = d_from[2];
+      d_from = nullptr;
+    } else {
+      speed_derivs(si, ua, d);
+    }
     if (bad(d)) return false;
     double uk = ua + inverse_series(d, rem);
     if (!(uk >= ua)) return false;
@@ -418,14 +425,24 @@ bool ArcLength::fast_advance(int si, double ua, double ds, double s_tol, double&
 }
 
 double ArcLength::advance(double u_from, double ds, double u_guess, double s_tol) const {
+  return advance_impl(u_from, ds, u_guess, s_tol, nullptr);
+}
+
+double ArcLength::advance_from(double u_from, const double* d_from, double ds, double s_tol) const {
+  return advance_impl(u_from, ds, -1, s_tol, d_from);
+}
+
+double ArcLength::advance_impl(double u_from, double ds, double u_guess, double s_tol, const double* d_from) const {
   const auto& spans = c_->spans();
+  const double u_in = u_from;
   u_from = std::clamp(u_from, c_->u_begin(), c_->u_end());
+  if (u_from != u_in) d_from = nullptr;  // given for another point
   if (!(ds > 0)) return u_from;
   if (s_tol <= 0) s_tol = 1e-12 * ds;
   int si = c_->find_span(u_from);
   if (fast_) {
     double u;
-    if (fast_advance(si, u_from, ds, s_tol, u)) {
+    if (fast_advance(si, u_from, ds, s_tol, u, d_from)) {
       ++stats_.fast_steps;
       return u;
     }

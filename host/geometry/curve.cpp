@@ -140,6 +140,32 @@ void rational_derivatives(const double* A, const double* w, int dim, int nd, dou
   }
 }
 
+namespace {
+// All columns of one derivative's coefficient block at once (rows j = tau^j,
+// COLS values each): the same Horner operations, in the same order, as the
+// per-column detail::horner, so the result is bitwise the same; a fixed column
+// count lets the compiler keep the accumulators in registers.
+template <int COLS>
+inline void horner_rows(const double* c, int nterms, double tau, double* out) {
+  double acc[COLS];
+  for (int i = 0; i < COLS; ++i) acc[i] = c[(nterms - 1) * COLS + i];
+  for (int j = nterms - 2; j >= 0; --j)
+    for (int i = 0; i < COLS; ++i) acc[i] = acc[i] * tau + c[j * COLS + i];
+  for (int i = 0; i < COLS; ++i) out[i] = acc[i];
+}
+
+inline void horner_rows_any(const double* c, int nterms, int cols, double tau, double* out) {
+  switch (cols) {
+    case 1: return horner_rows<1>(c, nterms, tau, out);
+    case 2: return horner_rows<2>(c, nterms, tau, out);
+    case 3: return horner_rows<3>(c, nterms, tau, out);
+    case 4: return horner_rows<4>(c, nterms, tau, out);
+    default:
+      for (int d = 0; d < cols; ++d) out[d] = detail::horner(c + d, nterms, cols, tau);
+  }
+}
+}  // namespace
+
 void Curve::eval_span(int si, double u, int nd, double* out) const {
   const PowerSpan& s = spans_[si];
   const int p = s.degree, cols = s.cols, dim = spline_.dim();
@@ -150,18 +176,19 @@ void Curve::eval_span(int si, double u, int nd, double* out) const {
         for (int d = 0; d < dim; ++d) out[k * dim + d] = 0;
         continue;
       }
-      const double* c = s.coef.data() + s.offset(k);
-      for (int d = 0; d < dim; ++d) out[k * dim + d] = detail::horner(c + d, p + 1 - k, cols, tau);
+      horner_rows_any(s.coef.data() + s.offset(k), p + 1 - k, cols, tau, out + k * dim);
     }
     return;
   }
   constexpr int kStack = 16;
-  double abuf[4 * kStack], wbuf[4];
+  double abuf[4 * (kStack + 1)], wbuf[4], row[kStack + 1];
   std::vector<double> heap;
   double* A = abuf;
+  double* R = row;
   if (dim > kStack) {
-    heap.resize(4 * dim);
+    heap.resize(5 * (dim + 1));
     A = heap.data();
+    R = heap.data() + 4 * (dim + 1);
   }
   for (int k = 0; k <= nd; ++k) {
     if (k > p) {
@@ -169,9 +196,9 @@ void Curve::eval_span(int si, double u, int nd, double* out) const {
       wbuf[k] = 0;
       continue;
     }
-    const double* c = s.coef.data() + s.offset(k);
-    for (int d = 0; d < dim; ++d) A[k * dim + d] = detail::horner(c + d, p + 1 - k, cols, tau);
-    wbuf[k] = detail::horner(c + dim, p + 1 - k, cols, tau);
+    horner_rows_any(s.coef.data() + s.offset(k), p + 1 - k, cols, tau, R);
+    for (int d = 0; d < dim; ++d) A[k * dim + d] = R[d];
+    wbuf[k] = R[dim];
   }
   rational_derivatives(A, wbuf, dim, nd, out);
 }

@@ -118,6 +118,9 @@ Frame frame_at(const Path& p, size_t ci, double u, double s) {
   }
   f.kappa = std::sqrt(kk);
   f.q_norm = std::sqrt(qq);
+  f.sig[0] = sig;
+  f.sig[1] = sig1;
+  f.sig[2] = sig2;
   return f;
 }
 
@@ -373,23 +376,31 @@ Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o) {
   Grid g = build_grid(p, L, o, plan.A_t);
   plan.grid_points = static_cast<int>(g.s.size());
   std::vector<char> forced(g.s.size(), 0);
+  std::vector<BlockMemo> memo;  // blocks of the previous pass (most are unchanged by new stations)
+  std::vector<char> changed;
   for (int iter = 0; iter < 10000; ++iter) {
     plan.stations = stations_from(g, forced, L.feed);
     const auto cap = caps_for(g, plan.stations, L.feed);
-    plan.pieces = plan_blocks(plan.stations, cap, plan.A_t, plan.J_t);
+    plan.pieces = plan_blocks(plan.stations, cap, plan.A_t, plan.J_t, memo, changed);
     // the profile must stay under v_lim at every grid point
     SpeedAtS v_at{plan.pieces};
     // every local maximum of the violation ratio becomes a station (not only
-    // the worst per block): fewer passes
+    // the worst per block): fewer passes. A block identical to one of the
+    // previous pass had no violation then (else it would have a new station),
+    // so only the grid points of changed blocks are evaluated.
     int added = 0;
     double r_prev2 = 0, r_prev = 0;
-    size_t i_prev = 0;
+    size_t i_prev = 0, blk = 0;
+    const size_t nblk = changed.size();
     for (size_t i = 0; i <= g.s.size(); ++i) {
       double r = 0;
       if (i < g.s.size() && !(g.corner[i] || forced[i])) {
-        // at a station the profile has the station's speed by construction
-        const double v = v_at(g.s[i]);
-        r = v / std::max(g.vlim[i], 1e-9 * L.feed);  // below 1e-9 feed counts as a stop
+        while (blk + 1 < nblk && plan.stations[blk + 1].s <= g.s[i]) ++blk;
+        if (nblk == 0 || changed[blk]) {
+          // at a station the profile has the station's speed by construction
+          const double v = v_at(g.s[i]);
+          r = v / std::max(g.vlim[i], 1e-9 * L.feed);  // below 1e-9 feed counts as a stop
+        }
       }
       if (r_prev > 1 + 1e-9 && r_prev >= r_prev2 && r_prev >= r) {
         forced[i_prev] = 1;
@@ -428,6 +439,8 @@ std::vector<TickSample> sample_ticks_range(const Path& p, const Plan& plan, doub
   int hint = 0;
   size_t ci = 0;
   double u = p.curve(0).u_begin(), s_prev = 0;
+  double sig_prev[3];
+  bool have_sig = false;  // sig_prev is at (ci, u)
   const int d = p.dim();
   for (long long k = k_first; k <= k_last; ++k) {
     const double t = k * period - t_offset;
@@ -438,11 +451,15 @@ std::vector<TickSample> sample_ticks_range(const Path& p, const Plan& plan, doub
       ci = cj;
       u = p.arclength(ci).u_at(sl);
     } else {
+      const double ds = std::max(0.0, ps.s - s_prev);
       u = sl >= p.arclength(ci).total() ? p.curve(ci).u_end()
-                                       : p.arclength(ci).advance(u, std::max(0.0, ps.s - s_prev), -1);
+          : have_sig                    ? p.arclength(ci).advance_from(u, sig_prev, ds)
+                                        : p.arclength(ci).advance(u, ds, -1);
     }
     s_prev = ps.s;
     const Frame f = frame_at(p, ci, u, ps.s);
+    for (int j = 0; j < 3; ++j) sig_prev[j] = f.sig[j];
+    have_sig = true;
     TickSample ts{};
     ts.t = k * period;
     ts.s = ps.s;

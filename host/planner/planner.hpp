@@ -109,6 +109,7 @@ struct Frame {
   size_t curve = 0;
   double C[kMaxAxes] = {0, 0, 0}, T[kMaxAxes] = {0, 0, 0}, K[kMaxAxes] = {0, 0, 0}, Q[kMaxAxes] = {0, 0, 0};
   double kappa = 0, q_norm = 0;
+  double sig[3] = {0, 0, 0};  // parametric speed |C'(u)| and its first two u-derivatives
 };
 
 // Frame at curve parameter u of curve i (s given for bookkeeping).

@@ -87,7 +87,19 @@ double append_change(std::vector<Piece>& out, double t, double s, double v0, dou
 }
 
 std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<double>& cap, double A, double J) {
+  std::vector<BlockMemo> memo;
+  std::vector<char> changed;
+  return plan_blocks(st, cap, A, J, memo, changed);
+}
+
+std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<double>& cap, double A, double J,
+                               std::vector<BlockMemo>& memo, std::vector<char>& changed) {
   const size_t n = st.size();
+  std::vector<BlockMemo> old;
+  old.swap(memo);
+  changed.assign(n > 0 ? n - 1 : 0, 1);
+  memo.reserve(changed.size());
+  size_t mj = 0;  // old memo entries are sorted by s0
   for (auto& x : st) x.v = x.vmax;
   if (n == 0) return {};
   // backward pass: able to slow down to the next station's speed
@@ -108,7 +120,13 @@ std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<doubl
     const double lo_peak = std::max(va, vb);
     double vp = std::max(cap[i], lo_peak);
     auto need = [&](double v) { return change_distance(va, v, A, J) + change_distance(v, vb, A, J); };
-    if (need(vp) > L) {
+    while (mj < old.size() && old[mj].s0 < s0) ++mj;
+    const double s1 = st[i + 1].s;
+    if (mj < old.size() && old[mj].s0 == s0 && old[mj].s1 == s1 && old[mj].va == va && old[mj].vb == vb &&
+        old[mj].cap == cap[i]) {
+      vp = old[mj].vp;
+      changed[i] = 0;
+    } else if (need(vp) > L) {
       // need() is increasing in v on [lo_peak, cap]: secant steps inside a
       // shrinking bracket (falls back to bisection), to 1e-12 relative
       double lo = lo_peak, hi = vp, flo = need(lo) - L, fhi = need(hi) - L;
@@ -126,6 +144,7 @@ std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<doubl
       }
       vp = lo;
     }
+    memo.push_back({s0, s1, va, vb, cap[i], vp});
     double s = s0;
     t = append_change(out, t, s, va, vp, A, J);
     s = s0 + change_distance(va, vp, A, J);

@@ -50,6 +50,16 @@ struct Station {
 // Station speeds are lowered in place so that every block is feasible.
 std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<double>& cap, double A, double J);
 
+// The same with a memo of the previous call's blocks: a block whose ends,
+// end speeds and cap are bitwise those of a remembered block reuses its peak
+// speed (the one costly step); the result is identical to a call without the
+// memo. changed[i] (one per block) tells which blocks were not found.
+struct BlockMemo {
+  double s0, s1, va, vb, cap, vp;
+};
+std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<double>& cap, double A, double J,
+                               std::vector<BlockMemo>& memo, std::vector<char>& changed);
+
 // Evaluation of a profile: index of the piece active at time t (pieces sorted).
 int piece_at(const std::vector<Piece>& p, double t, int hint = 0);
 

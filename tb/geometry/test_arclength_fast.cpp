@@ -124,6 +124,14 @@ TEST(GeometryArcLengthFast, ButterflyNearCusps) {
       const double u0 = t == 0 ? uc : uc + (U01(rng) - 0.5) * (t % 2 ? 4e-3 : 4e-5);
       check_step(c, al, u0, ds, al.advance(u0, ds), w, "butterfly rel_tol 1e-12");
       check_step(c, al14, u0, ds, al14.advance(u0, ds), w, "butterfly rel_tol 1e-14");
+      // advance_from: the speed and its u-derivatives at u0 given by the caller (the planner's
+      // march passes those of its frame), here from r', r'', r''' directly
+      double b[8];
+      c.eval(u0, 3, b);
+      const double s11 = b[2] * b[2] + b[3] * b[3], s12 = b[2] * b[4] + b[3] * b[5];
+      const double s22 = b[4] * b[4] + b[5] * b[5], s13 = b[2] * b[6] + b[3] * b[7];
+      const double sig[3] = {std::sqrt(s11), s12 / std::sqrt(s11), (s22 + s13 - s12 * s12 / s11) / std::sqrt(s11)};
+      check_step(c, al, u0, ds, al.advance_from(u0, sig, ds), w, "butterfly advance_from");
     }
   std::printf("butterfly near the cusps: %ld steps, max rel err %.2e, max %.2f ulp of u; fast %lld, fallbacks %lld\n",
               w.n, w.rel, w.ulps, al.stats().fast_steps, al.stats().fast_fallbacks);
