@@ -140,44 +140,12 @@ void rational_derivatives(const double* A, const double* w, int dim, int nd, dou
   }
 }
 
-namespace {
-// All columns of one derivative's coefficient block at once (rows j = tau^j,
-// COLS values each): the same Horner operations, in the same order, as the
-// per-column detail::horner, so the result is bitwise the same; a fixed column
-// count lets the compiler keep the accumulators in registers.
-template <int COLS>
-inline void horner_rows(const double* c, int nterms, double tau, double* out) {
-  double acc[COLS];
-  for (int i = 0; i < COLS; ++i) acc[i] = c[(nterms - 1) * COLS + i];
-  for (int j = nterms - 2; j >= 0; --j)
-    for (int i = 0; i < COLS; ++i) acc[i] = acc[i] * tau + c[j * COLS + i];
-  for (int i = 0; i < COLS; ++i) out[i] = acc[i];
-}
-
-inline void horner_rows_any(const double* c, int nterms, int cols, double tau, double* out) {
-  switch (cols) {
-    case 1: return horner_rows<1>(c, nterms, tau, out);
-    case 2: return horner_rows<2>(c, nterms, tau, out);
-    case 3: return horner_rows<3>(c, nterms, tau, out);
-    case 4: return horner_rows<4>(c, nterms, tau, out);
-    default:
-      for (int d = 0; d < cols; ++d) out[d] = detail::horner(c + d, nterms, cols, tau);
-  }
-}
-}  // namespace
-
 void Curve::eval_span(int si, double u, int nd, double* out) const {
   const PowerSpan& s = spans_[si];
   const int p = s.degree, cols = s.cols, dim = spline_.dim();
   const double tau = u - s.uc;
   if (!spline_.rational()) {
-    for (int k = 0; k <= nd; ++k) {
-      if (k > p) {
-        for (int d = 0; d < dim; ++d) out[k * dim + d] = 0;
-        continue;
-      }
-      horner_rows_any(s.coef.data() + s.offset(k), p + 1 - k, cols, tau, out + k * dim);
-    }
+    detail::eval_power_span<double>(s, dim, u, nd, out);
     return;
   }
   constexpr int kStack = 16;
@@ -196,7 +164,7 @@ void Curve::eval_span(int si, double u, int nd, double* out) const {
       wbuf[k] = 0;
       continue;
     }
-    horner_rows_any(s.coef.data() + s.offset(k), p + 1 - k, cols, tau, R);
+    detail::horner_rows_any<double>(s.coef.data() + s.offset(k), p + 1 - k, cols, tau, R);
     for (int d = 0; d < dim; ++d) A[k * dim + d] = R[d];
     wbuf[k] = R[dim];
   }

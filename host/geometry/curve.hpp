@@ -35,12 +35,54 @@ struct PowerSpan {
 };
 
 namespace detail {
-// Horner evaluation of one column of one derivative table; T may be an instrumented scalar.
+// The evaluation kernel of Curve::eval_span, templated on the scalar T so that a benchmark can count
+// its arithmetic with an instrumented scalar (tb/geometry/eval_kernels.hpp); the library instantiates
+// it with T = double. Coefficients are doubles; T(c) converts one.
+
+// Horner evaluation of one column of one derivative table.
 template <class T>
 inline T horner(const double* c, int nterms, int stride, const T& tau) {
   T acc = T(c[(nterms - 1) * stride]);
   for (int j = nterms - 2; j >= 0; --j) acc = acc * tau + T(c[j * stride]);
   return acc;
+}
+
+// All COLS columns of one derivative's coefficient block at once (rows j = tau^j, COLS values each):
+// the same Horner operations, in the same order, as `horner` per column, so the result is bitwise the
+// same; a fixed column count lets the compiler keep the accumulators in registers.
+template <int COLS, class T>
+inline void horner_rows(const double* c, int nterms, const T& tau, T* out) {
+  T acc[COLS];
+  for (int i = 0; i < COLS; ++i) acc[i] = T(c[(nterms - 1) * COLS + i]);
+  for (int j = nterms - 2; j >= 0; --j)
+    for (int i = 0; i < COLS; ++i) acc[i] = acc[i] * tau + T(c[j * COLS + i]);
+  for (int i = 0; i < COLS; ++i) out[i] = acc[i];
+}
+
+template <class T>
+inline void horner_rows_any(const double* c, int nterms, int cols, const T& tau, T* out) {
+  switch (cols) {
+    case 1: return horner_rows<1>(c, nterms, tau, out);
+    case 2: return horner_rows<2>(c, nterms, tau, out);
+    case 3: return horner_rows<3>(c, nterms, tau, out);
+    case 4: return horner_rows<4>(c, nterms, tau, out);
+    default:
+      for (int d = 0; d < cols; ++d) out[d] = horner<T>(c + d, nterms, cols, tau);
+  }
+}
+
+// Non-rational span (cols == dim): position and derivatives 0..nd at u, out[k*dim + axis]. Per
+// derivative k <= p: tau = u - uc once, then (p-k) multiplies and (p-k) adds per axis.
+template <class T>
+inline void eval_power_span(const PowerSpan& s, int dim, const T& u, int nd, T* out) {
+  const T tau = u - T(s.uc);
+  for (int k = 0; k <= nd; ++k) {
+    if (k > s.degree) {
+      for (int d = 0; d < dim; ++d) out[k * dim + d] = T(0.0);
+      continue;
+    }
+    horner_rows_any<T>(s.coef.data() + s.offset(k), s.degree + 1 - k, s.cols, tau, out + k * dim);
+  }
 }
 }  // namespace detail
 

@@ -2,8 +2,10 @@
 // instrumented scalar can count their arithmetic. Both evaluate a non-rational B-spline's position and
 // derivatives 1..nd at u in a known span (span search is not counted in either).
 //  * De Boor-Cox: The NURBS Book A2.3 basis-function derivatives + linear combination (ref_deboor.hpp).
-//  * Power basis: the library's per-span tables and Horner (traj::geo::detail::horner, the same template
-//    the library's Curve::eval_span instantiates with double).
+//  * Power basis: the library's own kernel, traj::geo::detail::eval_power_span (curve.hpp): the function
+//    template that Curve::eval_span calls for every non-rational span (with T = double), here
+//    instantiated with the counting scalar. Same code, same operations in the same order; the only
+//    difference from a call of Curve::eval is the span search (find_span), which is not counted.
 #pragma once
 #include "geometry/curve.hpp"
 #include "ref_deboor.hpp"
@@ -12,11 +14,7 @@ namespace kernels {
 
 template <class T>
 void power_eval(const traj::geo::PowerSpan& s, int dim, const T& u, int nd, T* out) {
-  const T tau = u - T(s.uc);
-  for (int k = 0; k <= nd; ++k) {
-    const double* c = s.coef.data() + s.offset(k);
-    for (int d = 0; d < dim; ++d) out[k * dim + d] = traj::geo::detail::horner<T>(c + d, s.degree + 1 - k, s.cols, tau);
-  }
+  traj::geo::detail::eval_power_span<T>(s, dim, u, nd, out);
 }
 
 template <class T>
