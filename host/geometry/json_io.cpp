@@ -2,6 +2,9 @@
 
 #include <cmath>
 #include <fstream>
+#include <iterator>
+#include <algorithm>
+#include <vector>
 
 #include "geometry/error.hpp"
 
@@ -9,6 +12,113 @@ namespace traj::geo {
 
 namespace {
 [[noreturn]] void fail(const std::string& where, const std::string& what) { throw GeometryError(where + ": " + what); }
+
+// nlohmann's what() without its "[json.exception.<kind>.<id>] " tag and without the
+// "parse error at line L, column C: " prefix (the caller states the place itself).
+std::string nlohmann_problem(const char* what) {
+  std::string m(what);
+  if (m.rfind("[json.exception.", 0) == 0) {
+    const auto e = m.find("] ");
+    if (e != std::string::npos) m.erase(0, e + 2);
+  }
+  if (m.rfind("parse error", 0) == 0) {
+    const auto e = m.find(": ");
+    if (e != std::string::npos) m.erase(0, e + 2);
+  }
+  return m;
+}
+
+// SAX handler: builds the document with nlohmann's own DOM builder and keeps the path of the value
+// being read, so that a parse error can name the field.
+class PathSax {
+ public:
+  using json = nlohmann::json;
+  PathSax(json& root, const std::string& text, const std::string& name) : dom_(root, true), text_(text), name_(name) {}
+
+  bool null() { return value(), dom_.null(); }
+  bool boolean(bool v) { return value(), dom_.boolean(v); }
+  bool number_integer(json::number_integer_t v) { return value(), dom_.number_integer(v); }
+  bool number_unsigned(json::number_unsigned_t v) { return value(), dom_.number_unsigned(v); }
+  bool number_float(json::number_float_t v, const json::string_t& s) { return value(), dom_.number_float(v, s); }
+  bool string(json::string_t& v) { return value(), dom_.string(v); }
+  bool binary(json::binary_t& v) { return value(), dom_.binary(v); }
+  bool start_object(std::size_t n) {
+    stack_.push_back({false, 0, {}, false});
+    return dom_.start_object(n);
+  }
+  bool key(json::string_t& k) {
+    stack_.back().key = k;
+    stack_.back().in_value = true;
+    return dom_.key(k);
+  }
+  bool end_object() {
+    stack_.pop_back();
+    leave();
+    return dom_.end_object();
+  }
+  bool start_array(std::size_t n) {
+    stack_.push_back({true, 0, {}, false});
+    return dom_.start_array(n);
+  }
+  bool end_array() {
+    stack_.pop_back();
+    leave();
+    return dom_.end_array();
+  }
+  // Called by the parser for syntax errors and for numbers outside the double range (out_of_range
+  // 406), with the byte offset at which it stopped and the offending token.
+  bool parse_error(std::size_t offset, const std::string& token, const nlohmann::detail::exception& ex) {
+    // offset: characters read, the offending token's last one included (reading the end of the input
+    // counts one more). For a number the token is the number's text, so its first character is found;
+    // otherwise nlohmann's token text may include earlier characters, and the place is the character
+    // the parser stopped at (the last one read, as nlohmann's own messages count it).
+    const std::size_t end = std::min(offset, text_.size());
+    std::size_t at = end > 0 ? end - 1 : 0;
+    if (ex.id == 406 && token.size() <= end) at = end - token.size();
+    std::size_t line = 1, line_start = 0;
+    for (std::size_t i = 0; i < at; ++i)
+      if (text_[i] == '\n') {
+        ++line;
+        line_start = i + 1;
+      }
+    std::string problem = nlohmann_problem(ex.what());
+    if (ex.id == 406) problem += " (beyond the double range)";
+    const std::string f = path();
+    throw GeometryError(name_ + ":" + std::to_string(line) + ":" + std::to_string(at - line_start + 1) + ": " +
+                        (f.empty() ? "" : f + ": ") + problem);
+  }
+  // Path of the value being read: object keys joined by '.', array indices in brackets.
+  std::string path() const {
+    std::string p;
+    for (const Frame& f : stack_) {
+      if (f.array) {
+        p += "[" + std::to_string(f.count) + "]";  // the element being read (or expected next)
+      } else {
+        if (!f.in_value) break;  // between members: the object itself is the place
+        p += (p.empty() ? "" : ".") + f.key;
+      }
+    }
+    return p;
+  }
+
+ private:
+  struct Frame {
+    bool array;
+    std::size_t count;  // arrays: elements completed
+    std::string key;    // objects: last key
+    bool in_value;      // objects: reading the value of `key`
+  };
+  void value() { leave(); }
+  void leave() {  // a value of the innermost container is complete
+    if (stack_.empty()) return;
+    if (stack_.back().array) ++stack_.back().count;
+    else stack_.back().in_value = false;
+  }
+  nlohmann::detail::json_sax_dom_parser<json> dom_;
+  std::vector<Frame> stack_;
+  const std::string& text_;
+  const std::string& name_;
+};
 
 double number(const nlohmann::json& v, const std::string& where, const std::string& field) {
   if (!v.is_number()) fail(where, field + ": expected a number, got " + std::string(v.type_name()));
@@ -23,10 +133,32 @@ const nlohmann::json& member(const nlohmann::json& doc, const char* key, const s
 }
 }  // namespace
 
-BSpline parse_curve(const nlohmann::json& doc, const std::string& where) {
+nlohmann::json load_json_file(const std::string& path, const std::string& name_in) {
+  const std::string& name = name_in.empty() ? path : name_in;
+  std::ifstream f(path, std::ios::binary);
+  if (!f) fail(name, "cannot open file" + (name == path ? std::string() : " " + path));
+  const std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  if (f.bad()) fail(name, "read error");
+  nlohmann::json doc;
+  PathSax sax(doc, text, name);
+  try {
+    nlohmann::json::sax_parse(text, &sax);
+  } catch (const nlohmann::json::exception& e) {  // not expected: the parser reports through parse_error
+    const std::string p = sax.path();
+    fail(name, (p.empty() ? "" : p + ": ") + nlohmann_problem(e.what()));
+  }
+  return doc;
+}
+
+namespace {
+// `field` is kept up to date with the field being read, for the catch in parse_curve.
+BSpline parse_curve_fields(const nlohmann::json& doc, const std::string& where, std::string& field) {
+  field = "top level";
   if (!doc.is_object()) fail(where, "top level: expected a JSON object");
   BSpline c;
+  field = "name";
   if (auto it = doc.find("name"); it != doc.end() && it->is_string()) c.name = it->get<std::string>();
+  field = "degree";
   const auto& deg = member(doc, "degree", where);
   if (!deg.is_number_integer()) fail(where, "degree: expected an integer");
   const long long p = deg.get<long long>();
@@ -35,11 +167,13 @@ BSpline parse_curve(const nlohmann::json& doc, const std::string& where) {
   c.degree = static_cast<int>(p);
 
   bool rational = false;
+  field = "rational";
   if (auto it = doc.find("rational"); it != doc.end()) {
     if (!it->is_boolean()) fail(where, "rational: expected true or false");
     rational = it->get<bool>();
   }
 
+  field = "control_points";
   const auto& cps = member(doc, "control_points", where);
   if (!cps.is_array() || cps.empty()) fail(where, "control_points: expected a non-empty array of points");
   const size_t n = cps.size();
@@ -49,22 +183,28 @@ BSpline parse_curve(const nlohmann::json& doc, const std::string& where) {
   c.ctrl.resize(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(dim));
   for (size_t i = 0; i < n; ++i) {
     const std::string fi = "control_points[" + std::to_string(i) + "]";
+    field = fi;
     if (!cps[i].is_array()) fail(where, fi + ": expected an array of coordinates");
     if (cps[i].size() != dim)
       fail(where, fi + ": " + std::to_string(cps[i].size()) + " coordinates, control_points[0] has " +
                       std::to_string(dim) + " (inconsistent dimensions)");
-    for (size_t j = 0; j < dim; ++j)
-      c.ctrl(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
-          number(cps[i][j], where, fi + "[" + std::to_string(j) + "]");
+    for (size_t j = 0; j < dim; ++j) {
+      field = fi + "[" + std::to_string(j) + "]";
+      c.ctrl(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = number(cps[i][j], where, field);
+    }
   }
 
+  field = "weights";
   if (auto it = doc.find("weights"); it != doc.end() && !it->is_null()) {
     if (!it->is_array()) fail(where, "weights: expected an array of numbers");
     if (it->size() != n)
       fail(where, "weights: " + std::to_string(it->size()) + " weights for " + std::to_string(n) +
                       " control points");
     Eigen::VectorXd w(static_cast<Eigen::Index>(n));
-    for (size_t i = 0; i < n; ++i) w[static_cast<Eigen::Index>(i)] = number((*it)[i], where, "weights[" + std::to_string(i) + "]");
+    for (size_t i = 0; i < n; ++i) {
+      field = "weights[" + std::to_string(i) + "]";
+      w[static_cast<Eigen::Index>(i)] = number((*it)[i], where, field);
+    }
     if (rational) c.weights = w;
     else
       for (size_t i = 0; i < n; ++i)
@@ -74,27 +214,33 @@ BSpline parse_curve(const nlohmann::json& doc, const std::string& where) {
     fail(where, "weights: missing (\"rational\" is true)");
   }
 
+  field = "knots";
   const auto& kn = member(doc, "knots", where);
   if (!kn.is_array()) fail(where, "knots: expected an array of numbers");
   c.knots.resize(static_cast<Eigen::Index>(kn.size()));
-  for (size_t i = 0; i < kn.size(); ++i)
-    c.knots[static_cast<Eigen::Index>(i)] = number(kn[i], where, "knots[" + std::to_string(i) + "]");
+  for (size_t i = 0; i < kn.size(); ++i) {
+    field = "knots[" + std::to_string(i) + "]";
+    c.knots[static_cast<Eigen::Index>(i)] = number(kn[i], where, field);
+  }
 
+  field = "curve";
   validate(c, where);
   return c;
+}
+}  // namespace
+
+BSpline parse_curve(const nlohmann::json& doc, const std::string& where) {
+  std::string field;
+  try {
+    return parse_curve_fields(doc, where, field);
+  } catch (const nlohmann::json::exception& e) {  // not expected: every field's type is checked first
+    fail(where, field + ": " + nlohmann_problem(e.what()));
+  }
 }
 
 BSpline load_curve(const std::string& path) {
   const std::string where = path.substr(path.find_last_of('/') == std::string::npos ? 0 : path.find_last_of('/') + 1);
-  std::ifstream f(path);
-  if (!f) fail(path, "cannot open file");
-  nlohmann::json doc;
-  try {
-    doc = nlohmann::json::parse(f);
-  } catch (const nlohmann::json::exception& e) {  // syntax error, or a number out of double range
-    fail(where, std::string("not valid JSON (") + e.what() + ")");
-  }
-  return parse_curve(doc, where);
+  return parse_curve(load_json_file(path, where), where);
 }
 
 nlohmann::json to_json(const BSpline& c, const std::string& units) {
