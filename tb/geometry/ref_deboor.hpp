@@ -53,11 +53,12 @@ inline R dN(const Spline& c, int i, int p, int k, R u, int span) {
               safe_div<R>(dN<R>(c, i + 1, p - 1, k - 1, u, span), R(U[i + p + 1]) - U[i + 1]));
 }
 
-// Derivatives 0..nd of the curve (rational handled by the Leibniz quotient formula), computed in
-// precision R and returned as double. out[k][d].
-template <class R = double>
-inline std::vector<std::vector<double>> cox_de_boor_derivs(const Spline& c, double u, int nd) {
-  const int span = find_span(c, u), dim = c.dim();
+// Derivatives 0..nd of the curve (rational handled by the Leibniz quotient formula), computed and
+// returned in precision R. out[k][d]. span >= 0 forces the knot span whose polynomial is evaluated
+// (e.g. a span's right end from inside: the half-open convention would pick the next span).
+template <class R>
+inline std::vector<std::vector<R>> cox_de_boor_derivs_r(const Spline& c, double u, int nd, int span_in = -1) {
+  const int span = span_in >= 0 ? span_in : find_span(c, u), dim = c.dim();
   const bool rat = !c.W.empty();
   std::vector<std::vector<R>> A(nd + 1, std::vector<R>(dim, R(0)));
   std::vector<R> w(nd + 1, R(0));
@@ -83,9 +84,16 @@ inline std::vector<std::vector<double>> cox_de_boor_derivs(const Spline& c, doub
       }
       C[k][d] = v / w[0];
     }
-  std::vector<std::vector<double>> out(nd + 1, std::vector<double>(dim));
-  for (int k = 0; k <= nd; ++k)
-    for (int d = 0; d < dim; ++d) out[k][d] = static_cast<double>(C[k][d]);
+  return C;
+}
+
+// The same, computed in precision R and returned as double.
+template <class R = double>
+inline std::vector<std::vector<double>> cox_de_boor_derivs(const Spline& c, double u, int nd) {
+  const auto C = cox_de_boor_derivs_r<R>(c, u, nd);
+  std::vector<std::vector<double>> out(C.size(), std::vector<double>(C.empty() ? 0 : C[0].size()));
+  for (size_t k = 0; k < C.size(); ++k)
+    for (size_t d = 0; d < C[k].size(); ++d) out[k][d] = static_cast<double>(C[k][d]);
   return out;
 }
 
