@@ -260,10 +260,7 @@ TEST(GeometryCurvature, ExtremaLocatedTo1e7) {
 }
 
 // Inflections of a planar cubic Bezier: x'y'' - y'x'' is a quadratic in t, solved in closed form here.
-TEST(GeometryCurvature, CubicInflectionsClosedForm) {
-  Eigen::MatrixXd P(4, 2);
-  P << 0, 0, 25, 71.5, 60, -42.9, 100, 0;
-  const Curve c(make_bezier(P));
+std::vector<double> cubic_inflections_closed_form(const Eigen::MatrixXd& P) {
   // B'(t) = 3[(1-t)^2 d0 + 2t(1-t) d1 + t^2 d2], B'' = 6[(1-t)(d1-d0) + t(d2-d1)]; cross(B',B'') =
   // 18 (a t^2 + b t + c) with a, b, c from the differences (standard result, derived by expanding).
   const Eigen::Vector2d d0 = P.row(1) - P.row(0), d1 = P.row(2) - P.row(1), d2 = P.row(3) - P.row(2);
@@ -284,10 +281,21 @@ TEST(GeometryCurvature, CubicInflectionsClosedForm) {
       const double t = (-B + sg * std::sqrt(disc)) / (2 * A);
       if (t > 0 && t < 1) roots.push_back(t);
     }
-  const auto mine = inflection_points(c);
-  ASSERT_EQ(mine.size(), roots.size());
+  return roots;
+}
+
+// Seed 004's curve 1 (with an inflection) and curve 3 (without), tb/geometry/seed_curves.hpp.
+TEST(GeometryCurvature, CubicInflectionsClosedForm) {
+  Eigen::MatrixXd P(4, 2);
+  P << 0, 0, 25, 71.5, 60, -42.9, 100, 0;
+  const std::vector<double> roots = cubic_inflections_closed_form(P);
+  const auto mine = inflection_points(Curve(make_bezier(P)));
   ASSERT_EQ(roots.size(), 1u);
+  ASSERT_EQ(mine.size(), roots.size());
   EXPECT_NEAR(mine[0], roots[0], 1e-9);
+  P << 0, 0, 10, 90, 90, 100, 94.15, 100;
+  EXPECT_TRUE(cubic_inflections_closed_form(P).empty());
+  EXPECT_TRUE(inflection_points(Curve(make_bezier(P))).empty());
 }
 
 // ACC/DEC units: curvature monotone inside every unit (sampled with the reference evaluator), units
