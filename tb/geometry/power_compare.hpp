@@ -60,9 +60,12 @@ inline void compare_one(const geotest::RandomSpline& rs, int points, std::mt1993
     refs.push_back(ref::cox_de_boor_derivs<long double>(rs.ref, u, nd));  // 64-bit mantissa reference
     mine.push_back(c.eval(u, nd));
   }
-  if (rs.lib.rational()) {  // scale: max |C^(k)| over the samples (no hodograph bbox for NURBS)
+  if (rs.lib.rational()) {
+    // Position: the bounding-box diagonal of the control points (positive weights: the curve lies in
+    // their convex hull). Derivatives: a NURBS has no hodograph hull, so max |C^(k)| over the samples.
+    scale[0] = geotest::derivative_scales(rs.ref, 0)[0];
     for (auto& r : refs)
-      for (int k = 0; k <= nd; ++k) {
+      for (int k = 1; k <= nd; ++k) {
         double n2 = 0;
         for (int d = 0; d < dim; ++d) n2 += r[k][d] * r[k][d];
         scale[k] = std::max(scale[k], std::sqrt(n2));

@@ -80,9 +80,14 @@ inline RandomSpline random_spline(std::mt19937_64& rng, int p, int dim, int n, b
   return r;
 }
 
-// Scale of the k-th derivative for relative errors: bounding-box diagonal of the control points of
-// the k-th hodograph (or the largest |Q^(k)_i| if larger: both bound |C^(k)| by the convex hull),
+// Scale of the k-th derivative for relative errors: the bounding-box diagonal of the control points of
+// the k-th hodograph (they bound C^(k) by the convex hull),
 // Q^(k)_i = (p-k+1) (Q^(k-1)_{i+1} - Q^(k-1)_i) / (t_{i+p+1} - t_{i+k}) (non-rational).
+// One exception, found when the scale was changed from max(diagonal, max|Q|) to the diagonal alone:
+// when the k-th hodograph's control points all coincide (diagonal 0: derivative k = p of a single-span
+// spline, a constant vector Q), the bounding box is a point and an error relative to it is undefined;
+// both evaluators round that constant by ~eps |Q| (1e-14 absolute was seen, relative to 1e-300 that is
+// 1e286). There the scale is |Q|, the constant's own magnitude.
 inline std::vector<double> derivative_scales(const ref::Spline& s, int kmax) {
   std::vector<double> out;
   std::vector<std::vector<double>> Q = s.P;
@@ -113,7 +118,8 @@ inline std::vector<double> derivative_scales(const ref::Spline& s, int kmax) {
       }
       if (!Q.empty()) diag2 += (hi - lo) * (hi - lo);
     }
-    out.push_back(Q.empty() ? 1.0 : std::max({std::sqrt(diag2), maxnorm, 1e-300}));
+    const double diag = std::sqrt(diag2);
+    out.push_back(Q.empty() ? 1.0 : diag > 0 ? diag : std::max(maxnorm, 1e-300));
   }
   return out;
 }
