@@ -140,6 +140,17 @@ double quant_bound_lsb_of(const Format& f, uint64_t k) {
   return to_lsb(mpq_class(Compiler::quant_bound_x2(f.degree, k), 2), f.guard_bits);
 }
 
+// "r[3] binds: alone it needs 49 guard bits (r[1] 18, r[2] 34)".
+std::string binding_note(const RegisterNeeds& nd) {
+  std::string others;
+  for (size_t i = 1; i < nd.alone.size(); ++i) {
+    if (static_cast<int>(i) == nd.binding) continue;
+    others += (others.empty() ? "" : ", ") + std::string("r[") + std::to_string(i) + "] " + std::to_string(nd.alone[i]);
+  }
+  return "r[" + std::to_string(nd.binding) + "] binds: alone it needs " + std::to_string(nd.alone[nd.binding]) +
+         " guard bits" + (others.empty() ? "" : " (" + others + ")");
+}
+
 // The straightforward exact form (mpq throughout). The fast path of compile()
 // falls back to it for every refusal and every case it cannot settle itself, so
 // messages and borderline decisions are this function's by construction.
@@ -170,6 +181,7 @@ Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::
   const uint64_t K = seg.ticks;
   const int G = f_.guard_bits;
   // Quantisation budget: Q(K) <= tol/2.
+  const RegisterNeeds needs = Compiler::register_needs(N, K, f_.tol_lsb);
   if (!fits(N, K, G, f_.tol_lsb)) {
     const uint64_t kmax = Compiler::longest_segment(N, G, f_.tol_lsb);
     const int gneed = Compiler::guard_bits_needed(N, K, f_.tol_lsb);
@@ -177,7 +189,7 @@ Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::
          fmt_double(quant_bound_lsb_of(f_, K)) + " LSB > tol/2 = " + fmt_double(f_.tol_lsb / 2) +
          " LSB with guard_bits=" + std::to_string(G) + "; split into segments of at most K=" +
          std::to_string(kmax) + " ticks, or use guard_bits >= " + std::to_string(gneed) +
-         " (width >= " + std::to_string(f_.out_width() + gneed) + ")");
+         " (width >= " + std::to_string(f_.out_width() + gneed) + "); " + binding_note(needs));
   }
 
   const mpq_class h = exact(seg.h);
@@ -237,6 +249,7 @@ Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::
   }
   out.carried_lsb = carried;
   out.bound_lsb = carried + quant_bound_lsb_of(f_, K);
+  out.needs = needs;
   return out;
 }
 
@@ -455,6 +468,59 @@ Compiler::Compiler(Format f) : f_(f) {
   } else {
     kfit_ = 0;
   }
+}
+
+namespace {
+// Least integer p with x <= m 2^p (x >= 1, 1 <= m < 2^63); t is scratch.
+//   x <= m:  p = -s, s the largest with x 2^s <= m, i.e. 2^s <= floor(m/x)
+//   x >  m:  p = ceil(log2 ceil(x/m)) = bitlen(ceil(x/m) - 1)
+long least_pow2_exponent(mpz_srcptr x, uint64_t m, mpz_ptr t) {
+  if (mpz_cmp_ui(x, m) <= 0) return -(bitlen_u64(m / mpz_get_ui(x)) - 1);
+  mpz_cdiv_q_ui(t, x, m);
+  mpz_sub_ui(t, t, 1);
+  return static_cast<long>(mpz_sizeinbase(t, 2));
+}
+
+// RegisterNeeds from bin[i] = C(K, i) (i = 1..N, zero for i > K) and their
+// sum, for tol = m 2^e: 1/2 X 2^-f <= tol/2 <=> X <= m 2^(e+f), so the least
+// f is p - e with p from least_pow2_exponent (then at least 0). t, x: scratch.
+void fill_needs(RegisterNeeds& nd, int N, const mpz_srcptr* bin, mpz_srcptr sum, const Dyadic& tol, mpz_ptr t,
+                mpz_ptr x) {
+  const uint64_t m = static_cast<uint64_t>(tol.m);
+  auto need = [&](mpz_srcptr v) {
+    return mpz_sgn(v) == 0 ? 0 : static_cast<int>(std::max(0L, least_pow2_exponent(v, m, t) - tol.e));
+  };
+  nd.alone.assign(N + 1, 0);
+  nd.share.assign(N + 1, 0);
+  nd.binding = 1;
+  for (int i = 1; i <= N; ++i) {
+    nd.alone[i] = need(bin[i]);
+    mpz_mul_ui(x, bin[i], static_cast<unsigned long>(N));
+    nd.share[i] = need(x);
+    if (mpz_cmp(bin[i], bin[nd.binding]) >= 0) nd.binding = i;  // the largest, highest i on ties
+  }
+  nd.common = need(sum);
+}
+}  // namespace
+
+RegisterNeeds Compiler::register_needs(int degree, uint64_t k, double tol_lsb) {
+  if (!(tol_lsb > 0) || !std::isfinite(tol_lsb))
+    throw CompileError("register_needs: tol_lsb=" + fmt_double(tol_lsb) + " must be positive and finite");
+  if (degree < 1 || degree > 7) throw CompileError("register_needs: degree out of range 1..7");
+  mpz_class c[8], sum = 0, t, x;
+  mpz_srcptr bin[8];
+  c[0] = 1;
+  for (int i = 1; i <= degree; ++i) {
+    if (static_cast<uint64_t>(i) <= k) {
+      c[i] = c[i - 1] * static_cast<unsigned long>(k - i + 1);
+      mpz_divexact_ui(c[i].get_mpz_t(), c[i].get_mpz_t(), static_cast<unsigned long>(i));
+    }  // else C(k, i) = 0 (default)
+    sum += c[i];
+  }
+  for (int i = 0; i <= degree; ++i) bin[i] = c[i].get_mpz_t();
+  RegisterNeeds nd;
+  fill_needs(nd, degree, bin, sum.get_mpz_t(), dyadic(tol_lsb), t.get_mpz_t(), x.get_mpz_t());
+  return nd;
 }
 
 Compiled Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>* start,
@@ -702,6 +768,11 @@ Compiled Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>*
   }
   out.carried_lsb = carried;
   out.bound_lsb = carried + qbound_lsb;
+  {
+    mpz_srcptr bin[8];
+    for (int i = 0; i <= N; ++i) bin[i] = S.bin[i];
+    fill_needs(out.needs, N, bin, S.q2, dyadic(f_.tol_lsb), S.t, S.x);
+  }
   return out;
 }
 

@@ -27,6 +27,43 @@
 // only if Q(K) <= tol/2 * 2^G and |e0| <= tol/2 * 2^G; every register error is
 // then <= tol output LSB and every output sample is within 1/2 + tol LSB of the
 // exact polynomial (the 1/2 is the output rounding).
+//
+// Per-register fraction bits, and why the registers share one LSB.
+// Give register i >= 1 its own f_i fraction bits below the output LSB. Rounded
+// to nearest, |e_i| <= 1/2 2^-f_i output LSB, and its contribution e_i C(k,i)
+// is at most 1/2 C(K,i) 2^-f_i over the segment (C(k,i) grows with k). For
+// every compiled segment the compiler reports (RegisterNeeds, below):
+//   alone[i]  least f >= 0 with 1/2 C(K,i) 2^-f <= tol/2: register i given the
+//             whole budget. A lower bound for ANY format: all the other terms
+//             can have the same sign, so no register can do with fewer bits.
+//   share[i]  least f >= 0 with 1/2 C(K,i) 2^-f <= tol/(2N): the budget split
+//             equally among the N registers (the share rule). If every register
+//             meets its share, the bound Q <= tol/2 holds. Equal shares are also
+//             the split that minimises the total bits sum f_i (minimising
+//             sum f_i subject to sum C_i 2^-f_i = tol gives C_i 2^-f_i equal).
+//   binding   the register with the largest C(K,i) (the highest i on ties).
+//             C(K,i+1)/C(K,i) = (K-i)/(i+1) >= 1 iff K >= 2i+1, so r[N] binds
+//             for every K >= 2N-1, where alone[i], share[i] never decrease
+//             with i.
+//   common    least G >= 0 with 1/2 sum_i C(K,i) 2^-G <= tol/2: the one common
+//             LSB that compile() requires (guard_bits >= common).
+// Exactness forces the common LSB. In fixed point, r[i] <- r[i] + r[i+1] is
+// exact in r[i]'s format only if f_i >= f_(i+1) (otherwise the low bits of
+// r[i+1] are dropped every tick: a fresh rounding error per tick that
+// accumulates like r[i+1]'s own, and a shifter in the real-time path). So
+// f_0 >= f_1 >= ... >= f_N, while the needs grow with i: together
+// f_i >= max_(j >= i) need_j, i.e. r[0] and r[1] (which carry every register's
+// contribution) need the maximum over all registers, and for K >= 2N-1 every
+// register is pushed up to r[N]'s need. One common LSB set by r[N] therefore
+// costs nothing (only in segments shorter than 2N-1 ticks could registers
+// above the binding one be coarser), and it keeps the run-time path free of
+// shifts. Numerically max_i alone[i] <= common <= max_i share[i] (since
+// C(K,i) <= sum_j C(K,j) <= N max_j C(K,j)), i.e. for K >= 2N-1
+// alone[N] <= common <= share[N]: the common LSB is r[N]'s need under any
+// split of the budget that gives r[N] between 1/N and all of it. Example (cubic, K = 4096, tol = 0.5): alone 13/24/35, share
+// 15/26/36, common 35. The design notes' 12/23/34 are ceil(log2 C(4096,i)),
+// i.e. the "alone" rule with 1/2 output LSB per register (tol = 1), a total
+// of up to N/2 LSB rather than a share of tol/2.
 #pragma once
 #include <gmpxx.h>
 
@@ -67,12 +104,23 @@ struct PolySegment {
   uint64_t ticks = 0;     // K
 };
 
+// Per-register fraction-bit needs of a K-tick segment (see the header
+// comment). Index i = 1..degree; index 0 (the position, which carries the
+// start error, not a rounding of its own) is 0.
+struct RegisterNeeds {
+  std::vector<int> alone;  // register i with the whole budget tol/2 (a lower bound)
+  std::vector<int> share;  // register i within an equal share tol/(2N) (sufficient)
+  int binding = 0;         // the register with the largest C(K,i): r[N] when K >= 2N-1
+  int common = 0;          // least common guard bits: sum C(K,i) <= tol 2^G
+};
+
 struct Compiled {
   uint32_t ticks = 0;
   std::vector<std::vector<mpz_class>> regs;  // [axis][i], signed exact values
   std::vector<mpz_class> end;                // r0 after K ticks: the next start
   double carried_lsb = 0;                    // |e0| in output LSB
   double bound_lsb = 0;                      // |e0| + Q(K), output LSB (register error bound)
+  RegisterNeeds needs;                       // per-register fraction bits for these K ticks
 };
 
 class Compiler {
@@ -104,6 +152,8 @@ class Compiler {
   static uint64_t longest_segment(int degree, int guard_bits, double tol_lsb);
   // Guard bits needed for K ticks at this degree and tolerance.
   static int guard_bits_needed(int degree, uint64_t k, double tol_lsb);
+  // Per-register needs for K >= 1 ticks (exact integer arithmetic; tol_lsb > 0).
+  static RegisterNeeds register_needs(int degree, uint64_t k, double tol_lsb);
 
  private:
   Format f_;

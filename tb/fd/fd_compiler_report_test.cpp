@@ -1,0 +1,192 @@
+// What the compiler reports: per-register fraction-bit needs, against an
+// independent exact computation (binomials as explicit products, tol as the
+// exact rational of the double, an integer log2 by bit length and a final
+// adjustment).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <string>
+
+#include "fd/fd_compiler.hpp"
+
+using traj::fd::CompileError;
+using traj::fd::Compiler;
+using traj::fd::Format;
+using traj::fd::PolySegment;
+using traj::fd::RegisterNeeds;
+
+namespace {
+
+// ---- independent reference -------------------------------------------------
+
+// C(k, i) = k (k-1) ... (k-i+1) / i!, numerator and denominator as products.
+mpz_class binom_product(uint64_t k, int i) {
+  if (static_cast<uint64_t>(i) > k) return 0;
+  mpz_class num = 1, den = 1;
+  for (int t = 0; t < i; ++t) {
+    num *= mpz_class(std::to_string(k - static_cast<uint64_t>(t)));
+    den *= t + 1;
+  }
+  return num / den;  // exact
+}
+
+int bit_length(mpz_class v) {  // v >= 0, by repeated halving
+  int n = 0;
+  while (v > 0) {
+    v >>= 1;
+    ++n;
+  }
+  return n;
+}
+
+// Least integer f >= 0 with x <= tol 2^f (x >= 0), tol the exact rational of
+// the double: x q <= p 2^f with tol = p/q.
+int least_f(const mpz_class& x, double tol) {
+  if (x == 0) return 0;
+  mpq_class t;
+  mpq_set_d(t.get_mpq_t(), tol);
+  const mpz_class p = t.get_num(), q = t.get_den();
+  const mpz_class lhs = x * q;
+  int f = std::max(0, bit_length(lhs) - bit_length(p) - 1);
+  while (lhs > (p << f)) ++f;
+  while (f > 0 && lhs <= (p << (f - 1))) --f;
+  return f;
+}
+
+RegisterNeeds reference_needs(int deg, uint64_t k, double tol) {
+  RegisterNeeds r;
+  r.alone.assign(deg + 1, 0);
+  r.share.assign(deg + 1, 0);
+  mpz_class sum = 0, best = -1;
+  for (int i = 1; i <= deg; ++i) {
+    const mpz_class c = binom_product(k, i);
+    sum += c;
+    r.alone[i] = least_f(c, tol);      // 1/2 C 2^-f <= tol/2
+    r.share[i] = least_f(c * deg, tol);  // 1/2 C 2^-f <= tol/(2N)
+    if (c >= best) {
+      best = c;
+      r.binding = i;
+    }
+  }
+  r.common = least_f(sum, tol);
+  return r;
+}
+
+Format fmt(int axes, int deg, int w, int c, int g, int frac) {
+  Format f;
+  f.axes = axes;
+  f.degree = deg;
+  f.width = w;
+  f.chunk_width = c;
+  f.guard_bits = g;
+  f.frac_bits = frac;
+  return f;
+}
+
+std::string refusal(const Compiler& comp, const PolySegment& s, const std::string& where = "seg 7") {
+  try {
+    comp.compile(s, nullptr, where);
+  } catch (const CompileError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------
+// Per-register needs
+// ---------------------------------------------------------------------------
+TEST(FdRegisterNeeds, MatchIndependentExactComputation) {
+  const uint64_t ks[] = {1, 2, 3, 4, 5, 6, 7, 12, 13, 16, 58, 74, 100, 255, 476, 2344, 4096, 65535, 100000,
+                         uint64_t(1) << 20, 4294967295ull, uint64_t(1) << 40};
+  const double tols[] = {0.5, 0.25, 1.0, 0.1, 1e-3, 3.0, 0.3};
+  long n = 0;
+  for (int deg = 1; deg <= 7; ++deg)
+    for (uint64_t k : ks)
+      for (double tol : tols) {
+        const RegisterNeeds got = Compiler::register_needs(deg, k, tol);
+        const RegisterNeeds want = reference_needs(deg, k, tol);
+        const std::string ctx = "deg " + std::to_string(deg) + " K " + std::to_string(k) + " tol " + std::to_string(tol);
+        ASSERT_EQ(got.alone, want.alone) << ctx;
+        ASSERT_EQ(got.share, want.share) << ctx;
+        ASSERT_EQ(got.binding, want.binding) << ctx;
+        ASSERT_EQ(got.common, want.common) << ctx;
+        // The compiler's own guard-bit count is the common need.
+        if (k <= 100000) {
+          ASSERT_EQ(got.common, Compiler::guard_bits_needed(deg, k, tol)) << ctx;
+        }
+        // Sandwich: max alone <= common <= max share.
+        const int max_alone = *std::max_element(got.alone.begin(), got.alone.end());
+        const int max_share = *std::max_element(got.share.begin(), got.share.end());
+        ASSERT_LE(max_alone, got.common) << ctx;
+        ASSERT_LE(got.common, max_share) << ctx;
+        ASSERT_LE(max_share - max_alone, static_cast<int>(std::ceil(std::log2(deg)))) << ctx;
+        // For K >= 2N-1 the needs never decrease with i and r[N] binds.
+        if (k >= static_cast<uint64_t>(2 * deg - 1)) {
+          ASSERT_EQ(got.binding, deg) << ctx;
+          for (int i = 2; i <= deg; ++i) {
+            ASSERT_GE(got.alone[i], got.alone[i - 1]) << ctx;
+            ASSERT_GE(got.share[i], got.share[i - 1]) << ctx;
+          }
+          ASSERT_EQ(max_alone, got.alone[deg]) << ctx;
+        }
+        ++n;
+      }
+  EXPECT_EQ(n, 7L * 22 * 7);
+}
+
+// The design notes' figures, by hand: log2 C(4096, i) = 12, 22.9996, 33.414
+// (and 43.413, 53.090 for i = 4, 5).
+TEST(FdRegisterNeeds, DesignNotesCubicAndQuinticOver4096Ticks) {
+  // 1/2 output LSB per register (tol = 1): ceil(log2 C(4096, i)), the notes' 12/23/34.
+  RegisterNeeds n = Compiler::register_needs(3, 4096, 1.0);
+  EXPECT_EQ(n.alone, (std::vector<int>{0, 12, 23, 34}));
+  // The compiler's budget tol/2 = 0.25 LSB: one bit more alone, log2(6) more
+  // with equal shares; the common LSB is r[3]'s alone need.
+  n = Compiler::register_needs(3, 4096, 0.5);
+  EXPECT_EQ(n.alone, (std::vector<int>{0, 13, 24, 35}));
+  EXPECT_EQ(n.share, (std::vector<int>{0, 15, 26, 36}));  // 6 C(4096,3) = 68669153280 <= 2^36
+  EXPECT_EQ(n.common, 35);
+  EXPECT_EQ(n.binding, 3);
+  // Quintic: the notes' "about 53" in register 5 is log2 C(4096,5) = 53.09, so 54 bits.
+  n = Compiler::register_needs(5, 4096, 1.0);
+  EXPECT_EQ(n.alone, (std::vector<int>{0, 12, 23, 34, 44, 54}));
+  EXPECT_EQ(n.binding, 5);
+  // A segment shorter than 2N-1 ticks: the middle binds (C(5,2) = C(5,3) = 10, highest index on ties).
+  n = Compiler::register_needs(7, 5, 0.5);
+  EXPECT_EQ(n.binding, 3);
+  EXPECT_EQ(n.alone, (std::vector<int>{0, 4, 5, 5, 4, 1, 0, 0}));
+}
+
+// compile() reports the needs of every compiled segment (fast path and the
+// exact reference path), and accepts a segment exactly when guard_bits >= common.
+TEST(FdRegisterNeeds, ReportedByCompileAndDecideAcceptance) {
+  for (int deg = 1; deg <= 7; ++deg)
+    for (int g : {16, 32, 48}) {
+      Format f = fmt(1, deg, 128, 32, g, 0);
+      f.max_ticks = 0xffffffffu;
+      const Compiler comp(f);
+      const uint64_t kmax = Compiler::longest_segment(deg, g, f.tol_lsb);
+      for (uint64_t k : {uint64_t(1), uint64_t(2 * deg - 1), kmax / 2, kmax, kmax + 1}) {
+        if (k < 1 || k > f.max_ticks) continue;
+        const RegisterNeeds want = reference_needs(deg, k, f.tol_lsb);
+        const PolySegment seg{{{1.0, 0.5}}, 1e-3, k};
+        const std::string msg = refusal(comp, seg);
+        EXPECT_EQ(msg.empty(), want.common <= g) << "deg " << deg << " G " << g << " K " << k << ": " << msg;
+        if (msg.empty()) {
+          const auto c = comp.compile(seg);
+          EXPECT_EQ(c.needs.alone, want.alone);
+          EXPECT_EQ(c.needs.share, want.share);
+          EXPECT_EQ(c.needs.binding, want.binding);
+          EXPECT_EQ(c.needs.common, want.common);
+        } else {
+          const std::string note = "r[" + std::to_string(want.binding) + "] binds: alone it needs " +
+                                   std::to_string(want.alone[want.binding]) + " guard bits";
+          EXPECT_NE(msg.find(note), std::string::npos) << msg;
+        }
+      }
+    }
+}
