@@ -80,6 +80,10 @@ void Format::validate() const {
   if (width < chunk_width || width > 128 || width % chunk_width != 0)
     bad("width=" + std::to_string(width) + " must be a multiple of chunk_width=" +
         std::to_string(chunk_width) + ", at most 128");
+  if (guard_bits == 0)
+    bad("guard_bits=0 is not supported by the compiler (the RTL builds it): with no bit below the output LSB "
+        "every register rounding is a whole 1/2 output LSB, so the error bound admits no segment at tol < 1 "
+        "and only K=1 at tol=1; use guard_bits >= 1 (Compiler::guard_bits_needed gives the count for K ticks)");
   if (guard_bits < 1 || guard_bits > width - 2)
     bad("guard_bits=" + std::to_string(guard_bits) + " out of range 1..width-2");
   if (frac_bits < -64 || frac_bits > 64)
@@ -140,6 +144,22 @@ double quant_bound_lsb_of(const Format& f, uint64_t k) {
   return to_lsb(mpq_class(Compiler::quant_bound_x2(f.degree, k), 2), f.guard_bits);
 }
 
+// "guard_bits >= g (width >= W: ...)" for the too-long refusal: the width is
+// rounded up to a buildable one (a multiple of chunk_width, at most 128).
+std::string guard_suggestion(const Format& f, int gneed) {
+  const int ow = f.out_width();
+  const int c = f.chunk_width;
+  const int wbuild = (ow + gneed + c - 1) / c * c;
+  const std::string g = "guard_bits >= " + std::to_string(gneed);
+  if (wbuild <= 128)
+    return g + " (width >= " + std::to_string(wbuild) + ": " + std::to_string(ow) + " output + " +
+           std::to_string(gneed) + " guard bits, rounded up to a multiple of chunk_width=" + std::to_string(c) + ")";
+  if (gneed <= 126)
+    return g + " (at width=128 that leaves out_width <= " + std::to_string(128 - gneed) + ", fewer than " +
+           std::to_string(ow) + ")";
+  return g + " (no buildable width: width <= 128 holds at most 126 guard bits)";
+}
+
 // "r[3] binds: alone it needs 49 guard bits (r[1] 18, r[2] 34)".
 std::string binding_note(const RegisterNeeds& nd) {
   std::string others;
@@ -149,6 +169,54 @@ std::string binding_note(const RegisterNeeds& nd) {
   }
   return "r[" + std::to_string(nd.binding) + "] binds: alone it needs " + std::to_string(nd.alone[nd.binding]) +
          " guard bits" + (others.empty() ? "" : " (" + others + ")");
+}
+
+// Whether one axis polynomial stays in the output range of format g for any
+// start within max(1/2 register LSB, tol/2) of it: a sufficient form of
+// compile()'s range check (the blend e0 (1 - t/T) moves every Bernstein
+// coefficient by at most |e0|, so max|b| + 2 e0max + sum C(K,i) + 2 < 2^(W-1)
+// implies max|b'| + |e0| + sum C(K,i) + 2 < 2^(W-1)).
+bool range_fits(const Format& g, const std::vector<double>& coef, const mpq_class& T, uint64_t K) {
+  const int N = g.degree;
+  mpq_class scale = mpq_class(pow2(g.guard_bits));
+  if (g.frac_bits >= 0) scale *= mpq_class(pow2(g.frac_bits));
+  else scale /= mpq_class(pow2(-g.frac_bits));
+  std::vector<mpq_class> c(N + 1, 0);
+  for (size_t j = 0; j < coef.size() && j <= static_cast<size_t>(N); ++j) c[j] = exact(coef[j]) * scale;
+  c[0] += mpq_class(pow2(g.guard_bits), 2);
+  const long double qmax = max_abs_on(c, T);
+  const long double e0max = std::max(0.5L, std::ldexp(static_cast<long double>(g.tol_lsb) / 2, g.guard_bits));
+  const long double need = qmax + 2 * e0max + static_cast<long double>(Compiler::quant_bound_x2(N, K).get_d()) + 2;
+  return need * (1 + std::ldexp(1.0L, -40)) < std::ldexp(1.0L, g.width - 1);
+}
+
+// "; it fits with frac_bits <= F (|x| < X), or with width >= W (out_width=O)"
+// for the range refusal: the largest frac_bits below the present one, and the
+// smallest buildable width above the present one (same guard_bits), with which
+// this axis would fit.
+std::string range_suggestion(const Format& f, const std::vector<double>& coef, const mpq_class& T, uint64_t K) {
+  std::string frac, wide;
+  for (int fb = f.frac_bits - 1; fb >= -64; --fb) {
+    Format g = f;
+    g.frac_bits = fb;
+    if (range_fits(g, coef, T, K)) {
+      frac = "frac_bits <= " + std::to_string(fb) + " (|x| < " + fmt_double(std::ldexp(1.0, f.out_width() - 1 - fb)) +
+             ")";
+      break;
+    }
+  }
+  for (int w = f.width + f.chunk_width; w <= 128; w += f.chunk_width) {
+    Format g = f;
+    g.width = w;
+    if (range_fits(g, coef, T, K)) {
+      wide = "width >= " + std::to_string(w) + " (out_width=" + std::to_string(g.out_width()) + " at guard_bits=" +
+             std::to_string(f.guard_bits) + ")";
+      break;
+    }
+  }
+  if (frac.empty() && wide.empty())
+    return "; no frac_bits >= -64 and no width <= 128 holds it: split the move or move the origin";
+  return "; it fits with " + (frac.empty() ? wide : wide.empty() ? frac : frac + ", or with " + wide);
 }
 
 // The straightforward exact form (mpq throughout). The fast path of compile()
@@ -188,8 +256,7 @@ Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::
     fail("K=" + std::to_string(K) + " ticks at degree " + std::to_string(N) + " has quantisation bound " +
          fmt_double(quant_bound_lsb_of(f_, K)) + " LSB > tol/2 = " + fmt_double(f_.tol_lsb / 2) +
          " LSB with guard_bits=" + std::to_string(G) + "; split into segments of at most K=" +
-         std::to_string(kmax) + " ticks, or use guard_bits >= " + std::to_string(gneed) +
-         " (width >= " + std::to_string(f_.out_width() + gneed) + "); " + binding_note(needs));
+         std::to_string(kmax) + " ticks, or use " + guard_suggestion(f_, gneed) + "; " + binding_note(needs));
   }
 
   const mpq_class h = exact(seg.h);
@@ -231,7 +298,8 @@ Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::
            fmt_double(static_cast<double>(qmax / static_cast<long double>(scale.get_d()))) +
            " units, the format holds |x| < " +
            fmt_double(std::ldexp(1.0, f_.out_width() - 1 - f_.frac_bits)) +
-           " (out_width=" + std::to_string(f_.out_width()) + ", frac_bits=" + std::to_string(f_.frac_bits) + ")");
+           " (out_width=" + std::to_string(f_.out_width()) + ", frac_bits=" + std::to_string(f_.frac_bits) + ")" +
+           range_suggestion(f_, seg.coef[a], T, K));
     // Exact samples q(m h), m = 0..N, then the forward-difference table.
     std::vector<mpq_class> y(N + 1);
     for (int m = 0; m <= N; ++m) {

@@ -1,12 +1,14 @@
-// What the compiler reports: per-register fraction-bit needs, against an
-// independent exact computation (binomials as explicit products, tol as the
+// What the compiler reports: per-register fraction-bit needs (against an
+// independent exact computation: binomials as explicit products, tol as the
 // exact rational of the double, an integer log2 by bit length and a final
-// adjustment).
+// adjustment), and refusal messages that say what would fit (the suggested
+// format is then compiled to show that it does).
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <regex>
 #include <string>
 
 #include "fd/fd_compiler.hpp"
@@ -189,4 +191,150 @@ TEST(FdRegisterNeeds, ReportedByCompileAndDecideAcceptance) {
         }
       }
     }
+}
+
+// ---------------------------------------------------------------------------
+// Refusals say what would fit
+// ---------------------------------------------------------------------------
+
+// The README's example, word for word.
+TEST(FdRefusal, TooLongExactMessage) {
+  const Compiler comp(fmt(2, 3, 64, 16, 32, 8));
+  const PolySegment s{{{1.0, 2.0}, {0.0}}, 1e-3, 100000};
+  EXPECT_EQ(refusal(comp, s),
+            "seg 7: K=100000 ticks at degree 3 has quantisation bound 19402.6 LSB > tol/2 = 0.25 LSB with "
+            "guard_bits=32; split into segments of at most K=2344 ticks, or use guard_bits >= 49 (width >= 96: "
+            "32 output + 49 guard bits, rounded up to a multiple of chunk_width=16); r[3] binds: alone it needs 49 "
+            "guard bits (r[1] 18, r[2] 34)");
+}
+
+// The suggested width is buildable (a multiple of chunk_width, <= 128), the
+// smallest such that keeps out_width, and the suggested formats accept it.
+TEST(FdRefusal, TooLongSuggestsBuildableWidth) {
+  struct Case {
+    int deg, w, c, g;
+    uint64_t k;
+  };
+  const std::regex re(R"(guard_bits >= (\d+) \(width >= (\d+): (\d+) output \+ (\d+) guard bits)");
+  int checked = 0;
+  for (const Case& cs : {Case{3, 64, 16, 32, 100000}, Case{3, 64, 32, 32, 100000}, Case{3, 64, 64, 32, 100000},
+                         Case{5, 48, 16, 16, 5000}, Case{2, 48, 16, 20, 70000}, Case{7, 96, 32, 64, 20000},
+                         Case{4, 64, 16, 40, 3000}}) {
+    Format f = fmt(1, cs.deg, cs.w, cs.c, cs.g, 4);
+    f.max_ticks = 0xffffffffu;
+    const Compiler comp(f);
+    const PolySegment s{{{1.0, 0.25}}, 1e-3, cs.k};
+    const std::string msg = refusal(comp, s);
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(msg, m, re)) << msg;
+    const int gneed = std::stoi(m[1]), wsug = std::stoi(m[2]);
+    const int ow = f.out_width();
+    EXPECT_EQ(gneed, reference_needs(cs.deg, cs.k, f.tol_lsb).common) << msg;
+    EXPECT_EQ(std::stoi(m[3]), ow);
+    EXPECT_EQ(wsug % cs.c, 0) << msg;
+    EXPECT_GE(wsug, ow + gneed) << msg;
+    EXPECT_LT(wsug - cs.c, ow + gneed) << msg;
+    EXPECT_LE(wsug, 128) << msg;
+    // Both readings of the suggestion compile the segment: same out_width
+    // (guard = width - out_width), or exactly gneed guard bits at that width.
+    for (int g2 : {wsug - ow, gneed}) {
+      Format f2 = f;
+      f2.width = wsug;
+      f2.guard_bits = g2;
+      EXPECT_NO_THROW(Compiler(f2).compile(s)) << msg << " at width " << wsug << " guard " << g2;
+    }
+    // And one guard bit fewer does not.
+    Format f3 = f;
+    f3.width = 128;
+    f3.chunk_width = 64;
+    f3.guard_bits = gneed - 1;
+    EXPECT_THROW(Compiler(f3).compile(s), CompileError);
+    ++checked;
+  }
+  EXPECT_EQ(checked, 7);
+  // No buildable width keeps the output: the suggestion says so.
+  {
+    Format f = fmt(1, 7, 128, 64, 96, 0);
+    f.max_ticks = 0xffffffffu;
+    const PolySegment s{{{1.0}}, 1e-3, 100000};  // needs 105 guard bits: 32 + 105 > 128
+    const std::string msg = refusal(Compiler(f), s);
+    EXPECT_NE(msg.find("guard_bits >= 105 (at width=128 that leaves out_width <= 23, fewer than 32)"),
+              std::string::npos)
+        << msg;
+    const PolySegment s2{{{1.0}}, 1e-3, 4000000000ull};  // needs 212 > 126
+    const std::string msg2 = refusal(Compiler(f), s2);
+    EXPECT_NE(msg2.find("(no buildable width: width <= 128 holds at most 126 guard bits)"), std::string::npos)
+        << msg2;
+  }
+}
+
+// Out of range: the message names segment and axis and says which frac_bits
+// or which width would hold the path; both suggestions compile.
+TEST(FdRefusal, OutOfRangeSaysWhatFits) {
+  const std::regex re_f(R"(it fits with frac_bits <= (-?\d+) \(\|x\| < ([0-9.e+]+)\))");
+  const std::regex re_w(R"(width >= (\d+) \(out_width=(\d+) at guard_bits=(\d+)\))");
+  struct Case {
+    double x;
+    int axis, w, c, g, frac;
+  };
+  for (const Case& cs : {Case{1e7, 0, 64, 16, 32, 8}, Case{1e9, 1, 64, 16, 32, 8}, Case{1e12, 0, 64, 16, 32, 8},
+                         Case{-3e6, 1, 48, 16, 16, 10},
+                         Case{5e3, 0, 64, 32, 40, 12}, Case{2.5e4, 1, 96, 32, 64, 20}}) {
+    const Format f = fmt(2, 3, cs.w, cs.c, cs.g, cs.frac);
+    const Compiler comp(f);
+    PolySegment s{{{1.0, 0.5}, {-2.0, 0.25}}, 1e-3, 20};
+    s.coef[cs.axis] = {cs.x, 0.01 * cs.x, -0.02 * cs.x};
+    const std::string msg = refusal(comp, s, "seg 12");
+    const std::string head = "seg 12: axis " + std::to_string(cs.axis) + " leaves the output range";
+    ASSERT_EQ(msg.rfind(head, 0), 0u) << msg;
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(msg, m, re_f)) << msg;
+    const int fsug = std::stoi(m[1]);
+    EXPECT_LT(fsug, cs.frac);
+    Format ff = f;
+    ff.frac_bits = fsug;
+    EXPECT_NO_THROW(Compiler(ff).compile(s)) << msg;
+    // The largest such frac_bits (here nothing is near the limit's margin).
+    ff.frac_bits = fsug + 1;
+    EXPECT_THROW(Compiler(ff).compile(s), CompileError) << msg;
+    ASSERT_TRUE(std::regex_search(msg, m, re_w)) << msg;
+    const int wsug = std::stoi(m[1]);
+    EXPECT_EQ(wsug % cs.c, 0);
+    EXPECT_EQ(std::stoi(m[2]), wsug - cs.g);
+    Format fw = f;
+    fw.width = wsug;
+    EXPECT_NO_THROW(Compiler(fw).compile(s)) << msg;
+    if (wsug - cs.c > cs.w) {
+      fw.width = wsug - cs.c;
+      EXPECT_THROW(Compiler(fw).compile(s), CompileError) << msg;
+    }
+  }
+  // Nothing holds it: said so.
+  const Compiler comp(fmt(1, 3, 64, 16, 32, 8));
+  const std::string msg = refusal(comp, PolySegment{{{1e300}}, 1e-3, 10});
+  EXPECT_NE(msg.find("no frac_bits >= -64 and no width <= 128 holds it"), std::string::npos) << msg;
+}
+
+// guard_bits = 0 (which the RTL builds) is refused with the reason, and the
+// reason holds: with G = 0 the bound admits no segment at tol = 0.5 and only
+// K = 1 at tol = 1, at every degree.
+TEST(FdRefusal, GuardBitsZeroRefusedWithReason) {
+  Format f = fmt(3, 3, 64, 16, 0, 16);
+  try {
+    Compiler c(f);
+    ADD_FAILURE() << "guard_bits=0 accepted";
+  } catch (const CompileError& e) {
+    EXPECT_NE(std::string(e.what()).find("format: guard_bits=0 is not supported by the compiler"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("use guard_bits >= 1"), std::string::npos) << e.what();
+  }
+  for (int deg = 1; deg <= 7; ++deg) {
+    EXPECT_EQ(Compiler::longest_segment(deg, 0, 0.5), 0u) << deg;
+    EXPECT_EQ(Compiler::longest_segment(deg, 0, 1.0), 1u) << deg;
+    EXPECT_GE(Compiler::guard_bits_needed(deg, 2, 1.0), 1) << deg;
+  }
+  f.guard_bits = 1;
+  EXPECT_NO_THROW(Compiler{f});
+  f.guard_bits = -1;
+  EXPECT_THROW(Compiler{f}, CompileError);
 }
