@@ -141,6 +141,107 @@ TEST(FdModel, MatchesHostPredictionAllDegreesAndWidths) {
   }
 }
 
+// Group 2 with wraps: a scaled Chebyshev T7 over K = 5 ticks at degree 7 and
+// W = 48. The compiler's range check (Bernstein bound 85.8 for T7 on [-1, 1])
+// keeps r[0] inside the register, but the differences of T7 over so few ticks
+// are hundreds of times larger (Delta^7 = amp 64 7! (2/K)^7 = 529 amp), so
+// r[1..7] wrap modulo 2^48, already when loaded and again while ticking.
+// Checked: that wraps happen (exact unwrapped register values from the closed
+// form, outside [-2^47, 2^47)), that every model register equals its exact
+// value modulo 2^48 after every tick, and that every sample equals the host's
+// prediction bit for bit.
+TEST(FdModel, IntermediateRegistersWrapAndMatchPrediction) {
+  constexpr int A = 2, D = 7, W = 48, C = 16, G = 16;
+  using Eng = traj::FdEngine<A, D, W, C, G>;
+  const Format f = fmt_for(A, D, W, C, G, 4);
+  Compiler comp(f);
+  const uint64_t K = 5;
+  const double h = 1e-3, T = static_cast<double>(K) * h;
+  const double range = std::ldexp(1.0, f.out_width() - 1 - f.frac_bits);  // |x| < range units
+  // x(t) = sign amp T7(2t/T - 1), T7(u) = 64u^7 - 112u^5 + 56u^3 - 7u, as a power series in t.
+  auto cheb7 = [&](double amp) {
+    const long double a[8] = {0, -7, 0, 56, 0, -112, 0, 64};
+    const long double al = 2.0L / T, be = -1;
+    std::vector<double> c(8);
+    for (int m = 0; m <= 7; ++m) {
+      long double v = 0;
+      for (int k = m; k <= 7; ++k) {
+        long double binom = 1;
+        for (int t = 1; t <= m; ++t) binom = binom * (k - m + t) / t;
+        v += a[k] * binom * std::pow(al, m) * std::pow(be, k - m);
+      }
+      c[m] = static_cast<double>(amp * v);
+    }
+    return c;
+  };
+  const double amp = 0.45 * range / 85.8;
+  PolySegment seg;
+  seg.h = h;
+  seg.ticks = K;
+  seg.coef = {cheb7(amp), cheb7(-0.7 * amp)};
+  const Compiled c = comp.compile(seg, nullptr, "T7");
+
+  // Exact unwrapped registers at tick k: r_i(k) = sum_j r_(i+j) C(k, j).
+  const mpz_class half = mpz_class(1) << (W - 1), mod = mpz_class(1) << W;
+  auto exact_reg = [&](int a, int i, uint64_t k) {
+    mpz_class v = 0;
+    for (int j = 0; i + j <= D; ++j) v += c.regs[a][i + j] * traj::fd::binom(k, j);
+    return v;
+  };
+  auto wrap_signed = [&](mpz_class v) {  // v mod 2^W in [-2^(W-1), 2^(W-1))
+    v %= mod;
+    if (v < 0) v += mod;
+    if (v >= half) v -= mod;
+    return v;
+  };
+
+  Eng e;
+  typename Eng::In in;
+  for (uint64_t w : comp.words(c)) {
+    in.tvalid = true;
+    in.tdata = w;
+    while (!e.outputs().tready) e.clock(typename Eng::In{});
+    e.clock(in);
+  }
+  in.tvalid = false;
+  int wraps = 0, max_excess_bits = 0, samples = 0;
+  for (uint64_t k = 0; k <= K; ++k) {
+    for (int a = 0; a < A; ++a)
+      for (int i = 0; i <= D; ++i) {
+        const mpz_class x = exact_reg(a, i, k);
+        const bool wrapped = x < -half || x >= half;
+        if (i == 0) {
+          ASSERT_FALSE(wrapped) << "r[0] must stay in range; tick " << k << " axis " << a;
+        }
+        if (wrapped) {
+          ++wraps;
+          max_excess_bits = std::max(max_excess_bits, static_cast<int>(mpz_sizeinbase(x.get_mpz_t(), 2)) - (W - 1));
+        }
+        ASSERT_EQ(traj::test::to_mpz_signed(e.reg(a, i), W), wrap_signed(x))
+            << "tick " << k << " axis " << a << " r[" << i << "]";
+      }
+    if (k == K) break;
+    in.tick = true;
+    e.clock(in);
+    in.tick = false;
+    for (int cyc = 0; cyc < Eng::kChunks + 2; ++cyc) {
+      const auto o = e.outputs();
+      if (o.sample_valid) {
+        ++samples;
+        for (int a = 0; a < A; ++a)
+          ASSERT_EQ(traj::test::to_mpz_signed(o.sample[a], Eng::kOutWidth), comp.sample_at(c, a, k))
+              << "tick " << k << " axis " << a;
+      }
+      e.clock(in);
+    }
+  }
+  EXPECT_EQ(samples, static_cast<int>(K));
+  EXPECT_GT(wraps, 0) << "no register wrapped: the case no longer tests wrapping";
+  std::printf("  T7 over K=%llu ticks: %d register values outside the 48-bit range (up to 2^%d times it), "
+              "samples == prediction\n",
+              static_cast<unsigned long long>(K), wraps, max_excess_bits);
+}
+
 // ---------------------------------------------------------------------------
 // Group 4: the error bound holds at every tick for the longest segment the
 // compiler accepts, at each degree and width.
@@ -271,7 +372,9 @@ TEST(FdBound, LongestSegmentIsTight) {
     EXPECT_LE(sumC(K), lim) << deg;
     EXPECT_GT(sumC(K + 1), lim) << deg;
     PolySegment seg{{{1.0}}, 1e-3, K};
-    if (K <= f.max_ticks) EXPECT_NO_THROW(comp.compile(seg));
+    if (K <= f.max_ticks) {
+      EXPECT_NO_THROW(comp.compile(seg));
+    }
     seg.ticks = K + 1;
     try {
       comp.compile(seg);
