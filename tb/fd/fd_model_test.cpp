@@ -349,6 +349,203 @@ TEST(FdBound, HoldsAtEveryTickForLongestAcceptedSegment) {
   all_bounds<Cfg<7, 48, 16, 16>, Cfg<7, 64, 16, 32>, Cfg<7, 96, 32, 64>, Cfg<7, 128, 64, 96>>(17);
 }
 
+// Group 4, adversarial: the same cells with a polynomial built so that every
+// difference register rounds by almost exactly +1/2 LSB. Its exact forward
+// differences are set to D_i = n_i + 1/2 + 2^-10 (random integers n_i, in
+// register LSB; the coefficients solved from D_i = 2^(F+G) sum_(j>=i) c_j h^j
+// i! S(j,i) from i = N down, each rounded to double with the rounding carried
+// into the next), with h = 2^-13 and a dyadic start (e0 = 0). Round to nearest
+// then gives e_i = 1/2 - 2^-10 (checked from an exact difference table), and
+// the error E_k = sum_i e_i C(k,i) reaches (1 - 2^-9) Q(K) at the end state.
+// The exact target is stepped in integers (everything is dyadic), so the error
+// at every tick is exact. Each cell must stay within the bound and come within
+// 0.8 of it: a bound 0.8x as large would be violated, so the check has teeth.
+namespace {
+
+struct AdvResult {
+  uint64_t K;
+  double e_min, e_max;
+  double worst_ratio;          // max |E_k| / bound over k = 0..K (K: the end state, the next start)
+  double worst_ratio_samples;  // the same over the K emitted samples, k < K
+  double worst_out;            // output error, LSB
+};
+
+long long stirling2(int j, int i) {  // S(j, i), j, i <= 7
+  if (j == 0 && i == 0) return 1;
+  if (j == 0 || i == 0) return 0;
+  return i * stirling2(j - 1, i) + stirling2(j - 1, i - 1);
+}
+
+mpq_class exact_q(double v) {
+  mpq_class q;
+  mpq_set_d(q.get_mpq_t(), v);
+  return q;
+}
+
+template <class Cf>
+AdvResult check_bound_adversarial(uint64_t seed) {
+  constexpr int A = 1, N = Cf::kDeg, G = Cf::kG;
+  using Eng = traj::FdEngine<A, N, Cf::kW, Cf::kC, G>;
+  const Format f = fmt_for(A, N, Cf::kW, Cf::kC, G, 8);
+  Compiler comp(f);
+  const uint64_t K = std::min<uint64_t>(Compiler::longest_segment(N, G, f.tol_lsb), f.max_ticks);
+  const double h = std::ldexp(1.0, -13);
+  const mpq_class hq = exact_q(h);
+  const mpq_class S(mpz_class(1) << (f.frac_bits + G));
+  const mpq_class eps(1, 1024);
+  std::mt19937_64 rng(seed);
+  const long long nmax = 1LL << (f.out_width() - 4);
+  std::uniform_int_distribution<long long> U(-nmax, nmax);
+  std::vector<double> c(N + 1);
+  std::vector<mpq_class> cq(N + 1);
+  c[0] = std::ldexp(1.0, f.out_width() - 3 - f.frac_bits);  // a quarter of the range, exact in registers
+  cq[0] = exact_q(c[0]);
+  mpz_class fact = 1;
+  for (int i = N; i >= 1; --i) {
+    fact = 1;
+    for (int t = 2; t <= i; ++t) fact *= t;
+    mpq_class hi = 1;
+    for (int t = 0; t < i; ++t) hi *= hq;
+    mpq_class rest = 0;  // what the higher coefficients (already rounded) put into D_i
+    for (int j = i + 1; j <= N; ++j) {
+      mpq_class hj = 1;
+      for (int t = 0; t < j; ++t) hj *= hq;
+      rest += cq[j] * hj * mpq_class(fact) * mpq_class(static_cast<long>(stirling2(j, i)));
+    }
+    const mpq_class target = mpq_class(static_cast<long>(U(rng))) + mpq_class(1, 2) + eps;
+    const mpq_class ci = (target - S * rest) / (S * hi * mpq_class(fact));
+    c[i] = ci.get_d();
+    cq[i] = exact_q(c[i]);
+  }
+  PolySegment seg;
+  seg.h = h;
+  seg.ticks = K;
+  seg.coef.push_back(c);
+  const Compiled cc = comp.compile(seg);
+  EXPECT_EQ(cc.carried_lsb, 0.0);
+
+  // Exact differences of q(t) = 2^(F+G) x(t) + 2^(G-1) from q(m h), m = 0..N.
+  const mpq_class bias(mpz_class(1) << (G - 1));
+  std::vector<mpq_class> y(N + 1), Dq(N + 1);
+  for (int m = 0; m <= N; ++m) {
+    mpq_class v = 0;
+    const mpq_class t = hq * m;
+    for (int j = N; j >= 0; --j) v = v * t + cq[j];
+    y[m] = v * S + bias;
+  }
+  Dq[0] = y[0];
+  for (int i = 1; i <= N; ++i) {
+    for (int m = 0; m + i <= N; ++m) y[m] = y[m + 1] - y[m];
+    Dq[i] = y[0];
+  }
+  AdvResult r{K, 1, 0, 0, 0, 0};
+  for (int i = 1; i <= N; ++i) {
+    const double ei = mpq_class(mpq_class(cc.regs[0][i]) - Dq[i]).get_d();
+    r.e_min = std::min(r.e_min, ei);
+    r.e_max = std::max(r.e_max, ei);
+  }
+  EXPECT_GT(r.e_min, 0.5 - 1.0 / 512) << "deg " << N << " W " << Cf::kW << ": rounding errors not all near +1/2";
+  EXPECT_LE(r.e_max, 0.5);
+  EXPECT_EQ(mpq_class(cc.regs[0][0]), Dq[0]);  // e0 = 0
+
+  // Integers: Q_i = D_i 2^Z (all D_i are dyadic), stepped exactly.
+  unsigned long Z = 0;
+  for (int i = 0; i <= N; ++i) {
+    Dq[i].canonicalize();
+    const mpz_class& den = Dq[i].get_den();
+    EXPECT_EQ(mpz_popcount(den.get_mpz_t()), 1u);
+    Z = std::max<unsigned long>(Z, mpz_sizeinbase(den.get_mpz_t(), 2) - 1);
+  }
+  std::vector<mpz_class> Q(N + 1);
+  for (int i = 0; i <= N; ++i) {
+    mpq_class v = Dq[i] * mpq_class(mpz_class(1) << Z);
+    v.canonicalize();
+    Q[i] = v.get_num();
+  }
+  // The limit is the compiler's stated bound (bound_lsb, output LSB) in the
+  // same scaled integer units, floored (the errors are integers there); it
+  // must agree with Q(K) = 1/2 sum C(K,i) computed here.
+  mpq_class stated = exact_q(cc.bound_lsb) * mpq_class(mpz_class(1) << (G + Z));
+  const mpz_class bound_reg = stated.get_num() / stated.get_den();  // floor (stated >= 0)
+  const mpz_class half_out = mpz_class(1) << (G - 1 + Z);             // 1/2 output LSB, scaled
+  stated += mpq_class(half_out);
+  const mpz_class bound_out = stated.get_num() / stated.get_den();
+  mpz_class qk2 = 0;  // 2 Q(K) = sum C(K, i), register LSB
+  for (int i = 1; i <= N; ++i) qk2 += traj::fd::binom(K, i);
+  EXPECT_NEAR(cc.bound_lsb, std::ldexp(qk2.get_d(), -(G + 1)), 1e-12 * cc.bound_lsb);
+
+  Eng e;
+  typename Eng::In in;
+  for (uint64_t w : comp.words(cc)) {
+    in.tvalid = true;
+    in.tdata = w;
+    while (!e.outputs().tready) e.clock(typename Eng::In{});
+    e.clock(in);
+  }
+  in.tvalid = false;
+  mpz_class err;
+  for (uint64_t k = 0; k <= K; ++k) {
+    // register error at tick k (r0 before the k-th update; k = K: the end state)
+    err = (traj::test::to_mpz_signed(e.reg(0, 0), Cf::kW) << Z) - Q[0];
+    if (mpz_cmpabs(err.get_mpz_t(), bound_reg.get_mpz_t()) > 0) {
+      ADD_FAILURE() << "deg " << N << " W " << Cf::kW << " tick " << k << ": register error "
+                    << mpq_class(mpq_class(err) / mpq_class(bound_reg)).get_d() << " x the stated bound "
+                    << cc.bound_lsb << " LSB";
+      return r;
+    }
+    const double ratio = std::fabs(mpq_class(mpq_class(err) / mpq_class(bound_reg)).get_d());
+    r.worst_ratio = std::max(r.worst_ratio, ratio);
+    if (k == K) break;
+    r.worst_ratio_samples = std::max(r.worst_ratio_samples, ratio);
+    in.tick = true;
+    e.clock(in);
+    in.tick = false;
+    for (int cyc = 0; cyc < Eng::kChunks + 2; ++cyc) {
+      const auto o = e.outputs();
+      if (o.sample_valid) {
+        // sample - x(kh) 2^F, scaled by 2^(G+Z): sample 2^(G+Z) - (Q_0 - 2^(G-1+Z))
+        const mpz_class oe =
+            (traj::test::to_mpz_signed(o.sample[0], Eng::kOutWidth) << (G + Z)) - Q[0] + half_out;
+        if (mpz_cmpabs(oe.get_mpz_t(), bound_out.get_mpz_t()) > 0) {
+          ADD_FAILURE() << "deg " << N << " W " << Cf::kW << " tick " << k << ": output error above 1/2 + bound";
+          return r;
+        }
+        r.worst_out = std::max(
+            r.worst_out, std::fabs(mpq_class(mpq_class(oe) / mpq_class(mpz_class(1) << (G + Z))).get_d()));
+      }
+      e.clock(in);
+    }
+    for (int i = 0; i < N; ++i) Q[i] += Q[i + 1];
+  }
+  EXPECT_GT(r.worst_ratio, 0.8) << "deg " << N << " W " << Cf::kW << ": the adversarial case does not reach the bound";
+  return r;
+}
+
+template <class... Cs>
+void all_adversarial(uint64_t seed) {
+  (
+      [&] {
+        const auto r = check_bound_adversarial<Cs>(seed);
+        std::printf("  degree %d width %3d guard %2d: K=%8llu e_i in [%.5f, %.5f] LSB, register error up to "
+                    "%.4f x bound (end state), %.4f x over the samples; output error up to %.4f LSB\n",
+                    Cs::kDeg, Cs::kW, Cs::kG, static_cast<unsigned long long>(r.K), r.e_min, r.e_max, r.worst_ratio,
+                    r.worst_ratio_samples, r.worst_out);
+      }(),
+      ...);
+}
+
+}  // namespace
+
+TEST(FdBound, AdversarialRoundingReachesTheBound) {
+  all_adversarial<Cfg<1, 48, 16, 16>, Cfg<1, 64, 16, 32>, Cfg<1, 96, 32, 64>, Cfg<1, 128, 64, 96>>(21);
+  all_adversarial<Cfg<2, 48, 16, 16>, Cfg<2, 64, 16, 32>, Cfg<2, 96, 32, 64>, Cfg<2, 128, 64, 96>>(22);
+  all_adversarial<Cfg<3, 48, 16, 16>, Cfg<3, 64, 16, 32>, Cfg<3, 96, 32, 64>, Cfg<3, 128, 64, 96>>(23);
+  all_adversarial<Cfg<4, 48, 16, 16>, Cfg<4, 64, 16, 32>, Cfg<4, 96, 32, 64>, Cfg<4, 128, 64, 96>>(24);
+  all_adversarial<Cfg<5, 48, 16, 16>, Cfg<5, 64, 16, 32>, Cfg<5, 96, 32, 64>, Cfg<5, 128, 64, 96>>(25);
+  all_adversarial<Cfg<6, 48, 16, 16>, Cfg<6, 64, 16, 32>, Cfg<6, 96, 32, 64>, Cfg<6, 128, 64, 96>>(26);
+  all_adversarial<Cfg<7, 48, 16, 16>, Cfg<7, 64, 16, 32>, Cfg<7, 96, 32, 64>, Cfg<7, 128, 64, 96>>(27);
+}
+
 TEST(FdBound, LongestSegmentIsTight) {
   // K_max from the compiler: K_max accepted, K_max + 1 refused with a message
   // that says what would fit. Independent check of the bound arithmetic: the
