@@ -54,9 +54,20 @@ BSpline BSpline::from_homogeneous(int degree, const Eigen::MatrixXd& hom, const 
   return c;
 }
 
-void validate(const BSpline& c, const std::string& where) {
-  if (c.degree < 1 || c.degree > kMaxDegree)
-    fail(where, "degree: " + std::to_string(c.degree) + " out of range 1.." + std::to_string(kMaxDegree));
+std::string degree_range_error(long long degree, bool rational, int max_degree) {
+  const int cap = max_degree > 0 ? max_degree : (rational ? kMaxDegreeRational : kMaxDegree);
+  if (degree >= 1 && degree <= cap) return {};
+  std::string m = "degree: " + std::to_string(degree) + " out of range 1.." + std::to_string(cap);
+  if (degree > cap && max_degree <= 0)
+    m += rational ? " for a rational curve (the quotient rule amplifies the power basis's rounding by the weights; "
+                    "non-rational curves: up to " + std::to_string(kMaxDegree) + ")"
+                  : " (the power basis loses about 1 bit per degree: beyond " + std::to_string(kMaxDegree) +
+                        " it misses the 1e-12 accuracy target)";
+  return m;
+}
+
+void validate(const BSpline& c, const std::string& where, int max_degree) {
+  if (const std::string e = degree_range_error(c.degree, c.rational(), max_degree); !e.empty()) fail(where, e);
   if (c.dim() < 1) fail(where, "control_points: points have no coordinates");
   const int n = c.n_ctrl();
   if (n < c.degree + 1)

@@ -11,7 +11,14 @@
 
 namespace traj::geo {
 
-constexpr int kMaxDegree = 7;
+// Highest degrees accepted (validate, the JSON reader, Curve). The power basis about the span midpoint
+// is an ill-conditioned basis: the rounding of its coefficients is amplified about 2x per degree
+// relative to the bounding box of the (hodograph) control points. Measured worst relative errors
+// (tb/geometry/bench_power_soak --beyond; host/geometry/README.md): ~1e-15 at degree 7, ~1e-13 at 15,
+// above the 1e-12 target from about 19. Rational curves add the quotient rule, which amplifies the
+// tables' rounding by up to the weight ratio; their derivatives approach the target sooner.
+constexpr int kMaxDegree = 15;          // non-rational B-splines and Beziers
+constexpr int kMaxDegreeRational = 7;   // NURBS / rational Beziers
 
 struct BSpline {
   int degree = 0;
@@ -33,9 +40,15 @@ struct BSpline {
                                   bool rational, std::string name = {});
 };
 
-// Checks degree 1..7, sizes, finite numbers, non-decreasing knots, positive weights, a non-empty
-// domain. Throws GeometryError("<where>: <field>[i]: ..."). `where` is usually the file name.
-void validate(const BSpline& c, const std::string& where = "curve");
+// Checks the degree (1..kMaxDegree, rational 1..kMaxDegreeRational), sizes, finite numbers,
+// non-decreasing knots, positive weights, a non-empty domain. Throws GeometryError("<where>: <field>[i]:
+// ..."). `where` is usually the file name. max_degree > 0 replaces both degree caps: only for
+// measuring the accuracy beyond them (bench_power_soak --beyond), never for production curves.
+void validate(const BSpline& c, const std::string& where = "curve", int max_degree = 0);
+
+// The message validate() gives for a degree outside the accepted range ("degree: 16 out of range
+// 1..15 (...)"), or "" if the degree is accepted; for readers that check the degree first.
+std::string degree_range_error(long long degree, bool rational, int max_degree = 0);
 
 // Boehm knot insertion of u, `times` times (multiplicity after insertion must stay <= degree+1).
 BSpline insert_knot(const BSpline& c, double u, int times = 1);

@@ -38,8 +38,8 @@ void hodograph(int p, const Eigen::MatrixXd& Q, const Eigen::VectorXd& U, Eigen:
 }
 }  // namespace
 
-Curve::Curve(const BSpline& spline, const std::string& where) {
-  validate(spline, where);
+Curve::Curve(const BSpline& spline, const std::string& where, int max_degree) {
+  validate(spline, where, max_degree);
   spline_ = clamp(spline);
   bezier_ = bezier_pieces(spline_);
   const int p = spline_.degree;

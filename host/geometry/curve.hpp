@@ -89,8 +89,9 @@ inline void eval_power_span(const PowerSpan& s, int dim, const T& u, int nd, T* 
 class Curve {
  public:
   Curve() = default;
-  // Validates (GeometryError on bad input), clamps if needed, converts to power basis.
-  explicit Curve(const BSpline& spline, const std::string& where = "curve");
+  // Validates (GeometryError on bad input), clamps if needed, converts to power basis. max_degree: see
+  // validate() (0 = the accepted range; larger only to measure the accuracy beyond it).
+  explicit Curve(const BSpline& spline, const std::string& where = "curve", int max_degree = 0);
 
   const BSpline& spline() const { return spline_; }  // clamped form
   int degree() const { return spline_.degree; }

@@ -162,9 +162,6 @@ BSpline parse_curve_fields(const nlohmann::json& doc, const std::string& where, 
   const auto& deg = member(doc, "degree", where);
   if (!deg.is_number_integer()) fail(where, "degree: expected an integer");
   const long long p = deg.get<long long>();
-  if (p < 1 || p > kMaxDegree)
-    fail(where, "degree: " + std::to_string(p) + " out of range 1.." + std::to_string(kMaxDegree));
-  c.degree = static_cast<int>(p);
 
   bool rational = false;
   field = "rational";
@@ -172,6 +169,9 @@ BSpline parse_curve_fields(const nlohmann::json& doc, const std::string& where, 
     if (!it->is_boolean()) fail(where, "rational: expected true or false");
     rational = it->get<bool>();
   }
+  field = "degree";
+  if (const std::string e = degree_range_error(p, rational); !e.empty()) fail(where, e);
+  c.degree = static_cast<int>(p);
 
   field = "control_points";
   const auto& cps = member(doc, "control_points", where);

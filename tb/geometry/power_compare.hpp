@@ -37,8 +37,10 @@ struct ErrStats {
 
 // Compare Curve::eval with the Cox-de Boor reference (and Eigen's spline when non-rational) at
 // `points` random parameters of one spline. Returns the max relative errors per derivative order.
-inline void compare_one(const geotest::RandomSpline& rs, int points, std::mt19937_64& rng, ErrStats& e, bool use_eigen) {
-  const traj::geo::Curve c(rs.lib);
+// max_degree: passed to Curve (0 = the library's caps; larger only to measure beyond them).
+inline void compare_one(const geotest::RandomSpline& rs, int points, std::mt19937_64& rng, ErrStats& e, bool use_eigen,
+                        int max_degree = 0) {
+  const traj::geo::Curve c(rs.lib, "curve", max_degree);
   const int dim = rs.lib.dim(), p = rs.lib.degree;
   const int nd = std::min(3, 3);
   std::vector<double> scale;

@@ -56,15 +56,49 @@ inline R dN(const Spline& c, int i, int p, int k, R u, int span) {
 // Derivatives 0..nd of the curve (rational handled by the Leibniz quotient formula), computed and
 // returned in precision R. out[k][d]. span >= 0 forces the knot span whose polynomial is evaluated
 // (e.g. a span's right end from inside: the half-open convention would pick the next span).
+// The recursion N / dN above is evaluated bottom-up with every N^(k)_{i,q} computed once (the same
+// expressions in the same order, so bitwise the same result as the plain recursion, but O(p^2) instead
+// of O(2^p) work: usable at high degree). Only i in [span-q, span] can be non-zero.
+template <class R>
+inline std::vector<std::vector<R>> basis_derivs_table(const Spline& c, R u, int span, int nd) {
+  const int p = c.p;
+  const auto& U = c.U;
+  // T[k][q][i - (span - q)], i = span-q..span.
+  std::vector<std::vector<std::vector<R>>> T(nd + 1, std::vector<std::vector<R>>(p + 1));
+  auto at = [&](int k, int q, int i) -> R {
+    if (i < span - q || i > span) return R(0);
+    return T[k][q][i - (span - q)];
+  };
+  for (int q = 0; q <= p; ++q)
+    for (int k = 0; k <= nd; ++k) {
+      T[k][q].assign(q + 1, R(0));
+      for (int i = span - q; i <= span; ++i) {
+        R v;
+        if (q == 0) v = (k == 0 && i == span) ? R(1) : R(0);
+        else if (k == 0)
+          v = safe_div<R>(u - U[i], R(U[i + q]) - U[i]) * at(0, q - 1, i) +
+              safe_div<R>(R(U[i + q + 1]) - u, R(U[i + q + 1]) - U[i + 1]) * at(0, q - 1, i + 1);
+        else
+          v = q * (safe_div<R>(at(k - 1, q - 1, i), R(U[i + q]) - U[i]) -
+                   safe_div<R>(at(k - 1, q - 1, i + 1), R(U[i + q + 1]) - U[i + 1]));
+        T[k][q][i - (span - q)] = v;
+      }
+    }
+  std::vector<std::vector<R>> out(nd + 1);
+  for (int k = 0; k <= nd; ++k) out[k] = T[k][p];  // out[k][j] = N^(k)_{span-p+j, p}
+  return out;
+}
+
 template <class R>
 inline std::vector<std::vector<R>> cox_de_boor_derivs_r(const Spline& c, double u, int nd, int span_in = -1) {
   const int span = span_in >= 0 ? span_in : find_span(c, u), dim = c.dim();
   const bool rat = !c.W.empty();
   std::vector<std::vector<R>> A(nd + 1, std::vector<R>(dim, R(0)));
   std::vector<R> w(nd + 1, R(0));
+  const auto Nt = basis_derivs_table<R>(c, R(u), span, nd);
   for (int k = 0; k <= nd; ++k)
     for (int i = span - c.p; i <= span; ++i) {
-      const R b = dN<R>(c, i, c.p, k, R(u), span);
+      const R b = Nt[k][i - (span - c.p)];
       const R wi = rat ? R(c.W[i]) : R(1);
       for (int d = 0; d < dim; ++d) A[k][d] += b * wi * c.P[i][d];
       w[k] += b * wi;
@@ -97,10 +131,11 @@ inline std::vector<std::vector<double>> cox_de_boor_derivs(const Spline& c, doub
   return out;
 }
 
-// The NURBS Book A2.3 (DersBasisFuns): ders[k][j] = N^(k)_{span-p+j,p}(u), k <= n.
+// The NURBS Book A2.3 (DersBasisFuns): ders[k][j] = N^(k)_{span-p+j,p}(u), k <= n, p < kA23Max.
+constexpr int kA23Max = 32;
 template <class T>
-void ders_basis_funs(int span, const T& u, int p, int n, const double* U, T ders[][8]) {
-  T ndu[8][8], a[2][8], left[8], right[8];
+void ders_basis_funs(int span, const T& u, int p, int n, const double* U, T ders[][kA23Max]) {
+  T ndu[kA23Max][kA23Max], a[2][kA23Max], left[kA23Max], right[kA23Max];
   ndu[0][0] = T(1.0);
   for (int j = 1; j <= p; ++j) {
     left[j] = u - T(U[span + 1 - j]);
@@ -150,7 +185,7 @@ void ders_basis_funs(int span, const T& u, int p, int n, const double* U, T ders
 // P: control points row-major n x dim. out[k*dim + d].
 template <class T>
 void deboor_cox_derivs(int p, const double* U, const double* P, int dim, int span, const T& u, int nd, T* out) {
-  T ders[8][8];
+  T ders[4][kA23Max];
   ders_basis_funs<T>(span, u, p, nd, U, ders);
   for (int k = 0; k <= nd; ++k)
     for (int d = 0; d < dim; ++d) {

@@ -121,8 +121,13 @@ TEST(GeometryJson, WeightCountAndMissing) {
 
 TEST(GeometryJson, DegreeOutOfRange) {
   json j = good();
-  j["degree"] = 8;
-  expect_error("deg8.json", j.dump(), {"degree", "8", "1..7"});
+  j["degree"] = 8;  // the butterfly is rational: 1..7
+  expect_error("deg8.json", j.dump(), {"deg8.json: degree: 8 out of range 1..7 for a rational curve"});
+  json b = j;
+  b.erase("weights");
+  b["rational"] = false;
+  b["degree"] = 16;
+  expect_error("deg16.json", b.dump(), {"deg16.json: degree: 16 out of range 1..15 ("});
   j["degree"] = 0;
   expect_error("deg0.json", j.dump(), {"degree", "0"});
   j["degree"] = 2.5;
