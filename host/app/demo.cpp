@@ -2,6 +2,11 @@
 // traversed in time, compiled to forward-difference segments, run through the
 // Verilated engine (and, beside it, the hls model and the host's exact
 // prediction), compared against the double-precision Bezier path.
+//
+// The demo always runs the fixed cubic engine build Vtraj_fd_cubic
+// (3 axes, degree 3, 64-bit registers, 16-bit chunks, 32 guard bits; verilated
+// in host/app/CMakeLists.txt), not the build's TRAJ_* engine, so `trajcore`
+// builds and the demo runs whatever TRAJ_AXES/DEGREE/WIDTH/CHUNK/GUARD are.
 #include "demo.hpp"
 
 #include <verilated.h>
@@ -16,7 +21,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "Vtraj_fd_engine.h"  // the build's own parameters
+#include "Vtraj_fd_cubic.h"  // fixed 3x3x64/16/32 build (host/app/CMakeLists.txt)
 #include "fd/fd_compiler.hpp"
 #include "fd/vl_bits.hpp"
 #include "traj_fd_engine.hpp"
@@ -24,7 +29,9 @@
 namespace traj::app {
 namespace {
 
-using Eng = FdEngine<FD_AXES, FD_DEGREE, FD_WIDTH, FD_CHUNK, FD_GUARD>;
+// The parameters Vtraj_fd_cubic is verilated with (host/app/CMakeLists.txt).
+constexpr int kAxes = 3, kDegree = 3, kWidth = 64, kChunk = 16, kGuard = 32;
+using Eng = FdEngine<kAxes, kDegree, kWidth, kChunk, kGuard>;
 using Vec = std::array<double, 3>;
 
 struct Bezier {
@@ -75,14 +82,13 @@ std::vector<double> compose(const std::array<double, 4>& c, double u0, double s)
 }  // namespace
 
 int run_demo(const DemoOptions& opt) {
-  static_assert(FD_AXES == 3, "the demo drives a 3-axis engine");
   const auto t_start = std::chrono::steady_clock::now();
   fd::Format f;
-  f.axes = FD_AXES;
-  f.degree = FD_DEGREE;
-  f.width = FD_WIDTH;
-  f.chunk_width = FD_CHUNK;
-  f.guard_bits = FD_GUARD;
+  f.axes = kAxes;
+  f.degree = kDegree;
+  f.width = kWidth;
+  f.chunk_width = kChunk;
+  f.guard_bits = kGuard;
   f.frac_bits = opt.frac_bits;
   fd::Compiler comp(f);
   if (opt.tick_gap < Eng::kWords + Eng::kChunks + 1)
@@ -124,7 +130,7 @@ int run_demo(const DemoOptions& opt) {
   // Stream everything through the Verilated engine and the hls model.
   auto ctx = std::make_unique<VerilatedContext>();
   ctx->randReset(2);
-  auto dut = std::make_unique<Vtraj_fd_engine>(ctx.get());
+  auto dut = std::make_unique<Vtraj_fd_cubic>(ctx.get());
   Eng model;
   std::vector<uint64_t> words;
   struct Owner {
@@ -213,7 +219,7 @@ int run_demo(const DemoOptions& opt) {
   std::printf("trajcore demo: circle R=%g mm of three 120-degree cubic Bezier arcs, feed %g mm/s nominal, tick %g ms\n",
               opt.radius, opt.feed, opt.period * 1e3);
   std::printf("  engine        : traj_fd_engine Axes=%d Degree=%d Width=%d ChunkWidth=%d GuardBits=%d (Verilated)\n",
-              FD_AXES, FD_DEGREE, FD_WIDTH, FD_CHUNK, FD_GUARD);
+              kAxes, kDegree, kWidth, kChunk, kGuard);
   std::printf("  output format : %d-bit samples, 1 LSB = 2^-%d mm = %.3g um\n", Eng::kOutWidth, opt.frac_bits,
               lsb * 1e3);
   std::printf("  segments      : %zu (K = %llu ticks per arc)\n", segs.size(), static_cast<unsigned long long>(K_arc));
