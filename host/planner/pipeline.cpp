@@ -147,7 +147,6 @@ JobResult run_job(const Path& p, const JobConfig& cfg, const Progress& progress)
     hold.k0 = static_cast<long long>(r.ticks.size()) - 1;
     hold.K = 1;
     hold.degree = cfg.degree;
-    hold.coef.assign(kMaxAxes, std::array<double, 6>{});
     for (int a = 0; a < p.dim(); ++a) hold.coef[a][0] = r.ticks.back().x[a];
     r.segments.push_back(hold);
   }
@@ -211,12 +210,14 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
   rep.guard_needed = fd::Compiler::guard_bits_needed(r.header.degree, rep.k_max, cfg.format.tol_lsb);
   rep.plan_peaks = peaks_of(r.ticks, d);
   rep.worst_plan = worst_ratio(rep.plan_peaks, cfg.limits, d, &rep.worst_plan_what);
-  for (const auto& sg : r.segments)
+  for (const auto& sg : r.segments) {
+    const SegmentPeaks pk = segment_peaks(sg, d, h);
     for (int a = 0; a < d; ++a) {
-      rep.fit_peaks.v_axis[a] = std::max(rep.fit_peaks.v_axis[a], sg.peak_v[a]);
-      rep.fit_peaks.a_axis[a] = std::max(rep.fit_peaks.a_axis[a], sg.peak_a[a]);
-      rep.fit_peaks.j_axis[a] = std::max(rep.fit_peaks.j_axis[a], sg.peak_j[a]);
+      rep.fit_peaks.v_axis[a] = std::max(rep.fit_peaks.v_axis[a], pk.v[a]);
+      rep.fit_peaks.a_axis[a] = std::max(rep.fit_peaks.a_axis[a], pk.a[a]);
+      rep.fit_peaks.j_axis[a] = std::max(rep.fit_peaks.j_axis[a], pk.j[a]);
     }
+  }
   {
     Peaks only_axes = rep.fit_peaks;
     Limits big = cfg.limits;

@@ -42,6 +42,7 @@ PathCurve::PathCurve(const geo::BSpline& spline, const std::string& w) : where(w
                     std::to_string(kMaxAxes));
   al = std::make_unique<geo::ArcLength>(*curve, 1e-12);
   if (!(al->total() > 1e-9)) throw PlanError(where + ": zero-length curve (arc length " + num(al->total()) + ")");
+  table = std::make_unique<ArcTable>(*curve, *al);
 }
 
 const std::vector<double>& PathCurve::split_s() const {
@@ -255,6 +256,8 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
     std::sort(must.begin(), must.end());
     must.push_back(len);
     size_t kb = 0;
+    const ArcTable& tab = p.table(ci);
+    int hint = 0;
     double s = 0, u = c.u_begin();
     size_t mi = 0;
     const double ds_max = std::min(o.max_grid_ds, len / 8);
@@ -320,7 +323,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
       double s_next = s + ds;
       if (mi < must.size() && must[mi] <= s_next) s_next = must[mi];
       if (s_next > len) s_next = len;
-      u = (s_next >= len) ? c.u_end() : al.advance(u, s_next - s);
+      u = (s_next >= len) ? c.u_end() : tab.u_at(s_next, hint);
       s = s_next;
     }
   }
@@ -436,11 +439,9 @@ std::vector<TickSample> sample_ticks_range(const Path& p, const Plan& plan, doub
   std::vector<TickSample> out;
   if (k_last < k_first) return out;
   out.reserve(static_cast<size_t>(k_last - k_first + 1));
-  int hint = 0;
-  size_t ci = 0;
-  double u = p.curve(0).u_begin(), s_prev = 0;
-  double sig_prev[3];
-  bool have_sig = false;  // sig_prev is at (ci, u)
+  int hint = 0, piece_hint = 0;
+  size_t ci = static_cast<size_t>(-1);
+  double u = 0;
   const int d = p.dim();
   for (long long k = k_first; k <= k_last; ++k) {
     const double t = k * period - t_offset;
@@ -449,17 +450,10 @@ std::vector<TickSample> sample_ticks_range(const Path& p, const Plan& plan, doub
     const double sl = std::clamp(ps.s - p.offset(cj), 0.0, p.arclength(cj).total());
     if (cj != ci) {
       ci = cj;
-      u = p.arclength(ci).u_at(sl);
-    } else {
-      const double ds = std::max(0.0, ps.s - s_prev);
-      u = sl >= p.arclength(ci).total() ? p.curve(ci).u_end()
-          : have_sig                    ? p.arclength(ci).advance_from(u, sig_prev, ds)
-                                        : p.arclength(ci).advance(u, ds, -1);
+      piece_hint = 0;
     }
-    s_prev = ps.s;
+    u = p.table(ci).u_at(sl, piece_hint);
     const Frame f = frame_at(p, ci, u, ps.s);
-    for (int j = 0; j < 3; ++j) sig_prev[j] = f.sig[j];
-    have_sig = true;
     TickSample ts{};
     ts.t = k * period;
     ts.s = ps.s;
@@ -468,6 +462,7 @@ std::vector<TickSample> sample_ticks_range(const Path& p, const Plan& plan, doub
     ts.j = ps.j;
     ts.u = u;
     ts.curve = ci;
+    ts.span = p.table(ci).span_of(piece_hint);
     for (int a = 0; a < d; ++a) {
       ts.x[a] = f.C[a];
       ts.dx[a] = f.T[a] * ps.v;

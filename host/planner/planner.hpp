@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "geometry/geometry.hpp"
+#include "planner/arc_table.hpp"
 #include "planner/profile.hpp"
 
 namespace traj::plan {
@@ -76,6 +77,7 @@ struct PathCurve {
   PathCurve(const geo::BSpline& spline, const std::string& where);  // checks axes and length
   std::unique_ptr<geo::Curve> curve;
   std::unique_ptr<geo::ArcLength> al;
+  std::unique_ptr<ArcTable> table;  // fast arc-length inverse for marching (ticks, grid)
   std::string where;
   const std::vector<double>& split_s() const;  // s of geo::split_params, ascending (computed once)
  private:
@@ -93,6 +95,7 @@ class Path {
   double length() const { return offsets_.empty() ? 0 : offsets_.back(); }
   const geo::Curve& curve(size_t i) const { return *curves_[i]->curve; }
   const geo::ArcLength& arclength(size_t i) const { return *curves_[i]->al; }
+  const ArcTable& table(size_t i) const { return *curves_[i]->table; }
   const PathCurve& entry(size_t i) const { return *curves_[i]; }
   double offset(size_t i) const { return offsets_[i]; }  // s at the start of curve i
   size_t curve_at(double s) const;
@@ -140,6 +143,7 @@ struct TickSample {
   double t, s, v, a, j;  // path
   double u;
   size_t curve;
+  int span;  // power-basis span of the curve that holds u
   double x[kMaxAxes], dx[kMaxAxes], ddx[kMaxAxes], dddx[kMaxAxes];
   double a_cen, j_cen_geo;  // centripetal acceleration kappa v^2, jerk bound |Q| v^3 + 3 kappa v |a|
 };

@@ -91,6 +91,36 @@ double max_abs_poly(const double* c, int n, double T) {
   return m;
 }
 
+SegmentPeaks segment_peaks(const TimeSegment& seg, int dim, double period) {
+  SegmentPeaks pk;
+  const double T = seg.K * period;
+  for (int a = 0; a < dim; ++a) {
+    double c1[5], c2[4], c3[3];
+    for (int j = 0; j < 5; ++j) c1[j] = seg.coef[a][j + 1] * (j + 1);
+    for (int j = 0; j < 4; ++j) c2[j] = c1[j + 1] * (j + 1);
+    for (int j = 0; j < 3; ++j) c3[j] = c2[j + 1] * (j + 1);
+    pk.v[a] = max_abs_poly(c1, seg.degree - 1, T);
+    pk.a[a] = max_abs_poly(c2, seg.degree - 2, T);
+    pk.j[a] = max_abs_poly(c3, seg.degree - 3, T);
+  }
+  return pk;
+}
+
+double bernstein_bound(const double* c, int n, double T) {
+  // d_j = c_j T^j (q on x in [0, 1]); b_i = sum_{j <= i} C(i,j) / C(n,j) d_j.
+  static const double binom[6][6] = {{1, 0, 0, 0, 0, 0}, {1, 1, 0, 0, 0, 0}, {1, 2, 1, 0, 0, 0},
+                                     {1, 3, 3, 1, 0, 0}, {1, 4, 6, 4, 1, 0}, {1, 5, 10, 10, 5, 1}};
+  double dj[6], tp = 1;
+  for (int j = 0; j <= n; ++j, tp *= T) dj[j] = c[j] * tp / binom[n][j];
+  double m = 0;
+  for (int i = 0; i <= n; ++i) {
+    double b = 0;
+    for (int j = 0; j <= i; ++j) b += binom[i][j] * dj[j];
+    m = std::max(m, std::fabs(b));
+  }
+  return m;
+}
+
 namespace {
 
 // Quintic (or cubic) Hermite coefficients on [0, T].
@@ -134,8 +164,7 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
       brk.push_back(k + 1);
       continue;
     }
-    if (ts[k].curve != ts[k + 1].curve ||
-        p.curve(ts[k].curve).find_span(ts[k].u) != p.curve(ts[k + 1].curve).find_span(ts[k + 1].u))
+    if (ts[k].curve != ts[k + 1].curve || ts[k].span != ts[k + 1].span)
       brk.push_back(k + 1);
   }
   std::sort(brk.begin(), brk.end());
@@ -143,57 +172,54 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
   brk.erase(std::remove_if(brk.begin(), brk.end(), [&](long long k) { return k < 0 || k > n; }), brk.end());
 
   std::vector<TimeSegment> out;
+  const double chord_max = L.feed * period * (1 + 1e-9);  // 1e-9: rounding of a chord planned at exactly the feed
+  // Does a fit over [k0, k1] pass? The peak test is exactly "exact maximum <=
+  // limit"; the Bernstein bound (>= the exact maximum) only skips the root
+  // search where it already shows that the limit holds.
   auto try_fit = [&](long long k0, long long k1, TimeSegment& seg) {
     const double T = (k1 - k0) * period;
-    seg = TimeSegment{};
     seg.k0 = k0 + k_base;
     seg.K = static_cast<uint32_t>(k1 - k0);
     seg.degree = o.degree;
-    seg.coef.assign(kMaxAxes, std::array<double, 6>{});
+    seg.coef = {};
+    seg.max_dev = 0;
     const TickSample& A = ts[k0];
     const TickSample& B = ts[k1];
     for (int a = 0; a < d; ++a) seg.coef[a] = hermite(o.degree, A.x[a], A.dx[a], A.ddx[a], B.x[a], B.dx[a], B.ddx[a], T);
-    bool feed_ok = true;
-    for (long long k = k0 + 1; k < k1; ++k) {
-      double e2 = 0;
+    // At every tick inside: deviation from the plan (on the curve) within
+    // fit_tol and within feed_rel of the tick's travel; every chord between
+    // consecutive fitted ticks at most feed * h (the plan's chords are
+    // shorter than its arcs).
+    double prev[kMaxAxes];
+    for (int a = 0; a < d; ++a) prev[a] = A.x[a];
+    for (long long k = k0 + 1; k <= k1; ++k) {
+      const double tau = (k - k0) * period;
+      double e2 = 0, c2 = 0;
       for (int a = 0; a < d; ++a) {
-        const double e = seg.eval(a, (k - k0) * period) - ts[k].x[a];
+        const double x = k == k1 ? B.x[a] : poly_val(seg.coef[a].data(), o.degree, tau);
+        const double e = x - ts[k].x[a], c = x - prev[a];
         e2 += e * e;
+        c2 += c * c;
+        prev[a] = x;
       }
-      const double e = std::sqrt(e2);
-      seg.max_dev = std::max(seg.max_dev, e);
-      if (e > std::max(o.feed_rel * ts[k].v * period, o.feed_abs) || e > o.fit_tol) {
-        feed_ok = false;
-        break;  // a failing fit needs no more ticks
+      if (k < k1) {
+        const double e = std::sqrt(e2);
+        seg.max_dev = std::max(seg.max_dev, e);
+        if (e > std::max(o.feed_rel * ts[k].v * period, o.feed_abs) || e > o.fit_tol) return false;
       }
-    }
-    if (seg.max_dev > o.fit_tol || !feed_ok) return false;
-    // path feed at the output: the chord between consecutive fitted ticks may
-    // not exceed feed * h (the plan's chords are shorter than its arcs)
-    {
-      double prev[kMaxAxes];
-      for (int a = 0; a < d; ++a) prev[a] = A.x[a];
-      for (long long k = k0 + 1; k <= k1; ++k) {
-        double c2 = 0;
-        for (int a = 0; a < d; ++a) {
-          const double xk = k == k1 ? B.x[a] : seg.eval(a, (k - k0) * period);
-          c2 += (xk - prev[a]) * (xk - prev[a]);
-          prev[a] = xk;
-        }
-        // relative slack 1e-9: rounding of a chord planned at exactly the feed
-        if (std::sqrt(c2) > L.feed * period * (1 + 1e-9)) return false;
-      }
+      if (std::sqrt(c2) > chord_max) return false;
     }
     for (int a = 0; a < d; ++a) {
       double c1[5], c2[4], c3[3];
       for (int j = 0; j < 5; ++j) c1[j] = seg.coef[a][j + 1] * (j + 1);
       for (int j = 0; j < 4; ++j) c2[j] = c1[j + 1] * (j + 1);
       for (int j = 0; j < 3; ++j) c3[j] = c2[j + 1] * (j + 1);
-      seg.peak_v[a] = max_abs_poly(c1, o.degree - 1, T);
-      seg.peak_a[a] = max_abs_poly(c2, o.degree - 2, T);
-      seg.peak_j[a] = max_abs_poly(c3, o.degree - 3, T);
-      if (seg.peak_v[a] > L.v_axis[a] || seg.peak_a[a] > L.a_axis[a]) return false;
-      if (o.degree == 5 && seg.peak_j[a] > L.j_axis[a]) return false;
+      auto within = [&](const double* c, int n, double lim) {
+        if (bernstein_bound(c, n, T) * (1 + 1e-12) <= lim) return true;
+        return max_abs_poly(c, n, T) <= lim;
+      };
+      if (!within(c1, o.degree - 1, L.v_axis[a]) || !within(c2, o.degree - 2, L.a_axis[a])) return false;
+      if (o.degree == 5 && !within(c3, o.degree - 3, L.j_axis[a])) return false;
     }
     return true;
   };
@@ -236,10 +262,11 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
         }
       }
       if (lo == k0) {
+        const SegmentPeaks pk = segment_peaks(seg, d, period);
         std::string why = "deviation " + std::to_string(seg.max_dev);
         for (int a = 0; a < d; ++a)
-          why += "; axis " + std::to_string(a) + ": v " + std::to_string(seg.peak_v[a]) + " a " +
-                 std::to_string(seg.peak_a[a]) + " j " + std::to_string(seg.peak_j[a]);
+          why += "; axis " + std::to_string(a) + ": v " + std::to_string(pk.v[a]) + " a " + std::to_string(pk.a[a]) +
+                 " j " + std::to_string(pk.j[a]);
         throw FitError("tick " + std::to_string(k0 + k_base) + " (t = " + std::to_string((k0 + k_base) * period) +
                            " s): no one-tick segment meets the limits (" + why + ")",
                        k0 + k_base);

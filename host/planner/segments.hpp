@@ -34,11 +34,18 @@ struct TimeSegment {
   long long k0 = 0;
   uint32_t K = 0;
   int degree = 5;
-  std::vector<std::array<double, 6>> coef;  // per axis, coefficient of tau^j, tau = t - k0 h (seconds)
+  std::array<std::array<double, 6>, kMaxAxes> coef{};  // per axis, coefficient of tau^j, tau = t - k0 h (seconds)
   double max_dev = 0;                       // max |fit - plan| at the ticks inside
-  double peak_v[kMaxAxes] = {0, 0, 0}, peak_a[kMaxAxes] = {0, 0, 0}, peak_j[kMaxAxes] = {0, 0, 0};
   double eval(int axis, double tau, int deriv = 0) const;
 };
+
+// Exact maxima over a segment of |x'|, |x''|, |x'''| per axis (end points and
+// real roots of the next derivative): what the report quotes. The fit decides
+// with the same exact test, skipped where a Bernstein bound already suffices.
+struct SegmentPeaks {
+  double v[kMaxAxes] = {0, 0, 0}, a[kMaxAxes] = {0, 0, 0}, j[kMaxAxes] = {0, 0, 0};
+};
+SegmentPeaks segment_peaks(const TimeSegment& seg, int dim, double period);
 
 // No one-tick segment meets the limits at `tick`: the plan must slow down there.
 class FitError : public PlanError {
@@ -66,5 +73,8 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
 
 // Exact max |q(t)| over [0, T] of a polynomial q (coefficients c[0..n]).
 double max_abs_poly(const double* c, int n, double T);
+// An upper bound of max |q(t)| over [0, T] (n <= 5): the largest Bernstein
+// coefficient of q on [0, T] (the convex-hull property), within a few ulps.
+double bernstein_bound(const double* c, int n, double T);
 
 }  // namespace traj::plan

@@ -149,8 +149,7 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
       hold.k0 = k_last;
       hold.K = 1;
       hold.degree = cfg.degree;
-      hold.coef.assign(kMaxAxes, std::array<double, 6>{});
-      for (int a = 0; a < path.dim(); ++a) hold.coef[a][0] = carried.x[a];
+        for (int a = 0; a < path.dim(); ++a) hold.coef[a][0] = carried.x[a];
       emit(hold);
       break;
     }
