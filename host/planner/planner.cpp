@@ -330,34 +330,66 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
   return g;
 }
 
-std::vector<Station> stations_from(const Grid& g, const std::vector<char>& forced, double feed) {
+// Stations of the grid points lo..hi (both always stations): corners, forced
+// points, and local minima of v_lim; idx receives their grid indices.
+std::vector<Station> stations_from(const Grid& g, const std::vector<char>& forced, double feed, size_t lo, size_t hi,
+                                   std::vector<size_t>& idx) {
   std::vector<Station> st;
-  const size_t n = g.s.size();
-  for (size_t i = 0; i < n; ++i) {
-    bool take = i == 0 || i + 1 == n || g.corner[i] || forced[i];
+  idx.clear();
+  for (size_t i = lo; i <= hi; ++i) {
+    bool take = i == lo || i == hi || g.corner[i] || forced[i];
     // a local minimum of v_lim, by more than rounding noise (1e-9 relative):
     // a plateau (constant curvature, straight line) makes no stations
     if (!take && g.vlim[i] < feed * (1 - 1e-9) && g.vlim[i] < g.vlim[i - 1] * (1 - 1e-9) &&
         g.vlim[i] <= g.vlim[i + 1] * (1 + 1e-9))
       take = true;
-    if (take) st.push_back({g.s[i], g.vlim[i], 0});
+    if (take) {
+      st.push_back({g.s[i], g.vlim[i], 0});
+      idx.push_back(i);
+    }
   }
   return st;
 }
 
-std::vector<double> caps_for(const Grid& g, const std::vector<Station>& st, double feed) {
+// Cruise cap of each block: the highest v_lim on it (the profile is checked
+// against v_lim at every grid point afterwards).
+std::vector<double> caps_for(const Grid& g, const std::vector<Station>& st, const std::vector<size_t>& idx,
+                             double feed) {
   std::vector<double> cap(st.empty() ? 0 : st.size() - 1, 0.0);
-  size_t gi = 0;
   for (size_t b = 0; b + 1 < st.size(); ++b) {
     double m = std::max(st[b].vmax, st[b + 1].vmax);
-    while (gi < g.s.size() && g.s[gi] <= st[b + 1].s) {
-      if (g.s[gi] >= st[b].s) m = std::max(m, g.vlim[gi]);
-      ++gi;
-    }
-    if (gi > 0) --gi;
+    for (size_t i = idx[b]; i <= idx[b + 1]; ++i) m = std::max(m, g.vlim[i]);
     cap[b] = std::min(m, feed);
   }
   return cap;
+}
+
+// Marks as forced stations the local maxima, over the grid points lo..hi, of
+// the ratio (profile speed / v_lim) where it exceeds 1; points for which
+// `check(i)` is false count as ratio 0. Returns the points marked (only the
+// first one with first_only).
+template <class Check>
+std::vector<size_t> mark_violations(const Grid& g, std::vector<char>& forced, SpeedAtS& v_at, size_t lo, size_t hi,
+                                    double feed, const Check& check, bool first_only = false) {
+  std::vector<size_t> marked;
+  double r_prev2 = 0, r_prev = 0;
+  size_t i_prev = lo;
+  for (size_t i = lo; i <= hi + 1; ++i) {
+    double r = 0;
+    if (i <= hi && !(g.corner[i] || forced[i]) && check(i)) {
+      // at a station the profile has the station's speed by construction
+      r = v_at(g.s[i]) / std::max(g.vlim[i], 1e-9 * feed);  // below 1e-9 feed counts as a stop
+    }
+    if (r_prev > 1 + 1e-9 && r_prev >= r_prev2 && r_prev >= r) {
+      marked.push_back(i_prev);
+      if (first_only) break;
+    }
+    r_prev2 = r_prev;
+    r_prev = r;
+    i_prev = i;
+  }
+  for (size_t i : marked) forced[i] = 1;
+  return marked;
 }
 
 }  // namespace
@@ -378,43 +410,58 @@ Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o) {
   plan.length = p.length();
   Grid g = build_grid(p, L, o, plan.A_t);
   plan.grid_points = static_cast<int>(g.s.size());
-  std::vector<char> forced(g.s.size(), 0);
+  const size_t n = g.s.size();
+  std::vector<char> forced(n, 0);
   std::vector<BlockMemo> memo;  // blocks of the previous pass (most are unchanged by new stations)
   std::vector<char> changed;
+  std::vector<size_t> idx, lidx;
   for (int iter = 0; iter < 10000; ++iter) {
-    plan.stations = stations_from(g, forced, L.feed);
-    const auto cap = caps_for(g, plan.stations, L.feed);
+    plan.stations = stations_from(g, forced, L.feed, 0, n - 1, idx);
+    const auto cap = caps_for(g, plan.stations, idx, L.feed);
     plan.pieces = plan_blocks(plan.stations, cap, plan.A_t, plan.J_t, memo, changed);
-    // the profile must stay under v_lim at every grid point
+    // The profile must stay under v_lim at every grid point. Every local
+    // maximum of the violation ratio becomes a station. A block identical to
+    // one of the previous pass had no violation then (else it would have a
+    // new station), so only the grid points of changed blocks are evaluated.
     SpeedAtS v_at{plan.pieces};
-    // every local maximum of the violation ratio becomes a station (not only
-    // the worst per block): fewer passes. A block identical to one of the
-    // previous pass had no violation then (else it would have a new station),
-    // so only the grid points of changed blocks are evaluated.
-    int added = 0;
-    double r_prev2 = 0, r_prev = 0;
-    size_t i_prev = 0, blk = 0;
-    const size_t nblk = changed.size();
-    for (size_t i = 0; i <= g.s.size(); ++i) {
-      double r = 0;
-      if (i < g.s.size() && !(g.corner[i] || forced[i])) {
-        while (blk + 1 < nblk && plan.stations[blk + 1].s <= g.s[i]) ++blk;
-        if (nblk == 0 || changed[blk]) {
-          // at a station the profile has the station's speed by construction
-          const double v = v_at(g.s[i]);
-          r = v / std::max(g.vlim[i], 1e-9 * L.feed);  // below 1e-9 feed counts as a stop
-        }
+    size_t blk = 0;
+    const auto marked = mark_violations(g, forced, v_at, 0, n - 1, L.feed, [&](size_t i) {
+      while (blk + 1 < changed.size() && idx[blk + 1] <= i) ++blk;
+      return changed.empty() || changed[blk] != 0;
+    });
+    if (marked.empty()) return plan;
+    plan.refinements += static_cast<int>(marked.size());
+    // Local refinement: a block that violated is re-planned alone, between
+    // its two stations at this pass's speeds, adding stations until it is
+    // under v_lim (where v_lim rises slowly this is a staircase of many
+    // steps: done here, each step costs the block, not the whole path). The
+    // next global pass re-checks everything with the propagated speeds.
+    std::vector<size_t> blocks;
+    for (size_t i : marked) blocks.push_back(static_cast<size_t>(std::upper_bound(idx.begin(), idx.end(), i) - idx.begin()) - 1);
+    blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
+    // The block is swept from the left: each round plans from the last
+    // station before the first violation found (at its planned speed) to the
+    // block's end and stops scanning at that violation, so a staircase of k
+    // steps over m grid points costs O(m + k) evaluations, not O(m k).
+    for (size_t b : blocks) {
+      size_t lo = idx[b];
+      double v_lo = plan.stations[b].v;
+      const size_t ib = idx[b + 1];
+      for (int it = 0; it < 100000 && lo + 1 < ib; ++it) {
+        auto loc = stations_from(g, forced, L.feed, lo, ib, lidx);
+        loc.front().vmax = v_lo;
+        loc.back().vmax = plan.stations[b + 1].v;
+        const auto lcap = caps_for(g, loc, lidx, L.feed);
+        const auto lp = plan_blocks(loc, lcap, plan.A_t, plan.J_t);
+        SpeedAtS lv{lp};
+        const auto lm = mark_violations(g, forced, lv, lo + 1, ib - 1, L.feed, [](size_t) { return true; }, true);
+        if (lm.empty()) break;
+        ++plan.refinements;
+        const size_t k = static_cast<size_t>(std::upper_bound(lidx.begin(), lidx.end(), lm[0]) - lidx.begin()) - 1;
+        lo = lidx[k];
+        v_lo = loc[k].v;
       }
-      if (r_prev > 1 + 1e-9 && r_prev >= r_prev2 && r_prev >= r) {
-        forced[i_prev] = 1;
-        ++added;
-      }
-      r_prev2 = r_prev;
-      r_prev = r;
-      i_prev = i;
     }
-    if (added == 0) return plan;
-    plan.refinements += added;
   }
   throw PlanError("feed planning did not converge");
 }
