@@ -1,5 +1,7 @@
 #include "planner/pipeline.hpp"
 
+#include "geometry/json_io.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -47,13 +49,13 @@ fd::Format engine_format(int degree) {
 JobConfig::JobConfig() : format(engine_format(5)) {}
 
 Path load_path(const std::string& file) {
-  std::ifstream in(file);
-  if (!in) throw PlanError(file + ": cannot open");
+  // every JSON error (syntax, truncation, a number out of the double range)
+  // names file:line:column and the field
   nlohmann::json doc;
   try {
-    doc = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw PlanError(file + ": not valid JSON: " + e.what());
+    doc = geo::load_json_file(file);
+  } catch (const geo::GeometryError& e) {
+    throw PlanError(e.what());
   }
   Path p;
   try {
