@@ -22,7 +22,7 @@ printf '%-6s %-10s %8s %10s %10s\n' device config LCs Fmax_MHz target_MHz
 status=0
 for dev in up5k hx8k; do
   if [ "$dev" = up5k ]; then pkg=sg48; freq=$UP5K_MHZ; pcf=(--pcf "$root/constraints/icebreaker_fd.pcf");
-  else pkg=ct256; freq=$HX8K_MHZ; pcf=(--pcf "$root/constraints/hx8k_breakout_fd.pcf" --pcf-allow-unconstrained); fi
+  else pkg=ct256; freq=$HX8K_MHZ; pcf=(--pcf "$root/constraints/hx8k_breakout_fd.pcf"); fi
   log="$out/nextpnr_$dev.log"
   if ! nextpnr-ice40 --$dev --package $pkg --json "$out/fd.json" "${pcf[@]}" \
         --freq "$freq" --seed "$SEED" --asc "$out/fd_$dev.asc" --report "$out/report_$dev.json" \
