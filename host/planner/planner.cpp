@@ -447,19 +447,35 @@ Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o) {
       size_t lo = idx[b];
       double v_lo = plan.stations[b].v;
       const size_t ib = idx[b + 1];
+      // the local stations, their grid indices and block caps are kept up to
+      // date incrementally (the same lists stations_from / caps_for would build)
+      auto loc = stations_from(g, forced, L.feed, lo, ib, lidx);
+      auto lcap = caps_for(g, loc, lidx, L.feed);
+      loc.back().vmax = plan.stations[b + 1].v;
       for (int it = 0; it < 100000 && lo + 1 < ib; ++it) {
-        auto loc = stations_from(g, forced, L.feed, lo, ib, lidx);
         loc.front().vmax = v_lo;
-        loc.back().vmax = plan.stations[b + 1].v;
-        const auto lcap = caps_for(g, loc, lidx, L.feed);
         const auto lp = plan_blocks(loc, lcap, plan.A_t, plan.J_t);
         SpeedAtS lv{lp};
         const auto lm = mark_violations(g, forced, lv, lo + 1, ib - 1, L.feed, [](size_t) { return true; }, true);
         if (lm.empty()) break;
         ++plan.refinements;
-        const size_t k = static_cast<size_t>(std::upper_bound(lidx.begin(), lidx.end(), lm[0]) - lidx.begin()) - 1;
+        const size_t i1 = lm[0];
+        const size_t k = static_cast<size_t>(std::upper_bound(lidx.begin(), lidx.end(), i1) - lidx.begin()) - 1;
         lo = lidx[k];
         v_lo = loc[k].v;
+        // drop the stations before lo; the new station i1 splits block 0
+        loc.erase(loc.begin(), loc.begin() + k);
+        lidx.erase(lidx.begin(), lidx.begin() + k);
+        lcap.erase(lcap.begin(), lcap.begin() + k);
+        loc.insert(loc.begin() + 1, Station{g.s[i1], g.vlim[i1], 0});
+        lidx.insert(lidx.begin() + 1, i1);
+        auto cap_of = [&](size_t a, size_t c) {
+          double m = std::max(g.vlim[a], g.vlim[c]);
+          for (size_t i = a; i <= c; ++i) m = std::max(m, g.vlim[i]);
+          return std::min(m, L.feed);
+        };
+        lcap[0] = cap_of(lidx[1], lidx[2]);
+        lcap.insert(lcap.begin(), cap_of(lidx[0], lidx[1]));
       }
     }
   }

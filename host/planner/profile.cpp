@@ -113,6 +113,7 @@ std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<doubl
     st[i].v = std::min(st[i].v, reachable(st[i - 1].v, L, A, J, st[i].v));
   }
   std::vector<Piece> out;
+  out.reserve(7 * (n - 1));  // at most 3 + 1 + 3 pieces per block
   double t = 0;
   for (size_t i = 0; i + 1 < n; ++i) {
     const double s0 = st[i].s, L = st[i + 1].s - s0;
