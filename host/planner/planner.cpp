@@ -81,11 +81,14 @@ size_t Path::curve_at(double s) const {
   return static_cast<size_t>(it - (offsets_.begin() + 1));
 }
 
-Frame frame_at(const Path& p, size_t ci, double u, double s) {
+Frame frame_at(const Path& p, size_t ci, double u, double s, int span) {
   const geo::Curve& c = p.curve(ci);
   const int d = c.dim();
   double buf[4 * kMaxAxes];
-  c.eval(u, 3, buf);
+  // the hint is used only strictly inside its span (at a knot find_span's
+  // convention, the span on the right, decides)
+  if (!(span >= 0 && u > c.spans()[span].u0 && u < c.spans()[span].u1)) span = c.find_span(u);
+  c.eval_span(span, u, 3, buf);
   const double* C0 = buf;
   const double* C1 = buf + d;
   const double* C2 = buf + 2 * d;
@@ -262,7 +265,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
     size_t mi = 0;
     const double ds_max = std::min(o.max_grid_ds, len / 8);
     while (true) {
-      const Frame f = frame_at(p, ci, u, s_off + s);
+      const Frame f = frame_at(p, ci, u, s_off + s, tab.span_of(hint));
       double vl = speed_limit(f, L, o, A_t, d);
       bool corner = false;
       if (s == 0) {
@@ -516,7 +519,7 @@ std::vector<TickSample> sample_ticks_range(const Path& p, const Plan& plan, doub
       piece_hint = 0;
     }
     u = p.table(ci).u_at(sl, piece_hint);
-    const Frame f = frame_at(p, ci, u, ps.s);
+    const Frame f = frame_at(p, ci, u, ps.s, p.table(ci).span_of(piece_hint));
     TickSample ts{};
     ts.t = k * period;
     ts.s = ps.s;

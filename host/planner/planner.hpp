@@ -115,8 +115,9 @@ struct Frame {
   double sig[3] = {0, 0, 0};  // parametric speed |C'(u)| and its first two u-derivatives
 };
 
-// Frame at curve parameter u of curve i (s given for bookkeeping).
-Frame frame_at(const Path& p, size_t curve, double u, double s);
+// Frame at curve parameter u of curve i (s given for bookkeeping); `span`, if
+// known (>= 0), is the power-basis span to evaluate (saves the span search).
+Frame frame_at(const Path& p, size_t curve, double u, double s, int span = -1);
 
 struct Plan {
   std::vector<Piece> pieces;  // s(t), from t = 0 to duration()
