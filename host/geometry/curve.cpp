@@ -57,6 +57,7 @@ Curve::Curve(const BSpline& spline, const std::string& where, int max_degree) {
     spans_.push_back(std::move(s));
     breaks_.push_back(b.u0);
   }
+  kernel_ = detail::fixed_kernel<double>(spline_.dim(), spline_.rational(), p);
   // Derivative k's table is converted from the k-th hodograph (a B-spline of degree p-k), not by
   // differentiating the position polynomial: the power coefficients of a short span are j-th
   // differences of its Bezier points divided by h^j, and differencing positions would amplify their
@@ -140,12 +141,12 @@ void rational_derivatives(const double* A, const double* w, int dim, int nd, dou
   }
 }
 
-void Curve::eval_span(int si, double u, int nd, double* out) const {
+void Curve::eval_span_general(int si, double u, int nd, double* out) const {
   const PowerSpan& s = spans_[si];
   const int p = s.degree, cols = s.cols, dim = spline_.dim();
   const double tau = u - s.uc;
   if (!spline_.rational()) {
-    detail::eval_power_span<double>(s, dim, u, nd, out);
+    detail::eval_power_span_general<double>(s, dim, u, nd, out);
     return;
   }
   constexpr int kStack = 16;

@@ -72,9 +72,10 @@ inline void horner_rows_any(const double* c, int nterms, int cols, const T& tau,
 }
 
 // Non-rational span (cols == dim): position and derivatives 0..nd at u, out[k*dim + axis]. Per
-// derivative k <= p: tau = u - uc once, then (p-k) multiplies and (p-k) adds per axis.
+// derivative k <= p: tau = u - uc once, then (p-k) multiplies and (p-k) adds per axis. The general
+// (runtime-sized) kernel; eval_power_span below uses the specialised one where there is one.
 template <class T>
-inline void eval_power_span(const PowerSpan& s, int dim, const T& u, int nd, T* out) {
+inline void eval_power_span_general(const PowerSpan& s, int dim, const T& u, int nd, T* out) {
   const T tau = u - T(s.uc);
   for (int k = 0; k <= nd; ++k) {
     if (k > s.degree) {
@@ -83,6 +84,100 @@ inline void eval_power_span(const PowerSpan& s, int dim, const T& u, int nd, T* 
     }
     horner_rows_any<T>(s.coef.data() + s.offset(k), s.degree + 1 - k, s.cols, tau, out + k * dim);
   }
+}
+
+// Offset of derivative table k in a span of degree P with C columns (PowerSpan::offset at compile time).
+template <int P, int C>
+constexpr int table_offset(int k) {
+  return C * (k * (P + 1) - k * (k - 1) / 2);
+}
+
+// Specialised kernel for DIM axes, rational (RAT) or not, degree P, all fixed at compile time:
+// position and derivatives 0..nd (nd <= 3) into out[k*DIM + axis]. The Horner recurrences of the
+// derivative tables 0..min(nd, P) run in one pass (one loop over the powers of tau, all accumulators in
+// registers, table offsets constant); each accumulator sees the same operations in the same order as
+// in the general kernel (horner_rows), and the quotient rule is rational_derivatives' expression
+// unrolled (the factor C(k,1) = C(k,k) = 1 is dropped: 1 * w is exact), so the results are bitwise
+// those of the general path (test GeometryFastEval.*). Requires the compiler not to contract a*b + c
+// into an FMA in one path and not the other: curve.cpp is built with -ffp-contract=off.
+template <class T, int DIM, bool RAT, int P>
+inline void eval_span_fixed(const PowerSpan& s, const T& u, int nd, T* out) {
+  constexpr int C = DIM + (RAT ? 1 : 0);
+  constexpr int K = P < kMaxDeriv ? P : kMaxDeriv;  // highest derivative with a stored table
+  const double* c = s.coef.data();
+  const T tau = u - T(s.uc);
+  const int kn = nd < 0 ? 0 : nd < K ? nd : K;  // nd >= 0 expected
+  T acc[K + 1][C];
+  for (int k = 0; k <= K; ++k) {
+    if (k > kn) break;
+    for (int i = 0; i < C; ++i) acc[k][i] = T(c[table_offset<P, C>(k) + (P - k) * C + i]);
+  }
+  // Table k has P + 1 - k terms: Horner step j (j = P-k-1 .. 0) applies to the tables with k < P - j.
+  for (int j = P - 1; j >= 0; --j)
+    for (int k = 0; k <= K; ++k) {
+      if (k > kn || k >= P - j) break;
+      for (int i = 0; i < C; ++i) acc[k][i] = acc[k][i] * tau + T(c[table_offset<P, C>(k) + j * C + i]);
+    }
+  if constexpr (!RAT) {
+    for (int k = 0; k <= nd; ++k)
+      for (int i = 0; i < DIM; ++i) out[k * DIM + i] = k <= kn ? acc[k][i] : T(0.0);
+  } else {
+    // Homogeneous A^(k) = acc[k][0..DIM-1], w^(k) = acc[k][DIM] (0 beyond the degree); quotient rule
+    // C^(k) = (A^(k) - sum_{i=1..k} C(k,i) w^(i) C^(k-i)) / w, in rational_derivatives' order.
+    T w[kMaxDeriv + 1];
+    for (int k = 0; k <= kMaxDeriv; ++k) w[k] = k <= kn ? acc[k][DIM] : T(0.0);
+    auto A = [&](int k, int i) { return k <= kn ? acc[k][i] : T(0.0); };
+    const T iw = T(1.0) / w[0];
+    T* C0 = out;
+    for (int i = 0; i < DIM; ++i) C0[i] = A(0, i) * iw;
+    if (nd < 1) return;
+    T* C1 = out + DIM;
+    for (int i = 0; i < DIM; ++i) C1[i] = (A(1, i) - w[1] * C0[i]) * iw;
+    if (nd < 2) return;
+    T* C2 = out + 2 * DIM;
+    const T b21 = T(2.0) * w[1];
+    for (int i = 0; i < DIM; ++i) C2[i] = ((A(2, i) - b21 * C1[i]) - w[2] * C0[i]) * iw;
+    if (nd < 3) return;
+    T* C3 = out + 3 * DIM;
+    const T b31 = T(3.0) * w[1], b32 = T(3.0) * w[2];
+    for (int i = 0; i < DIM; ++i) C3[i] = (((A(3, i) - b31 * C2[i]) - b32 * C1[i]) - w[3] * C0[i]) * iw;
+  }
+}
+
+template <class T>
+using SpanKernel = void (*)(const PowerSpan&, const T&, int, T*);
+
+constexpr int kFixedMaxDim = 3;     // specialised kernels: 1..3 axes,
+constexpr int kFixedMaxDegree = 5;  // degree 1..5 (rational or not)
+
+template <class T, int DIM, bool RAT>
+inline SpanKernel<T> fixed_kernel_deg(int p) {
+  switch (p) {
+    case 1: return &eval_span_fixed<T, DIM, RAT, 1>;
+    case 2: return &eval_span_fixed<T, DIM, RAT, 2>;
+    case 3: return &eval_span_fixed<T, DIM, RAT, 3>;
+    case 4: return &eval_span_fixed<T, DIM, RAT, 4>;
+    case 5: return &eval_span_fixed<T, DIM, RAT, 5>;
+    default: return nullptr;
+  }
+}
+
+// The specialised kernel for (dim, rational, degree), or nullptr where there is none.
+template <class T>
+inline SpanKernel<T> fixed_kernel(int dim, bool rational, int p) {
+  switch (dim) {
+    case 1: return rational ? fixed_kernel_deg<T, 1, true>(p) : fixed_kernel_deg<T, 1, false>(p);
+    case 2: return rational ? fixed_kernel_deg<T, 2, true>(p) : fixed_kernel_deg<T, 2, false>(p);
+    case 3: return rational ? fixed_kernel_deg<T, 3, true>(p) : fixed_kernel_deg<T, 3, false>(p);
+    default: return nullptr;
+  }
+}
+
+// Non-rational span: the kernel Curve::eval_span uses (specialised where there is one, else general).
+template <class T>
+inline void eval_power_span(const PowerSpan& s, int dim, const T& u, int nd, T* out) {
+  if (const SpanKernel<T> f = fixed_kernel<T>(dim, false, s.degree)) return f(s, u, nd, out);
+  eval_power_span_general<T>(s, dim, u, nd, out);
 }
 }  // namespace detail
 
@@ -109,8 +204,15 @@ class Curve {
   // Position and derivatives 0..nd (nd <= 3) at u: out is dim x (nd+1), column k = k-th derivative.
   Eigen::MatrixXd eval(double u, int nd = 0) const;
   // Same into a caller buffer out[k*dim + axis], using span `span` (u may lie anywhere; the span
-  // polynomial is extended). No allocation for dim <= 15.
-  void eval_span(int span, double u, int nd, double* out) const;
+  // polynomial is extended). No allocation for dim <= 16. Uses the specialised kernel
+  // (detail::eval_span_fixed: 1..3 axes, degree 1..5, rational or not) where there is one.
+  void eval_span(int span, double u, int nd, double* out) const {
+    if (kernel_) kernel_(spans_[span], u, nd, out);
+    else eval_span_general(span, u, nd, out);
+  }
+  // The general (runtime-sized) path, any dim and degree: the reference the specialised kernels are
+  // tested against (bitwise equal).
+  void eval_span_general(int span, double u, int nd, double* out) const;
   void eval(double u, int nd, double* out) const { eval_span(find_span(u), u, nd, out); }
   Eigen::VectorXd point(double u) const { return eval(u, 0).col(0); }
 
@@ -119,6 +221,7 @@ class Curve {
   std::vector<BezierPiece> bezier_;
   std::vector<PowerSpan> spans_;
   std::vector<double> breaks_;  // span start parameters (size = spans), for binary search
+  detail::SpanKernel<double> kernel_ = nullptr;  // specialised kernel for this curve, if any
 };
 
 // Quotient rule for rational curves: from homogeneous derivatives A^(k) (dim values each) and

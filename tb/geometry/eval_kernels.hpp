@@ -2,10 +2,11 @@
 // instrumented scalar can count their arithmetic. Both evaluate a non-rational B-spline's position and
 // derivatives 1..nd at u in a known span (span search is not counted in either).
 //  * De Boor-Cox: The NURBS Book A2.3 basis-function derivatives + linear combination (ref_deboor.hpp).
-//  * Power basis: the library's own kernel, traj::geo::detail::eval_power_span (curve.hpp): the function
-//    template that Curve::eval_span calls for every non-rational span (with T = double), here
-//    instantiated with the counting scalar. Same code, same operations in the same order; the only
-//    difference from a call of Curve::eval is the span search (find_span), which is not counted.
+//  * Power basis: the library's own kernel, traj::geo::detail::eval_power_span (curve.hpp): it runs the
+//    kernel Curve::eval_span uses for a non-rational span (detail::eval_span_fixed where specialised,
+//    else the general one; T = double there), here instantiated with the counting scalar. Same code,
+//    same operations in the same order; the only difference from a call of Curve::eval is the span
+//    search (find_span), which is not counted.
 #pragma once
 #include "geometry/curve.hpp"
 #include "ref_deboor.hpp"
