@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <random>
 #include <regex>
 #include <string>
 
@@ -138,6 +139,46 @@ TEST(FdRegisterNeeds, MatchIndependentExactComputation) {
         ++n;
       }
   EXPECT_EQ(n, 7L * 22 * 7);
+}
+
+// The same on random K of every size up to 2^64 - 1 and random tolerances
+// from 2^-1000 to 2^1000 (every branch of the exact power-of-two comparison),
+// and on tolerances that put C(K,i), N C(K,i) or their sum exactly on a power
+// of two times tol (the boundary of each least f).
+TEST(FdRegisterNeeds, MatchIndependentOnRandomKAndTolAndExactBoundaries) {
+  std::mt19937_64 rng(2024);
+  std::uniform_int_distribution<int> deg_d(1, 7), bits_d(0, 64), exp_d(-1000, 1000), s_d(-40, 40);
+  std::uniform_real_distribution<double> mant_d(0.5, 1.0);
+  long n = 0;
+  for (int rep = 0; rep < 6000; ++rep) {
+    const int deg = deg_d(rng);
+    const int kb = bits_d(rng);
+    uint64_t k = kb == 0 ? 1 : (rng() >> (64 - kb)) | (uint64_t(1) << (kb - 1));
+    if (rep % 7 == 0) k = static_cast<uint64_t>(std::uniform_int_distribution<int>(1, 20)(rng));
+    double tol = std::ldexp(mant_d(rng), rep % 3 == 0 ? exp_d(rng) : s_d(rng));
+    if (rep % 4 == 1 && k < (uint64_t(1) << 17)) {
+      // tol = X 2^-s for X = C(K,i), N C(K,i) or the sum: exact (X < 2^53 here)
+      const int i = std::uniform_int_distribution<int>(1, deg)(rng);
+      mpz_class x = binom_product(k, i);
+      if (rep % 3 == 1) x *= deg;
+      if (rep % 3 == 2) {
+        x = 0;
+        for (int t = 1; t <= deg; ++t) x += binom_product(k, t);
+      }
+      if (x == 0 || mpz_sizeinbase(x.get_mpz_t(), 2) > 53) continue;
+      tol = std::ldexp(x.get_d(), s_d(rng));
+      if (rep % 5 == 0) tol = std::nextafter(tol, rep % 2 ? 0.0 : 1e300);
+    }
+    const RegisterNeeds got = Compiler::register_needs(deg, k, tol);
+    const RegisterNeeds want = reference_needs(deg, k, tol);
+    const std::string ctx = "deg " + std::to_string(deg) + " K " + std::to_string(k) + " tol " + std::to_string(tol);
+    ASSERT_EQ(got.alone, want.alone) << ctx;
+    ASSERT_EQ(got.share, want.share) << ctx;
+    ASSERT_EQ(got.binding, want.binding) << ctx;
+    ASSERT_EQ(got.common, want.common) << ctx;
+    ++n;
+  }
+  EXPECT_GT(n, 5000);
 }
 
 // The design notes' figures, by hand: log2 C(4096, i) = 12, 22.9996, 33.414
