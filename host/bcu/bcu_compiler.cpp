@@ -21,31 +21,6 @@ mpz_class pow2(int e) {
 
 }  // namespace
 
-void Format::validate() const {
-  std::ostringstream m;
-  if (axes < 1 || axes > 8) m << "Format.axes = " << axes << " out of range 1..8";
-  else if (chunk_width < 8 || chunk_width > 64)
-    m << "Format.chunk_width = " << chunk_width << " out of range 8..64";
-  else if (max_depth < 1 || max_depth > 30)
-    m << "Format.max_depth = " << max_depth << " out of range 1..30";
-  else if (ctrl_width < 2 || ctrl_width + 3 * max_depth > 128)
-    m << "Format.ctrl_width = " << ctrl_width << " out of range 2.." << 128 - 3 * max_depth
-      << " (ctrl_width + 3*max_depth <= 128)";
-  else if (guard_bits < 0 || guard_bits > ctrl_width - 2)
-    m << "Format.guard_bits = " << guard_bits << " out of range 0.." << ctrl_width - 2;
-  else if (out_width < ctrl_width - guard_bits + (guard_bits > 0) || out_width > 64)
-    m << "Format.out_width = " << out_width << " out of range "
-      << ctrl_width - guard_bits + (guard_bits > 0) << "..64";
-  else if (words_per_value() * chunk_width > 128)
-    m << "Format: ceil((ctrl_width + 3*max_depth)/chunk_width)*chunk_width = "
-      << words_per_value() * chunk_width << " > 128 (datapath limit)";
-  else if (frac_bits < -64 || frac_bits > 200)
-    m << "Format.frac_bits = " << frac_bits << " out of range -64..200";
-  else
-    return;
-  fail(m.str());
-}
-
 double de_casteljau(const double b[4], double t) {
   const double u = 1.0 - t;
   double p0 = u * b[0] + t * b[1], p1 = u * b[1] + t * b[2], p2 = u * b[2] + t * b[3];
@@ -114,8 +89,19 @@ std::vector<uint64_t> stream_words(const std::vector<std::vector<mpz_class>>& c,
   return w;
 }
 
-Segment compile_segment(const Controls& b, int depth, const Format& f) {
-  f.validate();
+namespace {
+
+// Exact rational of a finite double.
+mpq_class exact(double x) {
+  mpq_class q;
+  mpq_set_d(q.get_mpq_t(), x);
+  return q;
+}
+
+// 2^e as a rational, any sign of e.
+mpq_class pow2q(int e) { return e >= 0 ? mpq_class(pow2(e)) : mpq_class(mpz_class(1), pow2(-e)); }
+
+void check_depth_axes(const Controls& b, int depth, const Format& f) {
   if (depth < 0 || depth > f.max_depth) {
     std::ostringstream m;
     m << "segment depth d = " << depth << " out of range 0.." << f.max_depth
@@ -127,10 +113,13 @@ Segment compile_segment(const Controls& b, int depth, const Format& f) {
     m << "segment has " << b.rows() << " axes, format expects " << f.axes;
     fail(m.str());
   }
-  Segment s;
-  s.depth = depth;
+}
+
+// Integer control values round(b 2^(F+G)) (ties away from zero), range-checked.
+std::vector<std::vector<mpz_class>> round_controls(const Controls& b, const Format& f, double& max_abs) {
   const mpz_class lim = pow2(f.ctrl_width - 1);
-  double max_abs = 0;
+  max_abs = 0;
+  std::vector<std::vector<mpz_class>> ctrl;
   for (int a = 0; a < f.axes; ++a) {
     std::vector<mpz_class> row(4);
     for (int i = 0; i < 4; ++i) {
@@ -157,15 +146,80 @@ Segment compile_segment(const Controls& b, int depth, const Format& f) {
       }
       row[i] = r;
     }
-    s.ctrl.push_back(row);
+    ctrl.push_back(row);
   }
+  return ctrl;
+}
+
+// Words, predicted samples, offsets and bounds of integer control values.
+Segment finish(std::vector<std::vector<mpz_class>> ctrl, const Controls& b, int depth, const Format& f,
+               double max_abs) {
+  Segment s;
+  s.depth = depth;
+  s.ctrl = std::move(ctrl);
+  s.guard_bits = f.guard_bits;
+  s.frac_bits = f.frac_bits;
   s.words = stream_words(s.ctrl, depth, f);
   const int K = 1 << depth;
   s.samples.assign(K + 1, std::vector<int64_t>(f.axes));
   for (int j = 0; j <= K; ++j)
     for (int a = 0; a < f.axes; ++a) s.samples[j][a] = predict_sample(s.ctrl[a], depth, j, f.guard_bits);
-  s.bound = error_bound(f, max_abs);
+  // offset = c0 2^-G - b0 2^F, exact
+  double worst_extra = 0;  // max(0, |offset| - 2^-(G+1)) over the axes
+  const double half_grid = std::ldexp(1.0, -(f.guard_bits + 1));
+  for (int a = 0; a < f.axes; ++a) {
+    mpq_class o = mpq_class(s.ctrl[a][0]) * pow2q(-f.guard_bits) - exact(b(a, 0)) * pow2q(f.frac_bits);
+    o.canonicalize();
+    s.offset.push_back(o);
+    mpq_class e = mpq_class(s.ctrl[a][3]) * pow2q(-f.guard_bits) - exact(b(a, 3)) * pow2q(f.frac_bits);
+    e.canonicalize();
+    s.end_offset.push_back(e);
+    worst_extra = std::max(worst_extra, std::fabs(o.get_d()) - half_grid);
+  }
+  s.ref_lsb = std::ldexp(8 * (std::numeric_limits<double>::epsilon() / 2) * max_abs, f.frac_bits);
+  // uniform bound: 1/2 + 2^-(G+1) + max(0, |offset| - 2^-(G+1)) + ref (LSB), in units
+  s.bound = error_bound(f, max_abs) + std::ldexp(worst_extra, -f.frac_bits);
   return s;
+}
+
+}  // namespace
+
+double Segment::exact_bound_lsb(int a, int j) const {
+  const double t = std::ldexp(static_cast<double>(j), -depth);  // exact
+  const double u = 1.0 - t;                                     // exact
+  const double b0 = u * u * u;  // exact for d <= 17 (3d significant bits)
+  return 0.5 + b0 * std::fabs(offset[a].get_d()) + (1.0 - b0) * std::ldexp(1.0, -(guard_bits + 1));
+}
+
+Segment compile_segment(const Controls& b, int depth, const Format& f) {
+  f.validate();
+  check_depth_axes(b, depth, f);
+  double max_abs = 0;
+  auto ctrl = round_controls(b, f, max_abs);
+  return finish(std::move(ctrl), b, depth, f, max_abs);
+}
+
+Segment compile_segment(const Controls& b, int depth, const Format& f, const std::vector<mpz_class>& start) {
+  f.validate();
+  check_depth_axes(b, depth, f);
+  if (static_cast<int>(start.size()) != f.axes) {
+    std::ostringstream m;
+    m << "start state has " << start.size() << " axes, format expects " << f.axes;
+    fail(m.str());
+  }
+  double max_abs = 0;
+  auto ctrl = round_controls(b, f, max_abs);
+  const mpz_class lim = pow2(f.ctrl_width - 1);
+  for (int a = 0; a < f.axes; ++a) {
+    if (start[a] >= lim || start[a] < -lim) {
+      std::ostringstream m;
+      m << "axis " << a << " start value A = " << start[a].get_str() << " does not fit ctrl_width "
+        << f.ctrl_width;
+      fail(m.str());
+    }
+    ctrl[a][0] = start[a];
+  }
+  return finish(std::move(ctrl), b, depth, f, max_abs);
 }
 
 }  // namespace traj::bcu
