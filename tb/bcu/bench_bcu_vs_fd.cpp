@@ -1,146 +1,255 @@
 // Benchmark program (prints figures, never fails on a slow machine):
-// BCU generator vs forward differences (FD) for a 3-axis cubic at K = 4096
-// ticks (d = 12), output LSB 2^-16 (units of the input, e.g. mm).
-//   * bits needed for a 1-LSB bound (BCU: exact datapath; FD: guard bits G
-//     with 1/2 + 2^-G-1 * sum_{i=1..3} C(K,i) <= 1 LSB),
-//   * additions per sample and axis,
-//   * measured maximum error vs the double-precision curve (BCU: the hls
-//     model; FD: the integer recurrence simulated here),
-//   * software reference: Horner in double, ns per sample (chrono).
+// BCU generator vs forward differences (FD) for a 3-axis cubic Bezier at
+// K = 4096 ticks (d = 12), output LSB 2^-16 (units of the input, e.g. mm),
+// control values in [-1000, 1000].
+//
+// Every figure comes from the real models:
+//   * FD : traj::fd::Compiler (exact GMP registers, its stated bound) and the
+//          cycle-accurate traj_fd_engine hls model (hls/traj_fd_engine.hpp);
+//   * BCU: traj::bcu::compile_segment and the traj_bcu_gen hls model
+//          (hls/traj_bcu_gen.hpp);
+// each model's samples are checked bit for bit against its host's exact
+// prediction, and the error is measured against the EXACT value of the Bezier
+// with the given (double) control points (GMP rationals), so the table's
+// errors are the engines' own.
+//   * cycles per sample, two figures, each the smallest uniform tick spacing
+//     (bisection) at which the hls model plays the whole segment correctly
+//     (no tick_err, no underrun, every sample equal to the prediction):
+//       sustained: ticks may wait for the engine (one pending tick), none lost;
+//       latency 2: every tick answered exactly 2 clocks later (no waiting: the
+//                  worst per-sample service time);
+//     driven through the models' public interface only. Also printed: the
+//     models' own constants (FD: Width/ChunkWidth per update; BCU:
+//     kMinTickSpacing, which includes a segment switch).
+//   * bits for a 1-LSB bound: FD needs 1/2 + Q(K) <= 1 LSB, Q(K) = 1/2 sum_{i=1..3}
+//     C(K,i) 2^-G: the least G (fd::Compiler::guard_bits_needed at tol = 1);
+//     plus the integer bits of the range, rounded up to a buildable width
+//     (a multiple of ChunkWidth 16). BCU: exact datapath, G = 0 gives
+//     1/2 + 2^-(G+1) = 1 LSB.
+//   * Horner in double: the software reference (3 mul + 3 add per axis),
+//     error vs exact and ns per sample (host timing, varies run to run).
 // usage: bench_bcu_vs_fd [seed]
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <gmpxx.h>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "bcu/bcu_compiler.hpp"
+#include "bcu/chain.hpp"
+#include "fd/fd_compiler.hpp"
 #include "traj_bcu_gen.hpp"
+#include "traj_fd_engine.hpp"
 
 namespace bcu = traj::bcu;
+namespace fd = traj::fd;
 using Clock = std::chrono::steady_clock;
 
-constexpr int kAxes = 3, kD = 12, kK = 1 << kD, kF = 16;
+constexpr int kAxes = 3, kD = 12, kK = 1 << kD, kF = 16, kChunk = 16;
+constexpr double kH = 1.0 / 1024;  // tick period: T = K h = 4 s, a power of two
+
+namespace {
+
+mpq_class exact(double x) {
+  mpq_class q;
+  mpq_set_d(q.get_mpq_t(), x);
+  return q;
+}
+
+// Exact x(j/K) 2^F per axis and sample (the reference for every engine).
+std::vector<std::vector<mpq_class>> exact_reference(const bcu::Controls& b) {
+  std::vector<std::vector<mpq_class>> ref(kK + 1, std::vector<mpq_class>(kAxes));
+  const mpz_class K = kK;
+  for (int j = 0; j <= kK; ++j) {
+    const mpz_class jj = j, kj = K - jj;
+    for (int a = 0; a < kAxes; ++a) {
+      mpq_class n = mpq_class(kj * kj * kj) * exact(b(a, 0)) + mpq_class(3 * kj * kj * jj) * exact(b(a, 1)) +
+                    mpq_class(3 * kj * jj * jj) * exact(b(a, 2)) + mpq_class(jj * jj * jj) * exact(b(a, 3));
+      n /= mpq_class(K * K * K);
+      n *= mpq_class(mpz_class(1) << kF);
+      ref[j][a] = n;
+    }
+  }
+  return ref;
+}
+
+double max_err(const std::vector<std::vector<int64_t>>& s, const std::vector<std::vector<mpq_class>>& ref) {
+  double w = 0;
+  for (size_t j = 0; j < s.size(); ++j)
+    for (int a = 0; a < kAxes; ++a) w = std::max(w, std::fabs(mpq_class(mpq_class(s[j][a]) - ref[j][a]).get_d()));
+  return w;
+}
+
+// Smallest S in [1, hi] with ok(S), assuming ok is monotone; checks S and S-1.
+int min_spacing(int hi, const std::function<bool(int)>& ok) {
+  while (!ok(hi)) hi *= 2;
+  int lo = 0;  // ok(lo) false (spacing 0 = no ticks is not a spacing)
+  while (hi - lo > 1) {
+    const int mid = lo + (hi - lo) / 2;
+    (ok(mid) ? hi : lo) = mid;
+  }
+  return hi;
+}
 
 // ---------------------------------------------------------------------------
-// BCU through the hls model.
+// FD: fd::Compiler + the traj_fd_engine hls model.
 // ---------------------------------------------------------------------------
-template <int Ctrl, int Guard, int Out>
-struct BcuRun {
-  using Gen = traj::BcuGen<kAxes, 32, Ctrl, Guard, Out, kD>;
-  static bcu::Format format() {
-    bcu::Format f;
-    f.axes = kAxes;
-    f.chunk_width = 32;
-    f.ctrl_width = Ctrl;
-    f.guard_bits = Guard;
-    f.out_width = Out;
-    f.max_depth = kD;
-    f.frac_bits = kF;
-    return f;
-  }
-  // returns max error in output LSB; fills ns per sample and cycles per sample
-  static double run(const bcu::Controls& b, double& ns_per_sample, double& cycles_per_sample,
-                    double& bound_lsb) {
-    const bcu::Segment seg = bcu::compile_segment(b, kD, format());
-    bound_lsb = seg.bound / std::ldexp(1.0, -kF);
-    Gen g;
+struct Row {
+  std::string name;
+  int guard = 0, width = 0, out_bits = 0;
+  double err = 0, bound = 0;
+  int cycles = 0;        // measured: smallest uniform tick spacing, no tick lost
+  int cycles_l2 = 0;     // measured: smallest uniform tick spacing with latency 2 throughout
+  std::string spec;      // the model's own timing constant
+  double range = 0;      // |x| the format holds, units
+};
+
+template <int W, int G>
+Row run_fd(const bcu::Controls& b, double tol, const std::vector<std::vector<mpq_class>>& ref) {
+  using Eng = traj::FdEngine<kAxes, 3, W, kChunk, G>;
+  fd::Format f;
+  f.axes = kAxes;
+  f.degree = 3;
+  f.width = W;
+  f.chunk_width = kChunk;
+  f.guard_bits = G;
+  f.frac_bits = kF;
+  f.tol_lsb = tol;
+  const fd::Compiler comp(f);
+  const fd::Compiled c = comp.compile(bcu::fd_poly_of_bezier(b, kK, kH), nullptr, "bench");
+  const std::vector<uint64_t> words = comp.words(c);
+  std::vector<std::vector<int64_t>> pred(kK + 1, std::vector<int64_t>(kAxes));
+  for (int k = 0; k <= kK; ++k)
+    for (int a = 0; a < kAxes; ++a) pred[k][a] = comp.sample_at(c, a, k).get_si();
+
+  // Play the segment with ticks every S cycles (public interface only).
+  std::vector<std::vector<int64_t>> got;
+  bool need_l2 = false;
+  auto play = [&](int S) {
+    Eng e;
+    got.clear();
     size_t wi = 0;
-    std::vector<std::vector<int64_t>> out;
-    out.reserve(kK + 1);
-    uint64_t cyc = 0;
-    const auto t0 = Clock::now();
-    while (out.size() < size_t(kK) + 1) {
+    uint64_t next = ~0ull, last_tick = 0;
+    int issued = 0;
+    for (uint64_t cyc = 0; got.size() < size_t(kK) && cyc < uint64_t(kK + 8) * S + 10000; ++cyc) {
+      const auto o = e.outputs();
+      if (o.tick_err || o.underrun) return false;
+      if (o.sample_valid) {
+        if (need_l2 && cyc != last_tick + 2) return false;
+        std::vector<int64_t> v;
+        for (int a = 0; a < kAxes; ++a) v.push_back(static_cast<int64_t>(traj::sext(o.sample[a], Eng::kOutWidth)));
+        if (v != pred[got.size()]) return false;
+        got.push_back(v);
+      }
+      typename Eng::In in;
+      in.tvalid = wi < words.size();
+      in.tdata = in.tvalid ? words[wi] : 0;
+      if (next == ~0ull && wi == words.size()) next = cyc + 1;  // loaded
+      in.tick = cyc == next && issued < kK;
+      if (in.tick) {
+        ++issued;
+        next += S;
+        last_tick = cyc;
+      }
+      if (in.tvalid && o.tready) ++wi;
+      e.clock(in);
+    }
+    return got.size() == size_t(kK);
+  };
+  Row r;
+  r.guard = G;
+  r.width = W;
+  r.out_bits = W - G;
+  r.range = std::ldexp(1.0, W - G - 1 - kF);
+  need_l2 = true;
+  r.cycles_l2 = min_spacing(Eng::kChunks, play);
+  need_l2 = false;
+  r.cycles = min_spacing(Eng::kChunks, play);
+  play(r.cycles);
+  got.push_back(pred[kK]);  // the end sample (the next segment's first), from the exact prediction
+  r.err = max_err(got, ref);
+  r.bound = 0.5 + c.bound_lsb;
+  r.spec = std::to_string(Eng::kChunks) + " (Width/ChunkWidth per update)";
+  return r;
+}
+
+// ---------------------------------------------------------------------------
+// BCU: traj::bcu + the traj_bcu_gen hls model.
+// ---------------------------------------------------------------------------
+template <int Ctrl, int G, int Out>
+Row run_bcu(const bcu::Controls& b, const std::vector<std::vector<mpq_class>>& ref) {
+  using Gen = traj::BcuGen<kAxes, kChunk, Ctrl, G, Out, kD>;
+  bcu::Format f;
+  f.axes = kAxes;
+  f.chunk_width = kChunk;
+  f.ctrl_width = Ctrl;
+  f.guard_bits = G;
+  f.out_width = Out;
+  f.max_depth = kD;
+  f.frac_bits = kF;
+  const bcu::Segment seg = bcu::compile_segment(b, kD, f);
+  std::vector<std::vector<int64_t>> got;
+  bool need_l2 = false;
+  // Ticks every S cycles from a minimum spacing after the last word (the
+  // segment is then ready whatever the schedule); K samples, then one
+  // underrun tick for the end value.
+  auto play = [&](int S) {
+    Gen g;
+    got.clear();
+    size_t wi = 0;
+    uint64_t next = ~0ull, last_tick = 0;
+    int issued = 0;
+    for (uint64_t cyc = 0; got.size() < size_t(kK) + 1 && cyc < uint64_t(kK + 8) * S + 100000; ++cyc) {
+      if (g.tick_err()) return false;
+      if (g.sample_valid()) {
+        if (need_l2 && cyc != last_tick + 2) return false;
+        if (g.underrun() != (got.size() == size_t(kK))) return false;
+        std::vector<int64_t> v;
+        for (int a = 0; a < kAxes; ++a) v.push_back(g.sample(a));
+        if (v != seg.samples[got.size()]) return false;
+        got.push_back(v);
+      } else if (g.underrun()) {
+        return false;
+      }
       typename Gen::In in;
       in.tvalid = wi < seg.words.size();
       in.tdata = in.tvalid ? seg.words[wi] : 0;
-      const auto& r = g.regs();
-      in.tick = !r.tick_q && (g.state() == Gen::S_READY ||
-                              (g.state() == Gen::S_IDLE && wi == seg.words.size() && r.have_last_q));
-      if (g.sample_valid()) {
-        std::vector<int64_t> v;
-        for (int a = 0; a < kAxes; ++a) v.push_back(g.sample(a));
-        out.push_back(v);
+      if (next == ~0ull && wi == seg.words.size()) next = cyc + Gen::kMinTickSpacing;
+      in.tick = cyc == next && issued <= kK;
+      if (in.tick) {
+        ++issued;
+        next += S;
+        last_tick = cyc;
       }
-      const bool acc = g.tready() && in.tvalid;
+      if (in.tvalid && g.tready()) ++wi;
       g.clock(in);
-      wi += acc;
-      ++cyc;
     }
-    const auto t1 = Clock::now();
-    ns_per_sample = std::chrono::duration<double, std::nano>(t1 - t0).count() / (kK + 1);
-    cycles_per_sample = double(cyc) / (kK + 1);
-    double worst = 0;
-    for (int j = 0; j <= kK; ++j)
-      for (int a = 0; a < kAxes; ++a) {
-        if (out[j][a] != seg.samples[j][a]) {
-          std::printf("BCU hls != host prediction at j=%d axis %d\n", j, a);
-          std::exit(1);
-        }
-        const double bb[4] = {b(a, 0), b(a, 1), b(a, 2), b(a, 3)};
-        const double ref = bcu::de_casteljau(bb, double(j) / kK);
-        worst = std::max(worst, std::fabs(std::ldexp(double(out[j][a]), -kF) - ref));
-      }
-    return worst / std::ldexp(1.0, -kF);
-  }
-};
-
-// ---------------------------------------------------------------------------
-// FD: registers r_i = round(Delta^i x(0) * 2^(F+G)) (exact rationals), then
-// r0 += r1, r1 += r2, r2 += r3 per tick (old values), output round(r0 / 2^G).
-// ---------------------------------------------------------------------------
-static double run_fd(const bcu::Controls& b, int G, double& ns_per_sample, int& max_reg_bits) {
-  double worst = 0;
-  max_reg_bits = 0;
-  double ns = 0;
-  for (int a = 0; a < kAxes; ++a) {
-    // power basis in j: x(j) = sum_i p_i (j/K)^i, exact from the doubles
-    const mpq_class b0(b(a, 0)), b1(b(a, 1)), b2(b(a, 2)), b3(b(a, 3));
-    const mpq_class p0 = b0, p1 = 3 * (b1 - b0), p2 = 3 * (b0 - 2 * b1 + b2),
-                    p3 = b3 - 3 * b2 + 3 * b1 - b0;
-    auto x = [&](long j) -> mpq_class {
-      const mpq_class t(j, kK);
-      return ((p3 * t + p2) * t + p1) * t + p0;
-    };
-    const mpq_class X0 = x(0), X1 = x(1), X2 = x(2), X3 = x(3);
-    const mpq_class D[4] = {X0, X1 - X0, X2 - 2 * X1 + X0, X3 - 3 * X2 + 3 * X1 - X0};
-    mpz_class scale = 1;
-    scale <<= (kF + G);
-    __int128 r[4];
-    for (int i = 0; i < 4; ++i) {
-      mpq_class v = D[i] * scale + mpq_class(1, 2);
-      mpz_class fl;
-      mpz_fdiv_q(fl.get_mpz_t(), v.get_num_mpz_t(), v.get_den_mpz_t());
-      // two 64-bit halves (registers are below 127 bits here)
-      mpz_class hi = fl >> 64, lo = fl - (hi << 64);
-      r[i] = (static_cast<__int128>(hi.get_si()) << 64) + static_cast<__int128>(lo.get_ui());
-    }
-    const double bb[4] = {b(a, 0), b(a, 1), b(a, 2), b(a, 3)};
-    const auto t0 = Clock::now();
-    std::vector<__int128> outs(kK + 1);
-    __int128 maxabs = 0;
-    for (int j = 0; j <= kK; ++j) {
-      outs[j] = (r[0] + (static_cast<__int128>(1) << (G - 1))) >> G;  // round half up
-      for (int i = 0; i < 3; ++i) {
-        r[i] += r[i + 1];
-        const __int128 m = r[i] < 0 ? -r[i] : r[i];
-        if (m > maxabs) maxabs = m;
-      }
-    }
-    ns += std::chrono::duration<double, std::nano>(Clock::now() - t0).count();
-    int nb = 1;
-    while (nb < 127 && (maxabs >> nb) != 0) ++nb;
-    max_reg_bits = std::max(max_reg_bits, nb + 1);
-    for (int j = 0; j <= kK; ++j) {
-      const double ref = bcu::de_casteljau(bb, double(j) / kK);
-      worst = std::max(worst, std::fabs(std::ldexp(double(outs[j]), -kF) - ref));
-    }
-  }
-  ns_per_sample = ns / (kK + 1);
-  return worst / std::ldexp(1.0, -kF);
+    return got.size() == size_t(kK) + 1;
+  };
+  Row r;
+  r.guard = G;
+  r.width = f.words_per_value() * kChunk;
+  r.out_bits = Ctrl - G + (G > 0);
+  r.range = std::ldexp(1.0, Ctrl - 1 - G - kF);
+  need_l2 = true;
+  r.cycles_l2 = min_spacing(std::max(1, Gen::kMinTickSpacing / 4), play);
+  need_l2 = false;
+  r.cycles = min_spacing(std::max(1, Gen::kMinTickSpacing / 4), play);
+  play(r.cycles);
+  r.err = max_err(got, ref);
+  r.bound = 0;
+  for (int j = 0; j <= kK; ++j)
+    for (int a = 0; a < kAxes; ++a) r.bound = std::max(r.bound, seg.exact_bound_lsb(a, j));
+  r.spec = "kMinTickSpacing " + std::to_string(Gen::kMinTickSpacing) + " (incl. a segment switch)";
+  return r;
 }
+
+}  // namespace
 
 int main(int argc, char** argv) {
   const uint64_t seed = argc > 1 ? std::strtoull(argv[1], nullptr, 0) : 1;
@@ -149,32 +258,53 @@ int main(int argc, char** argv) {
   bcu::Controls b(kAxes, 4);
   for (int a = 0; a < kAxes; ++a)
     for (int i = 0; i < 4; ++i) b(a, i) = U(rng);
-  std::printf("bench_bcu_vs_fd: 3-axis cubic, control values in [-1000, 1000], K = %d (d = %d), "
-              "output LSB 2^-%d, seed %llu\n\n", kK, kD, kF, (unsigned long long)seed);
+  std::printf("bench_bcu_vs_fd: 3-axis cubic Bezier, control values in [-1000, 1000], K = %d (d = %d), "
+              "output LSB 2^-%d, ChunkWidth %d, seed %llu\n", kK, kD, kF, kChunk, (unsigned long long)seed);
+  std::printf("errors vs the exact Bezier of the (double) control points (GMP), in output LSB\n\n");
+  const auto ref = exact_reference(b);
 
-  // --- bits for a 1-LSB bound --------------------------------------------
-  const double sumC = double(kK) + double(kK) * (kK - 1) / 2 + double(kK) * (kK - 1) * (kK - 2) / 6;
-  const int G_fd = static_cast<int>(std::ceil(std::log2(sumC)));  // 2^-G-1 sumC <= 1/2
-  std::printf("1-LSB bound (1/2 LSB output rounding + at most 1/2 LSB from the registers):\n");
-  std::printf("  FD : sum_{i=1..3} C(K,i) = %.6g = 2^%.2f -> G = %d guard bits in every register\n",
-              sumC, std::log2(sumC), G_fd);
-  std::printf("       (register error bound 2^-G-1 * sum C = %.3f LSB)\n",
-              std::ldexp(sumC, -G_fd - 1));
-  std::printf("  BCU: exact datapath, grows 3 bits per level: 3d = %d bits above the control\n"
-              "       value; control rounding 2^-G-1 <= 1/2 LSB -> G = 0 guard bits\n", 3 * kD);
-  std::printf("  integer part: |x| < 2^10 * 2^%d -> 27 bits signed\n", kF);
-  std::printf("  register widths: FD 27 + %d = %d bits x 4 registers/axis;\n", G_fd, 27 + G_fd);
-  std::printf("                   BCU W = 28 + 3*12 = 64 bits (CtrlWidth 28, G = 0) x (4 current + 4 per stack level)/axis\n\n");
+  // --- bits for a 1-LSB bound ----------------------------------------------
+  const mpz_class sumC = fd::Compiler::quant_bound_x2(3, kK);
+  const int G1 = fd::Compiler::guard_bits_needed(3, kK, 1.0);  // 1/2 + Q(K) <= 1
+  const int ibits = 1 + static_cast<int>(std::ceil(std::log2(1000.0 * 65536 + 1)));  // |x| <= 1000: 27 bits signed
+  const int wmin = ibits + G1, wbuild = (wmin + kChunk - 1) / kChunk * kChunk;
+  std::printf("1-LSB bound (1/2 LSB output rounding + at most 1/2 LSB from the rest):\n");
+  std::printf("  FD : sum_{i=1..3} C(%d,i) = %s = 2^%.2f -> Q(K) <= 1/2 needs G >= %d guard bits in every register;\n",
+              kK, sumC.get_str().c_str(), std::log2(sumC.get_d()), G1);
+  std::printf("       |x| <= 1000 needs %d integer bits: %d bits, buildable (multiple of ChunkWidth %d): Width %d,\n",
+              ibits, wmin, kChunk, wbuild);
+  std::printf("       which at G = %d leaves %d output bits (|x| < %g units; the core's G = 32 keeps 32 bits, |x| < %g)\n",
+              G1, wbuild - G1, std::ldexp(1.0, wbuild - G1 - 1 - kF), std::ldexp(1.0, 64 - 32 - 1 - kF));
+  std::printf("  BCU: exact datapath, G = 0 -> 1/2 + 2^-1 = 1 LSB; CtrlWidth %d (sign + %d integer bits),\n"
+              "       the datapath grows 3 bits per level: W = CtrlWidth + 3*MaxDepth = %d bits\n\n",
+              ibits + 1, ibits, ibits + 1 + 3 * kD);
 
-  // --- measured errors ------------------------------------------------------
-  double ns_bcu0, cyc_bcu0, bnd0, ns_bcu9, cyc_bcu9, bnd9;
-  const double e_bcu0 = BcuRun<28, 0, 28>::run(b, ns_bcu0, cyc_bcu0, bnd0);
-  const double e_bcu9 = BcuRun<40, 9, 32>::run(b, ns_bcu9, cyc_bcu9, bnd9);
-  double ns_fd, ns_fd32;
-  int bits_fd, bits_fd32;
-  const double e_fd = run_fd(b, G_fd, ns_fd, bits_fd);
-  const double e_fd32 = run_fd(b, 32, ns_fd32, bits_fd32);
-  const double e_fd20 = [&] { double n; int bb; return run_fd(b, 20, n, bb); }();
+  std::vector<Row> rows;
+  {
+    Row r = run_fd<64, 34>(b, 1.0, ref);
+    r.name = "FD, W 64, G 34 (tol 1: the 1-LSB setting)";
+    rows.push_back(r);
+  }
+  {
+    Row r = run_fd<64, 32>(b, 3.0, ref);
+    r.name = "FD, W 64, G 32 (the core's FD format; tol 3)";
+    rows.push_back(r);
+  }
+  {
+    Row r = run_fd<48, 20>(b, 16384.0, ref);
+    r.name = "FD, W 48, G 20 (tol 2^14)";
+    rows.push_back(r);
+  }
+  {
+    Row r = run_bcu<28, 0, 28>(b, ref);
+    r.name = "BCU, CtrlWidth 28, G 0 (the 1-LSB setting)";
+    rows.push_back(r);
+  }
+  {
+    Row r = run_bcu<40, 9, 32>(b, ref);
+    r.name = "BCU, CtrlWidth 40, G 9 (the core's BCU format)";
+    rows.push_back(r);
+  }
 
   // --- Horner in double -------------------------------------------------------
   double pc[kAxes][4];
@@ -199,25 +329,29 @@ int main(int argc, char** argv) {
     const double t = double(j) / kK;
     for (int a = 0; a < kAxes; ++a) {
       const double h = ((pc[a][3] * t + pc[a][2]) * t + pc[a][1]) * t + pc[a][0];
-      const double bb[4] = {b(a, 0), b(a, 1), b(a, 2), b(a, 3)};
-      e_horner = std::max(e_horner, std::fabs(h - bcu::de_casteljau(bb, t)));
+      const mpq_class d = exact(h) * mpq_class(mpz_class(1) << kF) - ref[j][a];
+      e_horner = std::max(e_horner, std::fabs(d.get_d()));
     }
   }
 
-  std::printf("| engine | guard bits | register bits | additions / sample / axis | max error [LSB] | bound [LSB] | host ns / sample, 3 axes (hls: cycle-accurate model, not a software evaluator) |\n");
-  std::printf("|---|---|---|---|---|---|---|\n");
-  std::printf("| BCU (hls model), CtrlWidth 28, G = 0 | 0 (+36 growth) | 64 | %.3f (6 per BCU x (K-1)/K) + 1 rounding | %.4f | %.4f | %.1f (%.1f model cycles) |\n",
-              6.0 * (kK - 1) / kK, e_bcu0, bnd0, ns_bcu0, cyc_bcu0);
-  std::printf("| BCU (hls model), CtrlWidth 40, G = 9 | 9 (+36 growth) | 76 | %.3f + 1 rounding | %.4f | %.4f | %.1f (%.1f model cycles) |\n",
-              6.0 * (kK - 1) / kK, e_bcu9, bnd9, ns_bcu9, cyc_bcu9);
-  std::printf("| FD (integer sim), G = %d | %d | %d (measured max %d) | 3 + 1 rounding | %.4f | %.4f | %.1f |\n",
-              G_fd, G_fd, 27 + G_fd, bits_fd, e_fd, 0.5 + std::ldexp(sumC, -G_fd - 1), ns_fd * kAxes);
-  std::printf("| FD (integer sim), G = 32 | 32 | 59 (measured max %d) | 3 + 1 rounding | %.4f | %.4f | %.1f |\n",
-              bits_fd32, e_fd32, 0.5 + std::ldexp(sumC, -33), ns_fd32 * kAxes);
-  std::printf("| FD (integer sim), G = 20 | 20 | 47 | 3 + 1 rounding | %.4f | %.1f | - |\n", e_fd20,
-              0.5 + std::ldexp(sumC, -21));
-  std::printf("| Horner, double (software reference) | - | 53-bit mantissa | 3 mul + 3 add | %.2e | - | %.2f |\n",
-              e_horner / std::ldexp(1.0, -kF), ns_horner);
-  std::printf("\n(sink %g)\n", double(sink) * 0);
+  std::printf("| engine (hls model + host compiler) | guard bits | register / datapath bits | output bits (range) | "
+              "additions / sample / axis | max error [LSB] | bound [LSB] | cycles / sample: sustained, latency 2 (measured) | "
+              "model constant |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|\n");
+  for (const Row& r : rows) {
+    const bool is_bcu = r.name.rfind("BCU", 0) == 0;
+    char adds[64];
+    if (is_bcu) std::snprintf(adds, sizeof adds, "%.3f + 1 rounding", 6.0 * (kK - 1) / kK);
+    else std::snprintf(adds, sizeof adds, "3 + 0 (rounding is the +1/2 in r[0])");
+    std::printf("| %s | %d | %d%s | %d (|x| < %g) | %s | %.4f | %.4f | %d, %d | %s |\n", r.name.c_str(), r.guard,
+                r.width, is_bcu ? " (4 lanes + a stack of 12 x 4 per axis)" : " x 4 registers per axis", r.out_bits,
+                r.range, adds, r.err, r.bound, r.cycles, r.cycles_l2, r.spec.c_str());
+  }
+  std::printf("| Horner, double (software reference) | - | 53-bit mantissa | - | 3 mul + 3 add | %.2e | - | %.2f ns "
+              "(host) | - |\n", e_horner, ns_horner);
+  std::printf("\n(bounds vs the exact polynomial of each engine's input: FD 1/2 + |e0| + Q(K) from fd::Compiler, BCU\n"
+              " max_j Segment::exact_bound_lsb; the FD power basis is converted in double, which moves the FD\n"
+              " polynomial by < 256 eps max|b| 2^F = %.1e LSB from the Bezier. sink %g)\n",
+              256 * 1.1102230246251565e-16 * 1000 * 65536, double(sink) * 0);
   return 0;
 }
