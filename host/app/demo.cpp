@@ -81,6 +81,9 @@ std::vector<double> compose(const std::array<double, 4>& c, double u0, double s)
 
 }  // namespace
 
+int run_fd_demo(const DemoOptions& opt, const fd::Compiler& comp,
+                const std::chrono::steady_clock::time_point t_start);
+
 int run_demo(const DemoOptions& opt) {
   const auto t_start = std::chrono::steady_clock::now();
   fd::Format f;
@@ -91,6 +94,20 @@ int run_demo(const DemoOptions& opt) {
   f.guard_bits = kGuard;
   f.frac_bits = opt.frac_bits;
   fd::Compiler comp(f);
+  if (opt.engine != "fd") {
+#if TRAJ_APP_CORE
+    return run_core_demo(opt);
+#else
+    throw std::invalid_argument("--engine " + opt.engine + ": this trajcore was built without host/bcu (TRAJ_SKIP)");
+#endif
+  }
+  DemoOptions o = opt;
+  if (o.tick_gap <= 0) o.tick_gap = 64;
+  return run_fd_demo(o, comp, t_start);
+}
+
+int run_fd_demo(const DemoOptions& opt, const fd::Compiler& comp,
+                const std::chrono::steady_clock::time_point t_start) {
   if (opt.tick_gap < Eng::kWords + Eng::kChunks + 1)
     throw std::invalid_argument("--tick-gap " + std::to_string(opt.tick_gap) +
                                 " is shorter than a segment load (" + std::to_string(Eng::kWords + Eng::kChunks + 1) +

@@ -3,6 +3,8 @@
 //   trajcore sim   <stream.trj> --csv out.csv  segment stream -> Verilated core -> samples
 //   trajcore run   <path.json> --out-dir DIR   both, with the full report and SVG plots
 //   trajcore demo                              the built-in circle demo (cubic engine)
+//   trajcore demo --engine bcu|mixed           the circle through traj_core (BCU / FD+BCU segments)
+//   trajcore spline <points.json> -o out.trj   seed 000's C1 spline through points -> BCU segment stream
 #include <CLI/CLI.hpp>
 
 #include <cmath>
@@ -95,7 +97,37 @@ int main(int argc, char** argv) {
   d->add_option("--pieces", demo.pieces, "time segments per 120-degree arc")->check(CLI::Range(1, 1000));
   d->add_option("--frac-bits", demo.frac_bits, "output fraction bits (1 LSB = 2^-F mm)")->check(CLI::Range(0, 30));
   d->add_option("--csv", demo.csv, "where to write the samples (CSV)");
-  d->add_option("--tick-gap", demo.tick_gap, "clock cycles between ticks in the simulation")->check(CLI::Range(1, 1000000));
+  d->add_option("--tick-gap", demo.tick_gap,
+                 "clock cycles between ticks in the simulation (default: 64 for --engine fd, the core's minimum tick "
+                 "spacing for bcu and mixed)")
+      ->check(CLI::Range(1, 1000000));
+  d->add_option("--engine", demo.engine,
+                "fd: forward differences on traj_fd_engine (default); bcu: every arc one BCU segment of K = 2^d "
+                "ticks; mixed: arcs FD, BCU, FD chained exactly; bcu and mixed run on traj_core (both engines) "
+                "through a version-2 segment stream")
+      ->check(CLI::IsMember({"fd", "bcu", "mixed"}))
+      ->capture_default_str();
+  d->add_option("--stream", demo.stream, "bcu|mixed: the segment stream to write (default out/demo_<engine>.trj)");
+
+  traj::app::SplineOptions spl;
+  auto* sp = app.add_subcommand(
+      "spline", "Seed 000's C1 interpolating cubic Bezier spline through points (JSON {\"points\": [[x, y(, z)], "
+                "...]}), compiled to BCU segments for traj_core: a version-2 segment stream for `trajcore sim`");
+  sp->add_option("points", spl.input, "points JSON file")->required();
+  sp->add_option("-o,--output", spl.output, "segment stream to write")->capture_default_str();
+  sp->add_option("--lambda", spl.lambda, "tension lambda (eq. 9), in (0, 1]")->capture_default_str();
+  sp->add_option("--mu", spl.mu, "tension mu (default: lambda, which makes the spline C1; otherwise G1)");
+  sp->add_option("--feed", spl.feed, "speed limit, units/s: each segment gets the least K = 2^d ticks that keeps "
+                                     "the speed below it (hodograph bound)")
+      ->capture_default_str();
+  sp->add_option("--period", spl.period, "tick period, s")->capture_default_str();
+  sp->add_option("--depth", spl.depth, "K = 2^depth ticks for every segment instead of --feed")->check(CLI::Range(0, 30));
+  sp->add_option("--frac-bits", spl.frac_bits, "output fraction bits (1 LSB = 2^-F units)")
+      ->check(CLI::Range(0, 30))
+      ->capture_default_str();
+  sp->add_option("--engine", spl.engine, "bcu: every segment BCU; mixed: odd segments as FD (exact chaining)")
+      ->check(CLI::IsMember({"bcu", "mixed"}))
+      ->capture_default_str();
 
   JobConfig cfg;
   std::vector<double> v_axis, a_axis, j_axis;
@@ -116,6 +148,8 @@ int main(int argc, char** argv) {
   sm->add_option("stream", input, "segment stream (.trj)")->required();
   sm->add_option("--csv", csv, "samples CSV to write")->capture_default_str();
   sm->add_option("--tick-gap", tick_gap, "clock cycles between ticks (0: shortest safe)");
+  sm->footer("A version-1 stream (FD segments) runs on traj_fd_engine, a version-2 stream (FD and BCU segments, "
+             "from `trajcore demo --engine bcu|mixed` or `trajcore spline`) on traj_core.");
 
   auto* rn = app.add_subcommand("run", "Plan, compile, simulate on the Verilated core, and report (text + SVG)");
   rn->add_option("path", input, "curve or path JSON")->required();
@@ -129,6 +163,11 @@ int main(int argc, char** argv) {
   }
   try {
     if (*d) return traj::app::run_demo(demo);
+#if TRAJ_APP_CORE
+    if (*sp) return traj::app::run_spline(spl);
+#else
+    if (*sp) throw std::runtime_error("spline: this trajcore was built without host/bcu (TRAJ_SKIP)");
+#endif
     if (*pl && (window > 0 || raster > 0)) {
       apply_axes(cfg, v_axis, a_axis, j_axis);
       struct VecSource : traj::plan::CurveSource {
@@ -216,6 +255,21 @@ int main(int argc, char** argv) {
         return 1;
       }
       auto sr = traj::app::simulate(rd.header, rd.records, tick_gap, [](double f) { progress("sim", f); });
+      if (sr.engine == "traj_core") {
+        // version 2: both engines; every sample also against the exact prediction from the records
+        const bool ok = sr.mismatches == 0 && sr.prediction_mismatches == 0 && !sr.tick_err && sr.underruns == 0;
+        if (ok) write_csv(csv, rd.header, sr.samples);
+        std::printf("%s: %zu segments (%llu FD, %llu BCU, %llu kind switches), %zu samples, %llu cycles on traj_core "
+                    "(tick every %d), RTL == hls: %s, == host prediction: %s, tick_err %s, underruns %llu -> %s\n",
+                    input.c_str(), rd.records.size(), static_cast<unsigned long long>(sr.fd_segments),
+                    static_cast<unsigned long long>(sr.bcu_segments), static_cast<unsigned long long>(sr.switches),
+                    sr.samples.v.size(), static_cast<unsigned long long>(sr.cycles), sr.tick_gap,
+                    sr.mismatches ? "NO" : "yes", sr.prediction_mismatches ? "NO" : "yes",
+                    sr.tick_err ? "SET" : "clear", static_cast<unsigned long long>(sr.underruns),
+                    ok ? csv.c_str() : "(no CSV written)");
+        if (!ok) std::fprintf(stderr, "trajcore sim: a check FAILED (see above)\n");
+        return ok ? 0 : 1;
+      }
       write_csv(csv, rd.header, sr.samples);
       std::printf("%s: %zu segments, %zu samples, %llu cycles, RTL == hls: %s -> %s\n", input.c_str(),
                   rd.records.size(), sr.samples.v.size(), static_cast<unsigned long long>(sr.cycles),

@@ -94,8 +94,25 @@ bool is(const stream::Header& h, int deg, int w, int c, int g) {
 
 }  // namespace
 
+#if TRAJ_APP_CORE
+SimResult simulate_core(const stream::Header& h, const std::vector<stream::Record>& recs, int tick_gap,
+                        const std::function<void(double)>& progress);  // core_sim.cpp
+#else
+bool has_core() { return false; }
+#endif
+
 SimResult simulate(const stream::Header& h, const std::vector<stream::Record>& recs, int tick_gap,
                    const std::function<void(double)>& progress) {
+  if (h.has_bcu()) {
+#if TRAJ_APP_CORE
+    return simulate_core(h, recs, tick_gap, progress);
+#else
+    throw std::runtime_error("this stream carries a BCU format (version 2) and this trajcore was built without "
+                             "host/bcu (TRAJ_SKIP): no traj_core to run it on");
+#endif
+  }
+  for (const auto& r : recs)
+    if (r.is_bcu()) throw std::runtime_error("BCU segment in a stream without a BCU format");
   if (is(h, 3, 64, 16, 32)) return run<Vtraj_fd_cubic, FdEngine<3, 3, 64, 16, 32>>(h, recs, tick_gap, progress);
   if (is(h, 5, 96, 16, 48)) return run<Vtraj_fd_quintic, FdEngine<3, 5, 96, 16, 48>>(h, recs, tick_gap, progress);
   throw std::runtime_error("no engine for this stream: axes " + std::to_string(h.axes) + ", degree " +
