@@ -15,24 +15,28 @@
 // length per kind: FD HdrWords + Axes*(Degree+1)*Width/ChunkWidth words, BCU
 // 1 + 4*Axes*Digits words. The router counts them and forwards each segment
 // to its engine, in stream order, waiting (tready low) while that engine
-// cannot take it. An engine takes a segment only when it has none, so at most
-// two segments are in flight (one per engine): the next segment of the other
-// kind is loaded while the current one plays.
+// cannot take it. The FD engine takes a segment only when it has none; the BCU
+// generator takes the next one while it plays (up to three of its segments in
+// flight: playing, prepared, loading), so up to four segments are in flight.
+// The next segment of the other kind is loaded while the current one plays.
 //
-// Ticks go to the engine that owns the current segment: the oldest in flight
-// (per engine an in-flight flag, set when a segment's first word is accepted
-// and cleared on that engine's seg_done, plus which of the two is older). The
-// routing looks at this cycle's pop and push, so
-// a tick arriving with the seg_done of the previous segment already goes to
-// the next one. With nothing in flight, ticks go to the engine of the last
+// Ticks go to the engine that owns the current segment: the oldest in flight.
+// In flight: the number of BCU segments (0..3), whether an FD segment is (at
+// most one), and how many of the BCU segments are older than it; a segment is
+// counted when its first word is accepted and dropped on its engine's
+// seg_done (each engine finishes its segments in order). The routing looks at this cycle's pop and push,
+// so a tick arriving with the seg_done of the previous segment already goes
+// to the next one. With nothing in flight, ticks go to the engine of the last
 // segment (which then reports underrun as it does alone).
 //
 // Output: the engines' registered outputs, combined (no extra latency:
 // tick_i -> sample_valid_o is 2 clocks, as for each engine):
 //   underrun_o / seg_done_o = OR of the engines'; tick_err_o = OR of the
 //   engines' and a sticky core flag: a segment ended while its engine still
-//   held a tick (ticks faster than the engine: that tick would be served out
-//   of order by the engine's next segment);
+//   held a tick and the next segment in flight belongs to the other engine
+//   (that tick would be served out of order; held by the same engine it is
+//   served, in order, by that engine's next segment, as when the BCU plays
+//   segments back to back at one sample per clock);
 //   sample_valid_o = a real sample from either engine, or an underrun once
 //   the core has emitted a sample since reset;
 //   sample_o = the sample of the engine that emitted last (sel_q). On an
@@ -46,8 +50,11 @@
 //
 // Requirements for exact, tick-for-tick play: FD segments have K >= 1 (the
 // compiler refuses K = 0), the stream is not starved, and ticks are at least
-// kMinTickSpacing = BcuGen::kMinTickSpacing clocks apart (this also covers an
-// FD reload, HdrWords + Regs*Chunks + 2 clocks).
+// kMinTickSpacing clocks apart: the BCU's start latency at MaxDepth plus the
+// register slice (2), which covers a BCU segment after an FD one of K = 1 and
+// an FD reload (HdrWords + Regs*Chunks + 2 clocks). Within a run of BCU
+// segments ticks may come on every clock (the generator's guarantee: once a
+// segment has started, and across segments of K >= Bcu::kBackToBack(d_next)).
 #pragma once
 #include <cstdint>
 
@@ -68,7 +75,7 @@ class Core {
   static constexpr int kFdWords = Fd::kWords;
   static constexpr int kBcuWords = Bcu::kSegWords;
   static constexpr int kMinTickSpacing =
-      Bcu::kMinTickSpacing > Fd::kWords + 2 ? Bcu::kMinTickSpacing : Fd::kWords + 2;
+      Bcu::kStartLatencyMax + 2 > Fd::kWords + 2 ? Bcu::kStartLatencyMax + 2 : Fd::kWords + 2;
   static_assert(Fd::kOutWidth == Bcu::kOutWidth, "engine output widths differ");
 
   enum Kind : uint8_t { kFd = 0, kBcu = 1 };
@@ -86,8 +93,9 @@ class Core {
     bool in_seg_q = false;  // a segment is being forwarded
     bool kind_q = false;    // its kind
     int rem_q = 0;          // words of it still to come
-    bool fl_fd_q = false, fl_bcu_q = false;  // a segment of that kind is in flight
-    bool older_q = false;               // kind of the older one when both are
+    int nb_q = 0;                       // BCU segments in flight (0..3)
+    bool fdf_q = false;                 // an FD segment is in flight
+    int fpos_q = 0;                     // BCU segments in flight older than it
     bool last_kind_q = false;           // kind of the last segment finished
     bool sel_q = false;                 // engine that emitted the last sample
     bool primed_q = false;              // a sample has been emitted since reset
@@ -103,7 +111,8 @@ class Core {
   // Combinational view of one cycle (needs the inputs: tready depends on tuser
   // on a segment's first word).
   struct Comb {
-    bool kind_now, tready, accept, push, pop_fd, pop_bcu, fl_fd1, fl_bcu1, last1, tick_kind, sel_now;
+    bool kind_now, tready, accept, push, pop_b, pop_f, fdf1, owner1, last1, tick_kind, sel_now;
+    int nb1, fpos1;  // after this cycle's pops
   };
 
   Comb comb(const In& in) const {
@@ -116,17 +125,19 @@ class Core {
     c.tready = c.kind_now ? bcu_.tready() : fd_.outputs().tready;  // router side
     c.accept = (q.fd_v_q && fd_.outputs().tready) || (q.bcu_v_q && bcu_.tready());
     c.push = c.accept && !q.in_seg_q;
-    c.pop_fd = q.fl_fd_q && fd_.outputs().seg_done;
-    c.pop_bcu = q.fl_bcu_q && bcu_.seg_done();
+    c.pop_b = q.nb_q > 0 && bcu_.seg_done();
+    c.pop_f = q.fdf_q && fd_.outputs().seg_done;
     // in flight after this cycle's pops, then the owner of the next tick
-    c.fl_fd1 = q.fl_fd_q && !c.pop_fd;
-    c.fl_bcu1 = q.fl_bcu_q && !c.pop_bcu;
-    c.last1 = c.pop_bcu ? true : (c.pop_fd ? false : q.last_kind_q);
-    c.tick_kind = (c.fl_fd1 && c.fl_bcu1) ? q.older_q
-                  : c.fl_fd1               ? false
-                  : c.fl_bcu1              ? true
-                  : c.push                 ? c.kind_now
-                                           : c.last1;
+    c.nb1 = q.nb_q - (c.pop_b ? 1 : 0);
+    c.fdf1 = q.fdf_q && !c.pop_f;
+    c.fpos1 = (c.pop_b && q.fpos_q > 0) ? q.fpos_q - 1 : q.fpos_q;
+    c.last1 = c.pop_b ? true : (c.pop_f ? false : q.last_kind_q);
+    c.owner1 = c.fdf1 || c.nb1 > 0 || c.push;  // someone owns the next tick
+    c.tick_kind = (c.fdf1 && c.fpos1 == 0) ? false
+                  : c.nb1 > 0             ? true
+                  : c.fdf1                ? false
+                  : c.push                ? c.kind_now
+                                          : c.last1;
     const auto fo = fd_.outputs();
     const bool fd_real = fo.sample_valid && !fo.underrun;
     const bool bcu_real = bcu_.sample_valid() && !bcu_.underrun();
@@ -187,9 +198,9 @@ class Core {
     }
     // segments in flight: finish (seg_done of their engine), then start
     n.last_kind_q = c.last1;
-    n.fl_fd_q = c.fl_fd1 || (c.push && !c.kind_now);
-    n.fl_bcu_q = c.fl_bcu1 || (c.push && c.kind_now);
-    if (c.push) n.older_q = (c.kind_now ? c.fl_fd1 : c.fl_bcu1) ? !c.kind_now : c.kind_now;
+    n.nb_q = (c.nb1 + ((c.push && c.kind_now) ? 1 : 0)) & 3;
+    n.fdf_q = c.fdf1 || (c.push && !c.kind_now);
+    n.fpos_q = (c.push && !c.kind_now) ? c.nb1 : c.fpos1;
     // output selection
     const auto fo = fd_.outputs();
     n.sel_q = c.sel_now;
@@ -197,13 +208,15 @@ class Core {
                  (bcu_.sample_valid() && !bcu_.underrun());
     // Pending ticks per engine: +1 per routed tick, -1 per answer (every
     // processed tick gives sample_valid or underrun one cycle later). If the
-    // owner of a finished segment still holds a tick, that tick would be
-    // served by its next segment out of order: flag it (sticky tick_err).
+    // owner of a finished segment still holds a tick while the next segment
+    // in flight is the other engine's, that tick would be served out of
+    // order: flag it (sticky tick_err).
     const bool ev_fd = fo.sample_valid || fo.underrun;
     const bool ev_bcu = bcu_.sample_valid() || bcu_.underrun();
     const int pf = q.pend_fd_q - (ev_fd ? 1 : 0);
     const int pb = q.pend_bcu_q - (ev_bcu ? 1 : 0);
-    if ((c.pop_fd && pf > 0) || (c.pop_bcu && pb > 0)) n.err_q = true;
+    if ((c.pop_b && pb > 0 && c.owner1 && !c.tick_kind) || (c.pop_f && pf > 0 && c.owner1 && c.tick_kind))
+      n.err_q = true;
     n.pend_fd_q = (pf + (fi.tick ? 1 : 0)) & 3;
     n.pend_bcu_q = (pb + (bi.tick ? 1 : 0)) & 3;
 

@@ -1,27 +1,28 @@
 // trajcore: BCU generator. Samples a cubic Bernstein polynomial per axis at
-// t = j/2^d, j = 0..2^d-1, in increasing time order, one sample per tick, by
-// depth-first de Casteljau mid-subdivision (scaled form, seed 000) with an
-// explicit stack. Mirrors hls/traj_bcu_gen.hpp cycle for cycle; the full
-// description (arithmetic, schedule, timing, interface rules) is there and in
-// tb/bcu/README.md. In short:
-//   * values are WP = Digits*ChunkWidth bits (Digits = ceil((CtrlWidth +
-//     3*MaxDepth)/ChunkWidth)), sent by the host pre-scaled by 8^(MaxDepth-d),
-//     so every leaf is 8^MaxDepth times the exact value: the output is one
-//     fixed bit slice, rounded once, half up.
-//   * digit-serial datapath: four lanes (A, B, C, D) rotate by one ChunkWidth
-//     digit per cycle through a 2-stage pipelined BCU whose adders are
-//     ChunkWidth bits wide with saved carries (as traj_fd_engine): no carry
-//     chain longer than ChunkWidth, no chunk-select multiplexer.
-//   * stack: MaxDepth*Axes*Digits entries of 4 digits, one write port,
-//     synchronous read: block RAM.
-//   * ticks at least MinTickSpacing = 3 + 4*N + MaxDepth*(N+2) clocks apart
-//     (N = Axes*Digits) are always served with latency 2.
+// t = j/2^d, j = 0..2^d-1, in increasing time order, ONE SAMPLE PER CLOCK once
+// a segment has started, then holds the end value round(D). Mirrors
+// hls/traj_bcu_gen.hpp cycle for cycle; the full description (method,
+// exactness, schedule, timing rules) is there and in tb/bcu/README.md. In short:
+//   * the host sends every control value pre-scaled by 8^(MaxDepth-d); d
+//     scaled mid-subdivisions along the left spine (digit-serial BCU, in place
+//     in block RAM) give the first leaf (A, B, C, D), 8^MaxDepth times the
+//     cubic on [0, 2^-d];
+//   * one digit-serial pass turns it into exact integer forward differences
+//     S0 = A + 2^(Shift-1), D1 = D - A, D2 = 6(B-2C+D), D3 = 6(D-3C+3B-A):
+//     the leaf polynomial at every integer x is the sample at t = x/2^d, so
+//     S += D1, D1 += D2, D2 += D3 gives every sample exactly (modulo 2^WF,
+//     the true values fit) and the sample is a bit slice of S;
+//   * the forward-difference stage is a skewed carry pipeline: C chunks of
+//     ChunkWidth bits, the carry registered between chunks, chunk k one step
+//     behind chunk k-1: one step per clock, no carry chain longer than
+//     ChunkWidth; the next segment is loaded chunk by chunk behind the last
+//     step of the current one (no gap).
 `default_nettype none
 `include "traj_check.svh"
 
 module traj_bcu_gen #(
   parameter int Axes       = 3,   // axes in lockstep, 1..8
-  parameter int ChunkWidth = 16,  // stream word and carry-chain digit width, 8..64
+  parameter int ChunkWidth = 16,  // stream word and carry-chain chunk width, 8..64
   parameter int CtrlWidth  = 40,  // control value width, >= 2
   parameter int GuardBits  = 9,   // control bits below the output LSB, 0..CtrlWidth-2
   parameter int OutWidth   = 32,  // sample width, CtrlWidth-GuardBits+(GuardBits>0) .. 64
@@ -44,21 +45,26 @@ module traj_bcu_gen #(
 );
 
   localparam int CW        = ChunkWidth;
-  localparam int W         = CtrlWidth + 3 * MaxDepth;         // value bits needed
-  localparam int Digits    = (W + CW - 1) / CW;                 // digits per value
-  localparam int WP        = Digits * CW;                       // datapath width
-  localparam int N         = Axes * Digits;                     // digits per lane
-  localparam int P         = 2;                                 // BCU pipeline latency
-  localparam int R         = N + P;                             // ring positions per lane
-  localparam int Shift     = 3 * MaxDepth + GuardBits;          // output rounding shift
+  localparam int W         = CtrlWidth + 3 * MaxDepth;          // value bits needed
+  localparam int Digits    = (W + CW - 1) / CW;                  // stream digits per value
+  localparam int WP        = Digits * CW;                        // stream value width
+  localparam int N         = Axes * Digits;                      // DESC pass slots
+  localparam int C         = (W + 1 + CW - 1) / CW;              // FD chunks
+  localparam int WF        = C * CW;                             // FD register width
+  localparam int Ni        = Axes * C;                           // INIT pass slots
+  localparam int L         = 5;                                  // read -> write latency
+  localparam int Pp        = (N > L + 1) ? N : L + 1;            // DESC pass period
+  localparam int Pi        = Ni + L + 1;                         // INIT + drain + hand-off
+  localparam int Shift     = 3 * MaxDepth + GuardBits;           // output rounding shift
   localparam int Narrow    = CtrlWidth - GuardBits + ((GuardBits > 0) ? 1 : 0);
   localparam int DepthBits = $clog2(MaxDepth + 1);
-  localparam int Stack     = MaxDepth * N;
-  localparam int AddrBits  = $clog2(Stack + 1);
-  localparam int PcBits    = $clog2(R);
-  localparam int LcBits    = (N > 1) ? $clog2(N) : 1;
-  localparam int DgBits    = (Digits > 1) ? $clog2(Digits) : 1;
-  localparam int LaneW     = R * CW;
+  localparam int DgBits    = (C > 1) ? $clog2(C) : 1;
+  localparam int AxBits    = (Axes > 1) ? $clog2(Axes) : 1;
+  localparam int PcBits    = $clog2(((Pp > Pi) ? Pp : Pi) + 1);
+  localparam int MemAB     = DgBits + 1;                         // {bank, digit}
+  localparam int HalfDigit = (Shift - 1) / CW;                   // rounding constant 2^(Shift-1)
+  localparam int HalfBit   = (Shift - 1) % CW;
+  localparam int K0        = Shift / CW;                         // lowest chunk of the output slice
 
   // ---------------------------------------------------------------------
   // Elaboration-time parameter checks.
@@ -77,161 +83,278 @@ module traj_bcu_gen #(
   `TRAJ_PARAM_CHECK(g_bad_hdr, DepthBits <= ChunkWidth,
                     "traj_bcu_gen: the depth field must fit one stream word")
 
-  localparam logic [2:0] StIdle   = 3'd0;
-  localparam logic [2:0] StLoad   = 3'd1;
-  localparam logic [2:0] StSettle = 3'd2;
-  localparam logic [2:0] StDesc   = 3'd3;
-  localparam logic [2:0] StReady  = 3'd4;
-  localparam logic [2:0] StPop    = 3'd5;
+  localparam logic [2:0] StIdle  = 3'd0;
+  localparam logic [2:0] StLoad  = 3'd1;
+  localparam logic [2:0] StWaitx = 3'd2;
+  localparam logic [2:0] StDesc  = 3'd3;
+  localparam logic [2:0] StInit  = 3'd4;
 
   // ---------------------------------------------------------------------
-  // State. Control is reset; datapath (ring, pipeline, asm, rd, sample,
-  // stack, pop address pipeline) is not.
+  // Control state (reset).
   // ---------------------------------------------------------------------
-  logic [2:0]           state_q, state_d;
-  logic                 tick_q, tick_err_q, have_last_q, have_last_d;
-  logic                 valid_q, valid_d, underrun_q, underrun_d, done_q, done_d;
-  logic [DepthBits-1:0] depth_q, depth_d, lvl_q, lvl_d, pop_lvl_q;
-  logic [PcBits-1:0]    pc_q, pc_d;
+  logic [2:0]           fsm_q, fsm_d;
+  logic                 tick_q, tick_err_q, valid_q, underrun_q, done_q;
+  logic [DepthBits-1:0] depth_q, depth_d, lvl_q, lvl_d, xdepth_q;
+  logic                 bank_q, bank_d, nbank_q, nbank_d;
   logic [1:0]           wc_q, wc_d;
-  logic [LcBits-1:0]    lc_q, lc_d;
-  logic [DgBits-1:0]    dg_q, dg_d;
-  logic                 pc_last_q;  // == (pc_q == R-1), a flop for timing
-  logic [MaxDepth-1:0]  j_q, j_d;
-  logic [AddrBits-1:0]  addr_q, addr_d, pop_base_q;
+  logic [DgBits-1:0]    wdg_q, wdg_d, sdg_q, sdg_d, xk_q;
+  logic [AxBits-1:0]    wax_q, wax_d, sax_q, sax_d;
+  logic [PcBits-1:0]    pc_q, pc_d;
+  logic                 xpend_q, xbusy_q, xbank_q, frem_q, need_end_q;
+  logic [MaxDepth-1:0]  fcnt_q;
+  logic [C-1:0]         tag_v_q, tag_last_q, tag_end_q;
+  // the start flag is used below the top only (chunk k loads where it is at k-1)
+  /* verilator lint_off UNUSEDSIGNAL */
+  logic [C-1:0]         tag_start_q;
+  /* verilator lint_on UNUSEDSIGNAL */
 
-  logic [4*LaneW-1:0]       ring_q, ring_d;     // lane l position i at [(l*R+i)*CW +: CW]
-  logic [3*CW-1:0]          asm_q, asm_d;
-  logic [4*CW-1:0]          rd_q;
-  logic [Axes*OutWidth-1:0] sample_q, sample_d;
-  logic [4*CW-1:0]          stack_mem [2**AddrBits];
-
-  logic accept, consume, mem_we, shift, ins_desc, ins_load, ins_pop;
+  logic accept, hand_off;
+  assign s_axis_tready = (fsm_q == StIdle) || (fsm_q == StLoad);
+  assign accept        = s_axis_tready && s_axis_tvalid;
 
   // ---------------------------------------------------------------------
-  // Digit-serial BCU on the head digits (free running, latency 2).
-  //   stage 1: s1 = A+B, s2 = B+C, s3 = C+D
-  //   stage 2: t1 = s1+s2, t2 = s2+s3
-  //   output : m = t1+t2; L = (A<<3, s1<<2, t1<<1, m), R = (m, t2<<1, s3<<2, D<<3)
-  // Carries are saved per adder and cleared at the first digit of a value;
-  // shifts take the top bits of the previous digit from small flops.
+  // Forward-difference stage control: advance, ticks, entering tag.
   // ---------------------------------------------------------------------
+  logic top_v, top_end, newer, proc, under, consume, adv;
+  logic enter_start, ent_v, ent_last, ent_end, xfer_step;
+  assign top_v   = tag_v_q[C-1];
+  assign top_end = tag_end_q[C-1];
+  if (C > 1) begin : g_newer
+    assign newer = xpend_q || (|tag_v_q[C-2:0]);
+    assign xfer_step = adv && (enter_start || (|tag_start_q[C-2:0]));
+  end else begin : g_newer1
+    assign newer = xpend_q;
+    assign xfer_step = adv && enter_start;
+  end
+  assign proc    = tick_q && top_v;
+  assign under   = tick_q && !top_v && (fsm_q == StIdle) && !s_axis_tvalid && !newer;
+  assign consume = proc || under;
+  assign adv     = top_v ? proc : (top_end ? newer : 1'b1);
+
+  assign enter_start = !frem_q && xpend_q;
+  // tags after an advance: shifted by one, the entering tag at 0
+  logic [C-1:0] tag_v_d, tag_start_d, tag_last_d, tag_end_d;
+  if (C > 1) begin : g_tag
+    assign tag_v_d     = {tag_v_q[C-2:0], ent_v};
+    assign tag_start_d = {tag_start_q[C-2:0], enter_start};
+    assign tag_last_d  = {tag_last_q[C-2:0], ent_v && ent_last};
+    assign tag_end_d   = {tag_end_q[C-2:0], ent_end};
+  end else begin : g_tag1
+    assign tag_v_d     = ent_v;
+    assign tag_start_d = enter_start;
+    assign tag_last_d  = ent_v && ent_last;
+    assign tag_end_d   = ent_end;
+  end
+  assign ent_v       = frem_q || xpend_q;
+  assign ent_last    = frem_q ? (fcnt_q == '0) : (xdepth_q == '0);
+  assign ent_end     = !frem_q && !xpend_q && need_end_q;
+
+  // ---------------------------------------------------------------------
+  // Block RAM: one memory per (lane, axis), address {bank, digit}; one
+  // registered write port (LOAD words, pass results), one synchronous read
+  // port (passes, transfer), shared address for all memories.
+  // ---------------------------------------------------------------------
+  logic                 rd_bank;
+  logic [DgBits-1:0]    rd_dg;
+  logic [MemAB-1:0]     rd_addr, waddr_q;
+  logic [4*CW-1:0]      wdata_q;
+  logic [4*Axes-1:0]    we_q;          // lane l, axis a at [l*Axes + a]
+  logic [4*Axes*CW-1:0] rd_q;          // lane l, axis a at [(l*Axes + a)*CW +: CW]
+  assign rd_addr = {rd_bank, rd_dg};
+  for (genvar l = 0; l < 4; l++) begin : g_mem_l
+    for (genvar a = 0; a < Axes; a++) begin : g_mem_a
+      logic [CW-1:0] mem [2**MemAB];
+      always_ff @(posedge clk_i) begin
+        if (we_q[l*Axes + a]) mem[waddr_q] <= wdata_q[l*CW +: CW];
+        rd_q[(l*Axes + a)*CW +: CW] <= mem[rd_addr];
+      end
+    end
+  end
+
+  // read port, read every cycle (no enable: no fan-out of a late enable to
+  // the read registers): a pass's slot (digit 0 in its other cycles, so the
+  // hand-off cycle reads chunk 0), else the transfer's chunk xk, or xk+1 when
+  // chunk xk loads in this cycle.
+  logic          issue;   // a pass slot is read this cycle
+  logic          pass_init, pass_on;
+  assign pass_on = (fsm_q == StDesc) || (fsm_q == StInit);
+  assign rd_bank = pass_on ? bank_q : xbank_q;
+  assign rd_dg   = pass_on ? (issue ? sdg_q : '0) : (xfer_step ? xk_q + 1'b1 : xk_q);
+
+  // ---------------------------------------------------------------------
+  // Digit-serial pipeline: rd -> hd -> stage 1 -> stage 2 -> write register.
+  // Slot flags: v (write back), first (first digit of a value, or a bubble),
+  // init (INIT pass), ext (sign-fill digit), ax, dg, bank.
+  // ---------------------------------------------------------------------
+  logic              rs_v, rs_first, rs_init, rs_ext, rs_bank;
+  logic              hs_v, hs_first, hs_init, hs_bank;
+  logic              s1_v, s1_first, s1_init, s1_bank;
+  logic              s2_v, s2_init, s2_bank;
+  logic [AxBits-1:0] rs_ax, hs_ax, s1_ax, s2_ax;
+  logic [DgBits-1:0] rs_dg, hs_dg, s1_dg, s2_dg;
+  logic              is_first, is_ext;
+  assign is_first = (sdg_q == '0);
+  assign is_ext   = pass_init && (32'(sdg_q) >= Digits);
+
+  always_ff @(posedge clk_i) begin
+    if (!rst_ni) begin
+      rs_v <= 1'b0; rs_first <= 1'b1; rs_init <= 1'b0; rs_ext <= 1'b0;
+      hs_v <= 1'b0; hs_first <= 1'b1; hs_init <= 1'b0;
+      s1_v <= 1'b0; s1_first <= 1'b1; s1_init <= 1'b0;
+      s2_v <= 1'b0; s2_init <= 1'b0;
+    end else begin
+      rs_v     <= issue;
+      rs_first <= !issue || is_first;
+      rs_init  <= issue && pass_init;
+      rs_ext   <= issue && is_ext;
+      hs_v     <= rs_v;
+      hs_first <= rs_first;
+      hs_init  <= rs_init;
+      s1_v     <= hs_v;
+      s1_first <= hs_first;
+      s1_init  <= hs_init;
+      s2_v     <= s1_v;
+      s2_init  <= s1_init;
+    end
+  end
+  always_ff @(posedge clk_i) begin
+    rs_ax   <= issue ? sax_q : '0;
+    rs_dg   <= issue ? sdg_q : '0;
+    rs_bank <= issue && bank_q;
+    hs_ax   <= rs_ax;   hs_dg <= rs_dg;   hs_bank <= rs_bank;
+    s1_ax   <= hs_ax;   s1_dg <= hs_dg;   s1_bank <= hs_bank;
+    s2_ax   <= s1_ax;   s2_dg <= s1_dg;   s2_bank <= s1_bank;
+  end
+
+  // hd: axis multiplexer (or the sign fill of the previous digit)
+  logic [4*CW-1:0] hd_q;
+  always_ff @(posedge clk_i) begin
+    for (int l = 0; l < 4; l++) begin
+      if (rs_ext) hd_q[l*CW +: CW] <= {CW{hd_q[l*CW + CW - 1]}};
+      else        hd_q[l*CW +: CW] <= rd_q[(l*Axes + 32'(rs_ax))*CW +: CW];
+    end
+  end
+
+  // stage 1: BCU s1=A+B, s2=B+C, s3=C+D; INIT e1=D-A, e2=B-C, e3=D-C.
+  // Saved carries: cleared (set, for a subtraction) when the digit that will
+  // use them (slot rs, next in hd) starts a value.
   logic [CW-1:0] hd_a, hd_b, hd_c, hd_d;
-  assign hd_a = ring_q[(0 * R) * CW +: CW];
-  assign hd_b = ring_q[(1 * R) * CW +: CW];
-  assign hd_c = ring_q[(2 * R) * CW +: CW];
-  assign hd_d = ring_q[(3 * R) * CW +: CW];
-
-  logic          f0, f0_next;
-  logic [CW:0]   s1_sum, s2_sum, s3_sum, t1_sum, t2_sum, m_sum;
-  logic [CW-1:0] s1_q, s2_q, s3_q, a1_q, d1_q;
-  logic          cs1_q, cs2_q, cs3_q, first1_q;
-  logic [CW-1:0] t1_q, t2_q, a2_q, s12_q, s32_q, d2_q;
-  logic          ct1_q, ct2_q, cm_q;
-  logic [2:0]    ha_q, hd_q;
-  logic [1:0]    hs1_q, hs3_q;
-  logic          ht1_q, ht2_q;
-
-  // Saved carries and shift bits are cleared when they are captured if the
-  // digit that will use them is the first of a value, so no adder carry-in
-  // and no shifted digit is gated (timing).
-  assign f0      = (dg_q == '0);
-  // == (dg_d == '0), from flops only (timing)
-  assign f0_next = (state_q != StDesc) || pc_last_q || (dg_q == DgBits'(Digits - 1));
+  assign hd_a = hd_q[0*CW +: CW];
+  assign hd_b = hd_q[1*CW +: CW];
+  assign hd_c = hd_q[2*CW +: CW];
+  assign hd_d = hd_q[3*CW +: CW];
+  logic [CW:0]   s1_sum, s2_sum, s3_sum, e1_sum, e2_sum, e3_sum;
+  logic [CW-1:0] s1_q, s2_q, s3_q, a1_q, e1_q, e2_q, e3_q;
+  logic          cs1_q, cs2_q, cs3_q, ce1_q, ce2_q, ce3_q;
   assign s1_sum = {1'b0, hd_a} + {1'b0, hd_b} + {{CW{1'b0}}, cs1_q};
   assign s2_sum = {1'b0, hd_b} + {1'b0, hd_c} + {{CW{1'b0}}, cs2_q};
   assign s3_sum = {1'b0, hd_c} + {1'b0, hd_d} + {{CW{1'b0}}, cs3_q};
+  assign e1_sum = {1'b0, hd_d} + {1'b0, ~hd_a} + {{CW{1'b0}}, ce1_q};
+  assign e2_sum = {1'b0, hd_b} + {1'b0, ~hd_c} + {{CW{1'b0}}, ce2_q};
+  assign e3_sum = {1'b0, hd_d} + {1'b0, ~hd_c} + {{CW{1'b0}}, ce3_q};
+  always_ff @(posedge clk_i) begin
+    s1_q  <= s1_sum[CW-1:0];
+    s2_q  <= s2_sum[CW-1:0];
+    s3_q  <= s3_sum[CW-1:0];
+    e1_q  <= e1_sum[CW-1:0];
+    e2_q  <= e2_sum[CW-1:0];
+    e3_q  <= e3_sum[CW-1:0];
+    a1_q  <= hd_a;
+    cs1_q <= s1_sum[CW] && !rs_first;
+    cs2_q <= s2_sum[CW] && !rs_first;
+    cs3_q <= s3_sum[CW] && !rs_first;
+    ce1_q <= e1_sum[CW] || rs_first;
+    ce2_q <= e2_sum[CW] || rs_first;
+    ce3_q <= e3_sum[CW] || rs_first;
+  end
+
+  // stage 2: BCU t1=s1+s2, t2=s2+s3; INIT u=e2+e3, y1=6*e1, y2=18*e2.
+  logic [CW:0]   t1_sum, t2_sum, u_sum, y1_sum, y2_sum;
+  logic [CW-1:0] t1_q, t2_q, a2_q, s12_q, u_q, y1_q, y2_q, e1d_q;
+  logic          ct1_q, ct2_q, cu_q, cy1_q, cy2_q;
+  logic [1:0]    he1_q;
+  logic [3:0]    he2_q;
   assign t1_sum = {1'b0, s1_q} + {1'b0, s2_q} + {{CW{1'b0}}, ct1_q};
   assign t2_sum = {1'b0, s2_q} + {1'b0, s3_q} + {{CW{1'b0}}, ct2_q};
-  assign m_sum  = {1'b0, t1_q} + {1'b0, t2_q} + {{CW{1'b0}}, cm_q};
-
+  assign u_sum  = {1'b0, e2_q} + {1'b0, e3_q} + {{CW{1'b0}}, cu_q};
+  assign y1_sum = {1'b0, e1_q[CW-3:0], he1_q} + {1'b0, e1_q[CW-2:0], he1_q[1]} + {{CW{1'b0}}, cy1_q};
+  assign y2_sum = {1'b0, e2_q[CW-5:0], he2_q} + {1'b0, e2_q[CW-2:0], he2_q[3]} + {{CW{1'b0}}, cy2_q};
   always_ff @(posedge clk_i) begin
-    s1_q     <= s1_sum[CW-1:0];
-    s2_q     <= s2_sum[CW-1:0];
-    s3_q     <= s3_sum[CW-1:0];
-    cs1_q    <= s1_sum[CW] && !f0_next;
-    cs2_q    <= s2_sum[CW] && !f0_next;
-    cs3_q    <= s3_sum[CW] && !f0_next;
-    a1_q     <= hd_a;
-    d1_q     <= hd_d;
-    first1_q <= f0;
-    t1_q     <= t1_sum[CW-1:0];
-    t2_q     <= t2_sum[CW-1:0];
-    ct1_q    <= t1_sum[CW] && !f0;
-    ct2_q    <= t2_sum[CW] && !f0;
-    a2_q     <= a1_q;
-    s12_q    <= s1_q;
-    s32_q    <= s3_q;
-    d2_q     <= d1_q;
-    cm_q     <= m_sum[CW] && !first1_q;
-    ha_q     <= first1_q ? 3'b000 : a2_q[CW-1:CW-3];
-    hs1_q    <= first1_q ? 2'b00 : s12_q[CW-1:CW-2];
-    ht1_q    <= first1_q ? 1'b0 : t1_q[CW-1];
-    ht2_q    <= first1_q ? 1'b0 : t2_q[CW-1];
-    hs3_q    <= first1_q ? 2'b00 : s32_q[CW-1:CW-2];
-    hd_q     <= first1_q ? 3'b000 : d2_q[CW-1:CW-3];
+    t1_q  <= t1_sum[CW-1:0];
+    t2_q  <= t2_sum[CW-1:0];
+    u_q   <= u_sum[CW-1:0];
+    y1_q  <= y1_sum[CW-1:0];
+    y2_q  <= y2_sum[CW-1:0];
+    ct1_q <= t1_sum[CW] && !hs_first;
+    ct2_q <= t2_sum[CW] && !hs_first;
+    cu_q  <= u_sum[CW] && !hs_first;
+    cy1_q <= y1_sum[CW] && !hs_first;
+    cy2_q <= y2_sum[CW] && !hs_first;
+    he1_q <= hs_first ? 2'b00 : e1_q[CW-1:CW-2];
+    he2_q <= hs_first ? 4'b0000 : e2_q[CW-1:CW-4];
+    a2_q  <= a1_q;
+    s12_q <= s1_q;
+    e1d_q <= e1_q;
   end
 
-  logic [4*CW-1:0] bcu_left, bcu_right;
-  assign bcu_left  = {m_sum[CW-1:0], {t1_q[CW-2:0], ht1_q}, {s12_q[CW-3:0], hs1_q},
-                      {a2_q[CW-4:0], ha_q}};
-  assign bcu_right = {{d2_q[CW-4:0], hd_q}, {s32_q[CW-3:0], hs3_q}, {t2_q[CW-2:0], ht2_q},
-                      m_sum[CW-1:0]};
-
-  // ---------------------------------------------------------------------
-  // Output rounding, once, half up: floor((x + 2^(Shift-1)) / 2^Shift), of
-  // A (READY) and of D (IDLE: the end value of the last leaf) of every axis,
-  // registered every cycle (rnd_a_q, rnd_d_q: the sum bits pack into the adders'
-  // logic cells). The ring is static in SETTLE/READY and IDLE (no pass), and
-  // a tick is processed only from the cycle after SETTLE, resp. in IDLE,
-  // which is entered only from READY (or reset, with have_last_q clear), so
-  // the registered values are those of the current ring. The sample is then
-  // selected from flops (rsel_q == (state_q == StIdle)): no adder is in the
-  // path to sample_q.
-  // ---------------------------------------------------------------------
-  logic                     rsel_q;
-  logic [Axes*OutWidth-1:0] rnd_a_q, rnd_d_q, round_x;
-  for (genvar a = 0; a < Axes; a++) begin : g_round
-    // Bits of xa/xd below the rounding bit, and the sign copies of ha/hd
-    // above the Narrow result bits, are not needed (the value fits Narrow bits).
-    /* verilator lint_off UNUSEDSIGNAL */
-    logic [WP-1:0]              xa, xd;
-    logic signed [WP-Shift-1:0] ha, hd;
-    /* verilator lint_on UNUSEDSIGNAL */
-    logic [Narrow-1:0]          ra, rd;
-    assign xa = ring_q[(0 * R + a * Digits) * CW +: WP];
-    assign xd = ring_q[(3 * R + a * Digits) * CW +: WP];
-    assign ha = xa[WP-1:Shift];
-    assign hd = xd[WP-1:Shift];
-    assign ra = Narrow'(ha) + {{(Narrow-1){1'b0}}, xa[Shift-1]};
-    assign rd = Narrow'(hd) + {{(Narrow-1){1'b0}}, xd[Shift-1]};
-    always_ff @(posedge clk_i) begin
-      rnd_a_q[a*OutWidth +: OutWidth] <= OutWidth'($signed(ra));
-      rnd_d_q[a*OutWidth +: OutWidth] <= OutWidth'($signed(rd));
-    end
+  // output stage: BCU m = t1+t2, L = (A<<3, s1<<2, t1<<1, m);
+  // INIT S0 = A + half, D1 = e1, D2 = (u<<2)+(u<<1), D3 = y1+y2.
+  logic [CW:0]   m_sum, s0_sum, dd2_sum, dd3_sum;
+  logic          cm_q, cs0_q, cd2_q, cd3_q;
+  logic [2:0]    ha_q;
+  logic [1:0]    hs1_q, hu_q;
+  logic          ht1_q;
+  logic [CW-1:0] half_dig;
+  assign half_dig = (32'(s2_dg) == HalfDigit) ? CW'(1) << HalfBit : '0;
+  assign m_sum   = {1'b0, t1_q} + {1'b0, t2_q} + {{CW{1'b0}}, cm_q};
+  assign s0_sum  = {1'b0, a2_q} + {1'b0, half_dig} + {{CW{1'b0}}, cs0_q};
+  assign dd2_sum = {1'b0, u_q[CW-3:0], hu_q} + {1'b0, u_q[CW-2:0], hu_q[1]} + {{CW{1'b0}}, cd2_q};
+  assign dd3_sum = {1'b0, y1_q} + {1'b0, y2_q} + {{CW{1'b0}}, cd3_q};
+  always_ff @(posedge clk_i) begin
+    cm_q  <= m_sum[CW] && !s1_first;
+    cs0_q <= s0_sum[CW] && !s1_first;
+    cd2_q <= dd2_sum[CW] && !s1_first;
+    cd3_q <= dd3_sum[CW] && !s1_first;
+    ha_q  <= s1_first ? 3'b000 : a2_q[CW-1:CW-3];
+    hs1_q <= s1_first ? 2'b00 : s12_q[CW-1:CW-2];
+    ht1_q <= s1_first ? 1'b0 : t1_q[CW-1];
+    hu_q  <= s1_first ? 2'b00 : u_q[CW-1:CW-2];
   end
-  assign round_x = rsel_q ? rnd_d_q : rnd_a_q;
 
-  // ---------------------------------------------------------------------
-  // Pop address pipeline, three registers: the lowest zero bit of j (one-hot,
-  // ~j & (j+1)), its index = trailing ones of j, p = depth-1-that, then p*N.
-  // j only changes at a processed tick and READY comes at least R cycles later.
-  // ---------------------------------------------------------------------
-  logic [MaxDepth-1:0]  zero_oh_q;
-  logic [DepthBits-1:0] tones;
-  always_comb begin
-    tones = '0;
-    for (int i = 0; i < MaxDepth; i++) begin
-      if (zero_oh_q[i]) tones = tones | DepthBits'(i);
+  // write register: LOAD word (one lane) or pass result (4 lanes)
+  logic wl_we;
+  logic [MemAB-1:0] wl_addr;
+  assign wl_we   = (fsm_q == StLoad) && accept;
+  assign wl_addr = {bank_q, wdg_q};
+  always_ff @(posedge clk_i) begin
+    if (wl_we) begin
+      wdata_q <= {4{s_axis_tdata}};
+      waddr_q <= wl_addr;
+    end else if (s2_init) begin
+      wdata_q <= {dd3_sum[CW-1:0], dd2_sum[CW-1:0], e1d_q, s0_sum[CW-1:0]};
+      waddr_q <= {s2_bank, s2_dg};
+    end else begin
+      wdata_q <= {m_sum[CW-1:0], {t1_q[CW-2:0], ht1_q}, {s12_q[CW-3:0], hs1_q}, {a2_q[CW-4:0], ha_q}};
+      waddr_q <= {s2_bank, s2_dg};
     end
   end
   always_ff @(posedge clk_i) begin
-    zero_oh_q  <= ~j_q & (j_q + 1'b1);
-    pop_lvl_q  <= depth_q - 1'b1 - tones;
-    pop_base_q <= AddrBits'(pop_lvl_q) * AddrBits'(N);
+    for (int l = 0; l < 4; l++) begin
+      for (int a = 0; a < Axes; a++) begin
+        if (!rst_ni) begin
+          we_q[l*Axes + a] <= 1'b0;
+        end else if (wl_we) begin
+          we_q[l*Axes + a] <= (wc_q == 2'(l)) && (32'(wax_q) == a);
+        end else begin
+          we_q[l*Axes + a] <= s2_v && (32'(s2_ax) == a);
+        end
+      end
+    end
   end
 
-  // Header word: depth, clamped to MaxDepth.
+  // ---------------------------------------------------------------------
+  // Prep FSM (mirrors BcuGen::clock).
+  // ---------------------------------------------------------------------
   logic [DepthBits-1:0] hdr_depth;
   // The comparison is constant when MaxDepth+1 is a power of two (no value of
   // the field exceeds MaxDepth); it is kept for every other MaxDepth.
@@ -240,216 +363,274 @@ module traj_bcu_gen #(
                    ? DepthBits'(MaxDepth) : s_axis_tdata[DepthBits-1:0];
   /* verilator lint_on CMPCONST */
 
-  // j == 2^d - 1 (the last leaf), registered: j and d are stable for many
-  // cycles before READY (at least R after a tick, 4*N after a header).
-  // Likewise the level compares of the pass ends (lvl changes at most once
-  // per pass, R cycles apart).
-  logic is_last_q, desc_last_q, lvl_eq_q;
-  always_ff @(posedge clk_i) begin
-    is_last_q   <= (j_q == ~({MaxDepth{1'b1}} << depth_q));
-    desc_last_q <= (lvl_q + 1'b1 == depth_q);
-    lvl_eq_q    <= (lvl_q == depth_q);
-  end
+  logic [PcBits-1:0] npass, period;
+  logic [DgBits-1:0] dpass_last;
+  assign pass_init  = (fsm_q == StInit);
+  assign npass      = pass_init ? PcBits'(Ni) : PcBits'(N);
+  assign period     = pass_init ? PcBits'(Pi) : PcBits'(Pp);
+  assign dpass_last = pass_init ? DgBits'(C - 1) : DgBits'(Digits - 1);
+  assign issue      = ((fsm_q == StDesc) || pass_init) && (pc_q < npass);
+  assign hand_off   = pass_init && (pc_q == period - 1'b1);
 
-  assign s_axis_tready = (state_q == StIdle) || (state_q == StLoad);
-  assign accept        = s_axis_tready && s_axis_tvalid;
-
-  // ---------------------------------------------------------------------
-  // Next state (mirrors BcuGen::clock).
-  // ---------------------------------------------------------------------
   always_comb begin
-    state_d     = state_q;
-    have_last_d = have_last_q;
-    valid_d     = 1'b0;
-    underrun_d  = 1'b0;
-    done_d      = 1'b0;
-    depth_d     = depth_q;
-    lvl_d       = lvl_q;
-    pc_d        = pc_q;
-    wc_d        = wc_q;
-    lc_d        = lc_q;
-    j_d         = j_q;
-    addr_d      = addr_q;
-    asm_d       = asm_q;
-    sample_d    = sample_q;
-    consume     = 1'b0;
-    mem_we      = 1'b0;
-    shift       = 1'b0;
-    ins_desc    = 1'b0;
-    ins_load    = 1'b0;
-    ins_pop     = 1'b0;
-
-    unique case (state_q)
+    fsm_d   = fsm_q;
+    depth_d = depth_q;
+    bank_d  = bank_q;
+    nbank_d = nbank_q;
+    wc_d    = wc_q;
+    wdg_d   = wdg_q;
+    wax_d   = wax_q;
+    pc_d    = pc_q;
+    lvl_d   = lvl_q;
+    sdg_d   = sdg_q;
+    sax_d   = sax_q;
+    case (fsm_q)
       StIdle: begin
-        // Timing: only the state (and the tick) depend on accept. depth is
-        // taken from every word offered in IDLE (the accepted header is the
-        // last one), j, lvl and addr are cleared in every IDLE cycle (unused
-        // there), and wc, lc and pc are always 0 in IDLE.
-        depth_d = hdr_depth;
-        j_d     = '0;
-        lvl_d   = '0;
-        addr_d  = '0;
         if (accept) begin
-          state_d = StLoad;
-        end else if (tick_q) begin
-          consume    = 1'b1;
-          underrun_d = 1'b1;
-          if (have_last_q) begin
-            valid_d  = 1'b1;
-            sample_d = round_x;
-          end
+          depth_d = hdr_depth;
+          bank_d  = nbank_q;
+          nbank_d = !nbank_q;
+          wc_d    = '0;
+          wdg_d   = '0;
+          wax_d   = '0;
+          fsm_d   = StLoad;
         end
       end
       StLoad: begin
         if (accept) begin
+          wc_d = wc_q + 1'b1;
           if (wc_q == 2'd3) begin
-            wc_d     = '0;
-            shift    = 1'b1;
-            ins_load = 1'b1;
-            if (lc_q == LcBits'(N - 1)) begin
-              lc_d    = '0;
-              state_d = (depth_q == '0) ? StSettle : StDesc;
+            if (wdg_q == DgBits'(Digits - 1)) begin
+              wdg_d = '0;
+              if (wax_q == AxBits'(Axes - 1)) begin
+                wax_d = '0;
+                fsm_d = StWaitx;
+              end else begin
+                wax_d = wax_q + 1'b1;
+              end
             end else begin
-              lc_d = lc_q + 1'b1;
+              wdg_d = wdg_q + 1'b1;
             end
-          end else begin
-            asm_d[wc_q*CW +: CW] = s_axis_tdata;
-            wc_d                 = wc_q + 1'b1;
           end
         end
       end
-      StDesc: begin
-        shift    = 1'b1;
-        ins_desc = 1'b1;
-        if (pc_q >= PcBits'(P)) begin
-          mem_we = 1'b1;
-          addr_d = addr_q + 1'b1;
-        end
-        if (pc_last_q) begin
+      StWaitx: begin
+        if (!xpend_q && !xbusy_q) begin
+          fsm_d = (depth_q == '0) ? StInit : StDesc;
           pc_d  = '0;
-          lvl_d = lvl_q + 1'b1;
-          if (desc_last_q) state_d = StSettle;
-        end else begin
-          pc_d = pc_q + 1'b1;
+          lvl_d = '0;
+          sdg_d = '0;
+          sax_d = '0;
         end
       end
-      StSettle: begin
-        // one cycle for the registered output rounding (rnd_a_q) to see the leaf
-        state_d = StReady;
-      end
-      StReady: begin
-        if (tick_q) begin
-          consume  = 1'b1;
-          valid_d  = 1'b1;
-          sample_d = round_x;
-          if (is_last_q) begin
-            done_d      = 1'b1;
-            have_last_d = 1'b1;
-            state_d     = StIdle;
+      StDesc, StInit: begin
+        if (issue) begin
+          if (sdg_q == dpass_last) begin
+            sdg_d = '0;
+            sax_d = sax_q + 1'b1;
           end else begin
-            lvl_d   = pop_lvl_q + 1'b1;
-            addr_d  = pop_base_q;
-            pc_d    = '0;
-            j_d     = j_q + 1'b1;
-            state_d = StPop;
+            sdg_d = sdg_q + 1'b1;
           end
         end
-      end
-      StPop: begin
-        shift   = 1'b1;
-        ins_pop = 1'b1;
-        if (pc_q < PcBits'(N)) addr_d = addr_q + 1'b1;
-        if (pc_last_q) begin
-          pc_d    = '0;
-          state_d = lvl_eq_q ? StSettle : StDesc;
+        if (pc_q == period - 1'b1) begin
+          pc_d  = '0;
+          sdg_d = '0;
+          sax_d = '0;
+          if (pass_init) begin
+            fsm_d = StIdle;
+          end else begin
+            lvl_d = lvl_q + 1'b1;
+            if (lvl_q + 1'b1 == depth_q) fsm_d = StInit;
+          end
         end else begin
           pc_d = pc_q + 1'b1;
         end
       end
       default: begin
-        state_d = StIdle;
+        fsm_d = StIdle;
       end
     endcase
-
-    // digit index of the head digit (0 = first digit of a value)
-    if (state_q == StDesc && !pc_last_q) begin
-      dg_d = (dg_q == DgBits'(Digits - 1)) ? '0 : dg_q + 1'b1;
-    end else begin
-      dg_d = '0;
-    end
   end
 
   // ---------------------------------------------------------------------
-  // Ring: rotate every lane right by one digit; the new digits of a pass
-  // enter at position N-1 (BCU output, load) or N (stack read data).
+  // Forward-difference stage: per axis S, D1, D2, D3 of C chunks; chunk k
+  // adds with the registered carry of chunk k-1 (one step behind it). All
+  // chunks advance together (adv); chunk k loads the new segment where the
+  // start tag reaches it (chunk 0: as it enters).
   // ---------------------------------------------------------------------
-  logic [4*CW-1:0] load_quad;
-  assign load_quad = {s_axis_tdata, asm_q};
-  for (genvar l = 0; l < 4; l++) begin : g_lane
-    logic [LaneW-1:0] lane, rot;
-    assign lane = ring_q[l*LaneW +: LaneW];
-    assign rot  = {lane[CW-1:0], lane[LaneW-1:CW]};
-    always_comb begin
-      ring_d[l*LaneW +: LaneW] = rot;
-      if (ins_desc) ring_d[(l*R + N - 1)*CW +: CW] = bcu_left[l*CW +: CW];
-      if (ins_load) ring_d[(l*R + N - 1)*CW +: CW] = load_quad[l*CW +: CW];
-      if (ins_pop)  ring_d[(l*R + N)*CW +: CW]     = rd_q[l*CW +: CW];
+  logic [Axes*WF-1:0] fs_q, f1_q, f2_q, f3_q, fs_d, f1_d, f2_d, f3_d;
+  logic [Axes*C-1:0]  cs_q, c1_q, c2_q, cs_d, c1_d, c2_d;
+  logic [C-1:0]       load_k;
+  if (C > 1) begin : g_load
+    assign load_k = {tag_start_q[C-2:0], enter_start};
+  end else begin : g_load1
+    assign load_k = enter_start;
+  end
+  for (genvar a = 0; a < Axes; a++) begin : g_fd_a
+    for (genvar k = 0; k < C; k++) begin : g_fd_k
+      localparam int I = a * C + k;
+      logic          ci_s, ci_1, ci_2;
+      logic [CW:0]   ns, n1, n2;
+      logic [CW-1:0] ld_s, ld_1, ld_2, ld_3;
+      if (k == 0) begin : g_c0
+        assign ci_s = 1'b0;
+        assign ci_1 = 1'b0;
+        assign ci_2 = 1'b0;
+      end else begin : g_cn
+        assign ci_s = cs_q[I-1];
+        assign ci_1 = c1_q[I-1];
+        assign ci_2 = c2_q[I-1];
+      end
+      assign ld_s = rd_q[(0*Axes + a)*CW +: CW];
+      assign ld_1 = rd_q[(1*Axes + a)*CW +: CW];
+      assign ld_2 = rd_q[(2*Axes + a)*CW +: CW];
+      assign ld_3 = rd_q[(3*Axes + a)*CW +: CW];
+      assign ns = {1'b0, fs_q[I*CW +: CW]} + {1'b0, f1_q[I*CW +: CW]} + {{CW{1'b0}}, ci_s};
+      assign n1 = {1'b0, f1_q[I*CW +: CW]} + {1'b0, f2_q[I*CW +: CW]} + {{CW{1'b0}}, ci_1};
+      assign n2 = {1'b0, f2_q[I*CW +: CW]} + {1'b0, f3_q[I*CW +: CW]} + {{CW{1'b0}}, ci_2};
+      assign cs_d[I] = ns[CW];
+      assign c1_d[I] = n1[CW];
+      assign c2_d[I] = n2[CW];
+      assign fs_d[I*CW +: CW] = load_k[k] ? ld_s : ns[CW-1:0];
+      assign f1_d[I*CW +: CW] = load_k[k] ? ld_1 : n1[CW-1:0];
+      assign f2_d[I*CW +: CW] = load_k[k] ? ld_2 : n2[CW-1:0];
+      assign f3_d[I*CW +: CW] = load_k[k] ? ld_3 : f3_q[I*CW +: CW];
     end
+  end
+  always_ff @(posedge clk_i) begin
+    if (adv) begin
+      fs_q <= fs_d;
+      f1_q <= f1_d;
+      f2_q <= f2_d;
+      f3_q <= f3_d;
+      cs_q <= cs_d;
+      c1_q <= c1_d;
+      c2_q <= c2_d;
+    end
+  end
+
+  // Deskew: chunk k (K0 <= k < C-1) waits C-1-k advances, so the slice of
+  // the top step is complete; the sample is that slice (no adder).
+  logic [Axes*OutWidth-1:0] top_sample;
+  for (genvar a = 0; a < Axes; a++) begin : g_out
+    // Bits of the step below the slice and above it are not needed.
+    /* verilator lint_off UNUSEDSIGNAL */
+    logic [WF-1:0] top_val;
+    /* verilator lint_on UNUSEDSIGNAL */
+    logic [Narrow-1:0] slice;
+    assign top_val[(C-1)*CW +: CW] = fs_q[(a*C + C - 1)*CW +: CW];
+    for (genvar k = 0; k < C - 1; k++) begin : g_dsk
+      if (k < K0) begin : g_low
+        assign top_val[k*CW +: CW] = '0;
+      end else begin : g_del
+        localparam int D = C - 1 - k;
+        logic [D*CW-1:0] dq;  // stage i (i advances old) at [i*CW +: CW]
+        if (D > 1) begin : g_multi
+          always_ff @(posedge clk_i) begin
+            if (adv) dq <= {dq[(D-1)*CW-1:0], fs_q[(a*C + k)*CW +: CW]};
+          end
+        end else begin : g_one
+          always_ff @(posedge clk_i) begin
+            if (adv) dq <= fs_q[(a*C + k)*CW +: CW];
+          end
+        end
+        assign top_val[k*CW +: CW] = dq[(D-1)*CW +: CW];
+      end
+    end
+    assign slice = top_val[Shift +: Narrow];
+    assign top_sample[a*OutWidth +: OutWidth] = OutWidth'($signed(slice));
   end
 
   // ---------------------------------------------------------------------
   // Registers.
   // ---------------------------------------------------------------------
+  logic [Axes*OutWidth-1:0] sample_q;
+  // Loaded whenever a tick is pending and the top holds a sample or the end
+  // value (timing: no stream or FSM term in this 96-flop enable). If the tick
+  // is not answered in this cycle (it waits for a newer segment), sample_q may
+  // take the end value before the next sample_valid_o; sample_o is defined
+  // with sample_valid_o, and every value emitted with it is unchanged.
+  always_ff @(posedge clk_i) begin
+    if (tick_q && (top_v || top_end)) sample_q <= top_sample;
+  end
+
   always_ff @(posedge clk_i) begin
     if (!rst_ni) begin
-      state_q     <= StIdle;
+      fsm_q       <= StIdle;
       tick_q      <= 1'b0;
       tick_err_q  <= 1'b0;
-      have_last_q <= 1'b0;
       valid_q     <= 1'b0;
       underrun_q  <= 1'b0;
       done_q      <= 1'b0;
       depth_q     <= '0;
-      lvl_q       <= '0;
-      pc_q        <= '0;
+      bank_q      <= 1'b0;
+      nbank_q     <= 1'b0;
       wc_q        <= '0;
-      lc_q        <= '0;
-      dg_q        <= '0;
-      pc_last_q   <= 1'b0;
-      j_q         <= '0;
-      addr_q      <= '0;
-      rsel_q      <= 1'b1;
+      wdg_q       <= '0;
+      wax_q       <= '0;
+      pc_q        <= '0;
+      lvl_q       <= '0;
+      sdg_q       <= '0;
+      sax_q       <= '0;
+      xpend_q     <= 1'b0;
+      xbusy_q     <= 1'b0;
+      xbank_q     <= 1'b0;
+      xdepth_q    <= '0;
+      xk_q        <= '0;
+      frem_q      <= 1'b0;
+      need_end_q  <= 1'b0;
+      fcnt_q      <= '0;
+      tag_v_q     <= '0;
+      tag_start_q <= '0;
+      tag_last_q  <= '0;
+      tag_end_q   <= '0;
     end else begin
-      state_q     <= state_d;
-      tick_q      <= (tick_q && !consume) || tick_i;
-      tick_err_q  <= tick_err_q || (tick_i && tick_q && !consume);
-      have_last_q <= have_last_d;
-      valid_q     <= valid_d;
-      underrun_q  <= underrun_d;
-      done_q      <= done_d;
-      depth_q     <= depth_d;
-      lvl_q       <= lvl_d;
-      pc_q        <= pc_d;
-      wc_q        <= wc_d;
-      lc_q        <= lc_d;
-      dg_q        <= dg_d;
-      pc_last_q   <= (pc_d == PcBits'(R - 1));
-      j_q         <= j_d;
-      addr_q      <= addr_d;
-      rsel_q      <= (state_d == StIdle);
+      fsm_q      <= fsm_d;
+      tick_q     <= (tick_q && !consume) || tick_i;
+      tick_err_q <= tick_err_q || (tick_i && tick_q && !consume);
+      valid_q    <= consume && (proc || top_end);
+      underrun_q <= under;
+      done_q     <= proc && tag_last_q[C-1];
+      depth_q    <= depth_d;
+      bank_q     <= bank_d;
+      nbank_q    <= nbank_d;
+      wc_q       <= wc_d;
+      wdg_q      <= wdg_d;
+      wax_q      <= wax_d;
+      pc_q       <= pc_d;
+      lvl_q      <= lvl_d;
+      sdg_q      <= sdg_d;
+      sax_q      <= sax_d;
+      if (hand_off) begin
+        xpend_q  <= 1'b1;
+        xbank_q  <= bank_q;
+        xdepth_q <= depth_q;
+        xk_q     <= '0;
+      end
+      if (adv) begin
+        tag_v_q     <= tag_v_d;
+        tag_start_q <= tag_start_d;
+        tag_last_q  <= tag_last_d;
+        tag_end_q   <= tag_end_d;
+        if (frem_q) begin
+          frem_q     <= (fcnt_q != '0);
+          fcnt_q     <= fcnt_q - 1'b1;
+          need_end_q <= (fcnt_q == '0);
+        end else if (xpend_q) begin
+          frem_q     <= (xdepth_q != '0);
+          fcnt_q     <= MaxDepth'((64'd1 << xdepth_q) - 64'd2);
+          need_end_q <= (xdepth_q == '0);
+          xpend_q    <= 1'b0;
+          xbusy_q    <= 1'b1;
+        end else begin
+          need_end_q <= 1'b0;
+        end
+        if (xfer_step) begin
+          if (xk_q == DgBits'(C - 1)) xbusy_q <= 1'b0;
+          else                        xk_q <= xk_q + 1'b1;
+        end
+      end
     end
-  end
-
-  always_ff @(posedge clk_i) begin
-    if (shift) ring_q <= ring_d;
-    asm_q    <= asm_d;
-    sample_q <= sample_d;
-  end
-
-  // Stack: one write port, synchronous read (block RAM).
-  always_ff @(posedge clk_i) begin
-    if (mem_we) stack_mem[addr_q] <= bcu_right;
-    rd_q <= stack_mem[addr_q];
   end
 
   assign sample_valid_o = valid_q;

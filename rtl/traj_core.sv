@@ -9,11 +9,14 @@
 //     segment. Segment lengths are fixed per kind (each engine's own format),
 //     so the router counts words and forwards each segment, in order, to its
 //     engine (back-pressure while that engine cannot take it). The next
-//     segment of the other kind loads while the current one plays.
-//   * ticks go to the engine owning the oldest segment in flight (per engine a
-//     flag set on a segment's first word, cleared on its seg_done, both seen
-//     in the same cycle, and which is older), else to the engine of the last
-//     segment.
+//     segment of the other kind loads while the current one plays; the BCU
+//     generator also takes its own next segments while it plays.
+//   * ticks go to the engine owning the oldest segment in flight (counted on
+//     a segment's first word, dropped on its engine's seg_done, both seen in
+//     the same cycle: up to 3 BCU segments and 1 FD segment, with the number
+//     of BCU segments older than the FD one), else to the engine of the last
+//     segment. Within a run of BCU segments ticks may come
+//     on every clock.
 //   * one sample output, same ports and latency (2) as the engines: the
 //     sample of the engine that emitted last; on an underrun it holds.
 `default_nettype none
@@ -95,17 +98,20 @@ module traj_core #(
   );
 
   // ---------------------------------------------------------------------
-  // Router and segments in flight (per engine a flag, set on a segment's
-  // first word, cleared on that engine's seg_done; older_q = kind of the older
-  // when both are in flight). State is control: all reset.
+  // Router and segments in flight: nb_q BCU segments (playing, prepared,
+  // loading: 0..3), fdf_q an FD segment (at most one), fpos_q BCU segments
+  // older than it. Counted on a segment's first word, dropped on its engine's
+  // seg_done (each engine finishes in order). State is control: all reset.
   // ---------------------------------------------------------------------
-  logic               in_seg_q, kind_q, fl_fd_q, fl_bcu_q, older_q, last_kind_q, sel_q, primed_q;
+  logic               in_seg_q, kind_q, last_kind_q, sel_q, primed_q;
+  logic [1:0]         nb_q, nb1, fpos_q, fpos1;
+  logic               fdf_q, fdf1;
   logic [RemBits-1:0] rem_q;
   logic [1:0]         pend_fd_q, pend_bcu_q;
   logic               err_q;
   logic [1:0]         pf, pb;
 
-  logic accept, push, pop_fd, pop_bcu, fl_fd1, fl_bcu1, last1, tick_kind;
+  logic accept, push, pop_b, pop_f, owner1, last1, tick_kind;
   logic sel_now, fd_real, bcu_real;
 
   // Input register slice (skid buffer): s_axis_tready is a flop; the router
@@ -162,17 +168,19 @@ module traj_core #(
 
   assign accept        = (fd_v_q && fd_tready) || (bcu_v_q && bcu_tready);
   assign push          = accept && !in_seg_q;
-  assign pop_fd        = fl_fd_q && fd_done;
-  assign pop_bcu       = fl_bcu_q && bcu_done;
-  assign fl_fd1        = fl_fd_q && !pop_fd;
-  assign fl_bcu1       = fl_bcu_q && !pop_bcu;
-  assign last1         = pop_bcu ? 1'b1 : (pop_fd ? 1'b0 : last_kind_q);
+  assign pop_b         = (nb_q != 2'd0) && bcu_done;
+  assign pop_f         = fdf_q && fd_done;
+  assign nb1           = nb_q - {1'b0, pop_b};
+  assign fdf1          = fdf_q && !pop_f;
+  assign fpos1         = (pop_b && fpos_q != 2'd0) ? fpos_q - 1'b1 : fpos_q;
+  assign last1         = pop_b ? 1'b1 : (pop_f ? 1'b0 : last_kind_q);
+  assign owner1        = fdf1 || (nb1 != 2'd0) || push;
   always_comb begin
-    if (fl_fd1 && fl_bcu1) tick_kind = older_q;
-    else if (fl_fd1)       tick_kind = 1'b0;
-    else if (fl_bcu1)      tick_kind = 1'b1;
-    else if (push)         tick_kind = bcu_v_q;
-    else                   tick_kind = last1;
+    if (fdf1 && fpos1 == 2'd0) tick_kind = 1'b0;
+    else if (nb1 != 2'd0)      tick_kind = 1'b1;
+    else if (fdf1)             tick_kind = 1'b0;
+    else if (push)             tick_kind = bcu_v_q;
+    else                       tick_kind = last1;
   end
 
   assign fd_tvalid  = fd_v_q;
@@ -185,9 +193,9 @@ module traj_core #(
       in_seg_q    <= 1'b0;
       kind_q      <= 1'b0;
       rem_q       <= '0;
-      fl_fd_q     <= 1'b0;
-      fl_bcu_q    <= 1'b0;
-      older_q     <= 1'b0;
+      nb_q        <= '0;
+      fdf_q       <= 1'b0;
+      fpos_q      <= '0;
       last_kind_q <= 1'b0;
       sel_q       <= 1'b0;
       primed_q    <= 1'b0;
@@ -202,21 +210,23 @@ module traj_core #(
                           : (bcu_v_q ? RemBits'(BcuWords - 1) : RemBits'(FdWords - 1));
       end
       last_kind_q <= last1;
-      fl_fd_q     <= fl_fd1 || (push && !bcu_v_q);
-      fl_bcu_q    <= fl_bcu1 || (push && bcu_v_q);
-      if (push) older_q <= (bcu_v_q ? fl_fd1 : fl_bcu1) ? !bcu_v_q : bcu_v_q;
+      nb_q        <= nb1 + {1'b0, push && bcu_v_q};
+      fdf_q       <= fdf1 || (push && !bcu_v_q);
+      fpos_q      <= (push && !bcu_v_q) ? nb1 : fpos1;
       sel_q      <= sel_now;
       primed_q   <= primed_q || fd_real || bcu_real;
       pend_fd_q  <= pf + {1'b0, fd_tick};
       pend_bcu_q <= pb + {1'b0, bcu_tick};
-      if ((pop_fd && pf != 2'd0) || (pop_bcu && pb != 2'd0)) err_q <= 1'b1;
+      if ((pop_b && pb != 2'd0 && owner1 && !tick_kind) || (pop_f && pf != 2'd0 && owner1 && tick_kind))
+        err_q <= 1'b1;
     end
   end
 
   // Pending ticks per engine: +1 per routed tick, -1 per answer (every
   // processed tick gives sample_valid or underrun one cycle later). If the
-  // owner of a finished segment still holds a tick, its next segment would
-  // serve it out of order: sticky error, reported on tick_err_o.
+  // owner of a finished segment still holds a tick while the next segment in
+  // flight is the other engine's, that tick would be served out of order:
+  // sticky error, reported on tick_err_o.
   assign pf = pend_fd_q - {1'b0, fd_valid || fd_underrun};
   assign pb = pend_bcu_q - {1'b0, bcu_valid || bcu_underrun};
 

@@ -2,10 +2,16 @@
 // cycle: control outputs (s_axis_tready, sample_valid_o, underrun_o,
 // seg_done_o, tick_err_o) always, sample_o when sample_valid_o.
 // Random control values (full range and extremes), random depths, chained and
-// unchained segments back to back, random idle cycles on the segment input,
-// random tick spacing (every cycle .. 2x the minimum, and exactly the minimum),
-// random resets (also mid-segment). Every sample is also checked against the
-// exact GMP prediction of the host (hls == host).
+// unchained segments back to back, random idle cycles on the segment input.
+// Phases of tick modes: exactly the uniform minimum (kMinTickSpacing), random
+// 1..2x it, sparse, 1..4x it, a tick on EVERY clock while a sample is ready
+// (the one-sample-per-clock guarantee), and rare short phases of ticks on every
+// clock regardless (too fast at segment switches: tick_err, ended by a reset).
+// Some phases force d = MaxDepth with ticks every clock; the run fails unless
+// at least one d = MaxDepth segment completes. Resets at random phase ends and
+// rarely mid-phase (about once per phase, never in a d = MaxDepth phase), so
+// long segments are not cut. Every sample is also checked against the exact
+// GMP prediction of the host (hls == host).
 //
 // usage: cosim_bcu_gen [--seed N] [--cycles N]   (or env TRAJ_BCU_SEED)
 // Prints the seed; a failure is reproducible from it.
@@ -98,9 +104,11 @@ int main(int argc, char** argv) {
     v = v % (2 * lim);
     return mpz_class(v - lim);
   };
+  bool force_max = false;  // phase: every segment at d = MaxDepth
   auto add_segment = [&]() {
     int d = static_cast<int>(rng() % (std::min(BCU_DEPTH, 7) + 1));
     if (rng() % 10 == 0) d = static_cast<int>(rng() % (BCU_DEPTH + 1));
+    if (force_max) d = BCU_DEPTH;
     std::vector<std::vector<mpz_class>> c(BCU_AXES, std::vector<mpz_class>(4));
     const bool chain = have_prev && (rng() % 4 != 0);
     for (int a = 0; a < BCU_AXES; ++a) {
@@ -124,22 +132,32 @@ int main(int argc, char** argv) {
 
   // scenario knobs, re-drawn every phase
   int tick_mode = 0, offer_pct = 100;
-  uint64_t next_tick = 0, phase_end = 0;
+  uint64_t next_tick = 0, phase_end = 0, phase_len = 1;
   uint64_t n_samples = 0, n_underrun = 0, n_done = 0, n_resets = 0, n_tickerr = 0, n_checked = 0;
+  uint64_t n_done_max = 0, n_run_ticks = 0;
   bool in_reset = true, synced = false;
   int reset_left = 3;
   const int S = Gen::kMinTickSpacing;
+  const uint64_t max_seg = (uint64_t(1) << BCU_DEPTH) + Gen::kStartLatencyMax;
 
   top->clk_i = 0;
   for (uint64_t cyc = 0; cyc < cycles; ++cyc) {
     if (cyc >= phase_end) {
-      tick_mode = static_cast<int>(rng() % 4);
-      if (rng() % 8 == 0) tick_mode = 4;  // too fast: tick_err (sticky until reset)
-      offer_pct = (rng() % 3 == 0) ? 100 : 20 + static_cast<int>(rng() % 80);
-      phase_end = cyc + 2000 + rng() % 40000;
+      // the previous phase ends: a reset after a too-fast phase (tick_err is
+      // sticky), else now and then
+      if (cyc > 0 && !in_reset && (tick_mode == 4 || hls.tick_err() || rng() % 4 == 0)) {
+        in_reset = true;
+        reset_left = 1 + static_cast<int>(rng() % 3);
+      }
+      const int r = static_cast<int>(rng() % 16);
+      force_max = r < 3;
+      tick_mode = force_max ? 5 : (r == 3 ? 4 : (r < 8 ? 5 : static_cast<int>(rng() % 4)));
+      offer_pct = (force_max || rng() % 3 == 0) ? 100 : 20 + static_cast<int>(rng() % 80);
+      phase_len = force_max ? 3 * max_seg : (tick_mode == 4 ? 500 + rng() % 4000 : 2000 + rng() % 40000 + max_seg);
+      phase_end = cyc + phase_len;
     }
-    // reset: at start and at random points (also mid-segment)
-    if (!in_reset && rng() % 25000 == 0) {
+    // rare reset mid-phase (also mid-segment), about once per 2 phases
+    if (!in_reset && !force_max && tick_mode != 4 && rng() % (2 * phase_len) == 0) {
       in_reset = true;
       reset_left = 1 + static_cast<int>(rng() % 3);
     }
@@ -156,10 +174,11 @@ int main(int argc, char** argv) {
     bool tick = false;
     switch (tick_mode) {
       case 0: tick = cyc >= next_tick; if (tick) next_tick = cyc + S; break;              // exact min
-      case 1: tick = cyc >= next_tick; if (tick) next_tick = cyc + 1 + rng() % (2 * S); break;
+      case 1: tick = cyc >= next_tick; if (tick) next_tick = cyc + S + rng() % S; break;
       case 2: tick = (rng() % 64) == 0; break;                                           // sparse
       case 3: tick = cyc >= next_tick; if (tick) next_tick = cyc + S + rng() % (3 * S); break;
-      default: tick = (rng() % 3) == 0; break;                                           // too fast
+      case 5: tick = hls.state() == Gen::S_READY; n_run_ticks += tick; break;           // every clock
+      default: tick = true; break;                                                       // too fast
     }
     const bool offer = !words.empty() && int(rng() % 100) < offer_pct;
     const uint64_t data = offer ? words.front() : rng();  // garbage when not valid
@@ -226,6 +245,7 @@ int main(int argc, char** argv) {
           expect.pop_front();
           ++n_checked;
         }
+        if (hls.seg_done() && !expect.empty() && expect.front().depth == BCU_DEPTH) ++n_done_max;
         if (hls.seg_done() && !expect.empty()) {
           end_value = expect.front().v;
           expect.pop_front();
@@ -268,10 +288,16 @@ int main(int argc, char** argv) {
     }
   }
   top->final();
-  std::printf("PASS: %llu samples (%llu checked against the host prediction), %llu seg_done, "
-              "%llu underrun ticks, %llu resets, %llu cycles with tick_err set\n",
-              (unsigned long long)n_samples, (unsigned long long)n_checked,
-              (unsigned long long)n_done, (unsigned long long)n_underrun,
-              (unsigned long long)n_resets, (unsigned long long)n_tickerr);
+  std::printf("PASS: %llu samples (%llu checked against the host prediction), %llu seg_done "
+              "(%llu at d = MaxDepth = %d), %llu ticks in every-clock phases, %llu underrun ticks, "
+              "%llu resets, %llu cycles with tick_err set (%.1f %%)\n",
+              (unsigned long long)n_samples, (unsigned long long)n_checked, (unsigned long long)n_done,
+              (unsigned long long)n_done_max, BCU_DEPTH, (unsigned long long)n_run_ticks,
+              (unsigned long long)n_underrun, (unsigned long long)n_resets, (unsigned long long)n_tickerr,
+              100.0 * double(n_tickerr) / double(cycles));
+  if (n_done_max == 0) {
+    std::printf("FAIL: no segment of depth MaxDepth completed (seed %llu)\n", (unsigned long long)seed);
+    return 1;
+  }
   return 0;
 }

@@ -4,8 +4,10 @@
 // sequences (FD with random registers and K, BCU with random control values and
 // depths, chained and not), random idle cycles on the stream (back-pressure
 // comes from the engines), random tick spacing (exactly the documented minimum,
-// random above it, sparse; and, in rare phases ended by a reset, too fast:
-// tick_err, where only RTL == hls is checked), starved stream (underrun and
+// random above it, sparse; BCU runs: a tick on every clock while the BCU owns
+// the segment and has a sample ready, FD ticks at the minimum; and, in rare
+// phases ended by a reset, too fast: tick_err, where only RTL == hls is
+// checked), starved stream (underrun and
 // recovery), random resets (also mid-segment). Every real sample is also
 // checked against the exact host prediction (FD: closed form; BCU: GMP), in
 // order, across kind switches; every underrun sample must hold the last output
@@ -153,7 +155,7 @@ int main(int argc, char** argv) {
   int tick_mode = 0, offer_pct = 100;
   bool starve = false;
   uint64_t next_tick = 0, phase_end = 0;
-  uint64_t n_samples_unchecked = 0, n_samples = 0, n_underrun = 0, n_done = 0, n_resets = 0, n_err = 0, n_switch = 0;
+  uint64_t n_run = 0, n_samples_unchecked = 0, n_samples = 0, n_underrun = 0, n_done = 0, n_resets = 0, n_err = 0, n_switch = 0;
   bool in_reset = true, synced = false, last_was_bcu = false, have_last_kind = false;
   int reset_left = 3;
   std::vector<int64_t> last_out, last_bcu_end;
@@ -165,8 +167,8 @@ int main(int argc, char** argv) {
         in_reset = true;
         reset_left = 1 + static_cast<int>(rng() % 3);
       }
-      tick_mode = static_cast<int>(rng() % 4);  // 0..3 respect the minimum spacing
-      if (rng() % 12 == 0) tick_mode = 4;       // too fast: tick_err
+      tick_mode = static_cast<int>(rng() % 6);  // 0..3, 5 respect the minimum spacing
+      if (tick_mode == 4 || rng() % 12 == 0) tick_mode = (rng() % 3 == 0) ? 4 : 5;  // 4: too fast
       offer_pct = (rng() % 3 == 0) ? 100 : 20 + static_cast<int>(rng() % 80);
       starve = rng() % 6 == 0;
       phase_end = cyc + 5000 + rng() % 60000;
@@ -194,6 +196,20 @@ int main(int argc, char** argv) {
       case 1: tick = cyc >= next_tick; if (tick) next_tick = cyc + S + rng() % S; break;
       case 2: tick = cyc >= next_tick; if (tick) next_tick = cyc + S + rng() % (8 * S); break;
       case 3: tick = cyc >= next_tick; if (tick) next_tick = cyc + S + rng() % (2 * S); break;
+      case 5: {  // BCU runs at one sample per clock, FD ticks at the minimum
+        const auto ck = hls.comb(Core::In{});
+        const auto& br = hls.bcu().regs();
+        if (ck.tick_kind) {
+          // not the tick after the last sample of a BCU segment (it could
+          // belong to an FD segment: the core needs the BCU's seg_done first)
+          tick = hls.bcu().state() == Core::Bcu::S_READY && !(br.tick_q && br.tag[Core::Bcu::kC - 1].last);
+          n_run += tick;
+        } else {
+          tick = cyc >= next_tick;
+          if (tick) next_tick = cyc + S;
+        }
+        break;
+      }
       default: tick = rng() % 5 == 0; break;
     }
     const bool offer = !words.empty() && int(rng() % 100) < offer_pct;
@@ -283,10 +299,10 @@ int main(int argc, char** argv) {
     const bool acc = hls.tready(in) && offer;
     if (cyc >= trace_from) {
       const auto c = hls.comb(in);
-      std::printf("cyc %llu rst %d tick %d->%s offer %d kind %d acc %d | flfd %d flbcu %d older %d last %d sel %d | "
+      std::printf("cyc %llu rst %d tick %d->%s offer %d kind %d acc %d | nb %d fdf %d fpos %d last %d sel %d | "
                   "fd v%d u%d d%d act %d | bcu v%d u%d d%d st %d | out v%d u%d | exp %zu %s\n",
                   (unsigned long long)cyc, rst_n, tick, c.tick_kind ? "bcu" : "fd", offer, user, acc,
-                  hls.regs().fl_fd_q, hls.regs().fl_bcu_q, hls.regs().older_q, hls.regs().last_kind_q,
+                  hls.regs().nb_q, hls.regs().fdf_q, hls.regs().fpos_q, hls.regs().last_kind_q,
                   hls.regs().sel_q, hls.fd().outputs().sample_valid, hls.fd().outputs().underrun,
                   hls.fd().outputs().seg_done, hls.fd().active(), hls.bcu().sample_valid(),
                   hls.bcu().underrun(), hls.bcu().seg_done(), hls.bcu().state(), hls.sample_valid(),
@@ -310,9 +326,9 @@ int main(int argc, char** argv) {
   }
   top->final();
   std::printf("PASS: %llu samples checked against the host prediction (%llu more under tick_err: RTL == hls only), %llu kind switches, "
-              "%llu seg_done, %llu underrun ticks, %llu resets, %llu cycles with tick_err set\n",
+              "%llu seg_done, %llu ticks in BCU runs at one per clock, %llu underrun ticks, %llu resets, %llu cycles with tick_err set\n",
               (unsigned long long)n_samples, (unsigned long long)n_samples_unchecked, (unsigned long long)n_switch,
-              (unsigned long long)n_done, (unsigned long long)n_underrun,
+              (unsigned long long)n_done, (unsigned long long)n_run, (unsigned long long)n_underrun,
               (unsigned long long)n_resets, (unsigned long long)n_err);
   return 0;
 }

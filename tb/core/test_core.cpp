@@ -65,6 +65,7 @@ traj::bcu::Format bcu_format() {
 struct Piece {
   bool bcu = false;
   int K = 0;
+  int d = 0;  // BCU depth
   std::vector<std::array<double, 4>> b;         // [axis] Bezier control values (mm)
   std::vector<uint64_t> words;
   std::vector<std::vector<int64_t>> samples;    // [k][axis], k = 0..K (K: end sample)
@@ -84,7 +85,7 @@ double bez(const std::array<double, 4>& b, double u) {
 }
 
 // Build and compile a chained path of n pieces, kinds random (both present).
-Path build_path(std::mt19937_64& rng, int n) {
+Path build_path(std::mt19937_64& rng, int n, int dmin = 4, int dmax = 8) {
   const traj::fd::Compiler fdc(fd_format());
   const traj::bcu::Format bf = bcu_format();
   const int Gf = C_GUARD, Gb = C_BGUARD;
@@ -107,8 +108,9 @@ Path build_path(std::mt19937_64& rng, int n) {
     }
     pc.extra_lsb.assign(C_AXES, 0.0);
     if (pc.bcu) {
-      const int d = 4 + static_cast<int>(rng() % 5);  // K = 16..256
+      const int d = dmin + static_cast<int>(rng() % (dmax - dmin + 1));  // K = 16..256 by default
       pc.K = 1 << d;
+      pc.d = d;
       traj::bcu::Controls b(C_AXES, 4);
       for (int a = 0; a < C_AXES; ++a)
         for (int k = 0; k < 4; ++k) b(a, k) = pc.b[a][k];
@@ -192,7 +194,13 @@ struct Played {
 
 // Stream the whole path (offer_pct % of cycles valid) and tick every `spacing`
 // cycles from the first READY/active segment on, `extra` ticks after the end.
+Played play_gaps(const Path& p, const std::vector<int>& gaps, int offer_pct, int extra, std::mt19937_64& rng);
 Played play(const Path& p, int spacing, int offer_pct, int extra, std::mt19937_64& rng) {
+  return play_gaps(p, std::vector<int>(p.expect.size() + extra, spacing), offer_pct, extra, rng);
+}
+
+// Tick k comes gaps[k] clocks after tick k-1 (gaps[0] unused).
+Played play_gaps(const Path& p, const std::vector<int>& gaps, int offer_pct, int extra, std::mt19937_64& rng) {
   Core core;
   std::vector<std::pair<uint64_t, bool>> words;
   for (const auto& pc : p.pieces)
@@ -214,7 +222,7 @@ Played play(const Path& p, int spacing, int offer_pct, int extra, std::mt19937_6
     in.tick = started && cyc == next_tick && out.tick_cycle.size() < want;
     if (in.tick) {
       out.tick_cycle.push_back(cyc);
-      next_tick = cyc + spacing;
+      if (out.tick_cycle.size() < gaps.size()) next_tick = cyc + gaps[out.tick_cycle.size()];
     }
     if (core.sample_valid() || core.underrun()) {
       std::vector<int64_t> v;
@@ -319,11 +327,40 @@ TEST(Core, MixedChainedPathWithIdleStream) {
   check_path(p, got, true);
 }
 
+TEST(Core, BcuRunsAtOneSamplePerClock) {
+  // Mixed chained path with long BCU pieces (K = 512..2048): ticks on every
+  // clock within a BCU piece and from a BCU piece into the next one (K >=
+  // Bcu::kBackToBack(d_next): no gap), kMinTickSpacing before FD samples and
+  // at the first sample after an FD piece. Every tick answered 2 clocks later.
+  std::mt19937_64 rng(test_seed() + 3);
+  const Path p = build_path(rng, 14, 9, 11);
+  std::vector<int> gaps;
+  size_t bcu_run_ticks = 0;
+  for (size_t i = 0; i < p.pieces.size(); ++i) {
+    const Piece& pc = p.pieces[i];
+    for (int k = 0; k < pc.K; ++k) {
+      bool run = pc.bcu && k > 0;
+      if (pc.bcu && k == 0 && i > 0) {
+        const Piece& pr = p.pieces[i - 1];
+        run = pr.bcu && pr.K >= Core::Bcu::kBackToBack(pc.d);
+      }
+      gaps.push_back(run ? 1 : Core::kMinTickSpacing);
+      bcu_run_ticks += run;
+    }
+  }
+  for (int e = 0; e < 2; ++e) gaps.push_back(Core::kMinTickSpacing);
+  const Played got = play_gaps(p, gaps, 100, 2, rng);
+  check_path(p, got, true);
+  EXPECT_GT(bcu_run_ticks, p.expect.size() / 2);
+  std::printf("  %zu samples, %zu of them on consecutive clocks (BCU runs)\n", p.expect.size(), bcu_run_ticks);
+}
+
 TEST(Core, FarBelowMinTickSpacingTicksAreLate) {
-  // Sanity of the documented figure: far below it, ticks are late or lost.
+  // Sanity: ticks on every clock for FD segments too (the FD engine needs
+  // Chunks clocks per tick): ticks are late or lost.
   std::mt19937_64 rng(test_seed() + 2);
   const Path p = build_path(rng, 8);
-  const Played got = play(p, Core::kMinTickSpacing / 4, 100, 0, rng);
+  const Played got = play(p, 1, 100, 0, rng);
   bool late = got.tick_err;
   for (size_t k = 0; k < got.samples.size() && k < got.tick_cycle.size(); ++k)
     late |= got.underrun[k] || got.cycle[k] != got.tick_cycle[k] + 2;
