@@ -578,7 +578,7 @@ class BcuGen {
     {
       const bool pass = q.fsm == S_DESC || q.fsm == S_INIT;
       const bool bank = pass ? q.bank_q : q.xbank_q;
-      const int dg = pass ? (issue.v ? q.sdg_q : 0)
+      const int dg = pass ? q.sdg_q  // 0 between slots: the hand-off reads chunk 0
                           : static_cast<int>(wrap(static_cast<u128>(xfer_step ? q.xk_q + 1 : q.xk_q), kDgBits));
       const int addr = (bank ? 1 << kDgBits : 0) + dg;
       for (int l = 0; l < 4; ++l)

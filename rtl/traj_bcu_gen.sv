@@ -163,7 +163,10 @@ module traj_bcu_gen #(
   assign rd_addr = {rd_bank, rd_dg};
   for (genvar l = 0; l < 4; l++) begin : g_mem_l
     for (genvar a = 0; a < Axes; a++) begin : g_mem_a
-      logic [CW-1:0] mem [2**MemAB];
+      // A read never needs the word written in the same cycle (a pass reads a
+      // digit at least L+1 cycles after writing it; LOAD writes the other
+      // bank): no read/write collision logic.
+      (* no_rw_check *) logic [CW-1:0] mem [2**MemAB];
       always_ff @(posedge clk_i) begin
         if (we_q[l*Axes + a]) mem[waddr_q] <= wdata_q[l*CW +: CW];
         rd_q[(l*Axes + a)*CW +: CW] <= mem[rd_addr];
@@ -179,7 +182,7 @@ module traj_bcu_gen #(
   logic          pass_init, pass_on;
   assign pass_on = (fsm_q == StDesc) || (fsm_q == StInit);
   assign rd_bank = pass_on ? bank_q : xbank_q;
-  assign rd_dg   = pass_on ? (issue ? sdg_q : '0) : (xfer_step ? xk_q + 1'b1 : xk_q);
+  assign rd_dg   = pass_on ? sdg_q : (xfer_step ? xk_q + 1'b1 : xk_q);  // sdg_q = 0 between slots
 
   // ---------------------------------------------------------------------
   // Digit-serial pipeline: rd -> hd -> stage 1 -> stage 2 -> write register.
