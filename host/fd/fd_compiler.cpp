@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 
 namespace traj::fd {
@@ -64,6 +65,11 @@ long double max_abs_on(const std::vector<mpq_class>& c, const mpq_class& T) {
 }
 
 }  // namespace
+
+PathCounts& path_counts() {
+  thread_local PathCounts c;
+  return c;
+}
 
 mpz_class binom(uint64_t k, int i) {
   mpz_class r;
@@ -224,6 +230,7 @@ std::string range_suggestion(const Format& f, const std::vector<double>& coef, c
 // messages and borderline decisions are this function's by construction.
 Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::vector<mpz_class>* start,
                            const std::string& where) {
+  ++path_counts().reference;
   const int N = f_.degree;
   const int A = f_.axes;
   auto fail = [&](const std::string& what) { throw CompileError(where + ": " + what); };
@@ -324,7 +331,11 @@ Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::
 }  // namespace
 
 // ---------------------------------------------------------------------------
-// Fast exact path.
+// Fast exact paths: compile() first tries the fixed-point grid path
+// (compile_grid, below), which settles nearly every segment without GMP, and
+// hands what it cannot settle to the exact integer path (compile_exact), which
+// hands refusals and borderline range decisions to compile_reference(). Both
+// fast paths rest on the following.
 //
 // Every input is a double, so every quantity is a dyadic rational: h = m_h 2^e_h,
 // c_j 2^(G+F) = m_j 2^(e_j+G+F), and the exact forward differences of the
@@ -335,9 +346,9 @@ Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::
 // by one exact integer division by K. Rounding floor(x + 1/2) is then a shift
 // (and, for r[1], a floor division by K): the registers equal the mpq
 // reference's bit for bit, since they are the same rationals rounded the same
-// way. The sums run on fixed-size two's complement limb arrays (at most 16
-// limbs, size bounded in advance per axis; mpz otherwise), the rest on mpz
-// scratch variables held per thread (no allocation once warm).
+// way. In compile_exact() the sums run on fixed-size two's complement limb
+// arrays (at most 16 limbs, size bounded in advance per axis; mpz otherwise),
+// the rest on mpz scratch variables held per thread (no allocation once warm).
 //
 // The range check is first tried in long double: the Bernstein coefficients of
 // the blended target are computed with an a-priori error bound (2^-48 times
@@ -348,10 +359,12 @@ Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::
 //     (max_i (|b_i| + 2^-48 sum_j |term_ij|) + |e0| + 2 Q(K) + 2) (1 + 2^-40)
 //         < 2^(W-1) (1 - 2^-40),
 // which implies that the reference's own long double computation accepts too
-// (its roundings are relative 2^-52 at worst). Anything else (a refusal, or a
-// path within that margin of the limit) goes to compile_reference(), which
-// then decides and words the message exactly as before. The same holds for a
-// discontinuous start and for a carried error too small for a normal double.
+// (its roundings are relative 2^-52 at worst). The grid path first tries the
+// cruder bound sum_j |a_j| >= max_i |b_i| with the same margins. Anything else
+// (a refusal, or a path within that margin of the limit) goes to
+// compile_reference(), which then decides and words the message exactly as
+// before. The same holds for a discontinuous start and for a carried error
+// too small for a normal double.
 namespace {
 
 // surj(j, i) = i! S(j, i) = Delta^i m^j at m = 0, j, i <= 7.
@@ -397,19 +410,22 @@ const BernsteinWeights& bernstein_weights() {
 }
 
 // v = m 2^e with m odd (or m = 0, e = 0). Exact for every finite double.
-struct Dyadic {
-  int64_t m = 0;
-  int e = 0;
+struct Dyadic {  // trivial (arrays of it are not zeroed unless asked)
+  int64_t m;
+  int e;
 };
 Dyadic dyadic(double v) {
-  Dyadic d;
-  if (v == 0) return d;
-  int e;
-  const double f = std::frexp(v, &e);  // |f| in [0.5, 1)
-  int64_t m = static_cast<int64_t>(std::ldexp(f, 53));
-  e -= 53;
-  const int tz = __builtin_ctzll(static_cast<uint64_t>(m));
-  d.m = m / (int64_t(1) << tz);
+  uint64_t bits;
+  std::memcpy(&bits, &v, sizeof bits);
+  const int ef = static_cast<int>((bits >> 52) & 0x7ff);
+  uint64_t m = bits & ((uint64_t(1) << 52) - 1);
+  Dyadic d{0, 0};
+  if (ef == 0 && m == 0) return d;  // +-0
+  int e = ef == 0 ? -1074 : ef - 1075;  // subnormal : normal
+  if (ef != 0) m |= uint64_t(1) << 52;
+  const int tz = __builtin_ctzll(m);
+  d.m = static_cast<int64_t>(m >> tz);
+  if (bits >> 63) d.m = -d.m;
   d.e = e + tz;
   return d;
 }
@@ -522,6 +538,8 @@ int bitlen_u64(uint64_t v) { return v ? 64 - __builtin_clzll(v) : 0; }
 
 Compiler::Compiler(Format f) : f_(f) {
   f_.validate();
+  scale_ld_ = std::ldexp(1.0L, f_.guard_bits + f_.frac_bits);
+  limit_ld_ = std::ldexp(1.0L, f_.width - 1) * (1 - std::ldexp(1.0L, -40));
   // Q(K) is increasing in K, so the budget check is K <= kfit_ for every
   // K <= max_ticks; found with the exact fits() test.
   if (fits(f_.degree, f_.max_ticks, f_.guard_bits, f_.tol_lsb)) {
@@ -539,84 +557,679 @@ Compiler::Compiler(Format f) : f_(f) {
 }
 
 namespace {
-// Least integer p with x <= m 2^p (x >= 1, 1 <= m < 2^63); t is scratch.
-//   x <= m:  p = -s, s the largest with x 2^s <= m, i.e. 2^s <= floor(m/x)
-//   x >  m:  p = ceil(log2 ceil(x/m)) = bitlen(ceil(x/m) - 1)
-long least_pow2_exponent(mpz_srcptr x, uint64_t m, mpz_ptr t) {
-  if (mpz_cmp_ui(x, m) <= 0) return -(bitlen_u64(m / mpz_get_ui(x)) - 1);
-  mpz_cdiv_q_ui(t, x, m);
-  mpz_sub_ui(t, t, 1);
-  return static_cast<long>(mpz_sizeinbase(t, 2));
+// Unsigned multi-limb integers for the binomials C(K, i) (i <= 7, K < 2^64, so
+// C < 2^448: at most 7 limbs) and the needs derived from them: exact, on the
+// stack, no GMP.
+struct Big {
+  uint64_t v[8] = {};
+  int n = 0;  // limbs in use; v[n-1] != 0 unless n == 0
+};
+void big_set(Big& x, uint64_t v) {
+  x.v[0] = v;
+  x.n = v ? 1 : 0;
+}
+void big_mul_small(Big& x, uint64_t m) {  // x *= m
+  u128 c = 0;
+  for (int l = 0; l < x.n; ++l) {
+    c += static_cast<u128>(x.v[l]) * m;
+    x.v[l] = static_cast<uint64_t>(c);
+    c >>= 64;
+  }
+  if (c) x.v[x.n++] = static_cast<uint64_t>(c);
+  if (m == 0) x.n = 0;
+}
+// x = floor(x / d), d < 2^32: two 64-by-32-bit steps per limb (the running
+// remainder is below d, so every partial dividend fits in 64 bits).
+uint64_t div_limbs_small(uint64_t* x, int n, uint64_t d) {
+  uint64_t r = 0;
+  for (int l = n - 1; l >= 0; --l) {
+    const uint64_t hi = (r << 32) | (x[l] >> 32);
+    const uint64_t qh = hi / d;
+    r = hi - qh * d;
+    const uint64_t lo = (r << 32) | (x[l] & 0xffffffffu);
+    const uint64_t ql = lo / d;
+    r = lo - ql * d;
+    x[l] = (qh << 32) | ql;
+  }
+  return r;
+}
+void big_add(Big& x, const Big& y) {  // x += y
+  const int n = std::max(x.n, y.n);
+  u128 c = 0;
+  for (int l = 0; l < n; ++l) {
+    c += static_cast<u128>(l < x.n ? x.v[l] : 0) + (l < y.n ? y.v[l] : 0);
+    x.v[l] = static_cast<uint64_t>(c);
+    c >>= 64;
+  }
+  x.n = n;
+  if (c) x.v[x.n++] = static_cast<uint64_t>(c);
+}
+int big_cmp(const Big& x, const Big& y) {
+  if (x.n != y.n) return x.n < y.n ? -1 : 1;
+  for (int l = x.n - 1; l >= 0; --l)
+    if (x.v[l] != y.v[l]) return x.v[l] < y.v[l] ? -1 : 1;
+  return 0;
 }
 
-// RegisterNeeds from bin[i] = C(K, i) (i = 1..N, zero for i > K) and their
-// sum, for tol = m 2^e: 1/2 X 2^-f <= tol/2 <=> X <= m 2^(e+f), so the least
-// f is p - e with p from least_pow2_exponent (then at least 0). t, x: scratch.
-void fill_needs(RegisterNeeds& nd, int N, const mpz_srcptr* bin, mpz_srcptr sum, const Dyadic& tol, mpz_ptr t,
-                mpz_ptr x) {
-  const uint64_t m = static_cast<uint64_t>(tol.m);
-  auto need = [&](mpz_srcptr v) {
-    return mpz_sgn(v) == 0 ? 0 : static_cast<int>(std::max(0L, least_pow2_exponent(v, m, t) - tol.e));
-  };
-  nd.alone.assign(N + 1, 0);
-  nd.share.assign(N + 1, 0);
-  nd.binding = 1;
-  for (int i = 1; i <= N; ++i) {
-    nd.alone[i] = need(bin[i]);
-    mpz_mul_ui(x, bin[i], static_cast<unsigned long>(N));
-    nd.share[i] = need(x);
-    if (mpz_cmp(bin[i], bin[nd.binding]) >= 0) nd.binding = i;  // the largest, highest i on ties
+// Bit length of an n-limb magnitude (leading zero limbs allowed).
+int bitlen_limbs(const uint64_t* x, int n) {
+  while (n > 0 && x[n - 1] == 0) --n;
+  return n ? 64 * (n - 1) + bitlen_u64(x[n - 1]) : 0;
+}
+// Bits [pos, pos + 64) of an n-limb magnitude (pos >= 0).
+uint64_t bits64_at(const uint64_t* x, int n, long pos) {
+  const long q = pos >> 6;
+  const unsigned r = static_cast<unsigned>(pos & 63);
+  const uint64_t lo = q < n ? x[q] : 0;
+  if (!r) return lo;
+  const uint64_t hi = q + 1 < n ? x[q + 1] : 0;
+  return (lo >> r) | (hi << (64 - r));
+}
+// Whether any of bits [0, pos) of x is set.
+bool any_bits_below(const uint64_t* x, int n, long pos) {
+  const long q = pos >> 6;
+  for (long l = 0; l < q && l < n; ++l)
+    if (x[l]) return true;
+  const unsigned r = static_cast<unsigned>(pos & 63);
+  return r && q < n && (x[q] & ((uint64_t(1) << r) - 1));
+}
+// Sign of x - m 2^s for an n-limb magnitude x and 1 <= m < 2^64, exactly.
+int cmp_m2e(const uint64_t* x, int n, uint64_t m, long s) {
+  const long bx = bitlen_limbs(x, n), bm = bitlen_u64(m);
+  if (bx != bm + s) return bx > bm + s ? 1 : -1;
+  if (s >= 0) {  // same bit length: compare the top bm bits, then the rest
+    const uint64_t top = bits64_at(x, n, s) & (bm == 64 ? ~uint64_t(0) : (uint64_t(1) << bm) - 1);
+    if (top != m) return top > m ? 1 : -1;
+    return any_bits_below(x, n, s) ? 1 : 0;
   }
-  nd.common = need(sum);
+  const uint64_t xs = x[0] << (-s);  // bx = bm + s < 64 bits, shifted to bm bits
+  return xs > m ? 1 : xs < m ? -1 : 0;
+}
+// Least integer p with x <= m 2^p (x >= 1, m >= 1): with p0 = bitlen(x) -
+// bitlen(m), m 2^(p0-1) < 2^(bitlen(x)-1) <= x and x < 2^bitlen(x) <= m 2^(p0+1),
+// so p is p0 or p0 + 1, decided by one exact comparison.
+long least_pow2_exponent(const uint64_t* x, int n, uint64_t m) {
+  const long p0 = static_cast<long>(bitlen_limbs(x, n)) - bitlen_u64(m);
+  return cmp_m2e(x, n, m, p0) <= 0 ? p0 : p0 + 1;
+}
+
+// C(K, i), i = 0..N (zero for i > K), and their sum over i = 1..N, exactly.
+struct Binomials {
+  Big c[8];
+  Big sum;
+  void compute(int N, uint64_t K) {
+    big_set(c[0], 1);
+    big_set(sum, 0);
+    for (int i = 1; i <= N; ++i) {
+      c[i] = c[i - 1];
+      if (static_cast<uint64_t>(i) > K) {
+        big_set(c[i], 0);
+        continue;
+      }
+      big_mul_small(c[i], K - static_cast<uint64_t>(i) + 1);  // C(K,i) = C(K,i-1) (K-i+1) / i, exact
+      div_limbs_small(c[i].v, c[i].n, static_cast<uint64_t>(i));
+      if (c[i].v[c[i].n - 1] == 0) --c[i].n;
+      big_add(sum, c[i]);
+    }
+  }
+};
+
+// RegisterNeeds from C(K, i) (i = 1..N) and their sum, for tol = m 2^e:
+// 1/2 X 2^-f <= tol/2 <=> X <= m 2^(e+f), so the least f is p - e with p from
+// least_pow2_exponent (then at least 0).
+struct NeedsArr {
+  int alone[8] = {}, share[8] = {};
+  int binding = 1, common = 0;
+};
+NeedsArr compute_needs(int N, const Binomials& b, const Dyadic& tol) {
+  const uint64_t m = static_cast<uint64_t>(tol.m);
+  auto need = [&](const Big& v) {
+    return v.n == 0 ? 0 : static_cast<int>(std::max(0L, least_pow2_exponent(v.v, v.n, m) - tol.e));
+  };
+  NeedsArr nd;
+  for (int i = 1; i <= N; ++i) {
+    nd.alone[i] = need(b.c[i]);
+    Big x = b.c[i];
+    big_mul_small(x, static_cast<uint64_t>(N));
+    nd.share[i] = need(x);
+    if (big_cmp(b.c[i], b.c[nd.binding]) >= 0) nd.binding = i;  // the largest, highest i on ties
+  }
+  nd.common = need(b.sum);
+  return nd;
+}
+void set_needs(RegisterNeeds& nd, int N, const NeedsArr& a) {
+  nd.alone.assign(a.alone, a.alone + N + 1);
+  nd.share.assign(a.share, a.share + N + 1);
+  nd.binding = a.binding;
+  nd.common = a.common;
 }
 }  // namespace
 
-RegisterNeeds Compiler::register_needs(int degree, uint64_t k, double tol_lsb) {
-  if (!(tol_lsb > 0) || !std::isfinite(tol_lsb))
-    throw CompileError("register_needs: tol_lsb=" + fmt_double(tol_lsb) + " must be positive and finite");
-  if (degree < 1 || degree > 7) throw CompileError("register_needs: degree out of range 1..7");
-  mpz_class c[8], sum = 0, t, x;
-  mpz_srcptr bin[8];
-  c[0] = 1;
-  for (int i = 1; i <= degree; ++i) {
-    if (static_cast<uint64_t>(i) <= k) {
-      c[i] = c[i - 1] * static_cast<unsigned long>(k - i + 1);
-      mpz_divexact_ui(c[i].get_mpz_t(), c[i].get_mpz_t(), static_cast<unsigned long>(i));
-    }  // else C(k, i) = 0 (default)
-    sum += c[i];
+// ---------------------------------------------------------------------------
+// Fixed-point grid path (the common case: no GMP, no heap until the result).
+//
+// The same dyadic sums as compile_exact(), but each term
+//     u_j = c_j 2^sigma h^j = m_j m_h^j 2^(e_j + sigma + j e_h)
+// is taken on a grid of 2^-64 register LSB (truncated towards zero: error
+// below one grid unit, and none if the term lies on the grid), in L = 3 or 4
+// limbs of two's complement (L chosen per segment from a bound on every
+// quantity; larger segments go to compile_exact()). Since m_j and m_h are odd,
+// a term is off the grid exactly when its exponent is below -64. Then
+//     X_i = sum_j surj(j,i) u_j   differs from the exact Delta^i by less than
+//     err_i = sum of surj(j,i) over the terms off the grid (< 2^15 grid units),
+// and r_i = floor(X_i/2^64 + 1/2) is certain unless X_i + 2^63 lies within
+// err_i of a multiple of 2^64 (probability ~2^-49 for arbitrary data; exact
+// ties, e.g. dyadic h, have err_i = 0 and are decided exactly). r_1 also
+// carries the blend -e0/K: with e0 (exact on the grid) = K qd + rd,
+// 0 <= rd < K, the exact value is X_1 - qd - rd/K, i.e. within (-1, 0] of
+// X_1 - qd. An undecided rounding sends the segment to compile_exact().
+// The start error e0 = r0 - c0 is exact on the grid (c0 = x(0) 2^sigma +
+// 2^(G-1) must lie on it, else compile_exact()), so the continuity check,
+// carried_lsb (truncated to a double as mpq_get_d does) and the range check's
+// inputs are those of compile_exact(). The end state r0 + sum r_i C(K,i) is
+// taken modulo 2^128: the range check bounds the exact value below
+// 2^(W-1) <= 2^127 in magnitude (|r0(K) - q(T)| <= Q(K), README), so the
+// residue read as a signed 128-bit integer is the exact value.
+namespace {
+
+// m_h^j, j = 0..7, of the tick period's odd mantissa m_h < 2^53 (at most 371
+// bits: 6 limbs), cached per thread for the last h.
+struct HPowers {
+  uint64_t key = 0;  // bit pattern of h (h > 0, so 0 means empty)
+  Dyadic hd{0, 0};
+  uint64_t p[8][6] = {};
+  int n[8] = {};     // limbs in use
+  int bits[8] = {};  // bit length
+};
+const HPowers& h_powers(double h) {
+  thread_local HPowers c;
+  uint64_t key;
+  std::memcpy(&key, &h, sizeof key);
+  if (c.key != key) {
+    c.key = key;
+    c.hd = dyadic(h);
+    const uint64_t m = static_cast<uint64_t>(c.hd.m);
+    c.p[0][0] = 1;
+    c.n[0] = 1;
+    for (int j = 1; j < 8; ++j) {
+      u128 carry = 0;
+      for (int l = 0; l < c.n[j - 1]; ++l) {
+        carry += static_cast<u128>(c.p[j - 1][l]) * m;
+        c.p[j][l] = static_cast<uint64_t>(carry);
+        carry >>= 64;
+      }
+      c.n[j] = c.n[j - 1];
+      if (carry) c.p[j][c.n[j]++] = static_cast<uint64_t>(carry);
+    }
+    for (int j = 0; j < 8; ++j) c.bits[j] = bitlen_limbs(c.p[j], c.n[j]);
   }
-  for (int i = 0; i <= degree; ++i) bin[i] = c[i].get_mpz_t();
-  RegisterNeeds nd;
-  fill_needs(nd, degree, bin, sum.get_mpz_t(), dyadic(tol_lsb), t.get_mpz_t(), x.get_mpz_t());
-  return nd;
+  return c;
 }
 
-Compiled Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>* start,
-                           const std::string& where) const {
+// Bits [pos, pos + 64) of an n-limb magnitude, pos of any sign (bits below 0
+// are zero).
+inline uint64_t get64(const uint64_t* x, int n, long pos) {
+  if (pos >= 0) return bits64_at(x, n, pos);
+  if (pos <= -64) return 0;
+  return x[0] << (-pos);
+}
+
+template <int L>
+inline void neg_l(uint64_t* x) {
+  uint64_t c = 1;
+  for (int l = 0; l < L; ++l) {
+    x[l] = ~x[l] + c;
+    c = c && x[l] == 0;
+  }
+}
+template <int L>
+inline bool is_neg(const uint64_t* x) {
+  return static_cast<int64_t>(x[L - 1]) < 0;
+}
+template <int L>
+inline void abs_l(const uint64_t* x, uint64_t* m) {
+  for (int l = 0; l < L; ++l) m[l] = x[l];
+  if (is_neg<L>(x)) neg_l<L>(m);
+}
+template <int L>
+inline void sub_l(uint64_t* x, const uint64_t* y) {  // x -= y (modulo 2^(64 L))
+  uint64_t borrow = 0;
+  for (int l = 0; l < L; ++l) {
+    const uint64_t t = x[l] - y[l];
+    const uint64_t b1 = x[l] < y[l];
+    x[l] = t - borrow;
+    borrow = b1 | (t < borrow);
+  }
+}
+template <int L>
+inline void add_u64_at(uint64_t* x, uint64_t v, int at) {  // x += v 2^(64 at) (modulo 2^(64 L))
+  uint64_t c = v;
+  for (int l = at; l < L; ++l) {
+    x[l] += c;
+    c = x[l] < c;
+  }
+}
+template <int L>
+inline void sub_u64(uint64_t* x, uint64_t v) {  // x -= v (modulo 2^(64 L))
+  uint64_t b = v;
+  for (int l = 0; l < L; ++l) {
+    const uint64_t t = x[l];
+    x[l] = t - b;
+    b = t < b;
+  }
+}
+template <int L>
+inline bool is_zero(const uint64_t* x) {
+  uint64_t o = 0;
+  for (int l = 0; l < L; ++l) o |= x[l];
+  return o == 0;
+}
+// Signed L-limb value as long double (relative error below 2^-61).
+template <int L>
+long double ld_of(const uint64_t* x) {
+  uint64_t m[L];
+  abs_l<L>(x, m);
+  long double v = 0;
+  for (int l = L - 1; l >= 0; --l) v = v * 0x1p64L + static_cast<long double>(m[l]);
+  return is_neg<L>(x) ? -v : v;
+}
+// |x| 2^p of an n-limb magnitude as a double, truncated to 53 bits like
+// mpz_get_d / mpq_get_d; false if the result would not be a normal double.
+bool trunc_double(const uint64_t* x, int n, long p, double& out) {
+  const int bx = bitlen_limbs(x, n);
+  if (bx == 0) {
+    out = 0;
+    return true;
+  }
+  uint64_t mant = bx <= 64 ? x[0] : bits64_at(x, n, bx - 64);
+  const int bm = bx <= 64 ? bx : 64;
+  p += bx - bm;
+  if (bm > 53) {
+    mant >>= bm - 53;
+    p += bm - 53;
+  }
+  const long binade = p + std::min(bm, 53) - 1;
+  if (binade < -1022 || binade > 1023) return false;
+  const uint64_t bits = (static_cast<uint64_t>(binade + 1023) << 52) |
+                        ((mant << (53 - std::min(bm, 53))) & ((uint64_t(1) << 52) - 1));
+  std::memcpy(&out, &bits, sizeof out);
+  return true;
+}
+// z = sign * the k-limb magnitude m (m[k-1] != 0 or k = 0). A fresh mpz
+// (GMP >= 6.2: mpz_init allocates nothing, _mp_alloc = 0) gets exactly k limbs
+// from GMP's own allocation function, which is what mpz_limbs_write would do
+// through _mpz_realloc, minus the round trip; GMP frees them with mpz_clear.
+void mpz_set_mag(mpz_ptr z, const uint64_t* m, int k, bool neg) {
+  static void* (*const gmp_alloc)(size_t) = [] {
+    void* (*fa)(size_t);
+    mp_get_memory_functions(&fa, nullptr, nullptr);
+    return fa;
+  }();
+  mp_limb_t* p;
+  if (z->_mp_alloc == 0 && k > 0) {
+    p = static_cast<mp_limb_t*>(gmp_alloc(static_cast<size_t>(k) * sizeof(mp_limb_t)));
+    z->_mp_d = p;
+    z->_mp_alloc = k;
+  } else {
+    p = mpz_limbs_write(z, k > 0 ? k : 1);
+  }
+  for (int l = 0; l < k; ++l) p[l] = m[l];
+  z->_mp_size = neg ? -k : k;
+}
+// z = the signed n-limb two's complement value x (n <= 4).
+void mpz_set_limbs(mpz_ptr z, const uint64_t* x, int n) {
+  uint64_t m[4];
+  const bool neg = static_cast<int64_t>(x[n - 1]) < 0;
+  uint64_t c = 1;
+  for (int l = 0; l < n; ++l) {
+    m[l] = neg ? ~x[l] + c : x[l];
+    if (neg) c = c && m[l] == 0;
+  }
+  int k = n;
+  while (k > 0 && m[k - 1] == 0) --k;
+  mpz_set_mag(z, m, k, neg);
+}
+void mpz_set_i128(mpz_ptr z, u128 v) {
+  const uint64_t x[2] = {static_cast<uint64_t>(v), static_cast<uint64_t>(v >> 64)};
+  mpz_set_limbs(z, x, 2);
+}
+// Low 128 bits of an mpz in two's complement.
+u128 low128(mpz_srcptr z) {
+  const int n = std::abs(z->_mp_size);
+  u128 v = n > 0 ? z->_mp_d[0] : 0;
+  if (n > 1) v |= static_cast<u128>(z->_mp_d[1]) << 64;
+  return z->_mp_size < 0 ? -v : v;
+}
+
+// Per (degree, K, tol): C(K, i) modulo 2^128, 2 Q(K) = sum C(K, i) as a
+// double truncated like mpz_get_d, and the register needs. A planner's
+// segments repeat a few hundred lengths, so this is cached per thread
+// (direct-mapped; a miss costs one exact computation on limbs).
+struct KData {
+  uint64_t K = 0, tol = 0;
+  int N = 0;  // 0: empty
+  double q2_d = 0;
+  u128 binlo[8] = {};
+  NeedsArr needs;
+};
+constexpr int kKCacheBits = 9;
+struct KCacheOwner {
+  KData* p = nullptr;
+  ~KCacheOwner() { delete[] p; }
+};
+const KData& k_data(int N, uint64_t K, double tol_lsb) {
+  thread_local KData* cache = nullptr;
+  if (!cache) {
+    thread_local KCacheOwner owner;
+    cache = owner.p = new KData[size_t(1) << kKCacheBits];
+  }
+  uint64_t tb;
+  std::memcpy(&tb, &tol_lsb, sizeof tb);
+  const uint64_t h = (K * 0x9E3779B97F4A7C15ull) ^ (tb * 0xC2B2AE3D27D4EB4Full) ^ static_cast<uint64_t>(N);
+  KData& e = cache[h >> (64 - kKCacheBits)];
+  if (e.N == N && e.K == K && e.tol == tb) return e;
+  Binomials b;
+  b.compute(N, K);
+  e.K = K;
+  e.tol = tb;
+  e.N = N;
+  trunc_double(b.sum.v, b.sum.n, 0, e.q2_d);  // >= 1 and < 2^448: always a normal double
+  for (int i = 0; i < 8; ++i)
+    e.binlo[i] = i > N || b.c[i].n == 0 ? 0 : (static_cast<u128>(b.c[i].n > 1 ? b.c[i].v[1] : 0) << 64) | b.c[i].v[0];
+  e.needs = compute_needs(N, b, dyadic(tol_lsb));
+  return e;
+}
+
+struct GridOut {
+  uint64_t reg[8][8][3];  // [axis][i] r[i] as L-1 limbs (i = 0 only if no start)
+  u128 end[8];
+};
+
+// The axes of one segment on the L-limb grid; false if a rounding is not
+// certain or anything else is left to compile_exact().
+template <int L>
+bool grid_axes(const Format& f, const PolySegment& seg, const std::vector<mpz_class>* start, const HPowers& hp,
+               const Dyadic (*d)[8], const u128* binlo, double q2_d, const Dyadic& htol, long double scale_ld,
+               long double limit_ld, double& carried, GridOut& o) {
+  const int N = f.degree;
+  const int G = f.guard_bits;
+  const long sigma = G + f.frac_bits;
+  const uint64_t K = seg.ticks;
+  const long double T_ld = static_cast<long double>(seg.h) * static_cast<long double>(K);
+  const long double err_rel = 0x1p-48L;
+  const long double grow = 1 + 0x1p-40L;
+  const long double(*w)[8] = bernstein_weights().w[N];
+  const SurjTable& surj = surj_table();
+
+  for (int a = 0; a < f.axes; ++a) {
+    const std::vector<double>& cf = seg.coef[a];
+    const Dyadic* da = d[a];
+    // c0 = x(0) 2^sigma + 2^(G-1) on the grid.
+    uint64_t c0[L] = {};
+    if (da[0].m) {
+      const uint64_t am = static_cast<uint64_t>(da[0].m < 0 ? -da[0].m : da[0].m);
+      const long s0 = da[0].e + sigma + 64;
+      for (int l = 0; l < L; ++l) c0[l] = get64(&am, 1, 64 * l - s0);
+      if (da[0].m < 0) neg_l<L>(c0);
+    }
+    add_u64_at<L>(c0, uint64_t(1) << ((G + 63) % 64), (G + 63) / 64);
+    // r0 and e0 = r0 - c0 (grid units).
+    uint64_t e0[L];
+    u128 r0lo;
+    if (start) {
+      mpz_srcptr z = (*start)[a].get_mpz_t();
+      const int n = std::abs(z->_mp_size);
+      uint64_t r0g[L] = {};
+      for (int l = 0; l < n; ++l) r0g[l + 1] = z->_mp_d[l];
+      if (z->_mp_size < 0) neg_l<L>(r0g);
+      for (int l = 0; l < L; ++l) e0[l] = r0g[l];
+      sub_l<L>(e0, c0);
+      r0lo = low128(z);
+    } else {
+      uint64_t zz[L];
+      for (int l = 0; l < L; ++l) zz[l] = c0[l];
+      add_u64_at<L>(zz, uint64_t(1) << 63, 0);
+      for (int l = 1; l < L; ++l) o.reg[a][0][l - 1] = zz[l];
+      r0lo = (static_cast<u128>(zz[2]) << 64) | zz[1];
+      // e0 = 2^63 - (low limb of c0 + 2^63), in (-2^63, 2^63]
+      const uint64_t low = zz[0];
+      const uint64_t v = (uint64_t(1) << 63) - low;  // modulo 2^64
+      const bool negv = low > (uint64_t(1) << 63);
+      e0[0] = v;
+      for (int l = 1; l < L; ++l) e0[l] = negv ? ~uint64_t(0) : 0;
+    }
+    uint64_t e0m[L];
+    abs_l<L>(e0, e0m);
+    const bool e0zero = is_zero<L>(e0);
+    // Continuity (refused by the reference: compile_exact() words it).
+    if (start && !e0zero && cmp_m2e(e0m, L, static_cast<uint64_t>(htol.m), htol.e + G + 64) > 0) return false;
+    double e0_lsb;
+    if (!trunc_double(e0m, L, -(64L + G), e0_lsb)) return false;
+    carried = std::max(carried, e0_lsb);
+
+    // Range: the same long double Bernstein bound as compile_exact().
+    {
+      const long double e0_ld = ld_of<L>(e0) * 0x1p-64L;
+      const long double e0_abs = std::fabs(e0_ld);
+      long double av[8], mag[8];
+      uint64_t r0l[L];  // r0 (register units), L limbs
+      if (start) {
+        mpz_srcptr z = (*start)[a].get_mpz_t();
+        const int n = std::abs(z->_mp_size);
+        for (int l = 0; l < L; ++l) r0l[l] = l < n ? z->_mp_d[l] : 0;
+        if (z->_mp_size < 0) neg_l<L>(r0l);
+      } else {
+        for (int l = 0; l < L - 1; ++l) r0l[l] = o.reg[a][0][l];
+        r0l[L - 1] = static_cast<int64_t>(r0l[L - 2]) < 0 ? ~uint64_t(0) : 0;
+      }
+      av[0] = ld_of<L>(r0l);
+      mag[0] = std::fabs(av[0]);
+      long double Tj = 1;
+      for (int j = 1; j <= N; ++j) {
+        Tj *= T_ld;
+        const long double cj = j < static_cast<int>(cf.size()) ? static_cast<long double>(cf[j]) * scale_ld : 0;
+        if (j == 1) {
+          av[1] = (cj - e0_ld / T_ld) * T_ld;
+          mag[1] = (std::fabs(cj) + e0_abs / T_ld) * T_ld;
+        } else {
+          av[j] = cj * Tj;
+          mag[j] = std::fabs(av[j]);
+        }
+      }
+      // First the power-basis bound sum_j |a_j| >= sum_j w_ij |a_j| >= |b_i|
+      // (0 < w_ij <= 1), with the same relative margin; far from the limit
+      // (nearly always) it settles the check without the Bernstein sums.
+      long double sum_mag = 0;
+      for (int j = 0; j <= N; ++j) sum_mag += mag[j];
+      const long double rest = e0_abs + static_cast<long double>(q2_d) + 2;
+      if (!((sum_mag * (1 + err_rel) + rest) * grow < limit_ld)) {
+        long double mhi = 0;
+        for (int i = 0; i <= N; ++i) {
+          long double bb = 0, sm = 0;
+          for (int j = 0; j <= i; ++j) {
+            bb += av[j] * w[i][j];
+            sm += mag[j] * w[i][j];
+          }
+          mhi = std::max(mhi, std::fabs(bb) + sm * err_rel);
+        }
+        const long double total = (mhi + rest) * grow;
+        if (!(total < limit_ld)) return false;  // compile_exact() decides (and words a refusal)
+      }
+    }
+
+    // Terms on the grid.
+    uint64_t u[8][L];
+    uint64_t off[8];  // all ones if term j is off the grid (then its error is below one grid unit)
+    for (int j = 1; j <= N; ++j) {
+      off[j] = 0;
+      if (!da[j].m) {
+        for (int l = 0; l < L; ++l) u[j][l] = 0;
+        continue;
+      }
+      const uint64_t am = static_cast<uint64_t>(da[j].m < 0 ? -da[j].m : da[j].m);
+      // prod = |m_j| m_h^j (at most 7 limbs) at buf[4..], zeros around it.
+      uint64_t buf[16];
+      buf[0] = buf[1] = buf[2] = buf[3] = 0;
+      u128 carry = 0;
+      const int pn = hp.n[j];
+      for (int l = 0; l < pn; ++l) {
+        carry += static_cast<u128>(hp.p[j][l]) * am;
+        buf[4 + l] = static_cast<uint64_t>(carry);
+        carry >>= 64;
+      }
+      buf[4 + pn] = static_cast<uint64_t>(carry);
+      for (int l = 0; l < L; ++l) buf[5 + pn + l] = 0;  // read up to buf[4 + q + L], q <= pn
+      // u_j = prod 2^s truncated: limb l holds bits [64 l - s, 64 l - s + 64)
+      // of prod, i.e. words q + l, q + l + 1 of buf + 4 with q = floor(-s/64).
+      // The size bound of compile_grid (bitlen(prod) + s + 18 <= 255) gives
+      // s <= 237, so q >= -4.
+      const long s = da[j].e + sigma + static_cast<long>(j) * hp.hd.e + 64;
+      const long q = (-s) >> 6;  // floor
+      const unsigned r = static_cast<unsigned>((-s) & 63);
+      if (q > pn) {
+        for (int l = 0; l < L; ++l) u[j][l] = 0;
+      } else {
+        const uint64_t* w0 = buf + 4 + q;
+        for (int l = 0; l < L; ++l) u[j][l] = (w0[l] >> r) | ((w0[l + 1] << 1) << (63 - r));
+      }
+      off[j] = s < 0 ? ~uint64_t(0) : 0;
+      if (da[j].m < 0) neg_l<L>(u[j]);
+    }
+    // e0 = K qd + rd, 0 <= rd < K (floor division).
+    uint64_t qd[L] = {};
+    uint64_t rd = 0;
+    if (!e0zero) {
+      for (int l = 0; l < L; ++l) qd[l] = e0m[l];
+      const uint64_t r = div_limbs_small(qd, L, K);
+      if (is_neg<L>(e0)) {
+        if (r) add_u64_at<L>(qd, 1, 0);
+        neg_l<L>(qd);
+        rd = r ? K - r : 0;
+      } else {
+        rd = r;
+      }
+    }
+    u128 end = r0lo;
+    for (int i = 1; i <= N; ++i) {
+      // X_i = sum_{j >= i} surj(j,i) u_j (modulo 2^(64 L); each limb column
+      // below 7 2^79, so one u128 per column), err_i as above.
+      u128 acc[L] = {};
+      uint64_t err = 0;
+      for (int j = i; j <= N; ++j) {
+        const uint64_t sj = surj.v[j][i];
+        for (int l = 0; l < L; ++l) acc[l] += static_cast<u128>(u[j][l]) * sj;
+        err += off[j] & sj;
+      }
+      uint64_t x[L];
+      u128 c = 0;
+      for (int l = 0; l < L; ++l) {
+        c += acc[l];
+        x[l] = static_cast<uint64_t>(c);
+        c >>= 64;
+      }
+      add_u64_at<L>(x, uint64_t(1) << 63, 0);
+      uint64_t below = 0;  // 1 if the exact value lies below x by a fraction of a grid unit
+      if (i == 1) {
+        sub_l<L>(x, qd);
+        below = rd != 0;
+      }
+      if (err == 0) {
+        sub_u64<L>(x, below);
+      } else if (x[0] < err + below || x[0] > uint64_t(0) - err) {
+        return false;  // within the truncation error of a rounding boundary
+      }
+      for (int l = 1; l < L; ++l) o.reg[a][i][l - 1] = x[l];
+      end += ((static_cast<u128>(x[2]) << 64) | x[1]) * binlo[i];
+    }
+    // |end| < 2^(W-1) by the range check; anything else would be a bug, and
+    // compile_exact() would then compute it exactly.
+    const u128 lim = static_cast<u128>(1) << (f.width - 1);  // W <= 128: 2^127 at most
+    if (end + lim - 1 > 2 * (lim - 1)) return false;
+    o.end[a] = end;
+  }
+  return true;
+}
+
+// The grid path of compile() for a segment that passed the checks before any
+// arithmetic and the budget check: true with `out` filled, or false (nothing
+// decided) for compile_exact().
+bool compile_grid(const Format& f, long double scale_ld, long double limit_ld, const PolySegment& seg,
+                  const std::vector<mpz_class>* start, Compiled& out) {
+  const int N = f.degree;
+  const int A = f.axes;
+  const int G = f.guard_bits;
+  const long sigma = G + f.frac_bits;
+  const HPowers& hp = h_powers(seg.h);
+  // Decompose the coefficients and bound every quantity (bits, grid units).
+  Dyadic d[8][8];
+  long need = G + 66;  // c0's bias 2^(G+63), with the margin below
+  for (int a = 0; a < A; ++a) {
+    const std::vector<double>& cf = seg.coef[a];
+    for (int j = 0; j <= N; ++j) d[a][j] = j < static_cast<int>(cf.size()) ? dyadic(cf[j]) : Dyadic{0, 0};
+    if (d[a][0].m) {
+      const long s0 = d[a][0].e + sigma + 64;
+      if (s0 < 0) return false;  // x(0) below the grid
+      need = std::max<long>(need, bitlen_u64(static_cast<uint64_t>(std::abs(d[a][0].m))) + s0 + 3);
+    }
+    for (int j = 1; j <= N; ++j)
+      if (d[a][j].m)
+        need = std::max<long>(need, bitlen_u64(static_cast<uint64_t>(std::abs(d[a][j].m))) + hp.bits[j] +
+                                        d[a][j].e + sigma + static_cast<long>(j) * hp.hd.e + 64 + 15 + 3);
+    if (start) {
+      mpz_srcptr z = (*start)[a].get_mpz_t();
+      const int n = std::abs(z->_mp_size);
+      need = std::max<long>(need, (n ? 64L * (n - 1) + bitlen_u64(z->_mp_d[n - 1]) : 0) + 64 + 3);
+    }
+  }
+  const KData& kd = k_data(N, seg.ticks, f.tol_lsb);
+  const double q2_d = kd.q2_d;
+  const Dyadic htol = dyadic(f.tol_lsb / 2);
+  GridOut o;
+  double carried = 0;
+  bool ok;
+  if (need <= 191) ok = grid_axes<3>(f, seg, start, hp, d, kd.binlo, q2_d, htol, scale_ld, limit_ld, carried, o);
+  else if (need <= 255) ok = grid_axes<4>(f, seg, start, hp, d, kd.binlo, q2_d, htol, scale_ld, limit_ld, carried, o);
+  else ok = false;
+  if (!ok) return false;
+  ++(need <= 191 ? path_counts().grid3 : path_counts().grid4);
+  const int L1 = need <= 191 ? 2 : 3;  // limbs of a register
+
+  out.ticks = static_cast<uint32_t>(seg.ticks);
+  out.regs.resize(A);
+  out.end.resize(A);
+  for (int a = 0; a < A; ++a) {
+    std::vector<mpz_class>& r = out.regs[a];
+    r.resize(N + 1);
+    if (start) {
+      mpz_srcptr z = (*start)[a].get_mpz_t();
+      mpz_set_mag(r[0].get_mpz_t(), z->_mp_d, std::abs(z->_mp_size), z->_mp_size < 0);
+    } else {
+      mpz_set_limbs(r[0].get_mpz_t(), o.reg[a][0], L1);
+    }
+    for (int i = 1; i <= N; ++i) mpz_set_limbs(r[i].get_mpz_t(), o.reg[a][i], L1);
+    mpz_set_i128(out.end[a].get_mpz_t(), o.end[a]);
+  }
+  out.carried_lsb = carried;
+  // = quant_bound_lsb(K): q2_d 2^-(G+1), exact (q2_d >= 1, G + 1 <= 127: normal)
+  double scale;
+  const uint64_t sbits = static_cast<uint64_t>(1023 - (G + 1)) << 52;
+  std::memcpy(&scale, &sbits, sizeof scale);
+  out.bound_lsb = carried + q2_d * scale;
+  set_needs(out.needs, N, kd.needs);
+  return true;
+}
+
+}  // namespace
+
+namespace {
+// The exact integer path (compile()'s fast path before the fixed-point grid
+// path above): exact dyadic sums on limb arrays sized per axis, mpz
+// otherwise. compile() takes it when the grid path cannot settle a segment.
+Compiled compile_exact(const Format& f_, const PolySegment& seg, const std::vector<mpz_class>* start,
+                       const std::string& where) {
+  ++path_counts().exact;
   const int N = f_.degree;
   const int A = f_.axes;
-  auto fail = [&](const std::string& what) { throw CompileError(where + ": " + what); };
-
-  // The refusals before any arithmetic, in the reference's order and words.
-  if (static_cast<int>(seg.coef.size()) != A)
-    fail("has " + std::to_string(seg.coef.size()) + " axes, the engine has " + std::to_string(A));
-  if (!(seg.h > 0) || !std::isfinite(seg.h)) fail("tick period h=" + fmt_double(seg.h) + " must be positive and finite");
-  if (seg.ticks < 1) fail("tick count K=0: a segment needs at least one tick");
-  if (seg.ticks > f_.max_ticks)
-    fail("K=" + std::to_string(seg.ticks) + " ticks exceeds max_ticks=" + std::to_string(f_.max_ticks) +
-         "; split the segment");
-  for (int a = 0; a < A; ++a) {
-    if (static_cast<int>(seg.coef[a].size()) > N + 1)
-      fail("axis " + std::to_string(a) + " has degree " + std::to_string(seg.coef[a].size() - 1) +
-           ", the engine is built for degree " + std::to_string(N));
-    for (size_t j = 0; j < seg.coef[a].size(); ++j)
-      if (!std::isfinite(seg.coef[a][j]))
-        fail("axis " + std::to_string(a) + " coefficient c" + std::to_string(j) + " = " +
-             fmt_double(seg.coef[a][j]) + " is not finite");
-  }
-  if (start && static_cast<int>(start->size()) != A) fail("start state has the wrong number of axes");
-  if (seg.ticks > kfit_) return compile_reference(f_, seg, start, where);  // words the refusal
-
   const uint64_t K = seg.ticks;
   const int G = f_.guard_bits;
   const int sigma = G + f_.frac_bits;  // scale = 2^sigma
@@ -668,7 +1281,7 @@ Compiled Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>*
   double carried = 0;
   for (int a = 0; a < A; ++a) {
     const std::vector<double>& cf = seg.coef[a];
-    Dyadic d[8];
+    Dyadic d[8] = {};
     for (size_t j = 0; j < cf.size(); ++j) d[j] = dyadic(cf[j]);
     // Common exponent z <= -1 of all terms (and of the bias 2^(G-1), G >= 1).
     long z = -1;
@@ -837,11 +1450,50 @@ Compiled Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>*
   out.carried_lsb = carried;
   out.bound_lsb = carried + qbound_lsb;
   {
-    mpz_srcptr bin[8];
-    for (int i = 0; i <= N; ++i) bin[i] = S.bin[i];
-    fill_needs(out.needs, N, bin, S.q2, dyadic(f_.tol_lsb), S.t, S.x);
+    set_needs(out.needs, N, k_data(N, K, f_.tol_lsb).needs);
   }
   return out;
+}
+}  // namespace
+
+RegisterNeeds Compiler::register_needs(int degree, uint64_t k, double tol_lsb) {
+  if (!(tol_lsb > 0) || !std::isfinite(tol_lsb))
+    throw CompileError("register_needs: tol_lsb=" + fmt_double(tol_lsb) + " must be positive and finite");
+  if (degree < 1 || degree > 7) throw CompileError("register_needs: degree out of range 1..7");
+  RegisterNeeds nd;
+  set_needs(nd, degree, k_data(degree, k, tol_lsb).needs);
+  return nd;
+}
+
+Compiled Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>* start,
+                           const std::string& where) const {
+  const int N = f_.degree;
+  const int A = f_.axes;
+  auto fail = [&](const std::string& what) { throw CompileError(where + ": " + what); };
+
+  // The refusals before any arithmetic, in the reference's order and words.
+  if (static_cast<int>(seg.coef.size()) != A)
+    fail("has " + std::to_string(seg.coef.size()) + " axes, the engine has " + std::to_string(A));
+  if (!(seg.h > 0) || !std::isfinite(seg.h)) fail("tick period h=" + fmt_double(seg.h) + " must be positive and finite");
+  if (seg.ticks < 1) fail("tick count K=0: a segment needs at least one tick");
+  if (seg.ticks > f_.max_ticks)
+    fail("K=" + std::to_string(seg.ticks) + " ticks exceeds max_ticks=" + std::to_string(f_.max_ticks) +
+         "; split the segment");
+  for (int a = 0; a < A; ++a) {
+    if (static_cast<int>(seg.coef[a].size()) > N + 1)
+      fail("axis " + std::to_string(a) + " has degree " + std::to_string(seg.coef[a].size() - 1) +
+           ", the engine is built for degree " + std::to_string(N));
+    for (size_t j = 0; j < seg.coef[a].size(); ++j)
+      if (!std::isfinite(seg.coef[a][j]))
+        fail("axis " + std::to_string(a) + " coefficient c" + std::to_string(j) + " = " +
+             fmt_double(seg.coef[a][j]) + " is not finite");
+  }
+  if (start && static_cast<int>(start->size()) != A) fail("start state has the wrong number of axes");
+  if (seg.ticks > kfit_) return compile_reference(f_, seg, start, where);  // words the refusal
+
+  Compiled out;
+  if (compile_grid(f_, scale_ld_, limit_ld_, seg, start, out)) return out;
+  return compile_exact(f_, seg, start, where);
 }
 
 mpz_class Compiler::state_at(const Compiled& c, int axis, uint64_t k) {

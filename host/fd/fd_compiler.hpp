@@ -170,7 +170,21 @@ class Compiler {
   // Longest K <= max_ticks with Q(K) <= tol/2 (0 if none), computed once: the
   // budget check of compile() is then K <= kfit_ (Q(K) is increasing in K).
   uint64_t kfit_ = 0;
+  // Constants of compile()'s fast path: 2^(G+F) and the range limit
+  // 2^(W-1) (1 - 2^-40), exact powers of two (and their product) in long double.
+  long double scale_ld_ = 0;
+  long double limit_ld_ = 0;
 };
+
+// Diagnostics (tests, benchmarks): how compile() settled segments on this
+// thread. grid3/grid4: the fixed-point grid path on 3 or 4 limbs (the common
+// case); exact: the exact integer path (a rounding the grid could not settle,
+// or values too large for it); reference: the exact rational form (refusals,
+// and what the fast paths leave to it).
+struct PathCounts {
+  uint64_t grid3 = 0, grid4 = 0, exact = 0, reference = 0;
+};
+PathCounts& path_counts();
 
 // Binomial C(k, i) exactly.
 mpz_class binom(uint64_t k, int i);

@@ -23,6 +23,7 @@ using traj::fd::CompileError;
 using traj::fd::Compiler;
 using traj::fd::Format;
 using traj::fd::PolySegment;
+using traj::fd::RegisterNeeds;
 
 namespace ref {
 
@@ -78,6 +79,35 @@ mpz_class quant_bound_x2(int degree, uint64_t k) {
   mpz_class s = 0;
   for (int i = 1; i <= degree; ++i) s += binom(k, i);
   return s;
+}
+// Least f >= 0 with x <= tol 2^f, tol the exact rational of the double (by
+// search, as the compiler's report test does).
+int least_f(const mpz_class& x, double tol) {
+  if (x == 0) return 0;
+  const mpq_class t = exact(tol);
+  const mpz_class p = t.get_num(), q = t.get_den();
+  const mpz_class lhs = x * q;
+  int f = 0;
+  while (lhs > (p << f)) ++f;
+  return f;
+}
+RegisterNeeds needs(int deg, uint64_t k, double tol) {
+  RegisterNeeds r;
+  r.alone.assign(deg + 1, 0);
+  r.share.assign(deg + 1, 0);
+  mpz_class sum = 0, best = -1;
+  for (int i = 1; i <= deg; ++i) {
+    const mpz_class c = binom(k, i);
+    sum += c;
+    r.alone[i] = least_f(c, tol);
+    r.share[i] = least_f(c * deg, tol);
+    if (c >= best) {
+      best = c;
+      r.binding = i;
+    }
+  }
+  r.common = least_f(sum, tol);
+  return r;
 }
 double quant_bound_lsb(const Format& f, uint64_t k) {
   return to_lsb(mpq_class(quant_bound_x2(f.degree, k), 2), f.guard_bits);
@@ -289,6 +319,11 @@ Outcome check_same(const Compiler& comp, const PolySegment& seg, const std::vect
     }
   }
   EXPECT_EQ(comp.words(a), ref::words(comp.format(), b)) << ctx;
+  const RegisterNeeds want = ref::needs(comp.format().degree, seg.ticks, comp.format().tol_lsb);
+  EXPECT_EQ(a.needs.alone, want.alone) << ctx;
+  EXPECT_EQ(a.needs.share, want.share) << ctx;
+  EXPECT_EQ(a.needs.binding, want.binding) << ctx;
+  EXPECT_EQ(a.needs.common, want.common) << ctx;
   return fast;
 }
 
@@ -586,4 +621,148 @@ TEST(FdCompilerFast, HelpersUnchanged) {
     }
   for (uint64_t k : {uint64_t(0), uint64_t(3), uint64_t(1) << 40})
     for (int i = 0; i <= 8; ++i) EXPECT_EQ(traj::fd::binom(k, i), ref::binom(k, i));
+}
+
+// ---------------------------------------------------------------------------
+// The fixed-point grid path (the common case) and its hand-over to the exact
+// integer path.
+
+namespace {
+traj::fd::PathCounts counts_since(const traj::fd::PathCounts& b) {
+  const traj::fd::PathCounts& a = traj::fd::path_counts();
+  return {a.grid3 - b.grid3, a.grid4 - b.grid4, a.exact - b.exact, a.reference - b.reference};
+}
+void print_counts(const char* what, const traj::fd::PathCounts& c) {
+  std::printf("  %s: grid3 %llu, grid4 %llu, exact %llu, reference %llu\n", what,
+              static_cast<unsigned long long>(c.grid3), static_cast<unsigned long long>(c.grid4),
+              static_cast<unsigned long long>(c.exact), static_cast<unsigned long long>(c.reference));
+}
+}  // namespace
+
+// Every buildable width 48..128 (chunk 16) at two guard-bit counts, every
+// degree, several frac_bits, chained random segments (mixed tick periods,
+// starts at and just off the previous end, ranges up to and beyond the
+// limit): identical to the reference, and the grid path (3 limbs, and 4 at the
+// widest formats) settles nearly every accepted segment.
+TEST(FdCompilerFast, GridPathAllWidthsChained) {
+  const WG wgs[] = {{48, 16, 8},  {48, 16, 30},  {64, 16, 16},  {64, 16, 48},  {80, 16, 24},   {80, 16, 60},
+                    {96, 16, 48}, {96, 16, 70},  {112, 16, 40}, {112, 16, 90}, {128, 16, 64}, {128, 16, 110}};
+  const int fracs[] = {0, 16, 32, -8};
+  Stats st;
+  uint64_t seed = 5000;
+  const traj::fd::PathCounts before = traj::fd::path_counts();
+  for (int deg = 1; deg <= 7; ++deg)
+    for (const WG& wg : wgs)
+      for (int frac : fracs) {
+        if (wg.w - wg.g - 1 - frac < 2) continue;
+        random_chain(deg, wg, frac, seed++, 40, st);
+        if (HasFailure()) return;
+      }
+  const traj::fd::PathCounts c = counts_since(before);
+  std::printf("  %ld accepted, %ld refused segments identical\n", st.accepted, st.refused);
+  print_counts("paths", c);
+  EXPECT_GT(st.accepted, 8000);
+  EXPECT_GE(static_cast<double>(c.grid3 + c.grid4), 0.9 * static_cast<double>(st.accepted));
+  EXPECT_GT(c.grid4, 100u);
+  EXPECT_GT(c.exact, 0u);
+}
+
+// The planner's main format and tick (3 axes, quintic, W 96, G 48, F 32,
+// h = 1 ms, K = 20..400, chained): every segment on the 3-limb grid path.
+TEST(FdCompilerFast, GridPathMainJobFormat) {
+  const Format f = fmt(3, 5, 96, 16, 48, 32);
+  const Compiler comp(f);
+  std::mt19937_64 rng(4242);
+  std::uniform_int_distribution<uint64_t> Kd(20, 400);
+  std::uniform_real_distribution<double> U(-1, 1);
+  std::vector<double> x0(3, 0.0);
+  Compiled prev;
+  Stats st;
+  const traj::fd::PathCounts before = traj::fd::path_counts();
+  for (int s = 0; s < 3000; ++s) {
+    PolySegment seg;
+    seg.h = 1e-3;
+    seg.ticks = Kd(rng);
+    const double T = seg.h * static_cast<double>(seg.ticks);
+    for (int a = 0; a < 3; ++a) {
+      std::vector<double> c(6);
+      c[0] = x0[a];
+      double Tj = 1;
+      for (int j = 1; j <= 5; ++j) {
+        Tj *= T;
+        c[j] = U(rng) * 1000.0 / 20.0 / Tj;
+      }
+      c[1] -= x0[a] / T * 0.5;
+      x0[a] = horner_q(c, T);
+      seg.coef.push_back(c);
+    }
+    const Outcome o = check_same(comp, seg, s ? &prev.end : nullptr, "main job seg " + std::to_string(s), &st);
+    ASSERT_TRUE(o.ok) << o.msg;
+    if (HasFailure()) return;
+    prev = o.c;
+  }
+  const traj::fd::PathCounts c = counts_since(before);
+  print_counts("paths", c);
+  EXPECT_EQ(c.grid3, 3000u);
+}
+
+// Roundings on the edge of the grid's truncation error, built exactly: with a
+// dyadic tick h = 2^-10 and x(0) = 0, the terms u_j = c_j 2^sigma h^j are
+// chosen in grid units (2^-64 register LSB) so that X_1 - qd + 2^63 (qd =
+// floor(e0/K) of the carried error) ends in a given 64-bit pattern L0, plus an
+// optional term +-2^-20 grid units below the grid (err_1 = 1). The grid path
+// must settle exactly the cases its bound allows (L0 >= err + [rd > 0],
+// L0 <= 2^64 - err), hand the others over, and agree with the reference on
+// every one (including the exact case L0 = 0 with rd > 0, which rounds down).
+TEST(FdCompilerFast, GridRoundingBoundaries) {
+  const Format f = fmt(1, 3, 96, 16, 48, 32);  // sigma = 80
+  const Compiler comp(f);
+  const uint64_t K = 3;
+  const mpz_class two64 = mpz_class(1) << 64;
+  auto c_of = [](const mpq_class& u, int j) {  // c_j = u 2^-64 2^-80 / 2^(-10 j)
+    mpq_class c = u;
+    mpz_mul_2exp(c.get_den_mpz_t(), c.get_den_mpz_t(), 144 - 10 * j);
+    c.canonicalize();
+    const double d = c.get_d();
+    EXPECT_EQ(ref::exact(d), c);  // exact
+    return d;
+  };
+  long settled = 0, handed = 0;
+  for (int delta : {0, 1, -1, 2, 3, -3}) {  // 0: no start (r0 from c0)
+    const bool with_start = delta != 0;
+    const mpz_class e0g = mpz_class(delta) * two64;
+    mpz_class qd, rd;
+    mpz_fdiv_qr_ui(qd.get_mpz_t(), rd.get_mpz_t(), e0g.get_mpz_t(), K);
+    const bool below = rd != 0;
+    for (uint64_t L0 : {uint64_t(0), uint64_t(1), uint64_t(2), uint64_t(3), uint64_t(1) << 63, ~uint64_t(0),
+                        ~uint64_t(0) - 1})
+      for (int tiny : {0, 1, -1}) {
+        for (int kint : {7, -6}) {
+          // X_1 (integer part, grid units) = kint 2^64 + T with T = L0 - 2^63 + qd (mod 2^64)
+          mpz_class T = mpz_class(std::to_string(L0)) - (mpz_class(1) << 63) + qd;
+          mpz_fdiv_r_2exp(T.get_mpz_t(), T.get_mpz_t(), 64);
+          const mpz_class X1 = mpz_class(kint) * two64 + T;
+          mpz_class u2;
+          mpz_fdiv_r_2exp(u2.get_mpz_t(), X1.get_mpz_t(), 40);
+          const mpz_class u1 = X1 - u2;
+          const mpq_class u3 = tiny == 0 ? mpq_class(0) : mpq_class(tiny, 1 << 20);
+          PolySegment seg{{{0.0, c_of(mpq_class(u1), 1), c_of(mpq_class(u2), 2), c_of(u3, 3)}}, std::ldexp(1.0, -10), K};
+          std::vector<mpz_class> start{(mpz_class(1) << 47) + delta};
+          const traj::fd::PathCounts before = traj::fd::path_counts();
+          const std::string ctx = "delta " + std::to_string(delta) + " L0 " + std::to_string(L0) + " tiny " +
+                                  std::to_string(tiny) + " kint " + std::to_string(kint);
+          const Outcome o = check_same(comp, seg, with_start ? &start : nullptr, ctx);
+          ASSERT_TRUE(o.ok) << ctx << ": " << o.msg;
+          const traj::fd::PathCounts c = counts_since(before);
+          const uint64_t err = tiny ? 1 : 0, bl = with_start && below ? 1 : 0;
+          const bool decided = err == 0 || (L0 >= err + bl && L0 <= uint64_t(0) - err);
+          EXPECT_EQ(c.grid3, decided ? 1u : 0u) << ctx;
+          EXPECT_EQ(c.exact, decided ? 0u : 1u) << ctx;
+          (decided ? settled : handed) += 1;
+          if (HasFailure()) return;
+        }
+      }
+  }
+  std::printf("  %ld settled on the grid, %ld handed to the exact path\n", settled, handed);
+  EXPECT_GT(handed, 10);
 }
