@@ -1465,8 +1465,8 @@ RegisterNeeds Compiler::register_needs(int degree, uint64_t k, double tol_lsb) {
   return nd;
 }
 
-Compiled Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>* start,
-                           const std::string& where) const {
+void Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>* start, const std::string& where,
+                       Compiled& out) const {
   const int N = f_.degree;
   const int A = f_.axes;
   auto fail = [&](const std::string& what) { throw CompileError(where + ": " + what); };
@@ -1489,11 +1489,20 @@ Compiled Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>*
              fmt_double(seg.coef[a][j]) + " is not finite");
   }
   if (start && static_cast<int>(start->size()) != A) fail("start state has the wrong number of axes");
-  if (seg.ticks > kfit_) return compile_reference(f_, seg, start, where);  // words the refusal
+  if (seg.ticks > kfit_) {
+    out = compile_reference(f_, seg, start, where);  // words the refusal
+    return;
+  }
+  // compile_grid() reads `start` before it writes `out` (r[0] of an axis
+  // before its end), so start may be &out.end.
+  if (!compile_grid(f_, scale_ld_, limit_ld_, seg, start, out)) out = compile_exact(f_, seg, start, where);
+}
 
+Compiled Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>* start,
+                           const std::string& where) const {
   Compiled out;
-  if (compile_grid(f_, scale_ld_, limit_ld_, seg, start, out)) return out;
-  return compile_exact(f_, seg, start, where);
+  compile(seg, start, where, out);
+  return out;
 }
 
 mpz_class Compiler::state_at(const Compiled& c, int axis, uint64_t k) {

@@ -147,6 +147,12 @@ class Compiler {
   // `where` names the segment in error messages.
   Compiled compile(const PolySegment& seg, const std::vector<mpz_class>* start = nullptr,
                    const std::string& where = "segment") const;
+  // The same into `out`, reusing its storage: a caller that compiles segment
+  // after segment into one Compiled (its registers and vectors already sized)
+  // allocates nothing on the common path. `start` may point to out.end. On a
+  // CompileError `out` is unspecified.
+  void compile(const PolySegment& seg, const std::vector<mpz_class>* start, const std::string& where,
+               Compiled& out) const;
 
   // The engine's stream words for a compiled segment (header, then registers).
   std::vector<uint64_t> words(const Compiled& c) const;

@@ -766,3 +766,56 @@ TEST(FdCompilerFast, GridRoundingBoundaries) {
   std::printf("  %ld settled on the grid, %ld handed to the exact path\n", settled, handed);
   EXPECT_GT(handed, 10);
 }
+
+// compile() into one reused Compiled (the allocation-free form) gives what a
+// fresh compile() gives, also with the start taken from that same object's
+// end, across refusals.
+TEST(FdCompilerFast, CompileIntoReusedResult) {
+  for (const WG wg : {WG{64, 16, 32}, WG{96, 16, 48}, WG{128, 32, 64}})
+    for (int deg : {1, 3, 5, 7}) {
+      const Format f = fmt(3, deg, wg.w, wg.c, wg.g, 16);
+      const Compiler comp(f);
+      std::mt19937_64 rng(deg * 1000 + wg.w);
+      const uint64_t kfit = std::min<uint64_t>(Compiler::longest_segment(deg, wg.g, f.tol_lsb), 400);
+      const double full = std::ldexp(1.0, f.out_width() - 1 - f.frac_bits);
+      Compiled work, fresh;
+      bool have = false;
+      std::vector<double> x0(3, 0.0);
+      for (int s = 0; s < 300; ++s) {
+        PolySegment seg;
+        seg.h = pick_h(rng);
+        seg.ticks = std::uniform_int_distribution<uint64_t>(1, kfit + (s % 37 == 0 ? 5 : 0))(rng);
+        const double T = seg.h * static_cast<double>(seg.ticks);
+        for (int a = 0; a < 3; ++a) seg.coef.push_back(random_poly(rng, deg, T, have ? x0[a] : 0.0, full * 0.3));
+        const std::vector<mpz_class> start = work.end;
+        bool ok_fresh = true, ok_work = true;
+        try {
+          fresh = comp.compile(seg, have ? &start : nullptr, "seg");
+        } catch (const CompileError&) {
+          ok_fresh = false;
+        }
+        try {
+          comp.compile(seg, have ? &work.end : nullptr, "seg", work);
+        } catch (const CompileError&) {
+          ok_work = false;
+        }
+        ASSERT_EQ(ok_fresh, ok_work) << "seg " << s;
+        if (!ok_work) {
+          have = false;
+          work = Compiled();
+          continue;
+        }
+        ASSERT_EQ(work.ticks, fresh.ticks);
+        ASSERT_EQ(work.regs, fresh.regs) << "seg " << s;
+        ASSERT_EQ(work.end, fresh.end) << "seg " << s;
+        ASSERT_TRUE(same_bits(work.carried_lsb, fresh.carried_lsb));
+        ASSERT_TRUE(same_bits(work.bound_lsb, fresh.bound_lsb));
+        ASSERT_EQ(work.needs.alone, fresh.needs.alone);
+        ASSERT_EQ(work.needs.share, fresh.needs.share);
+        ASSERT_EQ(work.needs.binding, fresh.needs.binding);
+        ASSERT_EQ(work.needs.common, fresh.needs.common);
+        have = true;
+        for (int a = 0; a < 3; ++a) x0[a] = horner_q(seg.coef[a], T);
+      }
+    }
+}
