@@ -1,6 +1,7 @@
 #include "planner/pipeline.hpp"
 
 #include "geometry/json_io.hpp"
+#include "planner/sampled.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -48,7 +49,17 @@ fd::Format engine_format(int degree) {
 
 JobConfig::JobConfig() : format(engine_format(5)) {}
 
+void check_tick_count(double duration, double period, const std::string& what) {
+  const double n = std::ceil(duration / period);
+  if (!(n <= kMaxPlanTicks))
+    throw PlanError(what + ": motion of " + fmt("%.4g", duration) + " s is " + fmt("%.4g", n) + " ticks at " +
+                    fmt("%g", period) + " s per tick, more than one plan holds (" + fmt("%.0f", kMaxPlanTicks) +
+                    " ticks, about 2 GB); split the path, raise the feed or the limits, or use a longer tick period" +
+                    " (plan --window splits a path only between curves)");
+}
+
 Path load_path(const std::string& file) {
+  if (std::filesystem::is_directory(file)) throw PlanError(file + ": is a directory, not a path file");
   // every JSON error (syntax, truncation, a number out of the double range)
   // names file:line:column and the field
   nlohmann::json doc;
@@ -86,8 +97,9 @@ JobResult run_job(const Path& p, const JobConfig& cfg, const Progress& progress)
   const double lsb = std::ldexp(1.0, -f.frac_bits);
   r.fit_tol = cfg.limits.tol - (0.5 + f.tol_lsb) * lsb;
   if (!(r.fit_tol > 0))
-    throw PlanError("path tolerance " + std::to_string(cfg.limits.tol) + " is below the output quantisation (" +
-                    std::to_string((0.5 + f.tol_lsb) * lsb) + " units)");
+    throw PlanError("path tolerance " + fmt("%g", cfg.limits.tol) + " " + cfg.units +
+                    " is below the output quantisation (" + fmt("%g", (0.5 + f.tol_lsb) * lsb) + " " + cfg.units +
+                    ": 1/2 LSB + the register bound at 2^-" + std::to_string(f.frac_bits) + ")");
   auto t0 = Clock::now();
   auto t1 = t0, t2 = t0;
   SegmentOptions so;
@@ -105,6 +117,7 @@ JobResult run_job(const Path& p, const JobConfig& cfg, const Progress& progress)
     if (progress) progress("plan", 0);
     auto a0 = Clock::now();
     r.plan = plan_path(p, cfg.limits, po);
+    check_tick_count(r.plan.duration(), h, "the path");
     auto a1 = Clock::now();
     r.ticks = sample_ticks(p, r.plan, h);
     auto a2 = Clock::now();
@@ -220,12 +233,6 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
       rep.fit_peaks.j_axis[a] = std::max(rep.fit_peaks.j_axis[a], pk.j[a]);
     }
   }
-  {
-    Peaks only_axes = rep.fit_peaks;
-    Limits big = cfg.limits;
-    big.feed = big.a_tan = big.j_tan = big.a_cen = big.j_cen = 1e300;
-    rep.worst_fit = worst_ratio(only_axes, big, d, &rep.worst_fit_what);
-  }
   // output samples
   const size_t n = s.v.size();
   std::vector<std::array<double, 3>> x(n);
@@ -298,19 +305,64 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
   rep.allow_a = 4 * rep.quant / (h * h);
   rep.allow_j = 8 * rep.quant / (h * h * h);
   rep.allow_path_v = std::sqrt(static_cast<double>(d)) * rep.allow_v;
+  // tangential and normal (centripetal) quantities of the samples, and of the
+  // fitted polynomials at the same ticks (sampled.hpp)
+  const bool jerk_claimed = r.header.degree == 5;
+  auto sampled_peaks = [&](const std::vector<std::array<double, 3>>& q, double min_chord, Peaks& pk) {
+    for (size_t k = 0; k + 2 < q.size(); ++k) {
+      const SampledWindow w = sampled_window(q[k].data(), q[k + 1].data(), q[k + 2].data(),
+                                             k + 3 < q.size() ? q[k + 3].data() : nullptr, d, h, min_chord);
+      pk.a_tan = std::max(pk.a_tan, w.at);
+      pk.a_cen = std::max(pk.a_cen, w.an);
+      pk.j_tan = std::max(pk.j_tan, w.jt);
+      pk.j_cen = std::max(pk.j_cen, w.jn);
+    }
+  };
+  sampled_peaks(x, 16 * lsb, rep.out_peaks);
+  {
+    std::vector<std::array<double, 3>> fx;
+    fx.reserve(n);
+    for (const auto& sg : r.segments)
+      for (uint32_t k = 0; k < sg.K; ++k) {
+        std::array<double, 3> q{};
+        for (int a = 0; a < d; ++a) q[a] = sg.eval(a, k * h);
+        fx.push_back(q);
+      }
+    sampled_peaks(fx, 1e-9 * cfg.limits.feed * h, rep.fit_peaks);
+  }
+  rep.out_peaks.feed = rep.out_path_v;
+  const double sd = std::sqrt(static_cast<double>(d));
   rep.worst_out = 0;
+  auto chk = [&](double v, double allow, double lim, const std::string& what) {
+    const double q = (v - allow) / lim;
+    if (q > rep.worst_out) {
+      rep.worst_out = q;
+      rep.worst_out_what = what;
+    }
+  };
   for (int a = 0; a < d; ++a) {
     const std::string ax(1, "xyz"[a]);
-    auto chk = [&](double v, double allow, double lim, const std::string& what) {
-      const double q = (v - allow) / lim;
-      if (q > rep.worst_out) {
-        rep.worst_out = q;
-        rep.worst_out_what = what;
-      }
-    };
     chk(rep.out_peaks.v_axis[a], rep.allow_v, cfg.limits.v_axis[a], "v_axis." + ax);
     chk(rep.out_peaks.a_axis[a], rep.allow_a, cfg.limits.a_axis[a], "a_axis." + ax);
-    if (r.header.degree == 5) chk(rep.out_peaks.j_axis[a], rep.allow_j, cfg.limits.j_axis[a], "j_axis." + ax);
+    if (jerk_claimed) chk(rep.out_peaks.j_axis[a], rep.allow_j, cfg.limits.j_axis[a], "j_axis." + ax);
+  }
+  chk(rep.out_path_v, rep.allow_path_v, cfg.limits.feed, "feed");
+  chk(rep.out_peaks.a_tan, sd * rep.allow_a, cfg.limits.a_tan, "a_tan");
+  chk(rep.out_peaks.a_cen, sd * rep.allow_a, cfg.limits.a_cen, "a_cen");
+  if (jerk_claimed) {
+    chk(rep.out_peaks.j_tan, sd * rep.allow_j, cfg.limits.j_tan, "j_tan");
+    chk(rep.out_peaks.j_cen, sd * rep.allow_j, cfg.limits.j_cen, "j_cen");
+  }
+  // the fit: per-axis exact maxima, tangential/normal at the ticks
+  {
+    Peaks f = rep.fit_peaks;
+    Limits lim = cfg.limits;
+    lim.feed = 1e300;
+    if (!jerk_claimed) {
+      for (int a = 0; a < kMaxAxes; ++a) f.j_axis[a] = 0;
+      f.j_tan = f.j_cen = 0;
+    }
+    rep.worst_fit = worst_ratio(f, lim, d, &rep.worst_fit_what);
   }
   return rep;
 }
@@ -331,6 +383,13 @@ std::string report_text(const JobConfig& cfg, const Report& rep, const JobResult
   o << "  engine format        Width " << r.header.width << ", Guard " << r.header.guard_bits << " (K_max "
     << rep.k_max << " needs " << rep.guard_needed << "), output " << (r.header.width - r.header.guard_bits)
     << " bits, 1 LSB = 2^-" << r.header.frac_bits << " " << cfg.units << "\n";
+  {
+    const long long rec = 12LL + static_cast<long long>(r.header.axes) * (r.header.degree + 1) * r.header.width / 8;
+    const long long bytes = 48 + static_cast<long long>(rep.segments) * rec + 16;
+    o << "  segment stream       " << bytes << " bytes (" << rec << " per segment: " << r.header.axes << " axes x "
+      << (r.header.degree + 1) << " registers x " << r.header.width << " bits + 96 bits of type, K and CRC; "
+      << fmt("%.1f", 8.0 * bytes / std::max(1.0, rep.motion_time)) << " bit/s of motion)\n";
+  }
   o << "Accuracy (output samples of the core)\n";
   o << "  max distance to the exact curve  " << fmt("%.4g", rep.max_deviation) << " " << cfg.units << "  (tolerance "
     << fmt("%g", L.tol) << ": fit " << fmt("%.4g", rep.fit_tol) << " + quantisation " << fmt("%.3g", rep.quant)
@@ -350,14 +409,21 @@ std::string report_text(const JobConfig& cfg, const Report& rep, const JobResult
   }
   o << "  feed          " << fmt("%10.4g", L.feed) << "  " << fmt("%10.4g", rep.plan_peaks.feed) << "              "
     << fmt("%10.4g", rep.out_path_v) << "\n";
-  o << "  a_tangential  " << fmt("%10.4g", L.a_tan) << "  " << fmt("%10.4g", rep.plan_peaks.a_tan) << "\n";
-  o << "  j_tangential  " << fmt("%10.4g", L.j_tan) << "  " << fmt("%10.4g", rep.plan_peaks.j_tan) << "\n";
-  o << "  a_centripetal " << fmt("%10.4g", L.a_cen) << "  " << fmt("%10.4g", rep.plan_peaks.a_cen) << "\n";
-  o << "  j_centripetal " << fmt("%10.4g", L.j_cen) << "  " << fmt("%10.4g", rep.plan_peaks.j_cen) << "\n";
-  o << "  |a| path, |j| path (output)              " << fmt("%10.4g", rep.out_path_a) << "  "
-    << fmt("%10.4g", rep.out_path_j) << "\n";
-  o << "  quantisation allowance on sample differences (per axis; sqrt(axes) x for the path): v " << fmt("%.3g", rep.allow_v) << ", a "
-    << fmt("%.3g", rep.allow_a) << ", j " << fmt("%.3g", rep.allow_j) << "\n";
+  const bool jerk = r.header.degree == 5;
+  auto row = [&](const char* name, double lim, double plan, double fit, double out, bool claimed) {
+    o << "  " << name << fmt("%10.4g", lim) << "  " << fmt("%10.4g", plan) << "  " << fmt("%10.4g", fit) << "  "
+      << fmt("%10.4g", out) << (claimed ? "" : "   (not limited: cubic segments join C1)") << "\n";
+  };
+  row("a_tangential  ", L.a_tan, rep.plan_peaks.a_tan, rep.fit_peaks.a_tan, rep.out_peaks.a_tan, true);
+  row("j_tangential  ", L.j_tan, rep.plan_peaks.j_tan, rep.fit_peaks.j_tan, rep.out_peaks.j_tan, jerk);
+  row("a_centripetal ", L.a_cen, rep.plan_peaks.a_cen, rep.fit_peaks.a_cen, rep.out_peaks.a_cen, true);
+  row("j_centripetal ", L.j_cen, rep.plan_peaks.j_cen, rep.fit_peaks.j_cen, rep.out_peaks.j_cen, jerk);
+  o << "  (tangential: chord speed and its differences; centripetal: normal part of the 2nd/3rd difference;\n"
+       "   plan: kappa v^2 and |Q| v^3 + 3 kappa v |a|; fit: the fitted polynomials at the ticks)\n";
+  o << "  |a|, |j| of the path (output, for information; the per-axis limits apply) " << fmt("%.4g", rep.out_path_a)
+    << ", " << fmt("%.4g", rep.out_path_j) << "\n";
+  o << "  quantisation allowance on sample differences (per axis; sqrt(axes) x for path quantities): v "
+    << fmt("%.3g", rep.allow_v) << ", a " << fmt("%.3g", rep.allow_a) << ", j " << fmt("%.3g", rep.allow_j) << "\n";
   o << "  worst peak/limit: plan " << fmt("%.4f", rep.worst_plan) << " (" << rep.worst_plan_what << "), fit "
     << fmt("%.4f", rep.worst_fit) << " (" << rep.worst_fit_what << "), output " << fmt("%.4f", rep.worst_out) << " ("
     << rep.worst_out_what << ", after the allowance)\n";

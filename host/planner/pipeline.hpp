@@ -40,6 +40,10 @@ struct JobResult {
 using Progress = std::function<void(const std::string& stage, double fraction)>;
 
 Path load_path(const std::string& file);
+// One plan (a whole path, or one streaming window) is sampled at every tick
+// in memory: at most kMaxPlanTicks ticks (PlanError naming `what` beyond).
+constexpr double kMaxPlanTicks = 1e7;
+void check_tick_count(double duration, double period, const std::string& what);
 JobResult run_job(const Path& p, const JobConfig& cfg, const Progress& progress = {});
 std::vector<stream::Record> records_of(const JobResult& r);
 

@@ -101,7 +101,17 @@ Frame frame_at(const Path& p, size_t ci, double u, double s, int span) {
     s13 += C1[a] * C3[a];
   }
   const double sig = std::sqrt(s11);
-  if (!(sig > 0)) throw PlanError("curve " + std::to_string(ci) + ": zero parametric speed at u = " + num(u));
+  if (!(sig > 0)) {
+    // A curve may start or end with zero parametric speed (a repeated end
+    // control point): its tangent there is the limit from inside, so the
+    // frame is taken a hair inside. Inside a curve, zero speed is a cusp.
+    const geo::PowerSpan& sp = c.spans()[span];
+    const double du = 1e-9 * (sp.u1 - sp.u0);
+    if (u <= c.u_begin() && du > 0) return frame_at(p, ci, u + du, s, span);
+    if (u >= c.u_end() && du > 0) return frame_at(p, ci, u - du, s, span);
+    throw PlanError(p.entry(ci).where + ": zero parametric speed at u = " + num(u) +
+                    " (a cusp: the tangent turns back; split the curve there)");
+  }
   const double sig1 = s12 / sig;
   const double sig2 = (s22 + s13) / sig - s12 * s12 / (sig * s11);
   const double us = 1 / sig;
@@ -140,7 +150,7 @@ double speed_limit(const Frame& f, const Limits& L, const PlanOptions& o, double
     if (std::fabs(f.K[a]) > 0) cap(o.g2 * L.j_axis[a] / (3 * std::fabs(f.K[a]) * A_t));
   }
   if (f.kappa > 0) {
-    cap(std::sqrt(L.a_cen / f.kappa));
+    cap(std::sqrt(o.cen_a_share * L.a_cen / f.kappa));
     cap(0.5 * L.j_cen / (3 * f.kappa * A_t));
   }
   if (f.q_norm > 0) cap(std::cbrt(0.5 * L.j_cen / f.q_norm));
@@ -408,8 +418,8 @@ Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o) {
     jmin = std::min(jmin, L.j_axis[a]);
   }
   Plan plan;
-  plan.A_t = std::min(L.a_tan, o.beta * amin);
-  plan.J_t = std::min(L.j_tan, o.g3 * jmin);
+  plan.A_t = std::min(o.tan_a_share * L.a_tan, o.beta * amin);
+  plan.J_t = std::min(o.tan_j_share * L.j_tan, o.g3 * jmin);
   plan.length = p.length();
   Grid g = build_grid(p, L, o, plan.A_t);
   plan.grid_points = static_cast<int>(g.s.size());

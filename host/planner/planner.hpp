@@ -62,6 +62,12 @@ struct PlanOptions {
   double corner_tol = 1e-6;   // tangent angle (rad) above which curves join with a stop
   double beta = 0.5;          // share of a_axis for tangential acceleration
   double g1 = 0.3, g2 = 0.2, g3 = 0.5;  // shares of j_axis (geometric, coupling, tangential)
+  // Headroom for the fit: the quintic through a bang-bang jerk profile
+  // overshoots its jerk (up to ~1.5x), its acceleration a little. The plan
+  // uses these shares of a_tan, j_tan and a_cen; the fit then checks the full
+  // limits at the samples (segments.hpp), so these only set how often a fit
+  // must be split or the plan slowed.
+  double tan_a_share = 0.95, tan_j_share = 0.6, cen_a_share = 0.95;
   double max_grid_ds = 0.25;  // arc-length grid step, units
   double grid_turn = 0.02;    // grid step <= grid_turn / kappa (radians of turning per step)
   std::vector<SpeedCap> caps;

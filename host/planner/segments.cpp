@@ -1,5 +1,7 @@
 #include "planner/segments.hpp"
 
+#include "planner/sampled.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -106,6 +108,20 @@ SegmentPeaks segment_peaks(const TimeSegment& seg, int dim, double period) {
   return pk;
 }
 
+std::vector<std::array<double, kMaxAxes>> fitted_tail(const std::vector<TimeSegment>& segs, int dim, double period,
+                                                      int count) {
+  std::vector<std::array<double, kMaxAxes>> t;
+  for (size_t i = segs.size(); i-- > 0 && static_cast<int>(t.size()) < count;) {
+    const TimeSegment& sg = segs[i];
+    for (uint32_t k = sg.K; k-- > 0 && static_cast<int>(t.size()) < count;) {
+      std::array<double, kMaxAxes> q{};
+      for (int a = 0; a < dim; ++a) q[a] = poly_val(sg.coef[a].data(), sg.degree, k * period);
+      t.insert(t.begin(), q);
+    }
+  }
+  return t;
+}
+
 double bernstein_bound(const double* c, int n, double T) {
   // d_j = c_j T^j (q on x in [0, 1]); b_i = sum_{j <= i} C(i,j) / C(n,j) d_j.
   static const double binom[6][6] = {{1, 0, 0, 0, 0, 0}, {1, 1, 0, 0, 0, 0}, {1, 2, 1, 0, 0, 0},
@@ -160,6 +176,10 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
   (void)plan;
   (void)t_offset;
   for (long long k = 0; k < n; ++k) {
+    // a first sample carried from the previous window (just before the
+    // path's start) is no break: the first segment may start there and cross
+    // the junction, as a whole-path fit would
+    if (k == 0 && ts[0].curve >= p.size()) continue;
     if (ts[k].curve >= p.size() || ts[k + 1].curve >= p.size()) {
       brk.push_back(k + 1);
       continue;
@@ -176,7 +196,12 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
   // Does a fit over [k0, k1] pass? The peak test is exactly "exact maximum <=
   // limit"; the Bernstein bound (>= the exact maximum) only skips the root
   // search where it already shows that the limit holds.
+  std::vector<std::array<double, kMaxAxes>> tail = o.history, pos;
+  while (tail.size() > 3) tail.erase(tail.begin());
+  const double min_chord = 1e-9 * L.feed * period;  // below: at rest, no direction
+  std::string fail_why;
   auto try_fit = [&](long long k0, long long k1, TimeSegment& seg) {
+    fail_why.clear();
     const double T = (k1 - k0) * period;
     seg.k0 = k0 + k_base;
     seg.K = static_cast<uint32_t>(k1 - k0);
@@ -209,6 +234,33 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
       }
       if (std::sqrt(c2) > chord_max) return false;
     }
+    // Sampled tangential and normal quantities (sampled.hpp) over every tick
+    // window that contains a tick of this segment after k0; the ticks before
+    // k0 are the fitted positions already accepted (tail).
+    {
+      const int hn = static_cast<int>(tail.size());
+      const int m = hn + 1 + static_cast<int>(k1 - k0);
+      pos.resize(m);
+      for (int i = 0; i < hn; ++i) pos[i] = tail[i];
+      for (long long k = k0; k <= k1; ++k) {
+        auto& q = pos[hn + (k - k0)];
+        for (int a = 0; a < d; ++a)
+          q[a] = k == k0 ? A.x[a] : k == k1 ? B.x[a] : poly_val(seg.coef[a].data(), o.degree, (k - k0) * period);
+      }
+      for (int i = std::max(0, hn - 2); i + 2 < m; ++i) {
+        const double* x3 = (i + 3 < m && o.degree == 5) ? pos[i + 3].data() : nullptr;
+        const SampledWindow w = sampled_window(pos[i].data(), pos[i + 1].data(), pos[i + 2].data(), x3, d, period,
+                                               min_chord);
+        if (i >= hn - 1 && (w.at > L.a_tan || w.an > L.a_cen)) {
+          fail_why = "sampled tangential acceleration " + std::to_string(w.at) + ", normal " + std::to_string(w.an);
+          return false;
+        }
+        if (w.jt > L.j_tan || w.jn > L.j_cen) {
+          fail_why = "sampled tangential jerk " + std::to_string(w.jt) + ", normal " + std::to_string(w.jn);
+          return false;
+        }
+      }
+    }
     for (int a = 0; a < d; ++a) {
       double c1[5], c2[4], c3[3];
       for (int j = 0; j < 5; ++j) c1[j] = seg.coef[a][j + 1] * (j + 1);
@@ -222,6 +274,16 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
       if (o.degree == 5 && !within(c3, o.degree - 3, L.j_axis[a])) return false;
     }
     return true;
+  };
+  // A kept segment: its fitted positions before its end become the tail.
+  auto accept = [&](TimeSegment& seg) {
+    for (uint32_t k = 0; k < seg.K; ++k) {
+      std::array<double, kMaxAxes> q{};
+      for (int a = 0; a < d; ++a) q[a] = poly_val(seg.coef[a].data(), seg.degree, k * period);
+      tail.push_back(q);
+    }
+    while (tail.size() > 3) tail.erase(tail.begin());
+    out.push_back(std::move(seg));
   };
   // Greedy: from each start, the longest segment that passes (binary search
   // over its length; a failing fit is never accepted, so the result is valid
@@ -247,7 +309,7 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
         }
       }
       if (lo == kmax) {
-        out.push_back(std::move(best));
+        accept(best);
         last_len = lo - k0;
         k0 = lo;
         continue;
@@ -263,7 +325,7 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
       }
       if (lo == k0) {
         const SegmentPeaks pk = segment_peaks(seg, d, period);
-        std::string why = "deviation " + std::to_string(seg.max_dev);
+        std::string why = fail_why.empty() ? "deviation " + std::to_string(seg.max_dev) : fail_why;
         for (int a = 0; a < d; ++a)
           why += "; axis " + std::to_string(a) + ": v " + std::to_string(pk.v[a]) + " a " + std::to_string(pk.a[a]) +
                  " j " + std::to_string(pk.j[a]);
@@ -271,7 +333,7 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
                            " s): no one-tick segment meets the limits (" + why + ")",
                        k0 + k_base);
       }
-      out.push_back(std::move(best));
+      accept(best);
       last_len = lo - k0;
       k0 = lo;
     }

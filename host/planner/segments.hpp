@@ -62,14 +62,31 @@ struct SegmentOptions {
   // max(feed_rel * v h, feed_abs), so that the chord between consecutive
   // output samples is within about 2 feed_rel of the planned arc.
   double feed_rel = 0.0025, feed_abs = 1e-8;
+  // Fitted positions of the (up to 3) ticks before ts[0], oldest first (a
+  // streaming window continuing a committed one): the sampled tangential and
+  // normal checks (sampled.hpp) then also cover the windows that straddle
+  // ts[0]. Empty at the start of a motion (at rest).
+  std::vector<std::array<double, kMaxAxes>> history;
 };
 
 // ts[0] is global tick k_base; the plan starts at global time t_offset. A
-// sample whose curve index is outside the path (carried from a previous
-// window) is a break. Returned k0 are global ticks.
+// first sample whose curve index is outside the path was carried from a
+// previous window (it lies just before the path's start). Returned k0 are
+// global ticks.
+//
+// Checks, per segment, in addition to those above: at every tick window of the
+// fitted positions (sampled.hpp), the sampled tangential acceleration and
+// jerk and the normal (centripetal) acceleration and jerk within a_tan, j_tan,
+// a_cen, j_cen. Unlike the per-axis maxima these are not polynomial in the
+// fit, so they are checked where the core samples them: at the ticks.
 std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std::vector<TickSample>& ts,
                                       const Limits& L, const SegmentOptions& o, double period,
                                       double t_offset = 0, long long k_base = 0);
+
+// Positions of the last `count` ticks before the end of a fitted sequence
+// (oldest first), for SegmentOptions::history of the next window.
+std::vector<std::array<double, kMaxAxes>> fitted_tail(const std::vector<TimeSegment>& segs, int dim, double period,
+                                                      int count = 3);
 
 // Exact max |q(t)| over [0, T] of a polynomial q (coefficients c[0..n]).
 double max_abs_poly(const double* c, int n, double T);

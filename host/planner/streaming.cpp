@@ -90,6 +90,8 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
     for (int attempt = 0;; ++attempt) {
       if (attempt > 200) throw PlanError("the limits cannot be met in window " + std::to_string(st.windows));
       plan = plan_path(path, cfg.limits, po);
+      check_tick_count(plan.duration(), h, "streaming window " + std::to_string(st.windows) + " (curves from " +
+                                              path.entry(0).where + ")");
       if (last) {
         Tc = plan.duration();
       } else {
@@ -121,7 +123,10 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
         segs = fit_segments(path, plan, ts, cfg.limits, sopt, h, T0, k_base);
       } catch (const FitError& e) {
         const long long idx = e.tick - k_base;
-        if (idx <= 0 && k_last >= 0) throw;  // at the committed tick: nothing left to slow down
+        if (idx <= 0 && k_last >= 0)  // at the committed tick: nothing left to slow down
+          throw PlanError("streaming window " + std::to_string(st.windows) + " (curves from " + path.entry(0).where +
+                          "): the motion committed by the previous window cannot be continued within the limits at "
+                          "their junction (" + e.what() + "); plan with a larger window (--window)");
         const TickSample& t = ts[static_cast<size_t>(idx)];
         const double w = std::max(5 * h * t.v, 1e-9 * path.length()) + 1e-9;
         po.caps.push_back({t.s - w, t.s + w, std::max(0.8 * t.v, 1e-6 * cfg.limits.feed)});
@@ -132,6 +137,14 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
     st.caps += po.caps.size();
     st.max_window_ticks = std::max(st.max_window_ticks, ts.size());
     for (const auto& sg : segs) emit(sg);
+    // the fitted positions before the committed end: the next window's fit
+    // checks its sampled tangential/normal windows across the junction
+    {
+      auto t = fitted_tail(segs, path.dim(), h, 3);
+      auto& hist = sopt.history;
+      hist.insert(hist.end(), t.begin(), t.end());
+      while (hist.size() > 3) hist.erase(hist.begin());
+    }
     if (!ts.empty()) {
       carried = ts.back();
       carried.curve = static_cast<size_t>(-1);
