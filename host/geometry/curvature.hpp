@@ -9,6 +9,9 @@
 // Extrema: sign changes of d(kappa^2)/du found on a scan of `samples_per_span` points per span
 // (span ends included, evaluated from inside the span, so a sign change across a knot, where r'''
 // jumps, is found too and located at the knot), then bisection to |du| <= u_tol.
+// Values within a rounding-error bound of zero count as zero (SplitOptions::noise_factor): on a
+// circle or a straight line, where d(kappa^2)/du is zero up to rounding, the scan sees no sign change.
+// Degree-1 curves (every span straight, kappa = 0) return no extrema and no inflections at once.
 // Inflections (2-D only): sign changes of the cross product x'y'' - y'x'', bisection to u_tol.
 #pragma once
 #include <vector>
@@ -24,6 +27,15 @@ double signed_curvature(const Curve& c, double u);
 // d kappa / du (0 where kappa = 0).
 double curvature_derivative(const Curve& c, double u);
 
+// d(kappa^2)/du at u evaluated in span `span` (as the extremum scan does), with a bound on its
+// rounding error (first order in the evaluation errors; +inf where |r'| is rounding noise). On a circle
+// or a line the value is zero up to rounding, and within the bound.
+struct CurvatureSqDerivative {
+  double value = 0;
+  double error_bound = 0;
+};
+CurvatureSqDerivative curvature_sq_derivative(const Curve& c, int span, double u);
+
 struct CurvatureExtremum {
   double u = 0;
   double kappa = 0;
@@ -31,11 +43,23 @@ struct CurvatureExtremum {
   bool at_knot = false;  // located at a knot (derivative jumps in sign there)
 };
 
+// Work counters of the scans (optional, SplitOptions::stats).
+struct SplitStats {
+  long long dk2_evals = 0;    // d(kappa^2)/du evaluations (scan samples + bisection steps)
+  long long cross_evals = 0;  // x'y'' - y'x'' evaluations (inflection scan + bisection), 2-D only
+};
+
 struct SplitOptions {
   int samples_per_span = 64;
   double u_tol = 1e-9;        // bisection width (|du|), must be <= 1e-7 for the requirement
   bool inflections = true;    // 2-D curves: also split at signed-curvature zero crossings
   bool minima = true;         // split at curvature minima too (else maxima only)
+  // Noise-aware extremum scan: a sample whose |d(kappa^2)/du| is at most noise_factor times its
+  // first-order rounding-error bound (from the magnitudes of the terms; see curvature.cpp) counts as
+  // zero, and an extremum needs a sign change between two samples above their bounds. 0 = every
+  // nonzero sign counts (the scan before the bound existed; on a circle it bisected rounding noise).
+  double noise_factor = 4;
+  SplitStats* stats = nullptr;  // if set, the scans add their evaluation counts here
 };
 
 std::vector<CurvatureExtremum> curvature_extrema(const Curve& c, const SplitOptions& o = {});
