@@ -11,6 +11,7 @@
 #include "planner/pipeline.hpp"
 #include "planner/profile.hpp"
 #include "planner/segments.hpp"
+#include "output_check.hpp"
 #include "sim.hpp"
 
 using namespace traj;
@@ -101,6 +102,23 @@ void expect_guarantees(const Path& p, const JobConfig& cfg, const RunOut& o, con
   EXPECT_LE(o.rep.worst_out, 1 + 1e-9) << o.rep.worst_out_what;
   EXPECT_LE(o.rep.out_path_v, cfg.limits.feed + o.rep.allow_path_v);
   EXPECT_LE(o.rep.max_deviation, cfg.limits.tol);
+  // the same limits and the deviation, checked apart from the report
+  // (output_check.hpp) on the samples the Verilated core emitted
+  {
+    const double lsb = std::ldexp(1.0, -o.job.header.frac_bits);
+    std::vector<std::array<double, 3>> x(o.sim.samples.v.size());
+    for (size_t k = 0; k < x.size(); ++k)
+      for (int a = 0; a < 3; ++a) x[k][a] = static_cast<double>(o.sim.samples.v[k][a]) * lsb;
+    const test::OutputVerdict ov =
+        test::check_output_limits(x, p.dim(), cfg.limits, cfg.plan.period, o.rep.quant, o.job.header.degree == 5);
+    EXPECT_LE(ov.worst, 1 + 1e-9) << ov.what << " at tick " << ov.tick;
+    double dev = 0;
+    for (size_t k = 0; k < x.size(); ++k)
+      dev = std::max(dev, test::distance_to_curve_near(p.curve(o.job.ticks[k].curve), x[k].data(), o.job.ticks[k].u));
+    EXPECT_LE(dev, cfg.limits.tol);
+    std::printf("  %s: independent check: worst %.4f (%s), deviation %.3g\n", what.c_str(), ov.worst, ov.what.c_str(),
+                dev);
+  }
   // first and last samples: the curve's ends
   const double lsb = std::ldexp(1.0, -o.job.header.frac_bits);
   const Eigen::VectorXd a = p.curve(0).point(p.curve(0).u_begin());
