@@ -118,8 +118,10 @@ JobResult run_job(const Path& p, const JobConfig& cfg, const Progress& progress)
     auto a0 = Clock::now();
     r.plan = plan_path(p, cfg.limits, po);
     check_tick_count(r.plan.duration(), h, "the path");
+    if (progress) progress("plan", 1);
     auto a1 = Clock::now();
     r.ticks = sample_ticks(p, r.plan, h);
+    if (progress) progress("ticks", 1);
     auto a2 = Clock::now();
     t_plan += secs(a0, a1);
     t_ticks += secs(a1, a2);
@@ -151,6 +153,7 @@ JobResult run_job(const Path& p, const JobConfig& cfg, const Progress& progress)
       continue;
     }
     t_fit += secs(a3, Clock::now());
+    if (progress) progress("fit", 1);
     r.repairs = static_cast<int>(po.caps.size());
     break;
   }
@@ -203,6 +206,18 @@ std::vector<stream::Record> records_of(const JobResult& r) {
   v.reserve(r.compiled.size());
   for (const auto& c : r.compiled) v.push_back({c.ticks, c.regs});
   return v;
+}
+
+Samples predicted_samples(const JobResult& r) {
+  Samples s;
+  fd::Compiler comp(r.header.format());
+  for (const auto& c : r.compiled)
+    for (uint32_t k = 0; k < c.ticks; ++k) {
+      std::array<long long, 3> v{};
+      for (int a = 0; a < std::min(3, r.header.axes); ++a) v[a] = comp.sample_at(c, a, k).get_si();
+      s.v.push_back(v);
+    }
+  return s;
 }
 
 Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, const Samples& s) {

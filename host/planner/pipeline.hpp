@@ -69,6 +69,11 @@ struct Report {
   int guard_needed = 0;
 };
 
+// The host's exact prediction of the core's samples (fd::Compiler::sample_at
+// on every compiled segment): bit for bit what the engine outputs, without
+// running it (tb/fd and the co-simulations check that identity).
+Samples predicted_samples(const JobResult& r);
+
 Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, const Samples& s);
 std::string report_text(const JobConfig& cfg, const Report& rep, const JobResult& r);
 // SVG plots: path coloured by feed; feed, acceleration and jerk against time.
