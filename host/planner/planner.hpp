@@ -17,9 +17,12 @@
 // stations are added until the profile is under v_lim at every grid point, and
 // the result is verified at every tick (verify()).
 //
-// Curves meeting with a tangent break (angle > corner_tol) are joined with a
-// stop: without blending, any non-zero speed through a corner needs unbounded
-// acceleration, so zero is what the corner allows.
+// Curves meeting with a tangent break (angle > corner_tol), and C0 knots
+// inside a curve, are passed at the corner speed: on the tick grid the
+// velocity turns within one tick, so the speed is what keeps that turn's
+// per-axis acceleration and jerk and its normal acceleration and jerk within
+// the limits (corner_speed in planner.cpp): a stop in practice for a visible
+// corner, the feed for a 1e-5 rad kink.
 #pragma once
 #include <Eigen/Dense>
 #include <memory>
