@@ -341,10 +341,13 @@ int main(int argc, char** argv) {
   for (const Row& r : rows) {
     const bool is_bcu = r.name.rfind("BCU", 0) == 0;
     char adds[64];
-    if (is_bcu) std::snprintf(adds, sizeof adds, "%.3f + 1 rounding", 6.0 * (kK - 1) / kK);
+    // BCU generator: d scaled subdivisions (6 additions each) down the left
+    // spine, 9 additions to form S0, D1, D2, D3 (rounding folded into S0),
+    // then 3 additions per sample (rtl/traj_bcu_gen.sv, tb/bcu/README.md)
+    if (is_bcu) std::snprintf(adds, sizeof adds, "3 + (6d + 9)/K = %.3f (rounding folded in)", 3.0 + (6.0 * 12 + 9) / kK);
     else std::snprintf(adds, sizeof adds, "3 + 0 (rounding is the +1/2 in r[0])");
     std::printf("| %s | %d | %d%s | %d (|x| < %g) | %s | %.4f | %.4f | %d, %d | %s |\n", r.name.c_str(), r.guard,
-                r.width, is_bcu ? " (4 lanes + a stack of 12 x 4 per axis)" : " x 4 registers per axis", r.out_bits,
+                r.width, is_bcu ? " (4 lanes per axis in BRAM; 4 registers of W+1 bits per axis)" : " x 4 registers per axis", r.out_bits,
                 r.range, adds, r.err, r.bound, r.cycles, r.cycles_l2, r.spec.c_str());
   }
   std::printf("| Horner, double (software reference) | - | 53-bit mantissa | - | 3 mul + 3 add | %.2e | - | %.2f ns "
