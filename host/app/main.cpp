@@ -1,5 +1,6 @@
 // trajcore: command-line tool.
 //   trajcore plan  <path.json> -o out.trj      plan + compile -> segment stream (+ plan report)
+//   trajcore plan  <path.jsonl> -o out.trj     the same, streamed: one curve per line, bounded memory
 //   trajcore sim   <stream.trj> --csv out.csv  segment stream -> Verilated core -> samples
 //   trajcore run   <path.json> --out-dir DIR   both, with the full report and SVG plots
 //   trajcore demo                              the built-in circle demo (cubic engine)
@@ -15,6 +16,7 @@
 #include <unistd.h>
 
 #include "demo.hpp"
+#include "planner/jsonl_source.hpp"
 #include "planner/pipeline.hpp"
 #include "planner/raster.hpp"
 #include "planner/streaming.hpp"
@@ -136,12 +138,26 @@ int main(int argc, char** argv) {
   int tick_gap = 0;
 
   size_t window = 0, raster = 0;
+  std::string format;
   auto* pl = app.add_subcommand("plan", "Plan and compile a path (curve JSON) into a segment stream");
-  pl->add_option("path", input, "curve or path JSON (the butterfly format, or {\"curves\": [...]})");
+  pl->add_option("path", input,
+                 "curve or path JSON (the butterfly format, or {\"curves\": [...]}), or a JSON Lines path "
+                 "(*.jsonl: one curve object per line, read as a stream)");
   pl->add_option("-o,--output", out_stream, "segment stream to write")->capture_default_str();
-  pl->add_option("--window", window,
-                 "stream in bounded memory: plan a look-ahead window of this many curves, commit half of it, "
-                 "write segments as they are final (0: plan the whole path at once)");
+  auto* window_opt = pl->add_option(
+      "--window", window,
+      "stream in bounded memory: plan a look-ahead window of this many curves, commit half of it, "
+      "write segments as they are final (0: plan the whole path at once; a .jsonl path is always streamed, "
+      "default window 64)");
+  pl->add_option("--format", format, "path file format: json or jsonl (default: jsonl for a name ending in .jsonl)")
+      ->check(CLI::IsMember({"json", "jsonl"}));
+  pl->footer(
+      "JSON Lines paths (*.jsonl or --format jsonl): one curve per line, each a curve object of the butterfly "
+      "format (degree, knots, control_points, optional weights); blank lines and lines starting with # are "
+      "skipped; consecutive curves must meet. The file is read line by line while the segments are written, so a "
+      "path of a million pieces plans in memory bounded by the window. An error names <file>:<line> and the field, "
+      "and leaves no output file. (`trajcore run` needs the whole path in memory for its report and plots: for a "
+      ".jsonl use `trajcore plan` then `trajcore sim`.)");
   pl->add_option("--raster", raster, "instead of a file: a synthetic raster toolpath of this many pieces (streamed)");
   add_limits(pl, cfg, v_axis, a_axis, j_axis);
 
@@ -153,7 +169,8 @@ int main(int argc, char** argv) {
              "from `trajcore demo --engine bcu|mixed` or `trajcore spline`) on traj_core.");
 
   auto* rn = app.add_subcommand("run", "Plan, compile, simulate on the Verilated core, and report (text + SVG)");
-  rn->add_option("path", input, "curve or path JSON")->required();
+  rn->add_option("path", input, "curve or path JSON (not .jsonl: plan a JSON Lines path with `plan`, then `sim`)")
+      ->required();
   rn->add_option("--out-dir", out_dir, "where to write plan.trj, samples.csv, report.txt, *.svg")->capture_default_str();
   add_limits(rn, cfg, v_axis, a_axis, j_axis);
 
@@ -169,7 +186,15 @@ int main(int argc, char** argv) {
 #else
     if (*sp) throw std::runtime_error("spline: this trajcore was built without host/bcu (TRAJ_SKIP)");
 #endif
-    if (*pl && (window > 0 || raster > 0)) {
+    const bool jsonl = !input.empty() && raster == 0 && traj::plan::is_jsonl(input, format);
+    if (*rn && traj::plan::is_jsonl(input))
+      throw traj::plan::PlanError(
+          "run: " + input + " is a JSON Lines path, which is planned as a stream; run needs the whole path in "
+          "memory (report, plots): use `trajcore plan " + input + " -o plan.trj` (streamed) then `trajcore sim "
+          "plan.trj`");
+    if (*pl && jsonl && window_opt->count() > 0 && window == 0)
+      throw traj::plan::PlanError("plan: a JSON Lines path is always streamed: --window must be at least 2");
+    if (*pl && (window > 0 || raster > 0 || jsonl)) {
       apply_axes(cfg, v_axis, a_axis, j_axis);
       struct VecSource : traj::plan::CurveSource {
         std::vector<std::pair<traj::geo::BSpline, std::string>> v;
@@ -185,6 +210,8 @@ int main(int argc, char** argv) {
       std::unique_ptr<traj::plan::CurveSource> src;
       if (raster > 0) {
         src = std::make_unique<traj::plan::RasterSource>(raster);
+      } else if (jsonl) {
+        src = std::make_unique<traj::plan::JsonlSource>(input);  // read line by line as the windows need curves
       } else {
         if (input.empty()) throw traj::plan::PlanError("plan: give a path file or --raster N");
         const auto path = traj::plan::load_path(input);  // checks the file and the joins
@@ -199,9 +226,15 @@ int main(int argc, char** argv) {
       }
       fd::Format f = cfg.format;
       traj::stream::StreamWriter w(out_stream, traj::stream::Header::from(f, cfg.plan.period, cfg.units));
-      const auto st = traj::plan::run_streaming(
-          *src, cfg, so, [&](const fd::Compiled& c, const traj::plan::TimeSegment&) { w.add({c.ticks, c.regs}); },
-          [](const std::string&, double curves) { std::fprintf(stderr, "\r[stream] %.0f curves   ", curves); });
+      traj::plan::StreamStats st;
+      try {
+        st = traj::plan::run_streaming(
+            *src, cfg, so, [&](const fd::Compiled& c, const traj::plan::TimeSegment&) { w.add({c.ticks, c.regs}); },
+            [](const std::string&, double curves) { std::fprintf(stderr, "\r[stream] %.0f curves   ", curves); });
+      } catch (...) {
+        std::fprintf(stderr, "\n");  // end the progress line; the writer removes its temporary file
+        throw;
+      }
       w.finish();
       std::fprintf(stderr, "\n");
       std::printf("%s: %zu curves in %zu windows, %zu segments, %lld ticks (%.3f s of motion) -> %s\n"

@@ -33,7 +33,8 @@ std::string nlohmann_problem(const char* what) {
 class PathSax {
  public:
   using json = nlohmann::json;
-  PathSax(json& root, const std::string& text, const std::string& name) : dom_(root, true), text_(text), name_(name) {}
+  PathSax(json& root, const std::string& text, const std::string& name, std::size_t first_line = 1)
+      : dom_(root, true), text_(text), name_(name), first_line_(first_line) {}
 
   bool null() { return value(), dom_.null(); }
   bool boolean(bool v) { return value(), dom_.boolean(v); }
@@ -75,7 +76,7 @@ class PathSax {
     const std::size_t end = std::min(offset, text_.size());
     std::size_t at = end > 0 ? end - 1 : 0;
     if (ex.id == 406 && token.size() <= end) at = end - token.size();
-    std::size_t line = 1, line_start = 0;
+    std::size_t line = first_line_, line_start = 0;
     for (std::size_t i = 0; i < at; ++i)
       if (text_[i] == '\n') {
         ++line;
@@ -118,6 +119,7 @@ class PathSax {
   std::vector<Frame> stack_;
   const std::string& text_;
   const std::string& name_;
+  std::size_t first_line_;
 };
 
 double number(const nlohmann::json& v, const std::string& where, const std::string& field) {
@@ -139,8 +141,12 @@ nlohmann::json load_json_file(const std::string& path, const std::string& name_i
   if (!f) fail(name, "cannot open file" + (name == path ? std::string() : " " + path));
   const std::string text((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
   if (f.bad()) fail(name, "read error");
+  return parse_json_text(text, name);
+}
+
+nlohmann::json parse_json_text(const std::string& text, const std::string& name, std::size_t first_line) {
   nlohmann::json doc;
-  PathSax sax(doc, text, name);
+  PathSax sax(doc, text, name, first_line);
   try {
     nlohmann::json::sax_parse(text, &sax);
   } catch (const nlohmann::json::exception& e) {  // not expected: the parser reports through parse_error

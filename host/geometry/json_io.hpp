@@ -25,6 +25,9 @@ namespace traj::geo {
 // GeometryError with the name and the field path too. `name` is the file's name in messages (default:
 // `path` as given).
 nlohmann::json load_json_file(const std::string& path, const std::string& name = {});
+// The same for text already read: errors "<name>:<line>:<column>: <field path>: <problem>", lines
+// counted from `first_line` (a JSON Lines reader passes the line's number in its file).
+nlohmann::json parse_json_text(const std::string& text, const std::string& name, std::size_t first_line = 1);
 
 // Reads and checks a curve file; throws GeometryError("<file name>: <field>: <problem>") (JSON errors
 // from load_json_file: "<file name>:<line>:<column>: <field>: <problem>").

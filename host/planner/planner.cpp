@@ -54,21 +54,22 @@ const std::vector<double>& PathCurve::split_s() const {
   return split_s_;
 }
 
+void check_join(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const std::string& where) {
+  if (b.size() != a.size())
+    throw PlanError(where + ": " + std::to_string(b.size()) + " axes, the path so far has " + std::to_string(a.size()));
+  if ((a - b).norm() > 1e-9 * std::max(1.0, a.norm()))
+    throw PlanError(where + ": starts " + num((a - b).norm()) + " units away from the previous curve's end");
+}
+
 void Path::add(const geo::BSpline& spline, const std::string& where) {
   add(std::make_shared<const PathCurve>(spline, where));
 }
 
 void Path::add(std::shared_ptr<const PathCurve> c) {
-  if (!curves_.empty() && c->curve->dim() != dim_)
-    throw PlanError(c->where + ": " + std::to_string(c->curve->dim()) + " axes, the path so far has " +
-                    std::to_string(dim_));
   // joins: end of the previous curve must meet this one's start
   if (!curves_.empty()) {
     const geo::Curve& prev = *curves_.back()->curve;
-    const Eigen::VectorXd a = prev.point(prev.u_end());
-    const Eigen::VectorXd b = c->curve->point(c->curve->u_begin());
-    if ((a - b).norm() > 1e-9 * std::max(1.0, a.norm()))
-      throw PlanError(c->where + ": starts " + num((a - b).norm()) + " units away from the previous curve's end");
+    check_join(prev.point(prev.u_end()), c->curve->point(c->curve->u_begin()), c->where);
   }
   dim_ = c->curve->dim();
   if (offsets_.empty()) offsets_.push_back(0);

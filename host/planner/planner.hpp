@@ -94,6 +94,13 @@ struct PathCurve {
   mutable bool split_done_ = false;
 };
 
+// The join check of Path::add (so of load_path and of every streaming window):
+// the curve named `where`, starting at `start`, must have the axes of the
+// previous curve (ending at `prev_end`) and start within 1e-9 * max(1, |prev_end|)
+// units of that end. Throws PlanError("<where>: starts D units away from the
+// previous curve's end") or PlanError("<where>: N axes, the path so far has M").
+void check_join(const Eigen::VectorXd& prev_end, const Eigen::VectorXd& start, const std::string& where);
+
 class Path {
  public:
   void add(const geo::BSpline& spline, const std::string& where);
