@@ -98,6 +98,10 @@ module traj_bcu_gen #(
   logic                 bank_q, bank_d, nbank_q, nbank_d;
   logic [1:0]           wc_q, wc_d;
   logic [DgBits-1:0]    wdg_q, wdg_d, sdg_q, sdg_d, xk_q;
+  logic [DgBits-1:0]    xk1_q;         // always xk_q + 1 (timing: no adder before the RAM address)
+  /* verilator lint_off UNUSEDSIGNAL */
+  logic                 vlo_q, slo_q;  // always |tag_v_q[C-2:0], |tag_start_q[C-2:0] (0 if C == 1)
+  /* verilator lint_on UNUSEDSIGNAL */
   logic [AxBits-1:0]    wax_q, wax_d, sax_q, sax_d;
   logic [PcBits-1:0]    pc_q, pc_d;
   logic                 xpend_q, xbusy_q, xbank_q, frem_q, need_end_q;
@@ -120,8 +124,8 @@ module traj_bcu_gen #(
   assign top_v   = tag_v_q[C-1];
   assign top_end = tag_end_q[C-1];
   if (C > 1) begin : g_newer
-    assign newer = xpend_q || (|tag_v_q[C-2:0]);
-    assign xfer_step = adv && (enter_start || (|tag_start_q[C-2:0]));
+    assign newer = xpend_q || vlo_q;
+    assign xfer_step = adv && (enter_start || slo_q);
   end else begin : g_newer1
     assign newer = xpend_q;
     assign xfer_step = adv && enter_start;
@@ -146,6 +150,18 @@ module traj_bcu_gen #(
     assign tag_end_d   = ent_end;
   end
   assign ent_v       = frem_q || xpend_q;
+  // the registered ORs of the tags below the top, after an advance
+  logic vlo_d, slo_d;
+  if (C > 2) begin : g_lo
+    assign vlo_d = ent_v || (|tag_v_q[C-3:0]);
+    assign slo_d = enter_start || (|tag_start_q[C-3:0]);
+  end else if (C == 2) begin : g_lo2
+    assign vlo_d = ent_v;
+    assign slo_d = enter_start;
+  end else begin : g_lo1
+    assign vlo_d = 1'b0;
+    assign slo_d = 1'b0;
+  end
   assign ent_last    = frem_q ? (fcnt_q == '0) : (xdepth_q == '0);
   assign ent_end     = !frem_q && !xpend_q && need_end_q;
 
@@ -182,7 +198,7 @@ module traj_bcu_gen #(
   logic          pass_init, pass_on;
   assign pass_on = (fsm_q == StDesc) || (fsm_q == StInit);
   assign rd_bank = pass_on ? bank_q : xbank_q;
-  assign rd_dg   = pass_on ? sdg_q : (xfer_step ? xk_q + 1'b1 : xk_q);  // sdg_q = 0 between slots
+  assign rd_dg   = pass_on ? sdg_q : (xfer_step ? xk1_q : xk_q);  // sdg_q = 0 between slots
 
   // ---------------------------------------------------------------------
   // Digit-serial pipeline: rd -> hd -> stage 1 -> stage 2 -> write register.
@@ -580,6 +596,9 @@ module traj_bcu_gen #(
       xbank_q     <= 1'b0;
       xdepth_q    <= '0;
       xk_q        <= '0;
+      xk1_q       <= DgBits'(1);
+      vlo_q       <= 1'b0;
+      slo_q       <= 1'b0;
       frem_q      <= 1'b0;
       need_end_q  <= 1'b0;
       fcnt_q      <= '0;
@@ -609,8 +628,11 @@ module traj_bcu_gen #(
         xbank_q  <= bank_q;
         xdepth_q <= depth_q;
         xk_q     <= '0;
+        xk1_q    <= DgBits'(1);
       end
       if (adv) begin
+        vlo_q       <= vlo_d;
+        slo_q       <= slo_d;
         tag_v_q     <= tag_v_d;
         tag_start_q <= tag_start_d;
         tag_last_q  <= tag_last_d;
@@ -630,7 +652,10 @@ module traj_bcu_gen #(
         end
         if (xfer_step) begin
           if (xk_q == DgBits'(C - 1)) xbusy_q <= 1'b0;
-          else                        xk_q <= xk_q + 1'b1;
+          else begin
+            xk_q  <= xk1_q;
+            xk1_q <= xk1_q + 1'b1;
+          end
         end
       end
     end
