@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <sstream>
+#include <type_traits>
 
 namespace traj::fd {
 namespace {
@@ -473,6 +474,7 @@ Scratch& scratch() {
 static_assert(GMP_NUMB_BITS == 64 && sizeof(mp_limb_t) == 8, "64-bit GMP limbs expected");
 constexpr int kMaxLimbs = 16;
 using u128 = unsigned __int128;
+using i128 = __int128;
 
 void limbs_mul1(uint64_t* out, const uint64_t* x, uint64_t m, int L) {
   u128 c = 0;
@@ -732,6 +734,14 @@ void set_needs(RegisterNeeds& nd, int N, const NeedsArr& a) {
 // residue read as a signed 128-bit integer is the exact value.
 namespace {
 
+// Bits [pos, pos + 64) of an n-limb magnitude, pos of any sign (bits below 0
+// are zero).
+inline uint64_t get64(const uint64_t* x, int n, long pos) {
+  if (pos >= 0) return bits64_at(x, n, pos);
+  if (pos <= -64) return 0;
+  return x[0] << (-pos);
+}
+
 // m_h^j, j = 0..7, of the tick period's odd mantissa m_h < 2^53 (at most 371
 // bits: 6 limbs), cached per thread for the last h.
 struct HPowers {
@@ -740,6 +750,8 @@ struct HPowers {
   uint64_t p[8][6] = {};
   int n[8] = {};     // limbs in use
   int bits[8] = {};  // bit length
+  u128 top[8] = {};  // m_h^j ~ top 2^tshift, top normalised to 128 bits (exact if bits <= 128)
+  int tshift[8] = {};
 };
 const HPowers& h_powers(double h) {
   thread_local HPowers c;
@@ -761,17 +773,14 @@ const HPowers& h_powers(double h) {
       c.n[j] = c.n[j - 1];
       if (carry) c.p[j][c.n[j]++] = static_cast<uint64_t>(carry);
     }
-    for (int j = 0; j < 8; ++j) c.bits[j] = bitlen_limbs(c.p[j], c.n[j]);
+    for (int j = 0; j < 8; ++j) {
+      c.bits[j] = bitlen_limbs(c.p[j], c.n[j]);
+      c.tshift[j] = c.bits[j] - 128;
+      const uint64_t lo = get64(c.p[j], c.n[j], c.tshift[j]), hi = get64(c.p[j], c.n[j], c.tshift[j] + 64);
+      c.top[j] = (static_cast<u128>(hi) << 64) | lo;
+    }
   }
   return c;
-}
-
-// Bits [pos, pos + 64) of an n-limb magnitude, pos of any sign (bits below 0
-// are zero).
-inline uint64_t get64(const uint64_t* x, int n, long pos) {
-  if (pos >= 0) return bits64_at(x, n, pos);
-  if (pos <= -64) return 0;
-  return x[0] << (-pos);
 }
 
 template <int L>
@@ -855,43 +864,62 @@ bool trunc_double(const uint64_t* x, int n, long p, double& out) {
   std::memcpy(&out, &bits, sizeof out);
   return true;
 }
-// z = sign * the k-limb magnitude m (m[k-1] != 0 or k = 0). A fresh mpz
-// (GMP >= 6.2: mpz_init allocates nothing, _mp_alloc = 0) gets exactly k limbs
-// from GMP's own allocation function, which is what mpz_limbs_write would do
-// through _mpz_realloc, minus the round trip; GMP frees them with mpz_clear.
-void mpz_set_mag(mpz_ptr z, const uint64_t* m, int k, bool neg) {
-  static void* (*const gmp_alloc)(size_t) = [] {
-    void* (*fa)(size_t);
-    mp_get_memory_functions(&fa, nullptr, nullptr);
-    return fa;
-  }();
-  mp_limb_t* p;
-  if (z->_mp_alloc == 0 && k > 0) {
-    p = static_cast<mp_limb_t*>(gmp_alloc(static_cast<size_t>(k) * sizeof(mp_limb_t)));
+// The result's registers are written straight into their mpz: in place if
+// there is room (a reused result); a fresh mpz (GMP >= 6.2: mpz_init
+// allocates nothing, _mp_alloc = 0) gets exactly the limbs it needs from
+// GMP's own allocation function (fetched once per compile(), so a program
+// that sets its own keeps it), which is what mpz_limbs_write would do through
+// _mpz_realloc, minus the round trip; GMP frees them with mpz_clear.
+using GmpAlloc = void* (*)(size_t);
+GmpAlloc gmp_alloc_func() {
+  void* (*fa)(size_t);
+  mp_get_memory_functions(&fa, nullptr, nullptr);
+  return fa;
+}
+inline mp_limb_t* mpz_room(mpz_ptr z, int k, GmpAlloc alloc) {  // k >= 1
+  if (z->_mp_alloc >= k) return z->_mp_d;
+  if (z->_mp_alloc == 0) {
+    mp_limb_t* p = static_cast<mp_limb_t*>(alloc(static_cast<size_t>(k) * sizeof(mp_limb_t)));
     z->_mp_d = p;
     z->_mp_alloc = k;
-  } else {
-    p = mpz_limbs_write(z, k > 0 ? k : 1);
+    return p;
   }
-  for (int l = 0; l < k; ++l) p[l] = m[l];
+  return mpz_limbs_write(z, k);
+}
+// z = sign * the k-limb magnitude m (m[k-1] != 0 or k = 0).
+inline void mpz_set_mag(mpz_ptr z, const uint64_t* m, int k, bool neg, GmpAlloc alloc) {
+  if (k > 0) {
+    mp_limb_t* p = mpz_room(z, k, alloc);
+    for (int l = 0; l < k; ++l) p[l] = m[l];
+  }
   z->_mp_size = neg ? -k : k;
 }
 // z = the signed n-limb two's complement value x (n <= 4).
-void mpz_set_limbs(mpz_ptr z, const uint64_t* x, int n) {
+inline void mpz_set_limbs(mpz_ptr z, const uint64_t* x, int n, GmpAlloc alloc) {
   uint64_t m[4];
   const bool neg = static_cast<int64_t>(x[n - 1]) < 0;
-  uint64_t c = 1;
-  for (int l = 0; l < n; ++l) {
-    m[l] = neg ? ~x[l] + c : x[l];
-    if (neg) c = c && m[l] == 0;
+  const uint64_t flip = neg ? ~uint64_t(0) : 0;
+  uint64_t c = neg ? 1 : 0;
+  for (int l = 0; l < n; ++l) {  // m = neg ? ~x + 1 : x
+    m[l] = (x[l] ^ flip) + c;
+    c = c & (m[l] == 0);
   }
   int k = n;
   while (k > 0 && m[k - 1] == 0) --k;
-  mpz_set_mag(z, m, k, neg);
+  mpz_set_mag(z, m, k, neg, alloc);
 }
-void mpz_set_i128(mpz_ptr z, u128 v) {
-  const uint64_t x[2] = {static_cast<uint64_t>(v), static_cast<uint64_t>(v >> 64)};
-  mpz_set_limbs(z, x, 2);
+// z = v, a signed 128-bit value.
+inline void mpz_set_s128(mpz_ptr z, u128 v, GmpAlloc alloc) {
+  const bool neg = static_cast<i128>(v) < 0;
+  const u128 m = neg ? -v : v;
+  const uint64_t lo = static_cast<uint64_t>(m), hi = static_cast<uint64_t>(m >> 64);
+  const int k = hi ? 2 : lo ? 1 : 0;
+  if (k > 0) {
+    mp_limb_t* p = mpz_room(z, k, alloc);
+    p[0] = lo;
+    if (k == 2) p[1] = hi;
+  }
+  z->_mp_size = neg ? -k : k;
 }
 // Low 128 bits of an mpz in two's complement.
 u128 low128(mpz_srcptr z) {
@@ -912,7 +940,7 @@ struct KData {
   u128 binlo[8] = {};
   NeedsArr needs;
 };
-constexpr int kKCacheBits = 9;
+constexpr int kKCacheBits = 10;
 struct KCacheOwner {
   KData* p = nullptr;
   ~KCacheOwner() { delete[] p; }
@@ -940,6 +968,50 @@ const KData& k_data(int N, uint64_t K, double tol_lsb) {
   return e;
 }
 
+// The range check of the grid paths (see "Fast exact paths" above) for the
+// blended target with r0 = r0_ld, e0 = e0_ld (register units): true if it
+// accepts; false leaves the decision (and a refusal's words) to
+// compile_exact() and the reference.
+bool range_ok(int N, const std::vector<double>& cf, long double scale_ld, long double T_ld, long double r0_ld,
+              long double e0_ld, double q2_d, long double limit_ld) {
+  const long double err_rel = 0x1p-48L;
+  const long double grow = 1 + 0x1p-40L;
+  const long double e0_abs = std::fabs(e0_ld);
+  long double av[8], mag[8];
+  av[0] = r0_ld;
+  mag[0] = std::fabs(r0_ld);
+  long double Tj = 1;
+  for (int j = 1; j <= N; ++j) {
+    Tj *= T_ld;
+    const long double cj = j < static_cast<int>(cf.size()) ? static_cast<long double>(cf[j]) * scale_ld : 0;
+    if (j == 1) {
+      av[1] = (cj - e0_ld / T_ld) * T_ld;
+      mag[1] = (std::fabs(cj) + e0_abs / T_ld) * T_ld;
+    } else {
+      av[j] = cj * Tj;
+      mag[j] = std::fabs(av[j]);
+    }
+  }
+  // First the power-basis bound sum_j |a_j| >= sum_j w_ij |a_j| >= |b_i|
+  // (0 < w_ij <= 1), with the same relative margin; far from the limit
+  // (nearly always) it settles the check without the Bernstein sums.
+  long double sum_mag = 0;
+  for (int j = 0; j <= N; ++j) sum_mag += mag[j];
+  const long double rest = e0_abs + static_cast<long double>(q2_d) + 2;
+  if ((sum_mag * (1 + err_rel) + rest) * grow < limit_ld) return true;
+  const long double(*w)[8] = bernstein_weights().w[N];
+  long double mhi = 0;
+  for (int i = 0; i <= N; ++i) {
+    long double bb = 0, sm = 0;
+    for (int j = 0; j <= i; ++j) {
+      bb += av[j] * w[i][j];
+      sm += mag[j] * w[i][j];
+    }
+    mhi = std::max(mhi, std::fabs(bb) + sm * err_rel);
+  }
+  return (mhi + rest) * grow < limit_ld;
+}
+
 struct GridOut {
   uint64_t reg[8][8][3];  // [axis][i] r[i] as L-1 limbs (i = 0 only if no start)
   u128 end[8];
@@ -956,9 +1028,6 @@ bool grid_axes(const Format& f, const PolySegment& seg, const std::vector<mpz_cl
   const long sigma = G + f.frac_bits;
   const uint64_t K = seg.ticks;
   const long double T_ld = static_cast<long double>(seg.h) * static_cast<long double>(K);
-  const long double err_rel = 0x1p-48L;
-  const long double grow = 1 + 0x1p-40L;
-  const long double(*w)[8] = bernstein_weights().w[N];
   const SurjTable& surj = surj_table();
 
   for (int a = 0; a < f.axes; ++a) {
@@ -1009,9 +1078,6 @@ bool grid_axes(const Format& f, const PolySegment& seg, const std::vector<mpz_cl
 
     // Range: the same long double Bernstein bound as compile_exact().
     {
-      const long double e0_ld = ld_of<L>(e0) * 0x1p-64L;
-      const long double e0_abs = std::fabs(e0_ld);
-      long double av[8], mag[8];
       uint64_t r0l[L];  // r0 (register units), L limbs
       if (start) {
         mpz_srcptr z = (*start)[a].get_mpz_t();
@@ -1022,39 +1088,7 @@ bool grid_axes(const Format& f, const PolySegment& seg, const std::vector<mpz_cl
         for (int l = 0; l < L - 1; ++l) r0l[l] = o.reg[a][0][l];
         r0l[L - 1] = static_cast<int64_t>(r0l[L - 2]) < 0 ? ~uint64_t(0) : 0;
       }
-      av[0] = ld_of<L>(r0l);
-      mag[0] = std::fabs(av[0]);
-      long double Tj = 1;
-      for (int j = 1; j <= N; ++j) {
-        Tj *= T_ld;
-        const long double cj = j < static_cast<int>(cf.size()) ? static_cast<long double>(cf[j]) * scale_ld : 0;
-        if (j == 1) {
-          av[1] = (cj - e0_ld / T_ld) * T_ld;
-          mag[1] = (std::fabs(cj) + e0_abs / T_ld) * T_ld;
-        } else {
-          av[j] = cj * Tj;
-          mag[j] = std::fabs(av[j]);
-        }
-      }
-      // First the power-basis bound sum_j |a_j| >= sum_j w_ij |a_j| >= |b_i|
-      // (0 < w_ij <= 1), with the same relative margin; far from the limit
-      // (nearly always) it settles the check without the Bernstein sums.
-      long double sum_mag = 0;
-      for (int j = 0; j <= N; ++j) sum_mag += mag[j];
-      const long double rest = e0_abs + static_cast<long double>(q2_d) + 2;
-      if (!((sum_mag * (1 + err_rel) + rest) * grow < limit_ld)) {
-        long double mhi = 0;
-        for (int i = 0; i <= N; ++i) {
-          long double bb = 0, sm = 0;
-          for (int j = 0; j <= i; ++j) {
-            bb += av[j] * w[i][j];
-            sm += mag[j] * w[i][j];
-          }
-          mhi = std::max(mhi, std::fabs(bb) + sm * err_rel);
-        }
-        const long double total = (mhi + rest) * grow;
-        if (!(total < limit_ld)) return false;  // compile_exact() decides (and words a refusal)
-      }
+      if (!range_ok(N, cf, scale_ld, T_ld, ld_of<L>(r0l), ld_of<L>(e0) * 0x1p-64L, q2_d, limit_ld)) return false;
     }
 
     // Terms on the grid.
@@ -1081,8 +1115,8 @@ bool grid_axes(const Format& f, const PolySegment& seg, const std::vector<mpz_cl
       for (int l = 0; l < L; ++l) buf[5 + pn + l] = 0;  // read up to buf[4 + q + L], q <= pn
       // u_j = prod 2^s truncated: limb l holds bits [64 l - s, 64 l - s + 64)
       // of prod, i.e. words q + l, q + l + 1 of buf + 4 with q = floor(-s/64).
-      // The size bound of compile_grid (bitlen(prod) + s + 18 <= 255) gives
-      // s <= 237, so q >= -4.
+      // The size bound of compile_grid (bitlen(prod) + s - 64 + 3 + 67 <= 255)
+      // gives s <= 248, so q >= -4.
       const long s = da[j].e + sigma + static_cast<long>(j) * hp.hd.e + 64;
       const long q = (-s) >> 6;  // floor
       const unsigned r = static_cast<unsigned>((-s) & 63);
@@ -1150,6 +1184,196 @@ bool grid_axes(const Format& f, const PolySegment& seg, const std::vector<mpz_cl
   return true;
 }
 
+// surj(j, i) as compile-time constants (the same values as SurjTable).
+struct SurjConst {
+  uint64_t v[8][8];
+};
+constexpr SurjConst make_surj() {
+  SurjConst t{};
+  for (int j = 0; j < 8; ++j)
+    for (int i = 0; i <= j; ++i) {
+      int64_t sum = 0, cik = 1;  // sum_k (-1)^(i-k) C(i,k) k^j
+      for (int k = 0; k <= i; ++k) {
+        int64_t kj = 1;
+        for (int e = 0; e < j; ++e) kj *= k;
+        sum += ((i - k) % 2 ? -1 : 1) * cik * kj;
+        cik = cik * (i - k) / (k + 1);
+      }
+      t.v[j][i] = static_cast<uint64_t>(sum);
+    }
+  return t;
+}
+constexpr SurjConst kSurj = make_surj();
+static_assert(kSurj.v[5][5] == 120 && kSurj.v[7][4] == 8400 && kSurj.v[3][2] == 6, "surj(j,i) = i! S(j,i)");
+
+// The axes on the 2-limb grid of 2^-g register LSB (32 <= g <= 64; the
+// caller's bound keeps every quantity below 2^127 grid units, every term below
+// 2^124): as grid_axes, on native 128-bit integers (modular, the exact values
+// fitting), with m_h^j taken to its top 128 bits, for degree N (a template
+// argument: the sums unroll on constant surj(j,i)). For a term below 2^125
+// grid units that truncation errs by less than m_j 2^(t+s) < 2^125 / top <=
+// 1/4 grid unit, so a term off the grid errs by less than 2 units (1 if m_h^j
+// has at most 128 bits).
+template <int N>
+bool grid2_axes(const Format& f, const PolySegment& seg, const std::vector<mpz_class>* start, const HPowers& hp,
+                const Dyadic (*d)[8], const long (*tb)[8], const u128* binlo, double q2_d, const Dyadic& htol, long double scale_ld,
+                long double limit_ld, int g, double& carried, GridOut& o) {
+  const int G = f.guard_bits;
+  const long sigma = G + f.frac_bits;
+  const uint64_t K = seg.ticks;
+  const long double T_ld = static_cast<long double>(seg.h) * static_cast<long double>(K);
+  const long double grid_ld = g == 64 ? 0x1p-64L : 1.0L / static_cast<long double>(uint64_t(1) << g);  // 2^-g
+  const u128 half = static_cast<u128>(1) << (g - 1);
+  const uint64_t mask = g == 64 ? ~uint64_t(0) : (uint64_t(1) << g) - 1;  // 2^g - 1
+  uint64_t wt[8];  // error weight of term j when off the grid
+  for (int j = 1; j <= N; ++j) wt[j] = hp.bits[j] <= 128 ? 1 : 2;
+  long sj[8];   // the exponent s of term j less e_j
+  long rsb[8];  // the right shift rs of term j plus e_j
+  for (int j = 1; j <= N; ++j) {
+    sj[j] = sigma + static_cast<long>(j) * hp.hd.e + g;
+    rsb[j] = -(sj[j] + hp.tshift[j]);
+  }
+  // The continuity bound tol/2 2^G in grid units, m 2^(e+G+g), as one 128-bit
+  // threshold when it is an integer below 2^127 (else cmp_m2e decides).
+  const long tol_sh = htol.e + G + g;
+  const bool tol_fast = tol_sh >= 0 && bitlen_u64(static_cast<uint64_t>(htol.m)) + tol_sh <= 127;
+  const u128 tol_thr = tol_fast ? static_cast<u128>(static_cast<uint64_t>(htol.m)) << tol_sh : 0;
+  const long k_bits = bitlen_u64(K);
+  long q2_bits;  // 2 Q(K) < 2^q2_bits (q2_d is it truncated: same binary exponent)
+  {
+    uint64_t qb;
+    std::memcpy(&qb, &q2_d, sizeof qb);
+    q2_bits = static_cast<long>((qb >> 52) & 0x7ff) - 1022;  // normal, >= 1
+  }
+
+  for (int a = 0; a < f.axes; ++a) {
+    const Dyadic* da = d[a];
+    // c0 = x(0) 2^sigma + 2^(G-1) on the grid (the caller checked e_0 + sigma + g >= 0).
+    u128 c0 = static_cast<u128>(1) << (G - 1 + g);
+    if (da[0].m) {
+      const u128 t = static_cast<u128>(da[0].m < 0 ? -da[0].m : da[0].m) << (da[0].e + sigma + g);
+      c0 = da[0].m < 0 ? c0 - t : c0 + t;
+    }
+    u128 e0, r0;
+    if (start) {
+      r0 = low128((*start)[a].get_mpz_t());  // |r0| < 2^(125-g) (the caller's bound)
+      e0 = (r0 << g) - c0;
+    } else {
+      const u128 z = c0 + half;
+      r0 = static_cast<u128>(static_cast<i128>(z) >> g);
+      e0 = half - (static_cast<uint64_t>(z) & mask);
+      o.reg[a][0][0] = static_cast<uint64_t>(r0);
+      o.reg[a][0][1] = static_cast<uint64_t>(r0 >> 64);
+    }
+    const bool eneg = static_cast<i128>(e0) < 0;
+    const u128 em = eneg ? -e0 : e0;
+    const uint64_t eml[2] = {static_cast<uint64_t>(em), static_cast<uint64_t>(em >> 64)};
+    if (start && em && (tol_fast ? em > tol_thr : cmp_m2e(eml, 2, static_cast<uint64_t>(htol.m), tol_sh) > 0))
+      return false;
+    double e0_lsb;
+    // = trunc_double(eml, 2, -(g + G)): |e0| 2^-(g+G) truncated to 53 bits, a
+    // normal double for every e0 != 0 (binary exponent bitlen - 1 - (g + G)
+    // in [-190, 127]).
+    if (em == 0) {
+      e0_lsb = 0;
+    } else {
+      const int bx = eml[1] ? 128 - __builtin_clzll(eml[1]) : 64 - __builtin_clzll(eml[0]);
+      const uint64_t mant = static_cast<uint64_t>(bx > 53 ? em >> (bx - 53) : em << (53 - bx));
+      const uint64_t eb = (static_cast<uint64_t>(bx - 1 - (g + G) + 1023) << 52) | (mant & ((uint64_t(1) << 52) - 1));
+      std::memcpy(&e0_lsb, &eb, sizeof e0_lsb);
+    }
+    carried = std::max(carried, e0_lsb);
+    // Range, first by bit lengths: the blended target's power coefficients
+    // are a_0 = r0, a_1 = u_1 K - e0, a_j = u_j K^j with |u_j| < 2^(bitlen m_j +
+    // bitlen m_h^j + e_j + sigma + j e_h) and K^j < 2^(j bitlen K). If those
+    // bounds, 2 |e0| and 2 Q(K) stay below 2^(W-5), then sum |a_j| + |e0| +
+    // 2 Q(K) + 2 (at most 11 such terms, N <= 7) is below 11/16 of the limit
+    // 2^(W-1), and sum |a_j| >= max |b_i|: the reference (exact, then a few
+    // roundings of relative size 2^-52 at most) accepts. Otherwise the long
+    // double bound decides.
+    {
+      const u128 r0m = static_cast<i128>(r0) < 0 ? -r0 : r0;
+      const uint64_t r0l[2] = {static_cast<uint64_t>(r0m), static_cast<uint64_t>(r0m >> 64)};
+      long mb = std::max<long>({bitlen_limbs(r0l, 2), static_cast<long>(bitlen_limbs(eml, 2)) - g + 1, q2_bits});
+      for (int j = 1; j <= N; ++j) mb = std::max<long>(mb, tb[a][j] + j * k_bits);  // tb: bits of |u_j|
+      if (mb > f.width - 5) {
+        const long double e0_ld = static_cast<long double>(eml[1]) * 0x1p64L + static_cast<long double>(eml[0]);
+        const long double r0_ld = static_cast<long double>(r0l[1]) * 0x1p64L + static_cast<long double>(r0l[0]);
+        if (!range_ok(N, seg.coef[a], scale_ld, T_ld, static_cast<i128>(r0) < 0 ? -r0_ld : r0_ld,
+                      (eneg ? -e0_ld : e0_ld) * grid_ld, q2_d, limit_ld))
+          return false;
+      }
+    }
+    // Terms: u_j = m_j top_j 2^(tshift_j + s), s = e_j + sigma + j e_h + g,
+    // truncated; m_j top_j >= 2^127 > 2^124 > u_j, so tshift_j + s < -3 (a
+    // right shift).
+    u128 u[N + 1];
+    uint64_t off[N + 1];
+    for (int j = 1; j <= N; ++j) {
+      u[j] = 0;
+      off[j] = 0;
+      if (!da[j].m) continue;
+      // m top = A + B 2^64 (A, B the products with top's halves), taken down
+      // by rs bits: floor((A + B 2^64) / 2^rs), below 2^124.
+      const uint64_t am = static_cast<uint64_t>(da[j].m < 0 ? -da[j].m : da[j].m);
+      const u128 A = static_cast<u128>(static_cast<uint64_t>(hp.top[j])) * am;
+      const u128 B = static_cast<u128>(static_cast<uint64_t>(hp.top[j] >> 64)) * am;
+      const long s = da[j].e + sj[j];
+      const long rs = rsb[j] - da[j].e;
+      u128 v = 0;
+      if (rs < 64) v = (B << (64 - rs)) + (A >> rs);  // exact below 2^128 (rs >= 4)
+      else if (rs < 192) v = (B + (A >> 64)) >> (rs - 64);
+      u[j] = da[j].m < 0 ? -v : v;
+      off[j] = s < 0 ? wt[j] : 0;
+    }
+    // e0 = K qd + rd, 0 <= rd < K.
+    u128 qd = 0;
+    uint64_t rd = 0;
+    if (em) {
+      uint64_t ql[2] = {eml[0], eml[1]};
+      const uint64_t r = div_limbs_small(ql, 2, K);
+      const u128 q = (static_cast<u128>(ql[1]) << 64) | ql[0];
+      qd = eneg ? -(q + (r != 0)) : q;
+      rd = eneg ? (r ? K - r : 0) : r;
+    }
+    // X_i = sum_j surj(j,i) u_j = i! c_i with c the coefficients of
+    // sum_j u_j m^j in the falling factorials m(m-1)...(m-i+1) (surj(j,i) =
+    // i! S(j,i)): c by synthetic division at the nodes 1..N-1 (ring
+    // operations modulo 2^128 on the exact integers, so exact), with multiples
+    // k <= 6 instead of the N(N+1)/2 products by surj(j,i). err_i the same way
+    // on the error weights.
+    for (int k = 1; k < N; ++k)
+      for (int j = N - 1; j >= k; --j) {
+        u[j] += u[j + 1] * static_cast<uint64_t>(k);
+        off[j] += off[j + 1] * static_cast<uint64_t>(k);
+      }
+    u128 end = r0;
+    for (int i = 1; i <= N; ++i) {
+      u128 x = half + u[i] * kSurj.v[i][i];  // i! c_i
+      const uint64_t err = off[i] * kSurj.v[i][i];
+      uint64_t below = 0;
+      if (i == 1) {
+        x -= qd;
+        below = rd != 0;
+      }
+      if (err == 0) {
+        x -= below;
+      } else {
+        const uint64_t low = static_cast<uint64_t>(x) & mask;
+        if (low < err + below || low > mask - (err - 1)) return false;  // within the error of a rounding boundary
+      }
+      const u128 ri = static_cast<u128>(static_cast<i128>(x) >> g);
+      o.reg[a][i][0] = static_cast<uint64_t>(ri);
+      o.reg[a][i][1] = static_cast<uint64_t>(ri >> 64);
+      end += ri * binlo[i];
+    }
+    const u128 lim = static_cast<u128>(1) << (f.width - 1);
+    if (end + lim - 1 > 2 * (lim - 1)) return false;
+    o.end[a] = end;
+  }
+  return true;
+}
+
 // The grid path of compile() for a segment that passed the checks before any
 // arithmetic and the budget check: true with `out` filled, or false (nothing
 // decided) for compile_exact().
@@ -1160,25 +1384,34 @@ bool compile_grid(const Format& f, long double scale_ld, long double limit_ld, c
   const int G = f.guard_bits;
   const long sigma = G + f.frac_bits;
   const HPowers& hp = h_powers(seg.h);
-  // Decompose the coefficients and bound every quantity (bits, grid units).
+  // Decompose the coefficients and bound every quantity in bits of register
+  // units: c0 (and its bias 2^(G-1)), r0, and each term u_j times the largest
+  // surj(j,i) (bitlen 1, 2, 3, 6, 8, 11, 15 for j = 1..7), plus 3 for a sum of
+  // at most 7. Then |X_i|, |c0|, |r0| < 2^bits, |e0|, |qd| < 2^(bits+2), and
+  // X_i + 2^(g-1) - qd stays below 2^(bits+3) in magnitude: the 2-limb grid
+  // takes g = min(64, 124 - bits) >= 32 fraction bits, the 3- and 4-limb grids
+  // 64 (bits + 67 <= 191, 255). c0 must lie on the grid: g >= gmin.
+  static constexpr int kSurjBits[8] = {0, 1, 2, 3, 6, 8, 11, 15};
   Dyadic d[8][8];
-  long need = G + 66;  // c0's bias 2^(G+63), with the margin below
+  long tb[8][8];  // bits of |u_j| (register units), a large negative number if u_j = 0
+  long bits = G, gmin = 1;
   for (int a = 0; a < A; ++a) {
     const std::vector<double>& cf = seg.coef[a];
     for (int j = 0; j <= N; ++j) d[a][j] = j < static_cast<int>(cf.size()) ? dyadic(cf[j]) : Dyadic{0, 0};
     if (d[a][0].m) {
-      const long s0 = d[a][0].e + sigma + 64;
-      if (s0 < 0) return false;  // x(0) below the grid
-      need = std::max<long>(need, bitlen_u64(static_cast<uint64_t>(std::abs(d[a][0].m))) + s0 + 3);
+      gmin = std::max<long>(gmin, -(d[a][0].e + sigma));
+      bits = std::max<long>(bits, bitlen_u64(static_cast<uint64_t>(std::abs(d[a][0].m))) + d[a][0].e + sigma);
     }
-    for (int j = 1; j <= N; ++j)
-      if (d[a][j].m)
-        need = std::max<long>(need, bitlen_u64(static_cast<uint64_t>(std::abs(d[a][j].m))) + hp.bits[j] +
-                                        d[a][j].e + sigma + static_cast<long>(j) * hp.hd.e + 64 + 15 + 3);
+    for (int j = 1; j <= N; ++j) {
+      tb[a][j] = d[a][j].m ? bitlen_u64(static_cast<uint64_t>(std::abs(d[a][j].m))) + hp.bits[j] + d[a][j].e + sigma +
+                                 static_cast<long>(j) * hp.hd.e
+                           : -(1L << 30);
+      bits = std::max<long>(bits, tb[a][j] + kSurjBits[j] + 3);
+    }
     if (start) {
       mpz_srcptr z = (*start)[a].get_mpz_t();
       const int n = std::abs(z->_mp_size);
-      need = std::max<long>(need, (n ? 64L * (n - 1) + bitlen_u64(z->_mp_d[n - 1]) : 0) + 64 + 3);
+      bits = std::max<long>(bits, n ? 64L * (n - 1) + bitlen_u64(z->_mp_d[n - 1]) : 0);
     }
   }
   const KData& kd = k_data(N, seg.ticks, f.tol_lsb);
@@ -1186,28 +1419,61 @@ bool compile_grid(const Format& f, long double scale_ld, long double limit_ld, c
   const Dyadic htol = dyadic(f.tol_lsb / 2);
   GridOut o;
   double carried = 0;
-  bool ok;
-  if (need <= 191) ok = grid_axes<3>(f, seg, start, hp, d, kd.binlo, q2_d, htol, scale_ld, limit_ld, carried, o);
-  else if (need <= 255) ok = grid_axes<4>(f, seg, start, hp, d, kd.binlo, q2_d, htol, scale_ld, limit_ld, carried, o);
-  else ok = false;
-  if (!ok) return false;
-  ++(need <= 191 ? path_counts().grid3 : path_counts().grid4);
-  const int L1 = need <= 191 ? 2 : 3;  // limbs of a register
+  int L1 = 0;  // limbs of a register, 0: not settled
+  const long g2 = std::min<long>(64, 124 - bits);
+  auto grid2 = [&](auto deg) {
+    return grid2_axes<decltype(deg)::value>(f, seg, start, hp, d, tb, kd.binlo, q2_d, htol, scale_ld, limit_ld,
+                                            static_cast<int>(g2), carried, o);
+  };
+  bool ok2 = false;
+  if (g2 >= 32 && g2 >= gmin) {
+    switch (N) {
+      case 1: ok2 = grid2(std::integral_constant<int, 1>()); break;
+      case 2: ok2 = grid2(std::integral_constant<int, 2>()); break;
+      case 3: ok2 = grid2(std::integral_constant<int, 3>()); break;
+      case 4: ok2 = grid2(std::integral_constant<int, 4>()); break;
+      case 5: ok2 = grid2(std::integral_constant<int, 5>()); break;
+      case 6: ok2 = grid2(std::integral_constant<int, 6>()); break;
+      default: ok2 = grid2(std::integral_constant<int, 7>()); break;
+    }
+  }
+  if (ok2) {
+    ++path_counts().grid2;
+    L1 = 2;
+  } else if (gmin <= 64) {
+    const long need = bits + 64 + 3;
+    carried = 0;
+    if (need <= 191 && grid_axes<3>(f, seg, start, hp, d, kd.binlo, q2_d, htol, scale_ld, limit_ld, carried, o)) {
+      ++path_counts().grid3;
+      L1 = 2;
+    } else if (need > 191 && need <= 255 &&
+               grid_axes<4>(f, seg, start, hp, d, kd.binlo, q2_d, htol, scale_ld, limit_ld, carried, o)) {
+      ++path_counts().grid4;
+      L1 = 3;
+    }
+  }
+  if (!L1) return false;
 
   out.ticks = static_cast<uint32_t>(seg.ticks);
   out.regs.resize(A);
   out.end.resize(A);
+  const GmpAlloc alloc = gmp_alloc_func();
   for (int a = 0; a < A; ++a) {
     std::vector<mpz_class>& r = out.regs[a];
     r.resize(N + 1);
     if (start) {
       mpz_srcptr z = (*start)[a].get_mpz_t();
-      mpz_set_mag(r[0].get_mpz_t(), z->_mp_d, std::abs(z->_mp_size), z->_mp_size < 0);
+      mpz_set_mag(r[0].get_mpz_t(), z->_mp_d, std::abs(z->_mp_size), z->_mp_size < 0, alloc);
+    } else if (L1 == 2) {
+      mpz_set_s128(r[0].get_mpz_t(), (static_cast<u128>(o.reg[a][0][1]) << 64) | o.reg[a][0][0], alloc);
     } else {
-      mpz_set_limbs(r[0].get_mpz_t(), o.reg[a][0], L1);
+      mpz_set_limbs(r[0].get_mpz_t(), o.reg[a][0], L1, alloc);
     }
-    for (int i = 1; i <= N; ++i) mpz_set_limbs(r[i].get_mpz_t(), o.reg[a][i], L1);
-    mpz_set_i128(out.end[a].get_mpz_t(), o.end[a]);
+    for (int i = 1; i <= N; ++i) {
+      if (L1 == 2) mpz_set_s128(r[i].get_mpz_t(), (static_cast<u128>(o.reg[a][i][1]) << 64) | o.reg[a][i][0], alloc);
+      else mpz_set_limbs(r[i].get_mpz_t(), o.reg[a][i], L1, alloc);
+    }
+    mpz_set_s128(out.end[a].get_mpz_t(), o.end[a], alloc);
   }
   out.carried_lsb = carried;
   // = quant_bound_lsb(K): q2_d 2^-(G+1), exact (q2_d >= 1, G + 1 <= 127: normal)

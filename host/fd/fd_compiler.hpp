@@ -183,12 +183,13 @@ class Compiler {
 };
 
 // Diagnostics (tests, benchmarks): how compile() settled segments on this
-// thread. grid3/grid4: the fixed-point grid path on 3 or 4 limbs (the common
-// case); exact: the exact integer path (a rounding the grid could not settle,
-// or values too large for it); reference: the exact rational form (refusals,
+// thread. grid2/grid3/grid4: the fixed-point grid path on 2 limbs (the common
+// case), or on 3 or 4 (wider values, or a rounding the 2-limb grid left open);
+// exact: the exact integer path (a rounding the grids could not settle, or
+// values too large for them); reference: the exact rational form (refusals,
 // and what the fast paths leave to it).
 struct PathCounts {
-  uint64_t grid3 = 0, grid4 = 0, exact = 0, reference = 0;
+  uint64_t grid2 = 0, grid3 = 0, grid4 = 0, exact = 0, reference = 0;
 };
 PathCounts& path_counts();
 

@@ -34,26 +34,25 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
   double T0 = 0, v_commit = 0;
   long long k_last = -1;  // last committed tick
   TickSample carried{};
-  std::vector<mpz_class> end_state;
   bool have_end = false;
   const int dim_engine = f.axes;
 
+  // One PolySegment and one Compiled reused for every segment: the compiler
+  // writes into the same storage (no allocation on its common path), and each
+  // segment starts from the previous one's exact end state, c.end.
+  fd::PolySegment ps;
+  ps.h = h;
+  ps.coef.assign(dim_engine, std::vector<double>(f.degree + 1, 0.0));
+  fd::Compiled c;
   auto emit = [&](const TimeSegment& seg) {
-    fd::PolySegment ps;
-    ps.h = h;
     ps.ticks = seg.K;
-    for (int a = 0; a < dim_engine; ++a) {
-      std::vector<double> c(f.degree + 1, 0.0);
-      for (int j = 0; j <= f.degree; ++j) c[j] = seg.coef[a][j];
-      ps.coef.push_back(c);
-    }
-    fd::Compiled c;
+    for (int a = 0; a < dim_engine; ++a)
+      for (int j = 0; j <= f.degree; ++j) ps.coef[a][j] = seg.coef[a][j];
     try {
-      c = comp.compile(ps, have_end ? &end_state : nullptr, "segment " + std::to_string(st.segments));
+      comp.compile(ps, have_end ? &c.end : nullptr, "segment " + std::to_string(st.segments), c);
     } catch (const fd::CompileError& e) {
       throw PlanError(std::string("compile: ") + e.what());
     }
-    end_state = c.end;
     have_end = true;
     if (st.first_segment < 0) st.first_segment = std::chrono::duration<double>(Clock::now() - t_start).count();
     sink(c, seg);

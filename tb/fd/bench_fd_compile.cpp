@@ -99,7 +99,7 @@ void run(const Case& cs, int nseg) {
     }
     t1 = Clock::now();
     const traj::fd::PathCounts& pc = traj::fd::path_counts();
-    paths = "grid3 " + std::to_string(pc.grid3 - before.grid3) + ", grid4 " + std::to_string(pc.grid4 - before.grid4) +
+    paths = "grid2 " + std::to_string(pc.grid2 - before.grid2) + ", grid3 " + std::to_string(pc.grid3 - before.grid3) + ", grid4 " + std::to_string(pc.grid4 - before.grid4) +
             ", exact " + std::to_string(pc.exact - before.exact) + ", reference " +
             std::to_string(pc.reference - before.reference);
   }

@@ -630,11 +630,11 @@ TEST(FdCompilerFast, HelpersUnchanged) {
 namespace {
 traj::fd::PathCounts counts_since(const traj::fd::PathCounts& b) {
   const traj::fd::PathCounts& a = traj::fd::path_counts();
-  return {a.grid3 - b.grid3, a.grid4 - b.grid4, a.exact - b.exact, a.reference - b.reference};
+  return {a.grid2 - b.grid2, a.grid3 - b.grid3, a.grid4 - b.grid4, a.exact - b.exact, a.reference - b.reference};
 }
 void print_counts(const char* what, const traj::fd::PathCounts& c) {
-  std::printf("  %s: grid3 %llu, grid4 %llu, exact %llu, reference %llu\n", what,
-              static_cast<unsigned long long>(c.grid3), static_cast<unsigned long long>(c.grid4),
+  std::printf("  %s: grid2 %llu, grid3 %llu, grid4 %llu, exact %llu, reference %llu\n", what,
+              static_cast<unsigned long long>(c.grid2), static_cast<unsigned long long>(c.grid3), static_cast<unsigned long long>(c.grid4),
               static_cast<unsigned long long>(c.exact), static_cast<unsigned long long>(c.reference));
 }
 }  // namespace
@@ -662,13 +662,16 @@ TEST(FdCompilerFast, GridPathAllWidthsChained) {
   std::printf("  %ld accepted, %ld refused segments identical\n", st.accepted, st.refused);
   print_counts("paths", c);
   EXPECT_GT(st.accepted, 8000);
-  EXPECT_GE(static_cast<double>(c.grid3 + c.grid4), 0.9 * static_cast<double>(st.accepted));
+  EXPECT_GE(static_cast<double>(c.grid2 + c.grid3 + c.grid4), 0.9 * static_cast<double>(st.accepted));
+  EXPECT_GT(c.grid2, 1000u);
+  EXPECT_GT(c.grid3, 1000u);
   EXPECT_GT(c.grid4, 100u);
   EXPECT_GT(c.exact, 0u);
 }
 
 // The planner's main format and tick (3 axes, quintic, W 96, G 48, F 32,
-// h = 1 ms, K = 20..400, chained): every segment on the 3-limb grid path.
+// h = 1 ms, K = 20..400, chained): every segment on the grid path, nearly all
+// on 2 limbs.
 TEST(FdCompilerFast, GridPathMainJobFormat) {
   const Format f = fmt(3, 5, 96, 16, 48, 32);
   const Compiler comp(f);
@@ -703,68 +706,163 @@ TEST(FdCompilerFast, GridPathMainJobFormat) {
   }
   const traj::fd::PathCounts c = counts_since(before);
   print_counts("paths", c);
-  EXPECT_EQ(c.grid3, 3000u);
+  EXPECT_EQ(c.grid2 + c.grid3, 3000u);
+  EXPECT_GT(c.grid2, 2900u);
 }
 
 // Roundings on the edge of the grid's truncation error, built exactly: with a
-// dyadic tick h = 2^-10 and x(0) = 0, the terms u_j = c_j 2^sigma h^j are
-// chosen in grid units (2^-64 register LSB) so that X_1 - qd + 2^63 (qd =
-// floor(e0/K) of the carried error) ends in a given 64-bit pattern L0, plus an
-// optional term +-2^-20 grid units below the grid (err_1 = 1). The grid path
-// must settle exactly the cases its bound allows (L0 >= err + [rd > 0],
-// L0 <= 2^64 - err), hand the others over, and agree with the reference on
-// every one (including the exact case L0 = 0 with rd > 0, which rounds down).
+// dyadic tick h = 2^-10, x(0) = 2^(B-81) (so that c0 = x(0) 2^80 + 2^47 and
+// r0 have B = 124 - g bits and the 2-limb grid takes g fraction bits), the
+// terms u_j = c_j 2^sigma h^j are chosen in grid units (2^-g register LSB) so
+// that X_1 - qd + 2^(g-1) (qd = floor(e0/K) of the carried error) ends in a
+// given g-bit pattern L0, plus up to two terms (u_3, u_4) of +-2^-20 grid
+// units below the grid (err_1 = 1 or 2). The 2-limb grid must settle exactly
+// the cases its bound
+// allows (L0 >= err + [rd > 0], L0 + err <= 2^g), leave the others to the
+// finer grid or the exact path, and every result must equal the reference's
+// (including the exact case L0 = 0 with rd > 0, which rounds down).
 TEST(FdCompilerFast, GridRoundingBoundaries) {
-  const Format f = fmt(1, 3, 96, 16, 48, 32);  // sigma = 80
+  const Format f = fmt(1, 4, 96, 16, 48, 32);  // sigma = 80
   const Compiler comp(f);
   const uint64_t K = 3;
-  const mpz_class two64 = mpz_class(1) << 64;
-  auto c_of = [](const mpq_class& u, int j) {  // c_j = u 2^-64 2^-80 / 2^(-10 j)
-    mpq_class c = u;
-    mpz_mul_2exp(c.get_den_mpz_t(), c.get_den_mpz_t(), 144 - 10 * j);
-    c.canonicalize();
-    const double d = c.get_d();
-    EXPECT_EQ(ref::exact(d), c);  // exact
-    return d;
-  };
   long settled = 0, handed = 0;
-  for (int delta : {0, 1, -1, 2, 3, -3}) {  // 0: no start (r0 from c0)
-    const bool with_start = delta != 0;
-    const mpz_class e0g = mpz_class(delta) * two64;
-    mpz_class qd, rd;
-    mpz_fdiv_qr_ui(qd.get_mpz_t(), rd.get_mpz_t(), e0g.get_mpz_t(), K);
-    const bool below = rd != 0;
-    for (uint64_t L0 : {uint64_t(0), uint64_t(1), uint64_t(2), uint64_t(3), uint64_t(1) << 63, ~uint64_t(0),
-                        ~uint64_t(0) - 1})
-      for (int tiny : {0, 1, -1}) {
-        for (int kint : {7, -6}) {
-          // X_1 (integer part, grid units) = kint 2^64 + T with T = L0 - 2^63 + qd (mod 2^64)
-          mpz_class T = mpz_class(std::to_string(L0)) - (mpz_class(1) << 63) + qd;
-          mpz_fdiv_r_2exp(T.get_mpz_t(), T.get_mpz_t(), 64);
-          const mpz_class X1 = mpz_class(kint) * two64 + T;
-          mpz_class u2;
-          mpz_fdiv_r_2exp(u2.get_mpz_t(), X1.get_mpz_t(), 40);
-          const mpz_class u1 = X1 - u2;
-          const mpq_class u3 = tiny == 0 ? mpq_class(0) : mpq_class(tiny, 1 << 20);
-          PolySegment seg{{{0.0, c_of(mpq_class(u1), 1), c_of(mpq_class(u2), 2), c_of(u3, 3)}}, std::ldexp(1.0, -10), K};
-          std::vector<mpz_class> start{(mpz_class(1) << 47) + delta};
-          const traj::fd::PathCounts before = traj::fd::path_counts();
-          const std::string ctx = "delta " + std::to_string(delta) + " L0 " + std::to_string(L0) + " tiny " +
-                                  std::to_string(tiny) + " kint " + std::to_string(kint);
-          const Outcome o = check_same(comp, seg, with_start ? &start : nullptr, ctx);
-          ASSERT_TRUE(o.ok) << ctx << ": " << o.msg;
-          const traj::fd::PathCounts c = counts_since(before);
-          const uint64_t err = tiny ? 1 : 0, bl = with_start && below ? 1 : 0;
-          const bool decided = err == 0 || (L0 >= err + bl && L0 <= uint64_t(0) - err);
-          EXPECT_EQ(c.grid3, decided ? 1u : 0u) << ctx;
-          EXPECT_EQ(c.exact, decided ? 0u : 1u) << ctx;
-          (decided ? settled : handed) += 1;
-          if (HasFailure()) return;
-        }
-      }
+  for (int g : {64, 52, 40, 33}) {
+    const int B = 124 - g;
+    const double x0 = std::ldexp(1.0, B - 81);
+    const mpz_class c0 = (mpz_class(1) << (B - 1)) + (mpz_class(1) << 47);
+    const mpz_class two_g = mpz_class(1) << g;
+    auto c_of = [g](const mpq_class& u, int j) {  // c_j = u 2^-g 2^-80 / 2^(-10 j)
+      mpq_class c = u;
+      mpz_mul_2exp(c.get_den_mpz_t(), c.get_den_mpz_t(), g + 80 - 10 * j);
+      c.canonicalize();
+      const double dv = c.get_d();
+      EXPECT_EQ(ref::exact(dv), c);  // exact
+      return dv;
+    };
+    for (int delta : {0, 1, -1, 2, 3, -3}) {  // 0: no start (r0 from c0)
+      const bool with_start = delta != 0;
+      const mpz_class e0g = mpz_class(delta) * two_g;
+      mpz_class qd, rd;
+      mpz_fdiv_qr_ui(qd.get_mpz_t(), rd.get_mpz_t(), e0g.get_mpz_t(), K);
+      const bool below = rd != 0;
+      const uint64_t top = g == 64 ? ~uint64_t(0) : (uint64_t(1) << g) - 1;
+      for (uint64_t L0 : {uint64_t(0), uint64_t(1), uint64_t(2), uint64_t(3), uint64_t(1) << (g - 1), top, top - 1})
+        for (const std::pair<int, int>& tiny : {std::pair<int, int>{0, 0}, {1, 0}, {-1, 0}, {1, 1}, {-1, -1}, {1, -1}})
+          for (int kint : {7, -6}) {
+            // X_1 = kint 2^g + T, T = L0 - 2^(g-1) + qd (mod 2^g), split so that
+            // both parts are exact doubles
+            mpz_class T = mpz_class(std::to_string(L0)) - (mpz_class(1) << (g - 1)) + qd;
+            mpz_fdiv_r_2exp(T.get_mpz_t(), T.get_mpz_t(), g);
+            const mpz_class X1 = mpz_class(kint) * two_g + T;
+            mpz_class u2;
+            mpz_fdiv_r_2exp(u2.get_mpz_t(), X1.get_mpz_t(), g - 24);
+            const mpz_class u1 = X1 - u2;
+            const mpq_class u3(tiny.first, 1 << 20), u4(tiny.second, 1 << 20);
+            PolySegment seg{{{x0, c_of(mpq_class(u1), 1), c_of(mpq_class(u2), 2), c_of(u3, 3), c_of(u4, 4)}},
+                            std::ldexp(1.0, -10), K};
+            ASSERT_EQ(ref::exact(x0) * mpq_class(mpz_class(1) << 80) + mpq_class(mpz_class(1) << 47), mpq_class(c0));
+            std::vector<mpz_class> start{c0 + delta};
+            const traj::fd::PathCounts before = traj::fd::path_counts();
+            const std::string ctx = "g " + std::to_string(g) + " delta " + std::to_string(delta) + " L0 " +
+                                    std::to_string(L0) + " tiny " + std::to_string(tiny.first) + "," +
+                                    std::to_string(tiny.second) + " kint " + std::to_string(kint);
+            const Outcome o = check_same(comp, seg, with_start ? &start : nullptr, ctx);
+            ASSERT_TRUE(o.ok) << ctx << ": " << o.msg;
+            const traj::fd::PathCounts c = counts_since(before);
+            const unsigned __int128 err = (tiny.first != 0) + (tiny.second != 0), bl = with_start && below ? 1 : 0;
+            const bool decided = err == 0 || (L0 >= err + bl && L0 + err <= (static_cast<unsigned __int128>(1) << g));
+            EXPECT_EQ(c.grid2, decided ? 1u : 0u) << ctx;
+            EXPECT_EQ(c.grid2 + c.grid3 + c.exact, 1u) << ctx;
+            (decided ? settled : handed) += 1;
+            if (HasFailure()) return;
+          }
+    }
   }
-  std::printf("  %ld settled on the grid, %ld handed to the exact path\n", settled, handed);
-  EXPECT_GT(handed, 10);
+  std::printf("  %ld settled on the 2-limb grid, %ld left to the finer grid or the exact path\n", settled, handed);
+  EXPECT_GT(handed, 100);
+}
+
+// The 2-limb grid on random chained segments of every degree 1..7 at several
+// widths (mixed tick periods: dyadic ones, where every term lies on the grid,
+// and 1 ms, whose m_h^j exceed 128 bits from j = 3 on, so the truncated powers
+// weigh 2 grid units): identical to the reference, and for every degree the
+// 2-limb grid settles a good share of the accepted segments (the rest: values
+// of full-range size at the wide formats, too large for 2 limbs).
+TEST(FdCompilerFast, Grid2RandomAllDegrees) {
+  const WG wgs[] = {{48, 16, 12}, {64, 16, 32}, {96, 16, 48}, {96, 32, 40}, {128, 32, 64}};
+  const int fracs[] = {0, 16, 32};
+  uint64_t seed = 90000;
+  for (int deg = 1; deg <= 7; ++deg) {
+    Stats st;
+    const traj::fd::PathCounts before = traj::fd::path_counts();
+    for (const WG& wg : wgs)
+      for (int frac : fracs) {
+        if (wg.w - wg.g - 1 - frac < 2) continue;
+        random_chain(deg, wg, frac, seed++, 50, st);
+        if (HasFailure()) return;
+      }
+    const traj::fd::PathCounts c = counts_since(before);
+    std::printf("  degree %d: %ld accepted, %ld refused;", deg, st.accepted, st.refused);
+    print_counts("paths", c);
+    EXPECT_GT(st.accepted, 400) << "degree " << deg;
+    EXPECT_GE(static_cast<double>(c.grid2), 0.3 * static_cast<double>(st.accepted)) << "degree " << deg;
+    EXPECT_GT(c.grid2, 100u) << "degree " << deg;
+  }
+}
+
+// The 2-limb grid's size limit: with W 128, G 48, F 32 (sigma = 80) and
+// x(0) = 2^11 the start state has 92 bits, the grid g = 124 - 92 = 32
+// fraction bits (the least it takes); one bit more and the segment goes to
+// the 3-limb grid. Random quintic terms at h = 1 ms, chained and unchained,
+// on both sides of the limit: identical to the reference on every one.
+TEST(FdCompilerFast, Grid2SizeLimit) {
+  const Format f = fmt(3, 5, 128, 32, 48, 32);
+  const Compiler comp(f);
+  std::mt19937_64 rng(31337);
+  std::uniform_real_distribution<double> U(-1, 1);
+  struct Side {
+    double x0;
+    bool grid2;
+  };
+  const Side sides[] = {{std::ldexp(1.0, 11) - std::ldexp(1.0, -30), true},
+                        {std::ldexp(1.0, 11), true},
+                        {std::ldexp(1.0, 12) - std::ldexp(1.0, -30), true},
+                        {std::ldexp(1.0, 12), false},
+                        {-std::ldexp(1.0, 12), false}};
+  long n2 = 0, n3 = 0;
+  for (const Side& sd : sides)
+    for (int rep = 0; rep < 40; ++rep) {
+      PolySegment seg;
+      seg.h = 1e-3;
+      seg.ticks = std::uniform_int_distribution<uint64_t>(20, 400)(rng);
+      const double T = seg.h * static_cast<double>(seg.ticks);
+      for (int a = 0; a < 3; ++a) {
+        std::vector<double> c(6);
+        c[0] = a == 0 ? sd.x0 : U(rng);
+        double Tj = 1;
+        for (int j = 1; j <= 5; ++j) {
+          Tj *= T;
+          c[j] = U(rng) * 1e-3 / Tj;  // the end stays within the same bit length
+        }
+        seg.coef.push_back(c);
+      }
+      const bool chained = rep % 2 == 1;
+      std::vector<mpz_class> start;
+      if (chained) {
+        for (int a = 0; a < 3; ++a) start.push_back(comp.position_to_state(seg.coef[a][0]) + (rep % 4 == 1 ? 1 : -1));
+      }
+      const traj::fd::PathCounts before = traj::fd::path_counts();
+      const std::string ctx = "x0 " + std::to_string(sd.x0) + " rep " + std::to_string(rep);
+      const Outcome o = check_same(comp, seg, chained ? &start : nullptr, ctx);
+      ASSERT_TRUE(o.ok) << ctx << ": " << o.msg;
+      const traj::fd::PathCounts c = counts_since(before);
+      EXPECT_EQ(c.grid2, sd.grid2 ? 1u : 0u) << ctx;
+      EXPECT_EQ(c.grid3, sd.grid2 ? 0u : 1u) << ctx;
+      n2 += static_cast<long>(c.grid2);
+      n3 += static_cast<long>(c.grid3);
+      if (HasFailure()) return;
+    }
+  std::printf("  %ld on the 2-limb grid, %ld on the 3-limb grid\n", n2, n3);
 }
 
 // compile() into one reused Compiled (the allocation-free form) gives what a
