@@ -198,7 +198,17 @@ module traj_bcu_gen #(
   logic          pass_init, pass_on;
   assign pass_on = (fsm_q == StDesc) || (fsm_q == StInit);
   assign rd_bank = pass_on ? bank_q : xbank_q;
-  assign rd_dg   = pass_on ? sdg_q : (xfer_step ? xk1_q : xk_q);  // sdg_q = 0 between slots
+  // A transfer step never falls in a pass (WAITX: passes start only when no
+  // transfer is pending or running; checked in simulation below), so the late
+  // xfer_step selects in the last LUT level only: the pass/idle choice is made
+  // from flops in parallel.
+  logic [DgBits-1:0] rd_dg_hold;
+  assign rd_dg_hold = pass_on ? sdg_q : xk_q;  // sdg_q = 0 between slots
+  assign rd_dg      = xfer_step ? xk1_q : rd_dg_hold;
+`ifndef SYNTHESIS
+  always @(posedge clk_i)
+    if (rst_ni && xfer_step && pass_on) $fatal(1, "traj_bcu_gen: transfer step during a pass");
+`endif
 
   // ---------------------------------------------------------------------
   // Digit-serial pipeline: rd -> hd -> stage 1 -> stage 2 -> write register.
