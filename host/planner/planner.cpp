@@ -537,8 +537,14 @@ std::vector<TickSample> sample_ticks(const Path& p, const Plan& plan, double per
 std::vector<TickSample> sample_ticks_range(const Path& p, const Plan& plan, double period, double t_offset,
                                            long long k_first, long long k_last) {
   std::vector<TickSample> out;
-  if (k_last < k_first) return out;
-  out.reserve(static_cast<size_t>(k_last - k_first + 1));
+  append_ticks_range(p, plan, period, t_offset, k_first, k_last, out);
+  return out;
+}
+
+void append_ticks_range(const Path& p, const Plan& plan, double period, double t_offset, long long k_first,
+                        long long k_last, std::vector<TickSample>& out) {
+  if (k_last < k_first) return;
+  out.reserve(out.size() + static_cast<size_t>(k_last - k_first + 1));
   int hint = 0, piece_hint = 0;
   size_t ci = static_cast<size_t>(-1);
   double u = 0;
@@ -573,7 +579,6 @@ std::vector<TickSample> sample_ticks_range(const Path& p, const Plan& plan, doub
     ts.j_cen_geo = f.q_norm * ps.v * ps.v * ps.v + 3 * f.kappa * ps.v * std::fabs(ps.a);
     out.push_back(ts);
   }
-  return out;
 }
 
 Peaks peaks_of(const std::vector<TickSample>& ts, int dim) {

@@ -169,6 +169,10 @@ std::vector<TickSample> sample_ticks(const Path& p, const Plan& plan, double per
 // t_offset: tick k is at plan time k h - t_offset (clamped to the plan).
 std::vector<TickSample> sample_ticks_range(const Path& p, const Plan& plan, double period, double t_offset,
                                            long long k_first, long long k_last);
+// The same, appended to `out` (whose storage a caller can reuse window after
+// window: no allocation, no page faults once it has grown).
+void append_ticks_range(const Path& p, const Plan& plan, double period, double t_offset, long long k_first,
+                        long long k_last, std::vector<TickSample>& out);
 
 struct Peaks {
   double v_axis[kMaxAxes] = {0, 0, 0}, a_axis[kMaxAxes] = {0, 0, 0}, j_axis[kMaxAxes] = {0, 0, 0};

@@ -34,6 +34,7 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
   double T0 = 0, v_commit = 0;
   long long k_last = -1;  // last committed tick
   TickSample carried{};
+  std::vector<TickSample> ts;  // the window's ticks; storage reused window after window
   bool have_end = false;
   const int dim_engine = f.axes;
 
@@ -81,7 +82,6 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
     po.v_start = v_commit;
     if (!last) po.force_stations = {s_commit};
     Plan plan;
-    std::vector<TickSample> ts;
     std::vector<TimeSegment> segs;
     double Tc = 0;
     long long k_end = 0;
@@ -103,8 +103,9 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
       }
       k_end = last ? static_cast<long long>(std::ceil((T0 + Tc) / h - 1e-9))
                    : static_cast<long long>(std::floor((T0 + Tc) / h + 1e-9));
-      ts = sample_ticks_range(path, plan, h, T0, k_last + 1, k_end);
-      if (k_last >= 0) ts.insert(ts.begin(), carried);
+      ts.clear();
+      if (k_last >= 0) ts.push_back(carried);
+      append_ticks_range(path, plan, h, T0, k_last + 1, k_end, ts);
       size_t caps_before = po.caps.size();
       long long lastcap = -1000000;
       for (size_t k = (k_last >= 0 ? 1 : 0); k < ts.size(); ++k) {
