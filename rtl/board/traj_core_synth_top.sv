@@ -53,23 +53,37 @@ module traj_core_synth_top #(
   logic [7:0]               fold_q, fold_d;
   logic                     sample_valid_q, underrun_q, seg_done_q, tick_err_q;
 
-  assign word_valid   = (nbytes_q == NbBits'(BytesPerWord));
-  assign byte_ready_o = !word_valid;
+  // Byte -> word assembly. tvalid is a flop (set when a word is complete,
+  // cleared by the handshake), so the engine's tready reaches nothing but that
+  // flop. byte_ready_o also covers the byte already in byte_q: a byte taken at
+  // the pins is never dropped (the last byte of a word closes the port until
+  // the word is handed over).
+  logic word_valid_q, last_in_flight;
+  assign word_valid     = word_valid_q;
+  assign last_in_flight = byte_valid_q && (nbytes_q == NbBits'(BytesPerWord - 1));
+  assign byte_ready_o   = !word_valid_q && !last_in_flight;
 
   always_ff @(posedge clk_i) begin
     rst_nq       <= rst_ni;
     tick_q       <= tick_i;
     byte_q       <= byte_i;
     kind_q       <= kind_i;
-    byte_valid_q <= byte_valid_i && !word_valid;
+    byte_valid_q <= byte_valid_i && byte_ready_o;
     if (!rst_nq) begin
-      nbytes_q <= '0;
-    end else if (word_valid && word_ready) begin
-      nbytes_q <= '0;
+      nbytes_q     <= '0;
+      word_valid_q <= 1'b0;
+      byte_valid_q <= 1'b0;
+    end else if (word_valid_q) begin
+      if (word_ready) word_valid_q <= 1'b0;
     end else if (byte_valid_q) begin
       word_q      <= {byte_q, word_q[ChunkWidth-1:8]};
       word_kind_q <= kind_q;
-      nbytes_q <= nbytes_q + 1'b1;
+      if (nbytes_q == NbBits'(BytesPerWord - 1)) begin
+        nbytes_q     <= '0;
+        word_valid_q <= 1'b1;
+      end else begin
+        nbytes_q <= nbytes_q + 1'b1;
+      end
     end
   end
 

@@ -49,18 +49,23 @@ module traj_fd_synth_top #(
 
   // Registered tvalid (AXI-Stream practice at a unit boundary): set when a
   // word is complete, cleared by the handshake.
-  logic word_valid_q;
-  assign word_valid   = word_valid_q;
-  assign byte_ready_o = !word_valid_q;
+  // byte_ready_o also covers the byte already in byte_q: a byte taken at the
+  // pins is never dropped (the last byte of a word closes the port until the
+  // word is handed over).
+  logic word_valid_q, last_in_flight;
+  assign word_valid     = word_valid_q;
+  assign last_in_flight = byte_valid_q && (nbytes_q == $bits(nbytes_q)'(BytesPerWord - 1));
+  assign byte_ready_o   = !word_valid_q && !last_in_flight;
 
   always_ff @(posedge clk_i) begin
     rst_nq       <= rst_ni;
     tick_q       <= tick_i;
     byte_q       <= byte_i;
-    byte_valid_q <= byte_valid_i && !word_valid_q;
+    byte_valid_q <= byte_valid_i && byte_ready_o;
     if (!rst_nq) begin
       nbytes_q     <= '0;
       word_valid_q <= 1'b0;
+      byte_valid_q <= 1'b0;
     end else if (word_valid_q) begin
       if (word_ready) word_valid_q <= 1'b0;
     end else if (byte_valid_q) begin
