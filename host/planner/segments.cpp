@@ -215,13 +215,22 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
     // fit_tol and within feed_rel of the tick's travel; every chord between
     // consecutive fitted ticks at most feed * h (the plan's chords are
     // shorter than its arcs).
+    // The fitted positions go into pos (after the tail of accepted ones), for
+    // the sampled checks below.
+    const int hn = static_cast<int>(tail.size());
+    const int m = hn + 1 + static_cast<int>(k1 - k0);
+    pos.resize(m);
+    for (int i = 0; i < hn; ++i) pos[i] = tail[i];
+    for (int a = 0; a < d; ++a) pos[hn][a] = A.x[a];
     double prev[kMaxAxes];
     for (int a = 0; a < d; ++a) prev[a] = A.x[a];
     for (long long k = k0 + 1; k <= k1; ++k) {
       const double tau = (k - k0) * period;
       double e2 = 0, c2 = 0;
+      auto& q = pos[hn + (k - k0)];
       for (int a = 0; a < d; ++a) {
         const double x = k == k1 ? B.x[a] : poly_val(seg.coef[a].data(), o.degree, tau);
+        q[a] = x;
         const double e = x - ts[k].x[a], c = x - prev[a];
         e2 += e * e;
         c2 += c * c;
@@ -238,15 +247,6 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
     // window that contains a tick of this segment after k0; the ticks before
     // k0 are the fitted positions already accepted (tail).
     {
-      const int hn = static_cast<int>(tail.size());
-      const int m = hn + 1 + static_cast<int>(k1 - k0);
-      pos.resize(m);
-      for (int i = 0; i < hn; ++i) pos[i] = tail[i];
-      for (long long k = k0; k <= k1; ++k) {
-        auto& q = pos[hn + (k - k0)];
-        for (int a = 0; a < d; ++a)
-          q[a] = k == k0 ? A.x[a] : k == k1 ? B.x[a] : poly_val(seg.coef[a].data(), o.degree, (k - k0) * period);
-      }
       for (int i = std::max(0, hn - 2); i + 2 < m; ++i) {
         const double* x3 = (i + 3 < m && o.degree == 5) ? pos[i + 3].data() : nullptr;
         const SampledWindow w = sampled_window(pos[i].data(), pos[i + 1].data(), pos[i + 2].data(), x3, d, period,
