@@ -201,6 +201,17 @@ struct SpeedAtS {
 // factor 10); the fit's checks at every tick decide, and the repair loop
 // slows down further if one fails. A right angle at 1 ms and 50 000 mm/s^3
 // gives 0.005 mm/s (a stop in practice); 1e-5 rad gives the feed.
+// Speed at a curvature jump (a C1 knot, or G1 curves meeting): the axis's
+// acceleration steps by dk v^2 within a tick. A quintic Hermite that takes a
+// step da of the acceleration over one tick T has a jerk peak of 9 da / T
+// (the third derivative of the end-acceleration basis (t^3 - 2 t^4 + t^5)/2
+// peaks at 9, at t = 1), so 9 dk v^2 / h <= (g1 + g2) j_axis: the geometric
+// and coupling shares (at a station the tangential acceleration is zero),
+// leaving g3 for the tangential jerk.
+double jump_speed(double dk, double j_axis, const PlanOptions& o) {
+  return std::sqrt((o.g1 + o.g2) * j_axis * o.period / (9 * dk));
+}
+
 double corner_speed(const double* T1, const double* T2, int d, const Limits& L, const PlanOptions& o) {
   const double h = o.period;
   double v = L.feed, dn2 = 0;
@@ -250,7 +261,7 @@ double knot_speed_bound(const Path& p, size_t ci, int sp, const Limits& L, const
   double v = L.feed;
   for (int a = 0; a < d; ++a) {
     const double dk = std::fabs(Kr[a] - Kl[a]);
-    if (dk > 1e-9 * (1 + kscale)) v = std::min(v, std::sqrt(o.g1 * L.j_axis[a] * o.period / (2 * dk)));
+    if (dk > 1e-9 * (1 + kscale)) v = std::min(v, jump_speed(dk, L.j_axis[a], o));
   }
   return v;
 }
@@ -323,7 +334,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
             for (int a = 0; a < d; ++a) {
               const double dk = std::fabs(f.K[a] - e.K[a]);
               if (dk > 1e-9 * (1 + kscale)) {
-                vl = std::min(vl, std::sqrt(o.g1 * L.j_axis[a] * o.period / (2 * dk)));
+                vl = std::min(vl, jump_speed(dk, L.j_axis[a], o));
                 corner = true;
               }
             }
