@@ -171,17 +171,14 @@ JobResult run_job(const Path& p, const JobConfig& cfg, const Progress& progress)
   auto t3 = Clock::now();
   const std::vector<mpz_class>* prev = nullptr;
   r.compiled.reserve(r.segments.size());
+  fd::PolySegment ps;  // reused: the coefficient vectors are sized once
+  ps.h = h;
+  ps.coef.assign(f.axes, std::vector<double>(f.degree + 1, 0.0));
   for (size_t i = 0; i < r.segments.size(); ++i) {
     const TimeSegment& s = r.segments[i];
-    fd::PolySegment ps;
-    ps.h = h;
     ps.ticks = s.K;
-    for (int a = 0; a < f.axes; ++a) {
-      std::vector<double> c(f.degree + 1, 0.0);
-      if (a < p.dim())
-        for (int j = 0; j <= f.degree; ++j) c[j] = s.coef[a][j];
-      ps.coef.push_back(c);
-    }
+    for (int a = 0; a < f.axes && a < p.dim(); ++a)
+      for (int j = 0; j <= f.degree; ++j) ps.coef[a][j] = s.coef[a][j];
     try {
       r.compiled.push_back(comp.compile(ps, prev, "segment " + std::to_string(i)));
     } catch (const fd::CompileError& e) {
