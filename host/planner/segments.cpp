@@ -314,7 +314,9 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
         k0 = lo;
         continue;
       }
-      while (hi - lo > 1) {
+      // bisection to within 1/8 of the length found (a segment up to 1/8
+      // shorter than the longest that passes: fewer fits, a few more segments)
+      while (hi - lo > std::max<long long>(1, (lo - k0) / 8)) {
         const long long mid = lo + (hi - lo) / 2;
         if (try_fit(k0, mid, seg)) {
           lo = mid;
