@@ -146,7 +146,8 @@ int main(int argc, char** argv) {
   pl->add_option("-o,--output", out_stream, "segment stream to write")->capture_default_str();
   auto* window_opt = pl->add_option(
       "--window", window,
-      "stream in bounded memory: plan a look-ahead window of this many curves, commit half of it, "
+      "stream in bounded memory: plan a look-ahead window of this many curves, commit three quarters of it "
+      "(half below 16), "
       "write segments as they are final (0: plan the whole path at once; a .jsonl path is always streamed, "
       "default window 64)");
   pl->add_option("--format", format, "path file format: json or jsonl (default: jsonl for a name ending in .jsonl)")
@@ -222,7 +223,7 @@ int main(int argc, char** argv) {
       traj::plan::StreamOptions so;
       if (window > 0) {
         so.window = std::max<size_t>(window, 2);
-        so.commit = so.window / 2;
+        so.commit = so.window >= 16 ? so.window * 3 / 4 : so.window / 2;
       }
       fd::Format f = cfg.format;
       traj::stream::StreamWriter w(out_stream, traj::stream::Header::from(f, cfg.plan.period, cfg.units));

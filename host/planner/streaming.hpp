@@ -27,7 +27,7 @@ class CurveSource {
 
 struct StreamOptions {
   size_t window = 64;  // curves held at once
-  size_t commit = 32;  // curves committed per window (< window)
+  size_t commit = 48;  // curves committed per window (< window); the rest is look-ahead, planned again
 };
 
 struct StreamStats {
