@@ -26,12 +26,22 @@ uint64_t get(const uint8_t* p, int bytes) {
 }
 
 // Two's complement of v in `bytes` bytes, little-endian (v must fit).
+// No temporaries: the magnitude's bytes (mpz_export, least significant
+// first), then the two's complement in place for a negative v.
 void put_signed(std::vector<uint8_t>& b, const mpz_class& v, int bytes) {
-  mpz_class u = v;
-  if (u < 0) u += mpz_class(1) << (8 * bytes);
-  for (int i = 0; i < bytes; ++i) {
-    b.push_back(static_cast<uint8_t>(mpz_class(u & 0xff).get_ui()));
-    u >>= 8;
+  const size_t base = b.size();
+  b.resize(base + static_cast<size_t>(bytes), 0);
+  if (mpz_sizeinbase(v.get_mpz_t(), 256) > static_cast<size_t>(bytes))
+    throw StreamError("value does not fit " + std::to_string(bytes) + " bytes");
+  size_t count = 0;
+  mpz_export(b.data() + base, &count, -1, 1, 0, 0, v.get_mpz_t());
+  if (mpz_sgn(v.get_mpz_t()) < 0) {
+    unsigned carry = 1;
+    for (int i = 0; i < bytes; ++i) {
+      const unsigned x = static_cast<uint8_t>(~b[base + i]) + carry;
+      b[base + i] = static_cast<uint8_t>(x);
+      carry = x >> 8;
+    }
   }
 }
 mpz_class get_signed(const uint8_t* p, int bytes) {
@@ -42,9 +52,14 @@ mpz_class get_signed(const uint8_t* p, int bytes) {
   return u;
 }
 int ctrl_bytes(const Header& h) { return (h.bcu_ctrl_width + 7) / 8; }
+// -2^(bits-1) <= v < 2^(bits-1), without temporaries.
 bool fits_bits(const mpz_class& v, int bits) {
-  const mpz_class lim = mpz_class(1) << (bits - 1);
-  return v < lim && v >= -lim;
+  const mpz_srcptr z = v.get_mpz_t();
+  if (mpz_sgn(z) == 0) return bits >= 1;
+  const size_t n = mpz_sizeinbase(z, 2);  // bits of |v|
+  if (n <= static_cast<size_t>(bits - 1)) return true;
+  // v = -2^(bits-1) exactly
+  return mpz_sgn(z) < 0 && n == static_cast<size_t>(bits) && mpz_scan1(z, 0) == static_cast<mp_bitcnt_t>(bits - 1);
 }
 // d with K = 2^d, or -1.
 int log2_exact(uint32_t k) {

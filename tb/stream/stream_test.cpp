@@ -130,6 +130,10 @@ TEST(Stream, RefusesToWriteBadContent) {
   r.ticks = 1;
   r.regs[0][0] = mpz_class(1) << 63;  // does not fit 64-bit two's complement
   EXPECT_THROW(encode_record(h, r), StreamError);
+  r.regs[0][0] = -(mpz_class(1) << 63) - 1;  // one below the most negative
+  EXPECT_THROW(encode_record(h, r), StreamError);
+  r.regs[0][0] = -(mpz_class(1) << 63);  // the most negative fits
+  EXPECT_NO_THROW(encode_record(h, r));
   Header bad = h;
   bad.period = -1;
   EXPECT_THROW(encode_header(bad), StreamError);
