@@ -226,16 +226,13 @@ std::string range_suggestion(const Format& f, const std::vector<double>& coef, c
   return "; it fits with " + (frac.empty() ? wide : wide.empty() ? frac : frac + ", or with " + wide);
 }
 
-// The straightforward exact form (mpq throughout). The fast path of compile()
-// falls back to it for every refusal and every case it cannot settle itself, so
-// messages and borderline decisions are this function's by construction.
-Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::vector<mpz_class>* start,
-                           const std::string& where) {
-  ++path_counts().reference;
+// The refusals before any arithmetic (shape, h, K, degree, finite
+// coefficients, start state), shared by compile() and the reference.
+void check_segment(const Format& f_, const PolySegment& seg, const std::vector<mpz_class>* start,
+                   const std::string& where) {
   const int N = f_.degree;
   const int A = f_.axes;
   auto fail = [&](const std::string& what) { throw CompileError(where + ": " + what); };
-
   if (static_cast<int>(seg.coef.size()) != A)
     fail("has " + std::to_string(seg.coef.size()) + " axes, the engine has " + std::to_string(A));
   if (!(seg.h > 0) || !std::isfinite(seg.h)) fail("tick period h=" + fmt_double(seg.h) + " must be positive and finite");
@@ -253,6 +250,19 @@ Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::
              fmt_double(seg.coef[a][j]) + " is not finite");
   }
   if (start && static_cast<int>(start->size()) != A) fail("start state has the wrong number of axes");
+}
+
+// The straightforward exact form (mpq throughout). The fast path of compile()
+// falls back to it for every refusal and every case it cannot settle itself, so
+// messages and borderline decisions are this function's by construction.
+Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::vector<mpz_class>* start,
+                           const std::string& where) {
+  ++path_counts().reference;
+  const int N = f_.degree;
+  const int A = f_.axes;
+  auto fail = [&](const std::string& what) { throw CompileError(where + ": " + what); };
+
+  check_segment(f_, seg, start, where);
 
   const uint64_t K = seg.ticks;
   const int G = f_.guard_bits;
@@ -1733,28 +1743,8 @@ RegisterNeeds Compiler::register_needs(int degree, uint64_t k, double tol_lsb) {
 
 void Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>* start, const std::string& where,
                        Compiled& out) const {
-  const int N = f_.degree;
-  const int A = f_.axes;
-  auto fail = [&](const std::string& what) { throw CompileError(where + ": " + what); };
-
   // The refusals before any arithmetic, in the reference's order and words.
-  if (static_cast<int>(seg.coef.size()) != A)
-    fail("has " + std::to_string(seg.coef.size()) + " axes, the engine has " + std::to_string(A));
-  if (!(seg.h > 0) || !std::isfinite(seg.h)) fail("tick period h=" + fmt_double(seg.h) + " must be positive and finite");
-  if (seg.ticks < 1) fail("tick count K=0: a segment needs at least one tick");
-  if (seg.ticks > f_.max_ticks)
-    fail("K=" + std::to_string(seg.ticks) + " ticks exceeds max_ticks=" + std::to_string(f_.max_ticks) +
-         "; split the segment");
-  for (int a = 0; a < A; ++a) {
-    if (static_cast<int>(seg.coef[a].size()) > N + 1)
-      fail("axis " + std::to_string(a) + " has degree " + std::to_string(seg.coef[a].size() - 1) +
-           ", the engine is built for degree " + std::to_string(N));
-    for (size_t j = 0; j < seg.coef[a].size(); ++j)
-      if (!std::isfinite(seg.coef[a][j]))
-        fail("axis " + std::to_string(a) + " coefficient c" + std::to_string(j) + " = " +
-             fmt_double(seg.coef[a][j]) + " is not finite");
-  }
-  if (start && static_cast<int>(start->size()) != A) fail("start state has the wrong number of axes");
+  check_segment(f_, seg, start, where);
   if (seg.ticks > kfit_) {
     out = compile_reference(f_, seg, start, where);  // words the refusal
     return;
