@@ -553,7 +553,7 @@ std::vector<TickSample> sample_ticks_range(const Path& p, const Plan& plan, doub
 }
 
 void append_ticks_range(const Path& p, const Plan& plan, double period, double t_offset, long long k_first,
-                        long long k_last, std::vector<TickSample>& out) {
+                        long long k_last, std::vector<TickSample>& out, long long k_origin) {
   if (k_last < k_first) return;
   out.reserve(out.size() + static_cast<size_t>(k_last - k_first + 1));
   int hint = 0, piece_hint = 0;
@@ -561,7 +561,7 @@ void append_ticks_range(const Path& p, const Plan& plan, double period, double t
   double u = 0;
   const int d = p.dim();
   for (long long k = k_first; k <= k_last; ++k) {
-    const double t = k * period - t_offset;
+    const double t = static_cast<double>(k - k_origin) * period - t_offset;
     const PathState ps = state_at(plan, t, &hint);
     const size_t cj = std::min(p.curve_at(ps.s), p.size() - 1);
     const double sl = std::clamp(ps.s - p.offset(cj), 0.0, p.arclength(cj).total());

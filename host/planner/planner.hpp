@@ -166,13 +166,16 @@ struct TickSample {
 };
 std::vector<TickSample> sample_ticks(const Path& p, const Plan& plan, double period);
 // Ticks k_first..k_last (global indices) of a plan that starts at global time
-// t_offset: tick k is at plan time k h - t_offset (clamped to the plan).
+// k_origin h + t_offset: tick k is at plan time (k - k_origin) h - t_offset
+// (clamped to the plan). A streaming caller keeps t_offset below a tick and
+// the tick count in k_origin, so the plan time of a tick keeps full double
+// precision however long the path runs (k h alone loses it past 2^25 ticks).
 std::vector<TickSample> sample_ticks_range(const Path& p, const Plan& plan, double period, double t_offset,
                                            long long k_first, long long k_last);
 // The same, appended to `out` (whose storage a caller can reuse window after
 // window: no allocation, no page faults once it has grown).
 void append_ticks_range(const Path& p, const Plan& plan, double period, double t_offset, long long k_first,
-                        long long k_last, std::vector<TickSample>& out);
+                        long long k_last, std::vector<TickSample>& out, long long k_origin = 0);
 
 struct Peaks {
   double v_axis[kMaxAxes] = {0, 0, 0}, a_axis[kMaxAxes] = {0, 0, 0}, j_axis[kMaxAxes] = {0, 0, 0};

@@ -31,6 +31,11 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
   StreamStats st;
   std::deque<std::shared_ptr<const PathCurve>> win;  // built once, shared by the windows
   bool exhausted = false;
+  // The window's start time is k_org h + T0 with 0 <= T0 < h: the tick count
+  // is held as an integer, so tick times and the committed tick keep full
+  // precision however long the path runs (a double T0 alone would round the
+  // tick grid to 7e-9 ticks past 2^25 ticks, 9 hours at 1 ms).
+  long long k_org = 0;
   double T0 = 0, v_commit = 0;
   long long k_last = -1;  // last committed tick
   TickSample carried{};
@@ -101,11 +106,11 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
         }
         Tc = hi;
       }
-      k_end = last ? static_cast<long long>(std::ceil((T0 + Tc) / h - 1e-9))
-                   : static_cast<long long>(std::floor((T0 + Tc) / h + 1e-9));
+      k_end = k_org + (last ? static_cast<long long>(std::ceil((T0 + Tc) / h - 1e-9))
+                            : static_cast<long long>(std::floor((T0 + Tc) / h + 1e-9)));
       ts.clear();
       if (k_last >= 0) ts.push_back(carried);
-      append_ticks_range(path, plan, h, T0, k_last + 1, k_end, ts);
+      append_ticks_range(path, plan, h, T0, k_last + 1, k_end, ts, k_org);
       size_t caps_before = po.caps.size();
       long long lastcap = -1000000;
       for (size_t k = (k_last >= 0 ? 1 : 0); k < ts.size(); ++k) {
@@ -152,6 +157,11 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
       k_last = k_end;
     }
     T0 += Tc;
+    {
+      const double whole = std::floor(T0 / h);
+      k_org += static_cast<long long>(whole);
+      T0 -= whole * h;
+    }
     v_commit = last ? 0 : state_at(plan, Tc).v;
     ++st.windows;
     for (size_t i = 0; i < ncommit; ++i) win.pop_front();
@@ -167,7 +177,7 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
       break;
     }
   }
-  st.motion_time = T0;
+  st.motion_time = static_cast<double>(k_org) * h + T0;
   st.wall = std::chrono::duration<double>(Clock::now() - t_start).count();
   return st;
 }

@@ -179,3 +179,36 @@ TEST(Streaming, G1ChainsKeepGuaranteesAtEveryWindowSize) {
     }
   }
 }
+
+// Tick times far into a stream: a window starting at tick 2^40 (35 years at
+// 1 ms) samples exactly what the same window starting at tick 0 samples, when
+// its start is given as an integer tick origin plus a sub-tick offset (what
+// run_streaming passes). As one double time, k h - T0, each tick's plan time
+// would be rounded by up to 1e-7 s there (the tick grid itself is lost).
+TEST(Streaming, TickTimesKeepFullPrecisionFarIntoTheStream) {
+  Path p;
+  Eigen::VectorXd a(2), b(2);
+  a << 0, 0;
+  b << 5, 3;
+  p.add(geo::make_line(a, b), "line");
+  JobConfig cfg;
+  cfg.limits.feed = 50;
+  const Plan plan = plan_path(p, cfg.limits, cfg.plan);
+  const double h = cfg.plan.period, off = 0.37 * h;
+  const long long n = static_cast<long long>(plan.duration() / h);
+  ASSERT_GT(n, 50);
+  const long long far = 1LL << 40;
+  std::vector<TickSample> near_ts, far_ts;
+  append_ticks_range(p, plan, h, off, 1, n, near_ts, 0);
+  append_ticks_range(p, plan, h, off, far + 1, far + n, far_ts, far);
+  ASSERT_EQ(near_ts.size(), far_ts.size());
+  for (size_t k = 0; k < near_ts.size(); ++k) {
+    ASSERT_EQ(near_ts[k].s, far_ts[k].s) << "tick " << k;
+    ASSERT_EQ(near_ts[k].v, far_ts[k].v) << "tick " << k;
+    for (int ax = 0; ax < 2; ++ax) ASSERT_EQ(near_ts[k].x[ax], far_ts[k].x[ax]) << "tick " << k;
+  }
+  // the plan times on the near side are exact multiples of h less the offset:
+  // the sampled speed follows the profile to rounding
+  for (size_t k = 0; k < near_ts.size(); ++k)
+    EXPECT_NEAR(near_ts[k].s, state_at(plan, static_cast<double>(k + 1) * h - off).s, 1e-12);
+}
