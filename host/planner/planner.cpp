@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace traj::plan {
@@ -139,22 +140,28 @@ Frame frame_at(const Path& p, size_t ci, double u, double s, int span) {
   return f;
 }
 
-double speed_limit(const Frame& f, const Limits& L, const PlanOptions& o, double A_t, int dim) {
+double speed_limit(const Frame& f, const Limits& L, const PlanOptions& o, double A_t, int dim, double* A_loc) {
   double v = L.feed;
   auto cap = [&](double x) {
     if (x >= 0 && x < v) v = x;
   };
+  // coupling: 3 |K_a| v a_t <= g2 j_axis and 3 kappa v a_t <= j_cen / 2, as v a_t <= C
+  double C = std::numeric_limits<double>::infinity();
   for (int a = 0; a < dim; ++a) {
     if (std::fabs(f.T[a]) > 0) cap(L.v_axis[a] / std::fabs(f.T[a]));
     if (std::fabs(f.K[a]) > 0) cap(std::sqrt((1 - o.beta) * L.a_axis[a] / std::fabs(f.K[a])));
     if (std::fabs(f.Q[a]) > 0) cap(std::cbrt(o.g1 * L.j_axis[a] / std::fabs(f.Q[a])));
-    if (std::fabs(f.K[a]) > 0) cap(o.g2 * L.j_axis[a] / (3 * std::fabs(f.K[a]) * A_t));
+    if (std::fabs(f.K[a]) > 0) C = std::min(C, o.g2 * L.j_axis[a] / (3 * std::fabs(f.K[a])));
   }
   if (f.kappa > 0) {
     cap(std::sqrt(o.cen_a_share * L.a_cen / f.kappa));
-    cap(0.5 * L.j_cen / (3 * f.kappa * A_t));
+    C = std::min(C, 0.5 * L.j_cen / (3 * f.kappa));
   }
   if (f.q_norm > 0) cap(std::cbrt(0.5 * L.j_cen / f.q_norm));
+  double A = A_t;
+  if (A_loc && std::isfinite(C) && v > 0) A = std::clamp(C / v, o.a_local_floor * A_t, A_t);
+  if (A_loc) *A_loc = A;
+  if (std::isfinite(C)) cap(C / A);
   return v;
 }
 
@@ -268,6 +275,7 @@ double knot_speed_bound(const Path& p, size_t ci, int sp, const Limits& L, const
 
 struct Grid {
   std::vector<double> s, vlim;
+  std::vector<double> A;     // local tangential acceleration bound (speed_limit)
   std::vector<char> corner;  // forced stop
 };
 
@@ -311,7 +319,8 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
     const double ds_max = std::min(o.max_grid_ds, len / 8);
     while (true) {
       const Frame f = frame_at(p, ci, u, s_off + s, tab.span_of(hint));
-      double vl = speed_limit(f, L, o, A_t, d);
+      double A_here = A_t;
+      double vl = speed_limit(f, L, o, A_t, d, &A_here);
       bool corner = false;
       if (s == 0) {
         if (ci == 0) {
@@ -327,7 +336,9 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
             vl = corner_speed(e.T, f.T, d, L, o);
             corner = true;
           } else {
-            vl = std::min(vl, speed_limit(e, L, o, A_t, d));
+            double A_e = A_t;
+            vl = std::min(vl, speed_limit(e, L, o, A_t, d, &A_e));
+            A_here = std::min(A_here, A_e);
             // curvature jump at the junction (G1, not G2): same bound as at a C1 knot
             double kscale = 0;
             for (int a = 0; a < d; ++a) kscale = std::max({kscale, std::fabs(e.K[a]), std::fabs(f.K[a])});
@@ -341,6 +352,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
           }
           if (!g.s.empty() && std::fabs(g.s.back() - (s_off + s)) < 1e-12) {
             g.vlim.back() = std::min(g.vlim.back(), vl);
+            g.A.back() = std::min(g.A.back(), A_here);
             g.corner.back() = g.corner.back() || corner;
             goto advance;
           }
@@ -361,6 +373,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
       }
       g.s.push_back(s_off + s);
       g.vlim.push_back(vl);
+      g.A.push_back(A_here);
       g.corner.push_back(corner);
     advance:
       if (s >= len) break;
@@ -410,6 +423,21 @@ std::vector<double> caps_for(const Grid& g, const std::vector<Station>& st, cons
     cap[b] = std::min(m, feed);
   }
   return cap;
+}
+
+// Tangential acceleration of the block between grid points a < c: the
+// smallest local bound strictly inside it (at its ends, stations, the profile's
+// acceleration is zero), or at its ends if it has no inner point.
+double block_A(const Grid& g, size_t a, size_t c) {
+  if (c <= a + 1) return std::min(g.A[a], g.A[c]);
+  double m = g.A[a + 1];
+  for (size_t i = a + 2; i < c; ++i) m = std::min(m, g.A[i]);
+  return m;
+}
+std::vector<double> accels_for(const Grid& g, const std::vector<size_t>& idx) {
+  std::vector<double> A(idx.empty() ? 0 : idx.size() - 1, 0.0);
+  for (size_t b = 0; b + 1 < idx.size(); ++b) A[b] = block_A(g, idx[b], idx[b + 1]);
+  return A;
 }
 
 // Marks as forced stations the local maxima, over the grid points lo..hi, of
@@ -466,7 +494,8 @@ Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o) {
   for (int iter = 0; iter < 10000; ++iter) {
     plan.stations = stations_from(g, forced, L.feed, 0, n - 1, idx);
     const auto cap = caps_for(g, plan.stations, idx, L.feed);
-    plan.pieces = plan_blocks(plan.stations, cap, plan.A_t, plan.J_t, memo, changed);
+    const auto acc = accels_for(g, idx);
+    plan.pieces = plan_blocks(plan.stations, cap, acc, plan.J_t, memo, changed);
     // The profile must stay under v_lim at every grid point. Every local
     // maximum of the violation ratio becomes a station. A block identical to
     // one of the previous pass had no violation then (else it would have a
@@ -499,10 +528,11 @@ Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o) {
       // date incrementally (the same lists stations_from / caps_for would build)
       auto loc = stations_from(g, forced, L.feed, lo, ib, lidx);
       auto lcap = caps_for(g, loc, lidx, L.feed);
+      auto lacc = accels_for(g, lidx);
       loc.back().vmax = plan.stations[b + 1].v;
       for (int it = 0; it < 100000 && lo + 1 < ib; ++it) {
         loc.front().vmax = v_lo;
-        const auto lp = plan_blocks(loc, lcap, plan.A_t, plan.J_t);
+        const auto lp = plan_blocks(loc, lcap, lacc, plan.J_t);
         SpeedAtS lv{lp};
         const auto lm = mark_violations(g, forced, lv, lo + 1, ib - 1, L.feed, [](size_t) { return true; }, true);
         if (lm.empty()) break;
@@ -515,6 +545,7 @@ Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o) {
         loc.erase(loc.begin(), loc.begin() + k);
         lidx.erase(lidx.begin(), lidx.begin() + k);
         lcap.erase(lcap.begin(), lcap.begin() + k);
+        lacc.erase(lacc.begin(), lacc.begin() + k);
         loc.insert(loc.begin() + 1, Station{g.s[i1], g.vlim[i1], 0});
         lidx.insert(lidx.begin() + 1, i1);
         auto cap_of = [&](size_t a, size_t c) {
@@ -524,6 +555,8 @@ Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o) {
         };
         lcap[0] = cap_of(lidx[1], lidx[2]);
         lcap.insert(lcap.begin(), cap_of(lidx[0], lidx[1]));
+        lacc[0] = block_A(g, lidx[1], lidx[2]);
+        lacc.insert(lacc.begin(), block_A(g, lidx[0], lidx[1]));
       }
     }
   }

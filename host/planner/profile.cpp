@@ -87,13 +87,19 @@ double append_change(std::vector<Piece>& out, double t, double s, double v0, dou
 }
 
 std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<double>& cap, double A, double J) {
+  return plan_blocks(st, cap, std::vector<double>(st.empty() ? 0 : st.size() - 1, A), J);
+}
+
+std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<double>& cap, const std::vector<double>& A,
+                               double J) {
   std::vector<BlockMemo> memo;
   std::vector<char> changed;
   return plan_blocks(st, cap, A, J, memo, changed);
 }
 
-std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<double>& cap, double A, double J,
-                               std::vector<BlockMemo>& memo, std::vector<char>& changed) {
+std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<double>& cap,
+                               const std::vector<double>& Ab, double J, std::vector<BlockMemo>& memo,
+                               std::vector<char>& changed) {
   const size_t n = st.size();
   std::vector<BlockMemo> old;
   old.swap(memo);
@@ -105,18 +111,18 @@ std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<doubl
   // backward pass: able to slow down to the next station's speed
   for (size_t i = n - 1; i-- > 0;) {
     const double L = st[i + 1].s - st[i].s;
-    st[i].v = std::min(st[i].v, reachable(st[i + 1].v, L, A, J, st[i].v));
+    st[i].v = std::min(st[i].v, reachable(st[i + 1].v, L, Ab[i], J, st[i].v));
   }
   // forward pass: reachable from the previous station
   for (size_t i = 1; i < n; ++i) {
     const double L = st[i].s - st[i - 1].s;
-    st[i].v = std::min(st[i].v, reachable(st[i - 1].v, L, A, J, st[i].v));
+    st[i].v = std::min(st[i].v, reachable(st[i - 1].v, L, Ab[i - 1], J, st[i].v));
   }
   std::vector<Piece> out;
   out.reserve(7 * (n - 1));  // at most 3 + 1 + 3 pieces per block
   double t = 0;
   for (size_t i = 0; i + 1 < n; ++i) {
-    const double s0 = st[i].s, L = st[i + 1].s - s0;
+    const double s0 = st[i].s, L = st[i + 1].s - s0, A = Ab[i];
     const double va = st[i].v, vb = st[i + 1].v;
     const double lo_peak = std::max(va, vb);
     double vp = std::max(cap[i], lo_peak);
@@ -124,7 +130,7 @@ std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<doubl
     while (mj < old.size() && old[mj].s0 < s0) ++mj;
     const double s1 = st[i + 1].s;
     if (mj < old.size() && old[mj].s0 == s0 && old[mj].s1 == s1 && old[mj].va == va && old[mj].vb == vb &&
-        old[mj].cap == cap[i]) {
+        old[mj].cap == cap[i] && old[mj].A == A) {
       vp = old[mj].vp;
       changed[i] = 0;
     } else if (need(vp) > L) {
@@ -145,7 +151,7 @@ std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<doubl
       }
       vp = lo;
     }
-    memo.push_back({s0, s1, va, vb, cap[i], vp});
+    memo.push_back({s0, s1, va, vb, cap[i], A, vp});
     double s = s0;
     t = append_change(out, t, s, va, vp, A, J);
     s = s0 + change_distance(va, vp, A, J);

@@ -49,15 +49,19 @@ struct Station {
 // them. cap(i) is the cruise cap for block i (between station i and i+1).
 // Station speeds are lowered in place so that every block is feasible.
 std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<double>& cap, double A, double J);
+// The same with a tangential acceleration per block (A[i] for block i).
+std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<double>& cap, const std::vector<double>& A,
+                               double J);
 
 // The same with a memo of the previous call's blocks: a block whose ends,
 // end speeds and cap are bitwise those of a remembered block reuses its peak
 // speed (the one costly step); the result is identical to a call without the
 // memo. changed[i] (one per block) tells which blocks were not found.
 struct BlockMemo {
-  double s0, s1, va, vb, cap, vp;
+  double s0, s1, va, vb, cap, A, vp;
 };
-std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<double>& cap, double A, double J,
+std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<double>& cap, const std::vector<double>& A,
+                               double J,
                                std::vector<BlockMemo>& memo, std::vector<char>& changed);
 
 // Evaluation of a profile: index of the piece active at time t (pieces sorted).
