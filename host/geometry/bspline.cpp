@@ -143,6 +143,30 @@ BSpline insert_knot(const BSpline& c, double u, int times) {
   return BSpline::from_homogeneous(p, P, U, c.rational(), c.name);
 }
 
+std::pair<BSpline, BSpline> split_at(const BSpline& c0, double u) {
+  const BSpline c = clamp(c0);
+  const int p = c.degree;
+  if (!(u > c.u_begin() && u < c.u_end()))
+    throw GeometryError("split_at: u = " + num(u) + " is not inside the domain (" + num(c.u_begin()) + ", " +
+                        num(c.u_end()) + ")");
+  int mult = 0;
+  for (int i = 0; i < c.knots.size(); ++i) mult += (c.knots[i] == u);
+  const BSpline d = mult < p ? insert_knot(c, u, p - mult) : c;
+  int r = 0;  // first index of u in the knots (it now occupies r .. r+p-1)
+  while (d.knots[r] != u) ++r;
+  const int n = d.n_ctrl(), dim = d.dim();
+  const Eigen::MatrixXd H = d.homogeneous();
+  Eigen::VectorXd kl(r + p + 1), kr(n + p + 1 - r + 1);
+  kl.head(r + p) = d.knots.head(r + p);
+  kl[r + p] = u;
+  kr[0] = u;
+  kr.tail(n + p + 1 - r) = d.knots.tail(n + p + 1 - r);
+  BSpline left = BSpline::from_homogeneous(p, H.topRows(r), kl, c.rational(), c.name);
+  BSpline right = BSpline::from_homogeneous(p, H.bottomRows(n - r + 1), kr, c.rational(), c.name);
+  (void)dim;
+  return {left, right};
+}
+
 BSpline clamp(const BSpline& c0) {
   if (c0.clamped()) return c0;
   const int p = c0.degree;

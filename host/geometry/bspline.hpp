@@ -7,6 +7,7 @@
 #pragma once
 #include <Eigen/Dense>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace traj::geo {
@@ -52,6 +53,10 @@ std::string degree_range_error(long long degree, bool rational, int max_degree =
 
 // Boehm knot insertion of u, `times` times (multiplicity after insertion must stay <= degree+1).
 BSpline insert_knot(const BSpline& c, double u, int times = 1);
+// The curve cut in two at u (strictly inside the domain): [t_p, u] and [u, t_n], each clamped, by
+// inserting u up to multiplicity `degree` (exact up to rounding; NURBS through homogeneous points).
+// The two share the control point at u. Throws GeometryError if u is not strictly inside.
+std::pair<BSpline, BSpline> split_at(const BSpline& c, double u);
 // Clamped equivalent of any B-spline on the same domain [t_p, t_n] (knot insertion at the domain
 // ends, then the control points outside the domain are dropped). Identity for clamped input.
 BSpline clamp(const BSpline& c);

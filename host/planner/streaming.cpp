@@ -30,6 +30,7 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
 
   StreamStats st;
   std::deque<std::shared_ptr<const PathCurve>> win;  // built once, shared by the windows
+  std::deque<geo::BSpline> wsp;                      // their splines (a curve may be cut at a commit)
   bool exhausted = false;
   // The window's start time is k_org h + T0 with 0 <= T0 < h: the tick count
   // is held as an integer, so tick times and the committed tick keep full
@@ -72,6 +73,7 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
     while (!exhausted && win.size() < so.window) {
       if (src.next(b, where)) {
         win.push_back(std::make_shared<const PathCurve>(b, where));
+        wsp.push_back(b);
         ++st.curves;
       } else {
         exhausted = true;
@@ -81,7 +83,55 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
     Path path;
     for (const auto& w : win) path.add(w);
     const bool last = exhausted;
-    const size_t ncommit = last ? win.size() : std::min(so.commit, win.size() - 1);
+    size_t ncommit = last ? win.size() : std::min(so.commit, win.size() - 1);
+    // The commit junction should not be a corner: the next window's first
+    // segment must start at the last committed tick, just before the
+    // junction, and turn the velocity from there; at a corner (passed at a
+    // near-stop within one tick) that can fail where a whole-path fit would
+    // have started the turn earlier. The nearest junction without a tangent
+    // break is taken instead (earlier first, then later), if there is one;
+    // where every junction is a corner (a polyline), the curve after the
+    // corner is cut in two inside a knot span (smooth there) and the commit
+    // ends at the cut, so the corner itself is fitted within this window.
+    if (!last) {
+      auto corner_at = [&](size_t i) {  // junction between curves i-1 and i
+        const Frame e = frame_at(path, i - 1, path.curve(i - 1).u_end(), path.offset(i));
+        const Frame f = frame_at(path, i, path.curve(i).u_begin(), path.offset(i));
+        double dot = 0;
+        for (int a = 0; a < path.dim(); ++a) dot += e.T[a] * f.T[a];
+        return std::acos(std::clamp(dot, -1.0, 1.0)) > cfg.plan.corner_tol;
+      };
+      if (corner_at(ncommit)) {
+        for (size_t d = 1; d < win.size(); ++d) {
+          if (ncommit > d && !corner_at(ncommit - d)) {
+            ncommit -= d;
+            break;
+          }
+          if (ncommit + d < win.size() && !corner_at(ncommit + d)) {
+            ncommit += d;
+            break;
+          }
+        }
+      }
+      if (corner_at(ncommit)) {
+        const geo::BSpline& c = wsp[ncommit];
+        const double mid = 0.5 * (c.u_begin() + c.u_end());
+        int i = c.degree;
+        while (i + 1 < c.n_ctrl() && c.knots[i + 1] <= mid) ++i;
+        const double u = 0.5 * (c.knots[i] + c.knots[i + 1]);  // middle of the span holding mid
+        auto halves = geo::split_at(c, u);
+        const std::string w = win[ncommit]->where;
+        auto first = std::make_shared<const PathCurve>(halves.first, w + " (first part)");
+        auto second = std::make_shared<const PathCurve>(halves.second, w + " (second part)");
+        win[ncommit] = first;
+        win.insert(win.begin() + static_cast<long>(ncommit) + 1, second);
+        wsp[ncommit] = std::move(halves.first);
+        wsp.insert(wsp.begin() + static_cast<long>(ncommit) + 1, std::move(halves.second));
+        ++ncommit;
+        path = Path();
+        for (const auto& x : win) path.add(x);
+      }
+    }
     const double s_commit = last ? path.length() : path.offset(ncommit);
     PlanOptions po = cfg.plan;
     po.v_start = v_commit;
@@ -164,7 +214,10 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
     }
     v_commit = last ? 0 : state_at(plan, Tc).v;
     ++st.windows;
-    for (size_t i = 0; i < ncommit; ++i) win.pop_front();
+    for (size_t i = 0; i < ncommit; ++i) {
+      win.pop_front();
+      wsp.pop_front();
+    }
     if (progress) progress("stream", static_cast<double>(st.curves));
     if (last) {
       // hold segment: the last sample is the end point

@@ -223,3 +223,44 @@ TEST(GeometryBezier, Seed004BezierCircleClaims) {
   EXPECT_LT(rmax, 2e-3);
   EXPECT_NEAR(vmin / vmax, 0.875, 1e-6);  // "about 88%"
 }
+
+// split_at: the two halves trace the original curve. Reference: the textbook Cox-de Boor recursion
+// (ref_deboor.hpp, long double) on the original control points, at parameters on both sides of the
+// cut; also at a cut on an existing knot; the halves meet at the cut and keep the ends.
+TEST(GeometrySplit, HalvesTraceTheOriginal) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> U01(0.0, 1.0);
+  for (int rep = 0; rep < 300; ++rep) {
+    const int p = 1 + rep % 5, dim = 1 + rep % 3, n = p + 1 + static_cast<int>(U01(rng) * 6);
+    const bool rational = rep % 2 == 1;
+    const auto rs = geotest::random_spline(rng, p, dim, n, rational);
+    const BSpline& c = rs.lib;
+    const double a = c.u_begin(), b = c.u_end();
+    // a random cut, or an interior knot when there is one
+    double u = a + (b - a) * (0.05 + 0.9 * U01(rng));
+    if (rep % 3 == 0)
+      for (int i = p + 1; i < c.n_ctrl(); ++i)
+        if (c.knots[i] > a && c.knots[i] < b) u = c.knots[i];
+    const auto halves = traj::geo::split_at(c, u);
+    ASSERT_EQ(halves.first.u_begin(), a);
+    ASSERT_EQ(halves.first.u_end(), u);
+    ASSERT_EQ(halves.second.u_begin(), u);
+    ASSERT_EQ(halves.second.u_end(), b);
+    const Curve left(halves.first), right(halves.second);
+    double scale = 0;
+    for (int i = 0; i < c.n_ctrl(); ++i) scale = std::max(scale, c.ctrl.row(i).cwiseAbs().maxCoeff());
+    for (int k = 0; k <= 40; ++k) {
+      const double t = a + (b - a) * k / 40.0;
+      const auto ref = ref::cox_de_boor_derivs<long double>(rs.ref, t, 0);
+      const Eigen::VectorXd x = t <= u ? left.point(t) : right.point(t);
+      for (int d = 0; d < dim; ++d)
+        ASSERT_NEAR(x[d], ref[0][d], 1e-11 * scale) << "rep " << rep << " p " << p << " t " << t << " cut " << u;
+    }
+    const Eigen::VectorXd l1 = left.point(u), r0 = right.point(u);
+    for (int d = 0; d < dim; ++d) EXPECT_NEAR(l1[d], r0[d], 1e-12 * scale);
+  }
+  // out of the domain: refused
+  const auto rs = geotest::random_spline(rng, 3, 2, 6, false);
+  EXPECT_THROW(traj::geo::split_at(rs.lib, rs.lib.u_begin()), traj::geo::GeometryError);
+  EXPECT_THROW(traj::geo::split_at(rs.lib, rs.lib.u_end() + 1), traj::geo::GeometryError);
+}

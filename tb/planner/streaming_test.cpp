@@ -130,17 +130,25 @@ class G1ChainSource : public CurveSource {
 // tolerance of the path and within every limit at the samples (the window
 // junctions included), and ends at the path's end.
 TEST(Streaming, G1ChainsKeepGuaranteesAtEveryWindowSize) {
-  for (const size_t window : {8, 16}) {
-    for (uint64_t seed : {1, 2}) {
+  // (window, seed): seeds 1, 2 have a corner every 11th curve, where the
+  // commit moves to the nearest smooth junction (windows from 3 curves work);
+  // seed 3 is a polyline (every junction a corner): the commit cuts the curve
+  // after the corner (windows from 8 curves; see the README for smaller ones)
+  const std::pair<size_t, uint64_t> cases[] = {{3, 1}, {3, 2}, {4, 1}, {4, 2}, {8, 1}, {8, 2}, {16, 1},
+                                               {16, 2}, {8, 3}, {16, 3}, {64, 3}};
+  for (const auto& [window, seed] : cases) {
+    {
+      // seed 3: every junction a corner (a polyline of Beziers); else every 11th
+      const size_t corner_every = seed == 3 ? 1 : 11;
       SCOPED_TRACE("window " + std::to_string(window) + " seed " + std::to_string(seed));
       const size_t pieces = 30;
       JobConfig cfg;
       cfg.limits.feed = 60;
-      G1ChainSource src(pieces, seed, 11);
+      G1ChainSource src(pieces, seed, corner_every);
       std::vector<fd::Compiled> comp;
       StreamOptions so;
       so.window = window;
-      so.commit = window / 2;
+      so.commit = std::max<size_t>(1, window / 2);
       const StreamStats st =
           run_streaming(src, cfg, so, [&](const fd::Compiled& c, const TimeSegment&) { comp.push_back(c); });
       using Eng = FdEngine<3, 5, 96, 16, 48>;
@@ -160,7 +168,7 @@ TEST(Streaming, G1ChainsKeepGuaranteesAtEveryWindowSize) {
                                });
       ASSERT_EQ(static_cast<long long>(x.size()), st.ticks);
       Path whole;
-      G1ChainSource again(pieces, seed, 11);
+      G1ChainSource again(pieces, seed, corner_every);
       geo::BSpline b;
       std::string w;
       while (again.next(b, w)) whole.add(b, w);
