@@ -397,8 +397,14 @@ std::vector<Station> stations_from(const Grid& g, const std::vector<char>& force
                                    std::vector<size_t>& idx) {
   std::vector<Station> st;
   idx.clear();
+  double A_ref = 0;
   for (size_t i = lo; i <= hi; ++i) {
     bool take = i == lo || i == hi || g.corner[i] || forced[i];
+    // where the local tangential acceleration has changed by more than 4x
+    // since the last station: a block then does not slow all of its ramp to
+    // the smallest A at its far end (with hysteresis: a slowly varying A
+    // makes no stations)
+    if (!take && (g.A[i] < 0.25 * A_ref || g.A[i] > 4 * A_ref)) take = true;
     // a local minimum of v_lim, by more than rounding noise (1e-9 relative):
     // a plateau (constant curvature, straight line) makes no stations
     if (!take && g.vlim[i] < feed * (1 - 1e-9) && g.vlim[i] < g.vlim[i - 1] * (1 - 1e-9) &&
@@ -407,6 +413,7 @@ std::vector<Station> stations_from(const Grid& g, const std::vector<char>& force
     if (take) {
       st.push_back({g.s[i], g.vlim[i], 0});
       idx.push_back(i);
+      A_ref = g.A[std::min(i + 1, hi)];  // the next block's first inner point (a station's own A is both sides')
     }
   }
   return st;

@@ -19,7 +19,9 @@
 //   the default limits. A(s) = C / v_other (clamped to [a_local_floor A_t,
 //   A_t]), v_other being the bound from every other term, so the coupling no
 //   longer lowers the speed; every block of the profile then accelerates at
-//   most at the smallest A(s) inside it.
+//   most at the smallest A(s) inside it, and a station is placed wherever
+//   A(s) has changed 4x since the last one, so that a ramp on a nearly
+//   straight stretch does not take the small A(s) of a tight turn at its end.
 // These give a speed bound v_lim(s), evaluated on an arc-length grid that
 // contains every curvature extremum and is refined where the curvature is high;
 // stations are added until the profile is under v_lim at every grid point, and

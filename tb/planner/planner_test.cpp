@@ -284,6 +284,32 @@ TEST(PlannerCore, TightUTurnRunsFastAndLimitsHold) {
   EXPECT_GT(v_arc, 4 * v_reserved);
 }
 
+// A hairpin (one quadratic B-spline): nearly straight legs into a tip of
+// high curvature, no junction between them. The local tangential acceleration
+// is small only near the tip; a block from the start to the tip would take
+// that smallest value for its whole ramp (about 1/20 of A_t here). Stations
+// where the local acceleration has changed 4x split the ramp, so the legs
+// accelerate and brake at up to A_t; every limit still holds on the core.
+TEST(PlannerCore, HairpinRampsAtFullAccelerationAwayFromTheTip) {
+  geo::BSpline sp;
+  sp.degree = 2;
+  sp.ctrl.resize(4, 2);
+  sp.ctrl << 0, 0, 20, 0, 20, 0.4, 0, 0.4;
+  sp.knots.resize(7);
+  sp.knots << 0, 0, 0, 0.5, 1, 1, 1;
+  Path p;
+  p.add(sp, "hairpin");
+  JobConfig cfg;
+  cfg.limits.feed = 50;
+  const RunOut o = run_through_core(p, cfg);
+  expect_guarantees(p, cfg, o, "hairpin");
+  double a_peak = 0;
+  for (const auto& q : o.job.plan.pieces) a_peak = std::max({a_peak, std::fabs(q.a(0)), std::fabs(q.a(q.T))});
+  std::printf("  hairpin: motion %.3f s, planned tangential acceleration peak %.1f of A_t %.1f\n", o.rep.motion_time,
+              a_peak, o.job.plan.A_t);
+  EXPECT_GT(a_peak, 0.5 * o.job.plan.A_t);
+}
+
 TEST(PlannerInput, BadInputGetsOneClearError) {
   const Path p = load_path(std::string(TRAJ_ASSETS) + "/butterfly_nurbs.json");
   auto msg = [&](auto mutate) -> std::string {
