@@ -978,16 +978,12 @@ const KData& k_data(int N, uint64_t K, double tol_lsb) {
   return e;
 }
 
-// The range check of the grid paths (see "Fast exact paths" above) for the
-// blended target with r0 = r0_ld, e0 = e0_ld (register units): true if it
-// accepts; false leaves the decision (and a refusal's words) to
-// compile_exact() and the reference.
-bool range_ok(int N, const std::vector<double>& cf, long double scale_ld, long double T_ld, long double r0_ld,
-              long double e0_ld, double q2_d, long double limit_ld) {
-  const long double err_rel = 0x1p-48L;
-  const long double grow = 1 + 0x1p-40L;
+// The power-basis terms of the blended target over the segment, register
+// units: av[0] = r0, av[1] = (c1 - e0 / T) T, av[j] = c_j T^j; mag[j] bounds
+// |av[j]| (mag[1] with the two parts of av[1] added in magnitude).
+void power_terms(int N, const std::vector<double>& cf, long double scale_ld, long double T_ld, long double r0_ld,
+                 long double e0_ld, long double* av, long double* mag) {
   const long double e0_abs = std::fabs(e0_ld);
-  long double av[8], mag[8];
   av[0] = r0_ld;
   mag[0] = std::fabs(r0_ld);
   long double Tj = 1;
@@ -1002,6 +998,19 @@ bool range_ok(int N, const std::vector<double>& cf, long double scale_ld, long d
       mag[j] = std::fabs(av[j]);
     }
   }
+}
+
+// The range check of the grid paths (see "Fast exact paths" above) for the
+// blended target with r0 = r0_ld, e0 = e0_ld (register units): true if it
+// accepts; false leaves the decision (and a refusal's words) to
+// compile_exact() and the reference.
+bool range_ok(int N, const std::vector<double>& cf, long double scale_ld, long double T_ld, long double r0_ld,
+              long double e0_ld, double q2_d, long double limit_ld) {
+  const long double err_rel = 0x1p-48L;
+  const long double grow = 1 + 0x1p-40L;
+  const long double e0_abs = std::fabs(e0_ld);
+  long double av[8], mag[8];
+  power_terms(N, cf, scale_ld, T_ld, r0_ld, e0_ld, av, mag);
   // First the power-basis bound sum_j |a_j| >= sum_j w_ij |a_j| >= |b_i|
   // (0 < w_ij <= 1), with the same relative margin; far from the limit
   // (nearly always) it settles the check without the Bernstein sums.
@@ -1619,20 +1628,9 @@ Compiled compile_exact(const Format& f_, const PolySegment& seg, const std::vect
       const long double e0_ld = mpz_ldexp(S.e, z);
       const long double e0_abs = std::fabs(e0_ld);
       long double av[8], mag[8];
-      av[0] = mpz_size(S.r0) <= 2 ? static_cast<long double>(mpz_get_d(S.r0)) : mpz_ldexp(S.r0, 0);
-      mag[0] = std::fabs(av[0]);
-      long double Tj = 1;
-      for (int j = 1; j <= N; ++j) {
-        Tj *= T_ld;
-        const long double cj = j < static_cast<int>(cf.size()) ? static_cast<long double>(cf[j]) * scale_ld : 0;
-        if (j == 1) {
-          av[1] = (cj - e0_ld / T_ld) * T_ld;
-          mag[1] = (std::fabs(cj) + e0_abs / T_ld) * T_ld;
-        } else {
-          av[j] = cj * Tj;
-          mag[j] = std::fabs(av[j]);
-        }
-      }
+      power_terms(N, cf, scale_ld, T_ld,
+                  mpz_size(S.r0) <= 2 ? static_cast<long double>(mpz_get_d(S.r0)) : mpz_ldexp(S.r0, 0), e0_ld, av,
+                  mag);
       long double mhi = 0;
       for (int i = 0; i <= N; ++i) {
         long double b = 0, sm = 0;
