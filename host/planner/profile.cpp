@@ -1,6 +1,7 @@
 #include "planner/profile.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 #include <cmath>
 
 namespace traj::plan {
@@ -101,6 +102,8 @@ std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<doubl
                                const std::vector<double>& Ab, double J, std::vector<BlockMemo>& memo,
                                std::vector<char>& changed) {
   const size_t n = st.size();
+  if (cap.size() + 1 < n || Ab.size() + 1 < n)
+    throw std::invalid_argument("plan_blocks: one cap and one acceleration per block needed");
   std::vector<BlockMemo> old;
   old.swap(memo);
   changed.assign(n > 0 ? n - 1 : 0, 1);

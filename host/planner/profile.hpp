@@ -54,7 +54,7 @@ std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<doubl
                                double J);
 
 // The same with a memo of the previous call's blocks: a block whose ends,
-// end speeds and cap are bitwise those of a remembered block reuses its peak
+// end speeds, cap and acceleration are bitwise those of a remembered block reuses its peak
 // speed (the one costly step); the result is identical to a call without the
 // memo. changed[i] (one per block) tells which blocks were not found.
 struct BlockMemo {
