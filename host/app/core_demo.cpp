@@ -29,10 +29,12 @@
 
 #include "bcu/chain.hpp"
 #include "demo.hpp"
-#include "sim.hpp"
+#include "sim/sim.hpp"
 #include "stream/segment_stream.hpp"
 
 namespace traj::app {
+
+using namespace traj::sim;
 namespace {
 
 // Arc of angle th from angle a0 on a circle of radius R: k = 4/3 tan(th/4).

@@ -23,7 +23,7 @@
 
 #include "Vtraj_fd_cubic.h"  // fixed 3x3x64/16/32 build (host/app/CMakeLists.txt)
 #include "fd/fd_compiler.hpp"
-#include "fd/vl_bits.hpp"
+#include "sim/vl_bits.hpp"
 #include "traj_fd_engine.hpp"
 
 namespace traj::app {

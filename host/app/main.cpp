@@ -16,24 +16,26 @@
 #include <unistd.h>
 
 #include "demo.hpp"
-#include "planner/jsonl_source.hpp"
-#include "planner/pipeline.hpp"
-#include "planner/raster.hpp"
-#include "planner/streaming.hpp"
-#include "sim.hpp"
+#include "input/jsonl_source.hpp"
+#include "report/report.hpp"
+#include "input/path_json.hpp"
+#include "input/raster.hpp"
+#include "job/streaming.hpp"
+#include "sim/sim.hpp"
 #include "stream/segment_stream.hpp"
+#include "util/atomic_file.hpp"
 
 namespace fd = traj::fd;
 
 namespace {
 
-using traj::plan::JobConfig;
+using traj::job::JobConfig;
 
 void add_limits(CLI::App* c, JobConfig& cfg, std::vector<double>& v_axis, std::vector<double>& a_axis,
                 std::vector<double>& j_axis) {
   auto& L = cfg.limits;
   c->add_option("--feed", L.feed, "commanded feed, units/s")->capture_default_str();
-  c->add_option("--period", cfg.plan.period, "tick period, s")->capture_default_str();
+  c->add_option("--period", cfg.machine.period, "tick period, s")->capture_default_str();
   c->add_option("--v-axis", v_axis, "per-axis velocity limits x,y,z (one value: all axes)")->delimiter(',');
   c->add_option("--a-axis", a_axis, "per-axis acceleration limits")->delimiter(',');
   c->add_option("--j-axis", j_axis, "per-axis jerk limits")->delimiter(',');
@@ -43,7 +45,7 @@ void add_limits(CLI::App* c, JobConfig& cfg, std::vector<double>& v_axis, std::v
   c->add_option("--j-cen", L.j_cen, "centripetal jerk limit")->capture_default_str();
   c->add_option("--tol", L.tol, "path tolerance: max distance of the output from the curve, units")
       ->capture_default_str();
-  c->add_option("--degree", cfg.degree, "segment degree: 5 (C2 joins) or 3")->capture_default_str();
+  c->add_option("--degree", cfg.machine.degree, "segment degree: 5 (C2 joins) or 3")->capture_default_str();
 }
 
 void apply_axes(JobConfig& cfg, const std::vector<double>& v, const std::vector<double>& a,
@@ -57,7 +59,6 @@ void apply_axes(JobConfig& cfg, const std::vector<double>& v, const std::vector<
   set(cfg.limits.v_axis, v, "v-axis");
   set(cfg.limits.a_axis, a, "a-axis");
   set(cfg.limits.j_axis, j, "j-axis");
-  cfg.format = traj::plan::engine_format(cfg.degree);
 }
 
 void progress(const std::string& stage, double f) {
@@ -65,12 +66,9 @@ void progress(const std::string& stage, double f) {
   if (stage == "done") std::fprintf(stderr, "\n");
 }
 
-void write_csv(const std::string& path, const traj::stream::Header& h, const traj::plan::Samples& s) {
-  std::filesystem::path p(path);
-  if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path());
-  const std::string tmp = path + ".tmp";
-  std::ofstream o(tmp);
-  if (!o) throw std::runtime_error("cannot write " + tmp);
+void write_csv(const std::string& path, const traj::stream::Header& h, const traj::report::Samples& s) {
+  traj::util::AtomicFile f(path);
+  std::ofstream& o = f.out();
   const double lsb = std::ldexp(1.0, -h.frac_bits);
   o << "tick,t_s,x_lsb,y_lsb,z_lsb,x,y,z\n";
   char b[160];
@@ -79,9 +77,7 @@ void write_csv(const std::string& path, const traj::stream::Header& h, const tra
                   s.v[k][2], s.v[k][0] * lsb, s.v[k][1] * lsb, s.v[k][2] * lsb);
     o << b;
   }
-  o.close();
-  if (!o) throw std::runtime_error("write failed: " + tmp);
-  std::filesystem::rename(tmp, path);
+  f.commit();
 }
 
 }  // namespace
@@ -187,8 +183,8 @@ int main(int argc, char** argv) {
 #else
     if (*sp) throw std::runtime_error("spline: this trajcore was built without host/bcu (TRAJ_SKIP)");
 #endif
-    const bool jsonl = !input.empty() && raster == 0 && traj::plan::is_jsonl(input, format);
-    if (*rn && traj::plan::is_jsonl(input))
+    const bool jsonl = !input.empty() && raster == 0 && traj::input::is_jsonl(input, format);
+    if (*rn && traj::input::is_jsonl(input))
       throw traj::plan::PlanError(
           "run: " + input + " is a JSON Lines path, which is planned as a stream; run needs the whole path in "
           "memory (report, plots): use `trajcore plan " + input + " -o plan.trj` (streamed) then `trajcore sim "
@@ -197,7 +193,7 @@ int main(int argc, char** argv) {
       throw traj::plan::PlanError("plan: a JSON Lines path is always streamed: --window must be at least 2");
     if (*pl && (window > 0 || raster > 0 || jsonl)) {
       apply_axes(cfg, v_axis, a_axis, j_axis);
-      struct VecSource : traj::plan::CurveSource {
+      struct VecSource : traj::input::CurveSource {
         std::vector<std::pair<traj::geo::BSpline, std::string>> v;
         size_t i = 0;
         bool next(traj::geo::BSpline& b, std::string& w) override {
@@ -208,28 +204,27 @@ int main(int argc, char** argv) {
           return true;
         }
       };
-      std::unique_ptr<traj::plan::CurveSource> src;
+      std::unique_ptr<traj::input::CurveSource> src;
       if (raster > 0) {
-        src = std::make_unique<traj::plan::RasterSource>(raster);
+        src = std::make_unique<traj::input::RasterSource>(raster);
       } else if (jsonl) {
-        src = std::make_unique<traj::plan::JsonlSource>(input);  // read line by line as the windows need curves
+        src = std::make_unique<traj::input::JsonlSource>(input);  // read line by line as the windows need curves
       } else {
         if (input.empty()) throw traj::plan::PlanError("plan: give a path file or --raster N");
-        const auto path = traj::plan::load_path(input);  // checks the file and the joins
+        const auto path = traj::input::load_path(input);  // checks the file and the joins
         auto vs = std::make_unique<VecSource>();
         for (size_t i = 0; i < path.size(); ++i) vs->v.push_back({path.curve(i).spline(), input + ": curve " + std::to_string(i)});
         src = std::move(vs);
       }
-      traj::plan::StreamOptions so;
+      traj::job::StreamOptions so;
       if (window > 0) {
         so.window = std::max<size_t>(window, 2);
         so.commit = so.window >= 16 ? so.window * 3 / 4 : so.window / 2;
       }
-      fd::Format f = cfg.format;
-      traj::stream::StreamWriter w(out_stream, traj::stream::Header::from(f, cfg.plan.period, cfg.units));
-      traj::plan::StreamStats st;
+      traj::stream::StreamWriter w(out_stream, cfg.machine.header());
+      traj::job::StreamStats st;
       try {
-        st = traj::plan::run_streaming(
+        st = traj::job::run_streaming(
             *src, cfg, so, [&](const fd::Compiled& c, const traj::plan::TimeSegment&) { w.add({c.ticks, c.regs}); },
             [](const std::string&, double curves) { std::fprintf(stderr, "\r[stream] %.0f curves   ", curves); });
       } catch (...) {
@@ -247,20 +242,20 @@ int main(int argc, char** argv) {
     if (*pl || *rn) {
       if (input.empty()) throw traj::plan::PlanError("give a path file");
       apply_axes(cfg, v_axis, a_axis, j_axis);
-      const auto path = traj::plan::load_path(input);
-      const auto res = traj::plan::run_job(path, cfg, progress);
-      auto verdict = [&](const traj::plan::Report& rep) {
+      const auto path = traj::input::load_path(input);
+      const auto res = traj::job::run_job(path, cfg, progress);
+      auto verdict = [&](const traj::report::Report& rep) {
         return rep.max_deviation <= cfg.limits.tol && rep.worst_plan <= 1 + 1e-9 && rep.worst_fit <= 1 + 1e-9 &&
                rep.worst_out <= 1 + 1e-9;
       };
       if (*pl) {
-        traj::stream::write_file(out_stream, res.header, traj::plan::records_of(res));
+        traj::stream::write_file(out_stream, res.header, traj::job::records_of(res));
         std::printf("%s: %zu segments, %zu ticks (%.3f s of motion) -> %s\n", input.c_str(), res.segments.size(),
                     res.ticks.size(), res.plan.duration(), out_stream.c_str());
         // the plan report; the output columns are the host's exact prediction
         // of the core's samples (`trajcore run` confirms them on the Verilated core)
-        const auto rep = traj::plan::make_report(path, cfg, res, traj::plan::predicted_samples(res));
-        std::fputs(traj::plan::report_text(cfg, rep, res).c_str(), stdout);
+        const auto rep = traj::report::make_report(path, cfg, res, traj::report::predicted_samples(res));
+        std::fputs(traj::report::report_text(cfg, rep, res).c_str(), stdout);
         std::printf("(output columns: the host's exact prediction of the core's samples)\n");
         if (!verdict(rep)) std::fprintf(stderr, "trajcore plan: a check FAILED (see the report)\n");
         return verdict(rep) ? 0 : 1;
@@ -282,16 +277,16 @@ int main(int argc, char** argv) {
         }
       } stage{out_dir + "/.trajcore-run-" + std::to_string(::getpid())};
       fs::create_directories(stage.dir);
-      traj::stream::write_file(stage.dir + "/plan.trj", res.header, traj::plan::records_of(res));
+      traj::stream::write_file(stage.dir + "/plan.trj", res.header, traj::job::records_of(res));
       std::printf("%s: %zu segments, %zu ticks (%.3f s of motion)\n", input.c_str(), res.segments.size(),
                   res.ticks.size(), res.plan.duration());
-      auto sr = traj::app::simulate(res.header, traj::plan::records_of(res), 0,
+      auto sr = traj::sim::simulate(res.header, traj::job::records_of(res), 0,
                                     [](double f) { progress("sim", f); });
       std::fprintf(stderr, "\n");
       write_csv(stage.dir + "/samples.csv", res.header, sr.samples);
-      const auto rep = traj::plan::make_report(path, cfg, res, sr.samples);
-      traj::plan::write_plots(stage.dir, path, cfg, res, sr.samples);
-      std::string text = traj::plan::report_text(cfg, rep, res);
+      const auto rep = traj::report::make_report(path, cfg, res, sr.samples);
+      traj::report::write_plots(stage.dir, path, cfg, res, sr.samples);
+      std::string text = traj::report::report_text(cfg, rep, res);
       char b[256];
       std::snprintf(b, sizeof b,
                     "Core (Verilated traj_fd_engine): %llu cycles in %.2f s, RTL == hls on every cycle: %s, "
@@ -319,7 +314,7 @@ int main(int argc, char** argv) {
                      rd.error.c_str(), rd.records.size());
         return 1;
       }
-      auto sr = traj::app::simulate(rd.header, rd.records, tick_gap, [](double f) { progress("sim", f); });
+      auto sr = traj::sim::simulate(rd.header, rd.records, tick_gap, [](double f) { progress("sim", f); });
       if (sr.engine == "traj_core") {
         // version 2: both engines; every sample also against the exact prediction from the records
         const bool ok = sr.mismatches == 0 && sr.prediction_mismatches == 0 && !sr.tick_err && sr.underruns == 0;

@@ -22,10 +22,12 @@
 #include "bcu/chain.hpp"
 #include "demo.hpp"
 #include "geometry/json_io.hpp"
-#include "sim.hpp"
+#include "sim/sim.hpp"
 #include "stream/segment_stream.hpp"
 
 namespace traj::app {
+
+using namespace traj::sim;
 namespace {
 
 [[noreturn]] void bad(const std::string& where, const std::string& what) {

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "geometry/error.hpp"
+#include "util/format.hpp"
 
 namespace traj::geo {
 
@@ -12,12 +13,7 @@ namespace {
 [[noreturn]] void fail(const std::string& where, const std::string& what) {
   throw GeometryError(where + ": " + what);
 }
-// Shortest text that reads back to the same double (0.3 prints as 0.3).
-std::string num(double v) {
-  char buf[64];
-  auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
-}
+using util::shortest;
 }  // namespace
 
 bool BSpline::clamped() const {
@@ -85,7 +81,7 @@ void validate(const BSpline& c, const std::string& where, int max_degree) {
       if (!std::isfinite(c.weights[i]))
         fail(where, "weights[" + std::to_string(i) + "]: not a finite number");
       if (!(c.weights[i] > 0))
-        fail(where, "weights[" + std::to_string(i) + "]: " + num(c.weights[i]) + " (weights must be positive)");
+        fail(where, "weights[" + std::to_string(i) + "]: " + shortest(c.weights[i]) + " (weights must be positive)");
     }
   }
   const int m = n + c.degree + 1;
@@ -95,7 +91,7 @@ void validate(const BSpline& c, const std::string& where, int max_degree) {
   for (int i = 0; i < m; ++i) {
     if (!std::isfinite(c.knots[i])) fail(where, "knots[" + std::to_string(i) + "]: not a finite number");
     if (i > 0 && c.knots[i] < c.knots[i - 1])
-      fail(where, "knots[" + std::to_string(i) + "]: " + num(c.knots[i]) + " < previous " + num(c.knots[i - 1]) +
+      fail(where, "knots[" + std::to_string(i) + "]: " + shortest(c.knots[i]) + " < previous " + shortest(c.knots[i - 1]) +
                       " (knot vector must be non-decreasing)");
   }
   // No knot of multiplicity > degree+1, and inner multiplicity <= degree (else the curve is split).
@@ -103,8 +99,8 @@ void validate(const BSpline& c, const std::string& where, int max_degree) {
     if (c.knots[i] == c.knots[i + c.degree + 1])
       fail(where, "knots[" + std::to_string(i) + "]: multiplicity exceeds degree + 1");
   if (!(c.u_end() > c.u_begin()))
-    fail(where, "knots: empty parameter domain [knots[degree], knots[n_ctrl]] = [" + num(c.u_begin()) + ", " +
-                    num(c.u_end()) + "]");
+    fail(where, "knots: empty parameter domain [knots[degree], knots[n_ctrl]] = [" + shortest(c.u_begin()) + ", " +
+                    shortest(c.u_end()) + "]");
   for (int i = c.degree + 1; i < n; ++i)
     if (c.knots[i] == c.knots[i + c.degree])
       fail(where, "knots[" + std::to_string(i) + "]: interior multiplicity exceeds degree (curve would be broken)");
@@ -125,7 +121,7 @@ BSpline insert_knot(const BSpline& c, double u, int times) {
         ++total;
         if (i <= k) ++s;
       }
-    if (total >= p) throw GeometryError("insert_knot: multiplicity of " + num(u) + " would exceed degree");
+    if (total >= p) throw GeometryError("insert_knot: multiplicity of " + shortest(u) + " would exceed degree");
     Eigen::MatrixXd Q(n + 1, P.cols());
     for (int i = 0; i <= k - p; ++i) Q.row(i) = P.row(i);
     for (int i = k - p + 1; i <= k - s; ++i) {
@@ -147,8 +143,8 @@ std::pair<BSpline, BSpline> split_at(const BSpline& c0, double u) {
   const BSpline c = clamp(c0);
   const int p = c.degree;
   if (!(u > c.u_begin() && u < c.u_end()))
-    throw GeometryError("split_at: u = " + num(u) + " is not inside the domain (" + num(c.u_begin()) + ", " +
-                        num(c.u_end()) + ")");
+    throw GeometryError("split_at: u = " + shortest(u) + " is not inside the domain (" + shortest(c.u_begin()) + ", " +
+                        shortest(c.u_end()) + ")");
   int mult = 0;
   for (int i = 0; i < c.knots.size(); ++i) mult += (c.knots[i] == u);
   const BSpline d = mult < p ? insert_knot(c, u, p - mult) : c;

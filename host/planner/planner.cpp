@@ -5,15 +5,13 @@
 #include <limits>
 #include <sstream>
 
+#include "util/format.hpp"
+#include "util/tick_period.hpp"
+
 namespace traj::plan {
 namespace {
 
-std::string num(double v) {
-  std::ostringstream os;
-  os.precision(6);
-  os << v;
-  return os.str();
-}
+using util::num;
 
 void check_positive(double v, const std::string& name) {
   if (!std::isfinite(v) || !(v > 0)) throw PlanError("limit " + name + " = " + num(v) + " must be positive and finite");
@@ -479,7 +477,7 @@ std::vector<size_t> mark_violations(const Grid& g, std::vector<char>& forced, Sp
 
 Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o) {
   L.validate();
-  if (!std::isfinite(o.period) || !(o.period > 0)) throw PlanError("tick period " + num(o.period) + " must be positive and finite");
+  if (const std::string m = util::tick_period_problem(o.period); !m.empty()) throw PlanError(m);
   if (p.size() == 0) throw PlanError("empty path");
   const int d = p.dim();
   double amin = L.a_axis[0], jmin = L.j_axis[0];

@@ -12,11 +12,14 @@
 #include <string>
 #include <vector>
 
-#include "planner/pipeline.hpp"
-#include "planner/raster.hpp"
-#include "planner/streaming.hpp"
+#include "input/path_json.hpp"
+#include "report/report.hpp"
+#include "input/raster.hpp"
+#include "job/streaming.hpp"
 
 using namespace traj::plan;
+using namespace traj::input;
+using namespace traj::job;
 
 static long rss_kib() {
   struct rusage ru;
@@ -79,7 +82,7 @@ int main(int argc, char** argv) {
     std::vector<std::pair<double, double>> tenths;  // (host s, motion s) per tenth
     double motion = 0, last_curves = 0, last_motion = 0;
     auto t_last = std::chrono::steady_clock::now();
-    const double h = cfg.plan.period;
+    const double h = cfg.machine.period;
     Progress progress;
     if (n >= 100000)
       progress = [&](const std::string&, double curves) {

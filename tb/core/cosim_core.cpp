@@ -26,7 +26,7 @@
 #include "Vtraj_core.h"
 #include "bcu/bcu_compiler.hpp"
 #include "fd/fd_compiler.hpp"
-#include "fd/vl_bits.hpp"
+#include "sim/vl_bits.hpp"
 #include "traj_core.hpp"
 #include "verilated.h"
 

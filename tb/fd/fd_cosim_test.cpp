@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "fd/fd_compiler.hpp"
-#include "fd/vl_bits.hpp"
+#include "sim/vl_bits.hpp"
 #include "traj_fd_engine.hpp"
 #include VTOP_H
 

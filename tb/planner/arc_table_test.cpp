@@ -13,10 +13,14 @@
 #include <random>
 
 #include "arclength_ref.hpp"
-#include "planner/pipeline.hpp"
+#include "input/path_json.hpp"
+#include "report/report.hpp"
 
 using namespace traj;
 using namespace traj::plan;
+using namespace traj::input;
+using namespace traj::job;
+using namespace traj::report;
 
 namespace {
 

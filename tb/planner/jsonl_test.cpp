@@ -12,12 +12,15 @@
 #include <sstream>
 
 #include "geometry/json_io.hpp"
-#include "planner/jsonl_source.hpp"
-#include "planner/raster.hpp"
-#include "planner/streaming.hpp"
+#include "input/path_json.hpp"
+#include "input/jsonl_source.hpp"
+#include "input/raster.hpp"
+#include "job/streaming.hpp"
 
 using namespace traj;
 using namespace traj::plan;
+using namespace traj::input;
+using namespace traj::job;
 
 namespace {
 

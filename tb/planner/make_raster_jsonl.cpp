@@ -7,8 +7,8 @@
 #include <fstream>
 #include <string>
 
-#include "planner/jsonl_source.hpp"
-#include "planner/raster.hpp"
+#include "input/jsonl_source.hpp"
+#include "input/raster.hpp"
 
 int main(int argc, char** argv) {
   if (argc != 3 && argc != 6) {
@@ -31,8 +31,8 @@ int main(int argc, char** argv) {
   }
   o << "# trajcore raster toolpath: " << pieces << " pieces, pass " << pass << ", step " << step << ", rows " << rows
     << "\n";
-  traj::plan::RasterSource src(pieces, pass, step, rows);
-  const size_t n = traj::plan::write_jsonl(src, o);
+  traj::input::RasterSource src(pieces, pass, step, rows);
+  const size_t n = traj::input::write_jsonl(src, o);
   o.close();
   if (!o || std::rename(tmp.c_str(), out.c_str()) != 0) {
     std::fprintf(stderr, "%s: write failed: %s\n", argv[0], out.c_str());

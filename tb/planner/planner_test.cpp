@@ -8,14 +8,18 @@
 #include <fstream>
 #include <random>
 
-#include "planner/pipeline.hpp"
+#include "input/path_json.hpp"
+#include "report/report.hpp"
 #include "planner/profile.hpp"
 #include "planner/segments.hpp"
 #include "output_check.hpp"
-#include "sim.hpp"
+#include "sim/sim.hpp"
 
 using namespace traj;
 using namespace traj::plan;
+using namespace traj::input;
+using namespace traj::job;
+using namespace traj::report;
 
 #ifndef TRAJ_ASSETS
 #error "TRAJ_ASSETS must name host/assets"
@@ -126,14 +130,14 @@ namespace {
 
 struct RunOut {
   JobResult job;
-  app::SimResult sim;
+  traj::sim::SimResult sim;
   Report rep;
 };
 
 RunOut run_through_core(const Path& p, const JobConfig& cfg) {
   RunOut o;
   o.job = run_job(p, cfg);
-  o.sim = app::simulate(o.job.header, records_of(o.job));
+  o.sim = traj::sim::simulate(o.job.header, records_of(o.job));
   o.rep = make_report(p, cfg, o.job, o.sim.samples);
   return o;
 }
@@ -157,7 +161,7 @@ void expect_guarantees(const Path& p, const JobConfig& cfg, const RunOut& o, con
     for (size_t k = 0; k < x.size(); ++k)
       for (int a = 0; a < 3; ++a) x[k][a] = static_cast<double>(o.sim.samples.v[k][a]) * lsb;
     const test::OutputVerdict ov =
-        test::check_output_limits(x, p.dim(), cfg.limits, cfg.plan.period, o.rep.quant, o.job.header.degree == 5);
+        test::check_output_limits(x, p.dim(), cfg.limits, cfg.machine.period, o.rep.quant, o.job.header.degree == 5);
     EXPECT_LE(ov.worst, 1 + 1e-9) << ov.what << " at tick " << ov.tick;
     double dev = 0;
     for (size_t k = 0; k < x.size(); ++k)
@@ -217,12 +221,11 @@ TEST(PlannerCore, RandomSplinesThroughVerilatedCore) {
     p.add(sp, "random spline " + std::to_string(rep));
     JobConfig cfg;
     cfg.limits.feed = 30 + 40 * (U(rng) + 1);
-    cfg.degree = rep % 3 == 1 ? 3 : 5;
-    cfg.format = engine_format(cfg.degree);
-    cfg.limits.tol = cfg.degree == 3 ? 2e-3 : 1e-3;
+    cfg.machine.degree = rep % 3 == 1 ? 3 : 5;
+    cfg.limits.tol = cfg.machine.degree == 3 ? 2e-3 : 1e-3;
     const RunOut o = run_through_core(p, cfg);
     expect_guarantees(p, cfg, o, "random spline " + std::to_string(rep) + " degree " + std::to_string(sp.degree) +
-                                     " dim " + std::to_string(dim) + " segments of degree " + std::to_string(cfg.degree));
+                                     " dim " + std::to_string(dim) + " segments of degree " + std::to_string(cfg.machine.degree));
   }
 }
 
@@ -327,8 +330,8 @@ TEST(PlannerInput, BadInputGetsOneClearError) {
   EXPECT_NE(msg([](JobConfig& c) { c.limits.a_axis[1] = -5; }).find("a_axis.y"), std::string::npos);
   EXPECT_NE(msg([](JobConfig& c) { c.limits.j_tan = INFINITY; }).find("j_tan"), std::string::npos);
   EXPECT_NE(msg([](JobConfig& c) { c.limits.tol = 0; }).find("tol"), std::string::npos);
-  EXPECT_NE(msg([](JobConfig& c) { c.plan.period = 0; }).find("tick period"), std::string::npos);
-  EXPECT_NE(msg([](JobConfig& c) { c.plan.period = NAN; }).find("tick period"), std::string::npos);
+  EXPECT_NE(msg([](JobConfig& c) { c.machine.period = 0; }).find("tick period"), std::string::npos);
+  EXPECT_NE(msg([](JobConfig& c) { c.machine.period = NAN; }).find("tick period"), std::string::npos);
   // zero-length curve
   Eigen::VectorXd a(2);
   a << 1, 1;

@@ -19,10 +19,14 @@
 #include <string>
 #include <vector>
 
-#include "planner/pipeline.hpp"
+#include "input/path_json.hpp"
+#include "report/report.hpp"
 
 using namespace traj;
 using namespace traj::plan;
+using namespace traj::input;
+using namespace traj::job;
+using namespace traj::report;
 namespace fs = std::filesystem;
 
 #ifndef TRAJ_ASSETS
@@ -258,7 +262,7 @@ Synth synth(size_t n, double speed, bool ticks) {
   Synth y{load_path(std::string(TRAJ_ASSETS) + "/butterfly_nurbs.json"), {}, {}, {}};  // 2 axes
   y.res.header.frac_bits = 32;
   y.res.header.degree = 5;
-  const double h = y.cfg.plan.period, lsb = std::ldexp(1.0, -32);
+  const double h = y.cfg.machine.period, lsb = std::ldexp(1.0, -32);
   const long long step = std::llround(speed * h / lsb);
   y.s.v.resize(n);
   for (size_t k = 0; k < n; ++k) y.s.v[k] = {static_cast<long long>(k) * step, 0, 0};
@@ -372,7 +376,7 @@ TEST(Plots, ButterflyJobWellFormedAndLabelled) {
 TEST(Plots, EnvelopeKeepsOneSampleSpike) {
   const size_t n = 1000000, k0 = 500001;
   Synth y = synth(n, 20, false);
-  const double lsb = std::ldexp(1.0, -32), h = y.cfg.plan.period, delta = 2e-3;
+  const double lsb = std::ldexp(1.0, -32), h = y.cfg.machine.period, delta = 2e-3;
   y.s.v[k0][1] += std::llround(delta / lsb);
   const double spike_a = -2 * delta / (h * h);      // -4000
   const double spike_j = 3 * delta / (h * h * h);   // +6e6 (and -6e6)
@@ -412,7 +416,7 @@ TEST(Plots, EnvelopeKeepsOneSampleSpike) {
 TEST(Plots, SizeBoundedOnLongNoisyRun) {
   const size_t n = 1000000;
   Synth y = synth(n, 20, true);
-  const double lsb = std::ldexp(1.0, -32), h = y.cfg.plan.period;
+  const double lsb = std::ldexp(1.0, -32), h = y.cfg.machine.period;
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> U(0.05, 1.2);
   double phi = 0;

@@ -7,12 +7,14 @@
 
 #include "fd_drive.hpp"
 #include "output_check.hpp"
-#include "planner/raster.hpp"
-#include "planner/streaming.hpp"
+#include "input/raster.hpp"
+#include "job/streaming.hpp"
 #include "traj_fd_engine.hpp"
 
 using namespace traj;
 using namespace traj::plan;
+using namespace traj::input;
+using namespace traj::job;
 
 
 TEST(Streaming, RasterKeepsGuaranteesAndChainsExactly) {
@@ -29,7 +31,7 @@ TEST(Streaming, RasterKeepsGuaranteesAndChainsExactly) {
   EXPECT_GE(st.windows, pieces / so.commit);
   // run the emitted stream through the hls model of the engine
   using Eng = FdEngine<3, 5, 96, 16, 48>;
-  fd::Compiler compiler(engine_format(5));
+  fd::Compiler compiler(Machine{}.format());
   Eng e;
   std::vector<std::array<double, 3>> x;
   const double lsb = std::ldexp(1.0, -32);
@@ -59,7 +61,7 @@ TEST(Streaming, RasterKeepsGuaranteesAndChainsExactly) {
   // largest stated sample error of the emitted segments)
   double q = 0;
   for (const auto& c : comp) q = std::max(q, (0.5 + c.bound_lsb) * lsb);
-  const traj::test::OutputVerdict ov = traj::test::check_output_limits(x, 2, cfg.limits, cfg.plan.period, q, true);
+  const traj::test::OutputVerdict ov = traj::test::check_output_limits(x, 2, cfg.limits, cfg.machine.period, q, true);
   EXPECT_LE(ov.worst, 1 + 1e-9) << ov.what << " at tick " << ov.tick;
   // starts at the path start, ends at the path end
   const Eigen::VectorXd p0 = whole.curve(0).point(whole.curve(0).u_begin());
@@ -152,7 +154,7 @@ TEST(Streaming, G1ChainsKeepGuaranteesAtEveryWindowSize) {
       const StreamStats st =
           run_streaming(src, cfg, so, [&](const fd::Compiled& c, const TimeSegment&) { comp.push_back(c); });
       using Eng = FdEngine<3, 5, 96, 16, 48>;
-      fd::Compiler compiler(engine_format(5));
+      fd::Compiler compiler(Machine{}.format());
       Eng e;
       std::vector<std::array<double, 3>> x;
       const double lsb = std::ldexp(1.0, -32);
@@ -178,7 +180,7 @@ TEST(Streaming, G1ChainsKeepGuaranteesAtEveryWindowSize) {
       EXPECT_LE(dev, cfg.limits.tol);
       double q = 0;
       for (const auto& c : comp) q = std::max(q, (0.5 + c.bound_lsb) * lsb);
-      const traj::test::OutputVerdict ov = traj::test::check_output_limits(x, 2, cfg.limits, cfg.plan.period, q, true);
+      const traj::test::OutputVerdict ov = traj::test::check_output_limits(x, 2, cfg.limits, cfg.machine.period, q, true);
       EXPECT_LE(ov.worst, 1 + 1e-9) << ov.what << " at tick " << ov.tick;
       const Eigen::VectorXd p1 = whole.curve(whole.size() - 1).point(whole.curve(whole.size() - 1).u_end());
       for (int a = 0; a < 2; ++a) EXPECT_NEAR(x.back()[a], p1[a], 1e-9);
@@ -201,8 +203,8 @@ TEST(Streaming, TickTimesKeepFullPrecisionFarIntoTheStream) {
   p.add(geo::make_line(a, b), "line");
   JobConfig cfg;
   cfg.limits.feed = 50;
-  const Plan plan = plan_path(p, cfg.limits, cfg.plan);
-  const double h = cfg.plan.period, off = 0.37 * h;
+  const Plan plan = plan_path(p, cfg.limits, cfg.plan_options());
+  const double h = cfg.machine.period, off = 0.37 * h;
   const long long n = static_cast<long long>(plan.duration() / h);
   ASSERT_GT(n, 50);
   const long long far = 1LL << 40;

@@ -1,4 +1,4 @@
-// trajcore planner: SVG plots of a job (see pipeline.hpp, write_plots).
+// SVG plots of a job (report.hpp, write_plots).
 //
 //   path_feed.svg  the x-y path of the core's output samples (equal aspect,
 //                  axes in units), coloured by the output feed (chord speed of
@@ -33,10 +33,14 @@
 #include <sstream>
 #include <vector>
 
-#include "planner/pipeline.hpp"
 #include "planner/sampled.hpp"
+#include "report/report.hpp"
 
-namespace traj::plan {
+namespace traj::report {
+
+using namespace plan;
+using job::JobConfig;
+using job::JobResult;
 
 namespace {
 
@@ -483,7 +487,7 @@ void simplify(const std::vector<std::array<double, 2>>& pts, double tol, std::ve
 // The x-y path of the samples, coloured by the output feed.
 std::string path_svg(size_t n, const std::function<std::array<double, 3>(size_t)>& pos, int d, const JobConfig& cfg,
                      double h, double allow_v) {
-  const std::string& u = cfg.units;
+  const std::string& u = cfg.machine.units;
   const double feed = cfg.limits.feed;
   // data range (x, y), a margin, equal scales on both axes
   double x0 = 0, x1 = 0, y0 = 0, y1 = 0;
@@ -734,10 +738,10 @@ void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, co
     if (ec) throw PlanError("cannot write plots: cannot create directory " + dir + ": " + ec.message());
   }
   const int d = std::clamp(p.dim(), 1, 3);
-  const double h = cfg.plan.period;
+  const double h = cfg.machine.period;
   const double lsb = std::ldexp(1.0, -r.header.frac_bits);
   const auto& L = cfg.limits;
-  const std::string& u = cfg.units;
+  const std::string& u = cfg.machine.units;
   const bool jerk = r.header.degree != 3;  // cubic segments join C1: no jerk claim
   const size_t n = s.v.size();
   auto X = [&](size_t k) {
@@ -890,4 +894,4 @@ void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, co
   write_all({{dir + "/path_feed.svg", path}, {dir + "/profile.svg", prof}});
 }
 
-}  // namespace traj::plan
+}  // namespace traj::report

@@ -13,13 +13,13 @@
 
 #include "bcu/bcu_format.hpp"
 #include "fd/fd_compiler.hpp"
-#include "planner/pipeline.hpp"
+#include "report/report.hpp"
 #include "stream/segment_stream.hpp"
 
-namespace traj::app {
+namespace traj::sim {
 
 struct SimResult {
-  plan::Samples samples;  // one per emitted sample (ticks in order)
+  report::Samples samples;  // one per emitted sample (ticks in order)
   uint64_t cycles = 0, underruns = 0, mismatches = 0;
   bool tick_err = false;
   double seconds = 0;
@@ -50,4 +50,4 @@ int core_min_tick_spacing();
 // Stream header for the carried core.
 stream::Header core_header(int frac_bits, double period, const std::string& units);
 
-}  // namespace traj::app
+}  // namespace traj::sim

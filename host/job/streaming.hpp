@@ -1,4 +1,4 @@
-// trajcore planner: bounded-memory streaming over paths of any length.
+// Bounded-memory streaming over paths of any length.
 //
 // Curves come one at a time from a CurveSource. The planner holds a window of
 // at most `window` curves and plans it as if the machine had to stop at the
@@ -14,16 +14,12 @@
 #include <string>
 
 #include "fd/fd_compiler.hpp"
-#include "planner/pipeline.hpp"
+#include "input/curve_source.hpp"
+#include "job/job.hpp"
 
-namespace traj::plan {
+namespace traj::job {
 
-class CurveSource {
- public:
-  virtual ~CurveSource() = default;
-  // Next curve; false at the end of the path.
-  virtual bool next(geo::BSpline& out, std::string& where) = 0;
-};
+using input::CurveSource;
 
 struct StreamOptions {
   size_t window = 64;  // curves held at once
@@ -40,9 +36,9 @@ struct StreamStats {
 };
 
 // Called for every compiled segment, in order.
-using SegmentSink = std::function<void(const fd::Compiled&, const TimeSegment&)>;
+using SegmentSink = std::function<void(const fd::Compiled&, const plan::TimeSegment&)>;
 
 StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOptions& so, const SegmentSink& sink,
                           const Progress& progress = {});
 
-}  // namespace traj::plan
+}  // namespace traj::job

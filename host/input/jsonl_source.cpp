@@ -1,10 +1,12 @@
-#include "planner/jsonl_source.hpp"
+#include "input/jsonl_source.hpp"
 
 #include <filesystem>
 
 #include "geometry/json_io.hpp"
 
-namespace traj::plan {
+namespace traj::input {
+
+using plan::PlanError;
 
 JsonlSource::JsonlSource(const std::string& file) : file_(file) {
   if (std::filesystem::is_directory(file)) throw PlanError(file + ": is a directory, not a path file");
@@ -24,7 +26,7 @@ bool JsonlSource::next(geo::BSpline& out, std::string& where) {
       const nlohmann::json doc = geo::parse_json_text(buf_, file_, line_);
       out = geo::parse_curve(doc, where);  // "<file>:<line>: <field>: ..."
       const geo::Curve c(out, where);
-      if (prev_end_.size() > 0) check_join(prev_end_, c.point(c.u_begin()), where);
+      if (prev_end_.size() > 0) plan::check_join(prev_end_, c.point(c.u_begin()), where);
       prev_end_ = c.point(c.u_end());
     } catch (const geo::GeometryError& e) {
       throw PlanError(e.what());
@@ -55,4 +57,4 @@ size_t write_jsonl(CurveSource& src, std::ostream& out, const std::string& units
   return n;
 }
 
-}  // namespace traj::plan
+}  // namespace traj::input

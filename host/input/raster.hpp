@@ -6,9 +6,9 @@
 #include <cmath>
 #include <string>
 
-#include "planner/streaming.hpp"
+#include "input/curve_source.hpp"
 
-namespace traj::plan {
+namespace traj::input {
 
 class RasterSource : public CurveSource {
  public:
@@ -53,4 +53,4 @@ class RasterSource : public CurveSource {
   size_t rows_;
 };
 
-}  // namespace traj::plan
+}  // namespace traj::input

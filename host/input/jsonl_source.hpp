@@ -1,4 +1,4 @@
-// trajcore planner: JSON Lines path files, read as a stream.
+// JSON Lines path files, read as a stream.
 //
 // Format (`*.jsonl`): one curve per line, each line a curve object of the
 // shared butterfly format ({"degree": p, "knots": [...], "control_points":
@@ -20,9 +20,10 @@
 #include <ostream>
 #include <string>
 
-#include "planner/streaming.hpp"
+#include "input/curve_source.hpp"
+#include "planner/planner.hpp"
 
-namespace traj::plan {
+namespace traj::input {
 
 class JsonlSource : public CurveSource {
  public:
@@ -49,4 +50,4 @@ bool is_jsonl(const std::string& file, const std::string& format = {});
 // returns the number of curves. Used to produce large test files.
 size_t write_jsonl(CurveSource& src, std::ostream& out, const std::string& units = "mm");
 
-}  // namespace traj::plan
+}  // namespace traj::input

@@ -1,4 +1,4 @@
-#include "sim.hpp"
+#include "sim/sim.hpp"
 
 #include <verilated.h>
 
@@ -9,10 +9,10 @@
 
 #include "Vtraj_fd_cubic.h"
 #include "Vtraj_fd_quintic.h"
-#include "fd/vl_bits.hpp"
+#include "sim/vl_bits.hpp"
 #include "traj_fd_engine.hpp"
 
-namespace traj::app {
+namespace traj::sim {
 namespace {
 
 template <class V, class Eng>
@@ -121,4 +121,4 @@ SimResult simulate(const stream::Header& h, const std::vector<stream::Record>& r
                            " (this tool carries 3x3x64/16/32 and 3x5x96/16/48)");
 }
 
-}  // namespace traj::app
+}  // namespace traj::sim

@@ -1,209 +1,18 @@
-#include "planner/pipeline.hpp"
-
-#include "geometry/json_io.hpp"
-#include "planner/sampled.hpp"
-
-#include <nlohmann/json.hpp>
+#include "report/report.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <sstream>
 
-namespace traj::plan {
-namespace {
+#include "planner/sampled.hpp"
+#include "util/format.hpp"
 
-using Clock = std::chrono::steady_clock;
-double secs(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+namespace traj::report {
 
-std::string fmt(const char* f, double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
-}
-
-}  // namespace
-
-fd::Format engine_format(int degree) {
-  fd::Format f;
-  f.axes = 3;
-  f.chunk_width = 16;
-  if (degree == 5) {
-    f.degree = 5;
-    f.width = 96;
-    f.guard_bits = 48;
-    f.frac_bits = 32;
-  } else if (degree == 3) {
-    f.degree = 3;
-    f.width = 64;
-    f.guard_bits = 32;
-    f.frac_bits = 16;
-  } else {
-    throw PlanError("segment degree " + std::to_string(degree) + ": the tool carries engines for degree 3 and 5");
-  }
-  return f;
-}
-
-JobConfig::JobConfig() : format(engine_format(5)) {}
-
-void check_tick_count(double duration, double period, const std::string& what) {
-  const double n = std::ceil(duration / period);
-  if (!(n <= kMaxPlanTicks))
-    throw PlanError(what + ": motion of " + fmt("%.4g", duration) + " s is " + fmt("%.4g", n) + " ticks at " +
-                    fmt("%g", period) + " s per tick, more than one plan holds (" + fmt("%.0f", kMaxPlanTicks) +
-                    " ticks, about 2 GB); split the path, raise the feed or the limits, or use a longer tick period" +
-                    " (plan --window splits a path only between curves)");
-}
-
-Path load_path(const std::string& file) {
-  if (std::filesystem::is_directory(file)) throw PlanError(file + ": is a directory, not a path file");
-  // every JSON error (syntax, truncation, a number out of the double range)
-  // names file:line:column and the field
-  nlohmann::json doc;
-  try {
-    doc = geo::load_json_file(file);
-  } catch (const geo::GeometryError& e) {
-    throw PlanError(e.what());
-  }
-  Path p;
-  try {
-    if (doc.is_object() && doc.contains("curves")) {
-      if (!doc["curves"].is_array() || doc["curves"].empty())
-        throw PlanError(file + ": curves: must be a non-empty array of curves");
-      for (size_t i = 0; i < doc["curves"].size(); ++i) {
-        const std::string where = file + ": curves[" + std::to_string(i) + "]";
-        p.add(geo::parse_curve(doc["curves"][i], where), where);
-      }
-    } else {
-      p.add(geo::parse_curve(doc, file), file);
-    }
-  } catch (const geo::GeometryError& e) {
-    throw PlanError(e.what());
-  }
-  return p;
-}
-
-JobResult run_job(const Path& p, const JobConfig& cfg, const Progress& progress) {
-  cfg.limits.validate();
-  const double h = cfg.plan.period;
-  if (!std::isfinite(h) || !(h > 0)) throw PlanError("tick period " + std::to_string(h) + " must be positive and finite");
-  JobResult r;
-  fd::Format f = cfg.format;
-  f.degree = cfg.degree;
-  fd::Compiler comp(f);
-  const double lsb = std::ldexp(1.0, -f.frac_bits);
-  r.fit_tol = cfg.limits.tol - (0.5 + f.tol_lsb) * lsb;
-  if (!(r.fit_tol > 0))
-    throw PlanError("path tolerance " + fmt("%g", cfg.limits.tol) + " " + cfg.units +
-                    " is below the output quantisation (" + fmt("%g", (0.5 + f.tol_lsb) * lsb) + " " + cfg.units +
-                    ": 1/2 LSB + the register bound at 2^-" + std::to_string(f.frac_bits) + ")");
-  auto t0 = Clock::now();
-  auto t1 = t0, t2 = t0;
-  SegmentOptions so;
-  so.degree = cfg.degree;
-  so.max_ticks = static_cast<uint32_t>(
-      std::min<uint64_t>(fd::Compiler::longest_segment(f.degree, f.guard_bits, f.tol_lsb), f.max_ticks));
-  so.fit_tol = r.fit_tol;
-  // Plan, check every tick, fit; where a limit is exceeded (between grid
-  // points) or no one-tick segment fits, cap the speed locally and replan.
-  PlanOptions po = cfg.plan;
-  const int d = p.dim();
-  double t_plan = 0, t_ticks = 0, t_fit = 0;
-  for (int attempt = 0;; ++attempt) {
-    if (attempt > 200) throw PlanError("the limits cannot be met: " + std::to_string(po.caps.size()) + " local speed caps did not suffice");
-    if (progress) progress("plan", 0);
-    auto a0 = Clock::now();
-    r.plan = plan_path(p, cfg.limits, po);
-    check_tick_count(r.plan.duration(), h, "the path");
-    if (progress) progress("plan", 1);
-    auto a1 = Clock::now();
-    r.ticks = sample_ticks(p, r.plan, h);
-    if (progress) progress("ticks", 1);
-    auto a2 = Clock::now();
-    t_plan += secs(a0, a1);
-    t_ticks += secs(a1, a2);
-    auto cap_at = [&](long long k, double ratio, double shrink) {
-      const TickSample& t = r.ticks[static_cast<size_t>(k)];
-      const double w = std::max(5 * h * t.v, 1e-9 * r.plan.length) + 1e-9;
-      double v = t.v * shrink;
-      if (ratio > 1) v = std::min(v, t.v * 0.95 * std::pow(ratio, -1.0 / 3.0));
-      po.caps.push_back({t.s - w, t.s + w, std::max(v, 1e-6 * cfg.limits.feed)});
-    };
-    size_t before = po.caps.size();
-    long long last = -1000000;
-    for (size_t k = 0; k < r.ticks.size(); ++k) {
-      const double q = tick_ratio(r.ticks[k], cfg.limits, d);
-      if (q > 1 + 1e-9 && static_cast<long long>(k) > last + 5) {
-        cap_at(static_cast<long long>(k), q, 1.0);
-        last = static_cast<long long>(k);
-      }
-    }
-    if (po.caps.size() > before) continue;
-    if (progress) progress("fit", 0);
-    auto a3 = Clock::now();
-    try {
-      r.segments = fit_segments(p, r.plan, r.ticks, cfg.limits, so, h);
-    } catch (const FitError& e) {
-      t_fit += secs(a3, Clock::now());
-      cap_at(e.tick, 0, 0.8);
-      cap_at(std::min<long long>(e.tick + 1, static_cast<long long>(r.ticks.size()) - 1), 0, 0.8);
-      continue;
-    }
-    t_fit += secs(a3, Clock::now());
-    if (progress) progress("fit", 1);
-    r.repairs = static_cast<int>(po.caps.size());
-    break;
-  }
-  t1 = t2 = Clock::now();
-  // Hold segment: one tick at the end position, so that the core's last
-  // sample is the end point (a segment emits its start, not its end).
-  {
-    TimeSegment hold;
-    hold.k0 = static_cast<long long>(r.ticks.size()) - 1;
-    hold.K = 1;
-    hold.degree = cfg.degree;
-    for (int a = 0; a < p.dim(); ++a) hold.coef[a][0] = r.ticks.back().x[a];
-    r.segments.push_back(hold);
-  }
-  auto t3 = Clock::now();
-  const std::vector<mpz_class>* prev = nullptr;
-  r.compiled.reserve(r.segments.size());
-  fd::PolySegment ps;  // reused: the coefficient vectors are sized once
-  ps.h = h;
-  ps.coef.assign(f.axes, std::vector<double>(f.degree + 1, 0.0));
-  for (size_t i = 0; i < r.segments.size(); ++i) {
-    const TimeSegment& s = r.segments[i];
-    ps.ticks = s.K;
-    for (int a = 0; a < f.axes && a < p.dim(); ++a)
-      for (int j = 0; j <= f.degree; ++j) ps.coef[a][j] = s.coef[a][j];
-    try {
-      r.compiled.push_back(comp.compile(ps, prev, "segment " + std::to_string(i)));
-    } catch (const fd::CompileError& e) {
-      throw PlanError(std::string("compile: ") + e.what());
-    }
-    prev = &r.compiled.back().end;
-    if (progress && (i % 1024 == 0)) progress("compile", double(i) / r.segments.size());
-  }
-  auto t4 = Clock::now();
-  r.header = stream::Header::from(f, h, cfg.units);
-  r.t_plan = t_plan;
-  r.t_ticks = t_ticks;
-  r.t_fit = t_fit + secs(t2, t3);
-  r.t_compile = secs(t3, t4);
-  (void)t0;
-  if (progress) progress("done", 1);
-  return r;
-}
-
-std::vector<stream::Record> records_of(const JobResult& r) {
-  std::vector<stream::Record> v;
-  v.reserve(r.compiled.size());
-  for (const auto& c : r.compiled) v.push_back({c.ticks, c.regs});
-  return v;
-}
+using namespace plan;
+using job::JobConfig;
+using job::JobResult;
+using util::fmt;
 
 Samples predicted_samples(const JobResult& r) {
   Samples s;
@@ -220,7 +29,7 @@ Samples predicted_samples(const JobResult& r) {
 Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, const Samples& s) {
   Report rep;
   const int d = p.dim();
-  const double h = cfg.plan.period;
+  const double h = cfg.machine.period;
   const double lsb = std::ldexp(1.0, -r.header.frac_bits);
   rep.ticks = static_cast<long long>(s.v.size());
   rep.motion_time = (rep.ticks - 1) * h;
@@ -234,7 +43,7 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
   double bound = 0;
   for (const auto& c : r.compiled) bound = std::max(bound, c.bound_lsb);
   rep.quant = (0.5 + bound) * lsb;
-  rep.guard_needed = fd::Compiler::guard_bits_needed(r.header.degree, rep.k_max, cfg.format.tol_lsb);
+  rep.guard_needed = fd::Compiler::guard_bits_needed(r.header.degree, rep.k_max, cfg.machine.format().tol_lsb);
   rep.plan_peaks = peaks_of(r.ticks, d);
   rep.worst_plan = worst_ratio(rep.plan_peaks, cfg.limits, d, &rep.worst_plan_what);
   for (const auto& sg : r.segments) {
@@ -385,16 +194,16 @@ std::string report_text(const JobConfig& cfg, const Report& rep, const JobResult
   const int d = r.ticks.empty() ? 0 : 2 + (std::fabs(r.ticks.front().x[2]) > 0 || L.v_axis[2] < 0);
   (void)d;
   o << "Plan\n";
-  o << "  path length          " << fmt("%.6f", r.plan.length) << " " << cfg.units << "\n";
+  o << "  path length          " << fmt("%.6f", r.plan.length) << " " << cfg.machine.units << "\n";
   o << "  motion time          " << fmt("%.4f", rep.motion_time) << " s (" << rep.ticks << " samples at "
-    << fmt("%g", cfg.plan.period * 1e3) << " ms)\n";
+    << fmt("%g", cfg.machine.period * 1e3) << " ms)\n";
   o << "  stations             " << r.plan.stations.size() << " (" << r.plan.refinements << " added by refinement, "
     << r.plan.grid_points << " grid points, " << r.repairs << " local speed caps from tick checks)\n";
   o << "  segments             " << rep.segments << " (K " << rep.k_min << ".." << rep.k_max << " ticks, degree "
     << r.header.degree << ")\n";
   o << "  engine format        Width " << r.header.width << ", Guard " << r.header.guard_bits << " (K_max "
     << rep.k_max << " needs " << rep.guard_needed << "), output " << (r.header.width - r.header.guard_bits)
-    << " bits, 1 LSB = 2^-" << r.header.frac_bits << " " << cfg.units << "\n";
+    << " bits, 1 LSB = 2^-" << r.header.frac_bits << " " << cfg.machine.units << "\n";
   {
     const long long rec = 12LL + static_cast<long long>(r.header.axes) * (r.header.degree + 1) * r.header.width / 8;
     const long long bytes = 48 + static_cast<long long>(rep.segments) * rec + 16;
@@ -403,7 +212,7 @@ std::string report_text(const JobConfig& cfg, const Report& rep, const JobResult
       << fmt("%.1f", 8.0 * bytes / std::max(1.0, rep.motion_time)) << " bit/s of motion)\n";
   }
   o << "Accuracy (output samples of the core)\n";
-  o << "  max distance to the exact curve  " << fmt("%.4g", rep.max_deviation) << " " << cfg.units << "  (tolerance "
+  o << "  max distance to the exact curve  " << fmt("%.4g", rep.max_deviation) << " " << cfg.machine.units << "  (tolerance "
     << fmt("%g", L.tol) << ": fit " << fmt("%.4g", rep.fit_tol) << " + quantisation " << fmt("%.3g", rep.quant)
     << ")\n";
   o << "  feed fluctuation (chord / planned arc - 1)  max " << fmt("%+.3e", rep.feed_fluct_max) << "  min "
@@ -444,4 +253,4 @@ std::string report_text(const JobConfig& cfg, const Report& rep, const JobResult
   return o.str();
 }
 
-}  // namespace traj::plan
+}  // namespace traj::report

@@ -14,11 +14,11 @@
 
 #include "Vtraj_core_app.h"
 #include "bcu/bcu_compiler.hpp"
-#include "fd/vl_bits.hpp"
-#include "sim.hpp"
+#include "sim/vl_bits.hpp"
+#include "sim/sim.hpp"
 #include "traj_core.hpp"
 
-namespace traj::app {
+namespace traj::sim {
 namespace {
 
 using B = CoreBuild;
@@ -211,4 +211,4 @@ SimResult simulate_core(const stream::Header& h, const std::vector<stream::Recor
   return res;
 }
 
-}  // namespace traj::app
+}  // namespace traj::sim

@@ -1,0 +1,116 @@
+#include "job/job.hpp"
+
+#include <chrono>
+#include <cmath>
+
+#include "job/plan_fit.hpp"
+#include "util/format.hpp"
+
+namespace traj::job {
+
+using plan::PlanError;
+using util::fmt;
+
+void JobConfig::validate() const {
+  limits.validate();
+  machine.validate();
+}
+
+plan::PlanOptions JobConfig::plan_options() const {
+  plan::PlanOptions po = plan;
+  po.period = machine.period;
+  return po;
+}
+
+plan::SegmentOptions JobConfig::segment_options() const {
+  plan::SegmentOptions so;
+  so.degree = machine.degree;
+  so.max_ticks = machine.longest_segment();
+  so.fit_tol = machine.fit_budget(limits.tol);
+  return so;
+}
+
+void check_tick_count(double duration, double period, const std::string& what) {
+  const double n = std::ceil(duration / period);
+  if (!(n <= kMaxPlanTicks))
+    throw PlanError(what + ": motion of " + fmt("%.4g", duration) + " s is " + fmt("%.4g", n) + " ticks at " +
+                    fmt("%g", period) + " s per tick, more than one plan holds (" + fmt("%.0f", kMaxPlanTicks) +
+                    " ticks, about 2 GB); split the path, raise the feed or the limits, or use a longer tick period" +
+                    " (plan --window splits a path only between curves)");
+}
+
+SegmentCompiler::SegmentCompiler(const Machine& m) : comp_(m.format()) {
+  const fd::Format f = m.format();
+  ps_.h = m.period;
+  ps_.coef.assign(f.axes, std::vector<double>(f.degree + 1, 0.0));
+}
+
+const fd::Compiled& SegmentCompiler::compile(const plan::TimeSegment& seg, size_t index) {
+  ps_.ticks = seg.K;
+  for (size_t a = 0; a < ps_.coef.size(); ++a)
+    for (size_t j = 0; j < ps_.coef[a].size(); ++j) ps_.coef[a][j] = seg.coef[a][j];
+  try {
+    comp_.compile(ps_, have_end_ ? &c_.end : nullptr, "segment " + std::to_string(index), c_);
+  } catch (const fd::CompileError& e) {
+    throw PlanError(std::string("compile: ") + e.what());
+  }
+  have_end_ = true;
+  return c_;
+}
+
+plan::TimeSegment hold_segment(long long k0, const double* x, int dim, int degree) {
+  plan::TimeSegment hold;
+  hold.k0 = k0;
+  hold.K = 1;
+  hold.degree = degree;
+  for (int a = 0; a < dim; ++a) hold.coef[a][0] = x[a];
+  return hold;
+}
+
+JobResult run_job(const plan::Path& p, const JobConfig& cfg, const Progress& progress) {
+  using Clock = std::chrono::steady_clock;
+  cfg.validate();
+  const Machine& m = cfg.machine;
+  JobResult r;
+  PlanFitRequest req;
+  req.path = &p;
+  req.limits = &cfg.limits;
+  req.options = cfg.plan_options();
+  req.segments = cfg.segment_options();
+  req.what = "the path";
+  req.sample = [&](const plan::Plan& plan, std::vector<plan::TickSample>& ts) {
+    ts = plan::sample_ticks(p, plan, m.period);
+  };
+  req.progress = progress;
+  r.fit_tol = req.segments.fit_tol;
+  PlanFitResult fit = plan_and_fit(req, r.ticks);
+  r.plan = std::move(fit.plan);
+  r.segments = std::move(fit.segments);
+  r.repairs = static_cast<int>(req.options.caps.size());
+  r.segments.push_back(
+      hold_segment(static_cast<long long>(r.ticks.size()) - 1, r.ticks.back().x, p.dim(), m.degree));
+
+  const auto t3 = Clock::now();
+  SegmentCompiler sc(m);
+  r.compiled.reserve(r.segments.size());
+  for (size_t i = 0; i < r.segments.size(); ++i) {
+    r.compiled.push_back(sc.compile(r.segments[i], i));
+    if (progress && (i % 1024 == 0)) progress("compile", double(i) / r.segments.size());
+  }
+  r.header = m.header();
+  r.t_plan = fit.t_plan;
+  r.t_ticks = fit.t_ticks;
+  r.t_fit = fit.t_fit;
+  r.t_compile = std::chrono::duration<double>(Clock::now() - t3).count();
+  if (progress) progress("done", 1);
+  return r;
+}
+
+std::vector<stream::Record> records_of(const JobResult& r) {
+  std::vector<stream::Record> v;
+  v.reserve(r.compiled.size());
+  for (const auto& c : r.compiled) v.push_back({c.ticks, c.regs});
+  return v;
+}
+
+}  // namespace traj::job

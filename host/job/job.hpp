@@ -1,0 +1,69 @@
+// A job: a whole path planned, fitted and compiled into the engine's segment
+// stream (run_job). Streaming over paths of any length is job/streaming.hpp;
+// the report on what the core outputs is report/report.hpp.
+#pragma once
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "fd/fd_compiler.hpp"
+#include "job/machine.hpp"
+#include "planner/planner.hpp"
+#include "planner/segments.hpp"
+#include "stream/segment_stream.hpp"
+
+namespace traj::job {
+
+struct JobConfig {
+  plan::Limits limits;
+  plan::PlanOptions plan;  // planner tuning; its period is set from `machine`
+  Machine machine;
+  // Validates the limits and the machine; PlanError naming the field.
+  void validate() const;
+  // The planner options with the machine's tick period.
+  plan::PlanOptions plan_options() const;
+  // The fit options: the machine's degree, longest segment and fit budget.
+  plan::SegmentOptions segment_options() const;
+};
+
+struct JobResult {
+  plan::Plan plan;
+  std::vector<plan::TickSample> ticks;
+  std::vector<plan::TimeSegment> segments;
+  std::vector<fd::Compiled> compiled;
+  stream::Header header;
+  double fit_tol = 0;
+  int repairs = 0;  // local speed caps added by the tick-level checks
+  double t_plan = 0, t_ticks = 0, t_fit = 0, t_compile = 0;  // seconds
+};
+
+using Progress = std::function<void(const std::string& stage, double fraction)>;
+
+// One plan (a whole path, or one streaming window) is sampled at every tick
+// in memory: at most kMaxPlanTicks ticks (PlanError naming `what` beyond).
+constexpr double kMaxPlanTicks = 1e7;
+void check_tick_count(double duration, double period, const std::string& what);
+
+JobResult run_job(const plan::Path& p, const JobConfig& cfg, const Progress& progress = {});
+std::vector<stream::Record> records_of(const JobResult& r);
+
+// Compiles time segments one after another, each from the exact integer end
+// state of the one before (no drift), into one reused fd::Compiled.
+class SegmentCompiler {
+ public:
+  explicit SegmentCompiler(const Machine& m);
+  // The compiled segment is valid until the next call. PlanError on a compile error.
+  const fd::Compiled& compile(const plan::TimeSegment& seg, size_t index);
+
+ private:
+  fd::Compiler comp_;
+  fd::PolySegment ps_;
+  fd::Compiled c_;
+  bool have_end_ = false;
+};
+
+// One tick at `x`: the last segment of a motion, so that the core's last
+// sample is the end point (a segment emits its start, not its end).
+plan::TimeSegment hold_segment(long long k0, const double* x, int dim, int degree);
+
+}  // namespace traj::job

@@ -1,0 +1,207 @@
+#include "job/streaming.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <memory>
+
+#include "job/plan_fit.hpp"
+
+namespace traj::job {
+namespace {
+
+using plan::Path;
+using plan::PathCurve;
+using plan::PlanError;
+
+// The curves held by the streaming window: each built once (arc-length
+// tables) and shared by the windows that plan it, with its spline kept so
+// that it can be cut at a commit.
+struct Window {
+  std::deque<std::shared_ptr<const PathCurve>> curves;
+  std::deque<geo::BSpline> splines;
+
+  Path path() const {
+    Path p;
+    for (const auto& c : curves) p.add(c);
+    return p;
+  }
+  void pop_front(size_t n) {
+    for (size_t i = 0; i < n; ++i) {
+      curves.pop_front();
+      splines.pop_front();
+    }
+  }
+  // Cuts curve i in two inside the knot span that holds its parameter middle
+  // (a smooth place: no knot there).
+  void split(size_t i) {
+    const geo::BSpline& c = splines[i];
+    const double mid = 0.5 * (c.u_begin() + c.u_end());
+    int k = c.degree;
+    while (k + 1 < c.n_ctrl() && c.knots[k + 1] <= mid) ++k;
+    auto halves = geo::split_at(c, 0.5 * (c.knots[k] + c.knots[k + 1]));
+    const std::string w = curves[i]->where;
+    curves[i] = std::make_shared<const PathCurve>(halves.first, w + " (first part)");
+    curves.insert(curves.begin() + static_cast<long>(i) + 1,
+                  std::make_shared<const PathCurve>(halves.second, w + " (second part)"));
+    splines[i] = std::move(halves.first);
+    splines.insert(splines.begin() + static_cast<long>(i) + 1, std::move(halves.second));
+  }
+};
+
+// True if curves i-1 and i of `path` meet at a tangent break.
+bool corner_at(const Path& path, size_t i, double corner_tol) {
+  const plan::Frame e = plan::frame_at(path, i - 1, path.curve(i - 1).u_end(), path.offset(i));
+  const plan::Frame f = plan::frame_at(path, i, path.curve(i).u_begin(), path.offset(i));
+  double dot = 0;
+  for (int a = 0; a < path.dim(); ++a) dot += e.T[a] * f.T[a];
+  return std::acos(std::clamp(dot, -1.0, 1.0)) > corner_tol;
+}
+
+// How many curves of a (not last) window to commit. The commit junction
+// should not be a corner: the next window's first segment must start at the
+// last committed tick, just before the junction, and turn the velocity from
+// there; at a corner (passed at a near-stop within one tick) that can fail
+// where a whole-path fit would have started the turn earlier. The nearest
+// junction without a tangent break is taken (earlier first, then later); where
+// every junction is a corner (a polyline), the curve after the corner is cut
+// in two inside a knot span and the commit ends at the cut, so the corner
+// itself is fitted within this window.
+size_t choose_commit(Window& win, Path& path, size_t ncommit, double corner_tol) {
+  if (corner_at(path, ncommit, corner_tol)) {
+    for (size_t d = 1; d < win.curves.size(); ++d) {
+      if (ncommit > d && !corner_at(path, ncommit - d, corner_tol)) return ncommit - d;
+      if (ncommit + d < win.curves.size() && !corner_at(path, ncommit + d, corner_tol)) return ncommit + d;
+    }
+    win.split(ncommit);
+    path = win.path();
+    return ncommit + 1;
+  }
+  return ncommit;
+}
+
+// Time at which `plan` reaches arc length s (bisection on the profile).
+double time_at_arc_length(const plan::Plan& plan, double s) {
+  double lo = 0, hi = plan.duration();
+  for (int it = 0; it < 200 && hi - lo > 1e-15 * (1 + hi); ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (plan::state_at(plan, mid).s < s ? lo : hi) = mid;
+  }
+  return hi;
+}
+
+}  // namespace
+
+StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOptions& so, const SegmentSink& sink,
+                          const Progress& progress) {
+  using Clock = std::chrono::steady_clock;
+  const auto t_start = Clock::now();
+  if (so.window < 2 || so.commit < 1 || so.commit >= so.window)
+    throw PlanError("streaming window: need 1 <= commit < window (got commit " + std::to_string(so.commit) +
+                    ", window " + std::to_string(so.window) + ")");
+  cfg.validate();
+  const double h = cfg.machine.period;
+  plan::SegmentOptions sopt = cfg.segment_options();
+
+  StreamStats st;
+  Window win;
+  bool exhausted = false;
+  // The window's start time is k_org h + T0 with 0 <= T0 < h: the tick count
+  // is held as an integer, so tick times and the committed tick keep full
+  // precision however long the path runs (a double T0 alone would round the
+  // tick grid to 7e-9 ticks past 2^25 ticks, 9 hours at 1 ms).
+  long long k_org = 0;
+  double T0 = 0, v_commit = 0;
+  long long k_last = -1;  // last committed tick
+  plan::TickSample carried{};
+  std::vector<plan::TickSample> ts;  // the window's ticks; storage reused window after window
+
+  SegmentCompiler sc(cfg.machine);
+  auto emit = [&](const plan::TimeSegment& seg) {
+    const fd::Compiled& c = sc.compile(seg, st.segments);
+    if (st.first_segment < 0) st.first_segment = std::chrono::duration<double>(Clock::now() - t_start).count();
+    sink(c, seg);
+    ++st.segments;
+    st.ticks += seg.K;
+  };
+
+  while (true) {
+    geo::BSpline b;
+    std::string where;
+    while (!exhausted && win.curves.size() < so.window) {
+      if (src.next(b, where)) {
+        win.curves.push_back(std::make_shared<const PathCurve>(b, where));
+        win.splines.push_back(b);
+        ++st.curves;
+      } else {
+        exhausted = true;
+      }
+    }
+    if (win.curves.empty()) break;
+    Path path = win.path();
+    const bool last = exhausted;
+    size_t ncommit = last ? win.curves.size() : std::min(so.commit, win.curves.size() - 1);
+    if (!last) ncommit = choose_commit(win, path, ncommit, cfg.plan.corner_tol);
+    const double s_commit = last ? path.length() : path.offset(ncommit);
+
+    double Tc = 0;
+    long long k_end = 0;
+    PlanFitRequest req;
+    req.path = &path;
+    req.limits = &cfg.limits;
+    req.options = cfg.plan_options();
+    req.options.v_start = v_commit;
+    if (!last) req.options.force_stations = {s_commit};
+    req.segments = sopt;
+    req.what = "streaming window " + std::to_string(st.windows) + " (curves from " + path.entry(0).where + ")";
+    req.carried = k_last >= 0;
+    req.t_offset = T0;
+    req.k_base = k_last < 0 ? 0 : k_last;
+    req.sample = [&](const plan::Plan& plan, std::vector<plan::TickSample>& out) {
+      Tc = last ? plan.duration() : time_at_arc_length(plan, s_commit);
+      k_end = k_org + (last ? static_cast<long long>(std::ceil((T0 + Tc) / h - 1e-9))
+                            : static_cast<long long>(std::floor((T0 + Tc) / h + 1e-9)));
+      out.clear();
+      if (k_last >= 0) out.push_back(carried);
+      plan::append_ticks_range(path, plan, h, T0, k_last + 1, k_end, out, k_org);
+    };
+    const PlanFitResult fit = plan_and_fit(req, ts);
+    st.caps += req.options.caps.size();
+    st.max_window_ticks = std::max(st.max_window_ticks, ts.size());
+    for (const auto& sg : fit.segments) emit(sg);
+    // the fitted positions before the committed end: the next window's fit
+    // checks its sampled tangential/normal windows across the junction
+    {
+      auto t = plan::fitted_tail(fit.segments, path.dim(), h, 3);
+      auto& hist = sopt.history;
+      hist.insert(hist.end(), t.begin(), t.end());
+      while (hist.size() > 3) hist.erase(hist.begin());
+    }
+    if (!ts.empty()) {
+      carried = ts.back();
+      carried.curve = static_cast<size_t>(-1);
+      carried.s = 0;
+      k_last = k_end;
+    }
+    T0 += Tc;
+    {
+      const double whole = std::floor(T0 / h);
+      k_org += static_cast<long long>(whole);
+      T0 -= whole * h;
+    }
+    v_commit = last ? 0 : plan::state_at(fit.plan, Tc).v;
+    ++st.windows;
+    win.pop_front(ncommit);
+    if (progress) progress("stream", static_cast<double>(st.curves));
+    if (last) {
+      emit(hold_segment(k_last, carried.x, path.dim(), cfg.machine.degree));
+      break;
+    }
+  }
+  st.motion_time = static_cast<double>(k_org) * h + T0;
+  st.wall = std::chrono::duration<double>(Clock::now() - t_start).count();
+  return st;
+}
+
+}  // namespace traj::job

@@ -1,0 +1,46 @@
+// The report on a job: what the core outputs (the host's exact prediction of
+// its samples, or the samples of a simulation) measured against the path and
+// the limits, as text and as SVG plots.
+#pragma once
+#include <array>
+#include <string>
+#include <vector>
+
+#include "job/job.hpp"
+
+namespace traj::report {
+
+// The core's output, as integers per tick and axis (OutWidth <= 63 bits).
+struct Samples {
+  std::vector<std::array<long long, 3>> v;
+};
+
+struct Report {
+  double motion_time = 0;
+  long long ticks = 0;
+  size_t segments = 0;
+  uint32_t k_min = 0, k_max = 0;
+  double max_deviation = 0;  // distance of output samples to the exact curve, units
+  double fit_tol = 0, quant = 0;
+  double feed_fluct_max = 0, feed_fluct_min = 0, feed_fluct_rms = 0;
+  plan::Peaks plan_peaks, fit_peaks, out_peaks;
+  double out_path_v = 0, out_path_a = 0, out_path_j = 0;  // from sample differences (vector norms)
+  double allow_v = 0, allow_a = 0, allow_j = 0;           // quantisation allowance on sample differences, per axis
+  double allow_path_v = 0;                                // the same for the path speed (vector norm): sqrt(dim) allow_v
+  double worst_plan = 0, worst_fit = 0, worst_out = 0;
+  std::string worst_plan_what, worst_fit_what, worst_out_what;
+  int guard_needed = 0;
+};
+
+// The host's exact prediction of the core's samples (fd::Compiler::sample_at
+// on every compiled segment): bit for bit what the engine outputs, without
+// running it (tb/fd and the co-simulations check that identity).
+Samples predicted_samples(const job::JobResult& r);
+
+Report make_report(const plan::Path& p, const job::JobConfig& cfg, const job::JobResult& r, const Samples& s);
+std::string report_text(const job::JobConfig& cfg, const Report& rep, const job::JobResult& r);
+// SVG plots: path coloured by feed; feed, acceleration and jerk against time.
+void write_plots(const std::string& dir, const plan::Path& p, const job::JobConfig& cfg, const job::JobResult& r,
+                 const Samples& s);
+
+}  // namespace traj::report

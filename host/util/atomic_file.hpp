@@ -1,0 +1,32 @@
+// Atomic file output: nothing half-written is ever left under the final name.
+//
+// AtomicFile writes to "<path>.tmp" and renames it onto `path` in commit();
+// if commit() is never reached (an exception, an early return), the
+// destructor removes the temporary file, so the target is either the old
+// file, the complete new one, or absent. The parent directory is created.
+#pragma once
+#include <fstream>
+#include <string>
+
+namespace traj::util {
+
+class AtomicFile {
+ public:
+  // Throws std::runtime_error("cannot write <path>.tmp") if it cannot be opened.
+  explicit AtomicFile(const std::string& path, std::ios::openmode mode = std::ios::out);
+  ~AtomicFile();
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+
+  std::ofstream& out() { return out_; }
+  const std::string& tmp_path() const { return tmp_; }
+  // Flushes, closes and renames into place; throws std::runtime_error("write failed: <tmp>") on error.
+  void commit();
+
+ private:
+  std::string path_, tmp_;
+  std::ofstream out_;
+  bool done_ = false;
+};
+
+}  // namespace traj::util

@@ -1,0 +1,20 @@
+#include "util/format.hpp"
+
+#include <charconv>
+#include <cstdio>
+
+namespace traj::util {
+
+std::string fmt(const char* printf_format, double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, printf_format, v);
+  return b;
+}
+
+std::string shortest(double v) {
+  char b[64];
+  const auto r = std::to_chars(b, b + sizeof b, v);
+  return std::string(b, r.ptr);
+}
+
+}  // namespace traj::util

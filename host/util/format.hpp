@@ -1,0 +1,17 @@
+// Number formatting for messages and reports: one place, so every message
+// prints a number the same way.
+#pragma once
+#include <string>
+
+namespace traj::util {
+
+// printf-style formatting of one double, e.g. fmt("%.4g", v).
+std::string fmt(const char* printf_format, double v);
+
+// "%g": six significant digits, the default for numbers in error messages.
+inline std::string num(double v) { return fmt("%g", v); }
+
+// The shortest text that reads back to the same double (0.3 prints as 0.3).
+std::string shortest(double v);
+
+}  // namespace traj::util
