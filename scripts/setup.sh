@@ -6,7 +6,7 @@ set -euo pipefail
 PKGS=(
   build-essential cmake ninja-build pkg-config
   verilator iverilog yosys nextpnr-ice40 fpga-icestorm z3
-  libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
+  libeigen3-dev libgtest-dev libgmock-dev
   libcli11-dev nlohmann-json3-dev libgmp-dev zlib1g-dev
   valgrind
 )

@@ -1,0 +1,216 @@
+#include "commands.hpp"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <vector>
+
+#include "input/jsonl_source.hpp"
+#include "input/path_json.hpp"
+#include "input/raster.hpp"
+#include "job/streaming.hpp"
+#include "report/report.hpp"
+#include "sim/sim.hpp"
+#include "stream/segment_stream.hpp"
+#include "util/atomic_file.hpp"
+
+namespace traj::app {
+namespace {
+
+namespace fs = std::filesystem;
+using plan::PlanError;
+
+void progress(const std::string& stage, double f) {
+  std::fprintf(stderr, "\r[%s] %3.0f%%   ", stage.c_str(), 100 * f);
+  if (stage == "done") std::fprintf(stderr, "\n");
+}
+
+void write_csv(const std::string& path, const stream::Header& h, const report::Samples& s) {
+  util::AtomicFile f(path);
+  std::ofstream& o = f.out();
+  const double lsb = std::ldexp(1.0, -h.frac_bits);
+  o << "tick,t_s,x_lsb,y_lsb,z_lsb,x,y,z\n";
+  char b[160];
+  for (size_t k = 0; k < s.v.size(); ++k) {
+    std::snprintf(b, sizeof b, "%zu,%.6f,%lld,%lld,%lld,%.10f,%.10f,%.10f\n", k, k * h.period, s.v[k][0], s.v[k][1],
+                  s.v[k][2], s.v[k][0] * lsb, s.v[k][1] * lsb, s.v[k][2] * lsb);
+    o << b;
+  }
+  f.commit();
+}
+
+// The curves of a path already in memory, as a stream.
+struct PathSource : input::CurveSource {
+  PathSource(const plan::Path& p, const std::string& file) : path(p), file(file) {}
+  bool next(geo::BSpline& b, std::string& w) override {
+    if (i >= path.size()) return false;
+    b = path.curve(i).spline();
+    w = file + ": curve " + std::to_string(i);
+    ++i;
+    return true;
+  }
+  plan::Path path;
+  std::string file;
+  size_t i = 0;
+};
+
+bool passes(const job::JobConfig& cfg, const report::Report& rep) {
+  return rep.max_deviation <= cfg.limits.tol && rep.worst_plan <= 1 + 1e-9 && rep.worst_fit <= 1 + 1e-9 &&
+         rep.worst_out <= 1 + 1e-9;
+}
+
+int plan_streamed(const PlanArgs& a, bool jsonl) {
+  std::unique_ptr<input::CurveSource> src;
+  if (a.raster > 0) {
+    src = std::make_unique<input::RasterSource>(a.raster);
+  } else if (jsonl) {
+    src = std::make_unique<input::JsonlSource>(a.input);  // read line by line as the windows need curves
+  } else {
+    if (a.input.empty()) throw PlanError("plan: give a path file or --raster N");
+    src = std::make_unique<PathSource>(input::load_path(a.input), a.input);  // checks the file and the joins
+  }
+  job::StreamOptions so;
+  if (a.window > 0) {
+    so.window = std::max<size_t>(a.window, 2);
+    so.commit = so.window >= 16 ? so.window * 3 / 4 : so.window / 2;
+  }
+  stream::StreamWriter w(a.output, a.cfg.machine.header());
+  job::StreamStats st;
+  try {
+    st = job::run_streaming(
+        *src, a.cfg, so, [&](const fd::Compiled& c, const plan::TimeSegment&) { w.add({c.ticks, c.regs}); },
+        [](const std::string&, double curves) { std::fprintf(stderr, "\r[stream] %.0f curves   ", curves); });
+  } catch (...) {
+    std::fprintf(stderr, "\n");  // end the progress line; the writer removes its temporary file
+    throw;
+  }
+  w.finish();
+  std::fprintf(stderr, "\n");
+  std::printf("%s: %zu curves in %zu windows, %zu segments, %lld ticks (%.3f s of motion) -> %s\n"
+              "host time %.3f s (%.0fx real time), first segment after %.1f ms\n",
+              a.raster ? "raster" : a.input.c_str(), st.curves, st.windows, st.segments, st.ticks, st.motion_time,
+              a.output.c_str(), st.wall, st.motion_time / st.wall, st.first_segment * 1e3);
+  return 0;
+}
+
+int plan_whole(const PlanArgs& a) {
+  if (a.input.empty()) throw PlanError("give a path file");
+  const auto path = input::load_path(a.input);
+  const auto res = job::run_job(path, a.cfg, progress);
+  stream::write_file(a.output, res.header, job::records_of(res));
+  std::printf("%s: %zu segments, %zu ticks (%.3f s of motion) -> %s\n", a.input.c_str(), res.segments.size(),
+              res.ticks.size(), res.plan.duration(), a.output.c_str());
+  // the plan report; the output columns are the host's exact prediction of
+  // the core's samples (`trajcore run` confirms them on the Verilated core)
+  const auto rep = report::make_report(path, a.cfg, res, report::predicted_samples(res));
+  std::fputs(report::report_text(a.cfg, rep, res).c_str(), stdout);
+  std::printf("(output columns: the host's exact prediction of the core's samples)\n");
+  const bool ok = passes(a.cfg, rep);
+  if (!ok) std::fprintf(stderr, "trajcore plan: a check FAILED (see the report)\n");
+  return ok ? 0 : 1;
+}
+
+// A folder inside the output folder that holds the files until all are
+// written; removed unless kept.
+struct Staging {
+  std::string dir;
+  bool keep = false;
+  ~Staging() {
+    std::error_code ec;
+    if (!keep) fs::remove_all(dir, ec);
+  }
+};
+
+std::string core_line(const sim::SimResult& sr) {
+  char b[256];
+  std::snprintf(b, sizeof b,
+                "Core (Verilated traj_fd_engine): %llu cycles in %.2f s, RTL == hls on every cycle: %s, "
+                "underruns %llu, tick_err %s\n",
+                static_cast<unsigned long long>(sr.cycles), sr.seconds, sr.mismatches ? "NO" : "yes",
+                static_cast<unsigned long long>(sr.underruns), sr.tick_err ? "SET" : "clear");
+  return b;
+}
+
+}  // namespace
+
+int plan_command(const PlanArgs& a) {
+  const bool jsonl = !a.input.empty() && a.raster == 0 && input::is_jsonl(a.input, a.format);
+  if (jsonl && a.window_given && a.window == 0)
+    throw PlanError("plan: a JSON Lines path is always streamed: --window must be at least 2");
+  if (a.window > 0 || a.raster > 0 || jsonl) return plan_streamed(a, jsonl);
+  return plan_whole(a);
+}
+
+int run_command(const RunArgs& a) {
+  if (input::is_jsonl(a.input))
+    throw PlanError("run: " + a.input + " is a JSON Lines path, which is planned as a stream; run needs the whole "
+                    "path in memory (report, plots): use `trajcore plan " + a.input + " -o plan.trj` (streamed) then "
+                    "`trajcore sim plan.trj`");
+  if (a.input.empty()) throw PlanError("give a path file");
+  const auto path = input::load_path(a.input);
+  const auto res = job::run_job(path, a.cfg, progress);
+  // everything is written into a staging folder inside out_dir and moved
+  // into place only when all of it is written (nothing half-written)
+  const std::vector<std::string> names = {"plan.trj", "samples.csv", "report.txt", "path_feed.svg", "profile.svg"};
+  fs::create_directories(a.out_dir);
+  for (const auto& n : names)
+    if (fs::exists(a.out_dir + "/" + n) && !fs::is_regular_file(a.out_dir + "/" + n))
+      throw PlanError(a.out_dir + "/" + n + ": exists and is not a regular file; nothing written");
+  Staging stage{a.out_dir + "/.trajcore-run-" + std::to_string(::getpid())};
+  fs::create_directories(stage.dir);
+  const auto records = job::records_of(res);
+  stream::write_file(stage.dir + "/plan.trj", res.header, records);
+  std::printf("%s: %zu segments, %zu ticks (%.3f s of motion)\n", a.input.c_str(), res.segments.size(),
+              res.ticks.size(), res.plan.duration());
+  const auto sr = sim::simulate(res.header, records, 0, [](double f) { progress("sim", f); });
+  std::fprintf(stderr, "\n");
+  write_csv(stage.dir + "/samples.csv", res.header, sr.samples);
+  const auto rep = report::make_report(path, a.cfg, res, sr.samples);
+  report::write_plots(stage.dir, path, a.cfg, res, sr.samples);
+  const std::string text = report::report_text(a.cfg, rep, res) + core_line(sr);
+  {
+    util::AtomicFile f(stage.dir + "/report.txt");
+    f.out() << text;
+    f.commit();
+  }
+  for (const auto& n : names) fs::rename(stage.dir + "/" + n, a.out_dir + "/" + n);
+  std::fputs(text.c_str(), stdout);
+  std::printf("Wrote %s/{plan.trj, samples.csv, report.txt, path_feed.svg, profile.svg}\n", a.out_dir.c_str());
+  const bool ok = sr.mismatches == 0 && !sr.tick_err && passes(a.cfg, rep);
+  if (!ok) std::fprintf(stderr, "trajcore run: a check FAILED (see the report)\n");
+  return ok ? 0 : 1;
+}
+
+int sim_command(const SimArgs& a) {
+  const auto rd = stream::read_file(a.input);
+  if (!rd.complete) {
+    std::fprintf(stderr, "trajcore: error: %s (%zu segments before it were valid; nothing simulated)\n",
+                 rd.error.c_str(), rd.records.size());
+    return 1;
+  }
+  const auto sr = sim::simulate(rd.header, rd.records, a.tick_gap, [](double f) { progress("sim", f); });
+  if (sr.engine == "traj_core") {
+    // version 2: both engines; every sample also against the exact prediction from the records
+    const bool ok = sr.mismatches == 0 && sr.prediction_mismatches == 0 && !sr.tick_err && sr.underruns == 0;
+    if (ok) write_csv(a.csv, rd.header, sr.samples);
+    std::printf("%s: %zu segments (%llu FD, %llu BCU, %llu kind switches), %zu samples, %llu cycles on traj_core "
+                "(tick every %d), RTL == hls: %s, == host prediction: %s, tick_err %s, underruns %llu -> %s\n",
+                a.input.c_str(), rd.records.size(), static_cast<unsigned long long>(sr.fd_segments),
+                static_cast<unsigned long long>(sr.bcu_segments), static_cast<unsigned long long>(sr.switches),
+                sr.samples.v.size(), static_cast<unsigned long long>(sr.cycles), sr.tick_gap,
+                sr.mismatches ? "NO" : "yes", sr.prediction_mismatches ? "NO" : "yes", sr.tick_err ? "SET" : "clear",
+                static_cast<unsigned long long>(sr.underruns), ok ? a.csv.c_str() : "(no CSV written)");
+    if (!ok) std::fprintf(stderr, "trajcore sim: a check FAILED (see above)\n");
+    return ok ? 0 : 1;
+  }
+  write_csv(a.csv, rd.header, sr.samples);
+  std::printf("%s: %zu segments, %zu samples, %llu cycles, RTL == hls: %s -> %s\n", a.input.c_str(),
+              rd.records.size(), sr.samples.v.size(), static_cast<unsigned long long>(sr.cycles),
+              sr.mismatches ? "NO" : "yes", a.csv.c_str());
+  return sr.mismatches ? 1 : 0;
+}
+
+}  // namespace traj::app

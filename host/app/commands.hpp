@@ -1,0 +1,38 @@
+// The path commands of the trajcore tool: plan, run, sim (main.cpp parses the
+// command line into these and reports errors).
+#pragma once
+#include <cstddef>
+#include <string>
+
+#include "job/job.hpp"
+
+namespace traj::app {
+
+struct PlanArgs {
+  job::JobConfig cfg;
+  std::string input;                 // path file (empty with raster)
+  std::string format;                // "json", "jsonl" or empty (by the file name)
+  std::string output = "out/plan.trj";
+  size_t window = 0;                 // > 0: stream with this window
+  bool window_given = false;         // --window was on the command line
+  size_t raster = 0;                 // > 0: a synthetic raster of this many pieces instead of a file
+};
+// Writes the segment stream; for a whole path also prints the plan report.
+int plan_command(const PlanArgs& a);
+
+struct RunArgs {
+  job::JobConfig cfg;
+  std::string input;
+  std::string out_dir = "out";
+};
+// plan + simulate on the Verilated core + report and plots, all files or none.
+int run_command(const RunArgs& a);
+
+struct SimArgs {
+  std::string input;
+  std::string csv = "out/samples.csv";
+  int tick_gap = 0;
+};
+int sim_command(const SimArgs& a);
+
+}  // namespace traj::app
