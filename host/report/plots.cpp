@@ -23,18 +23,17 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cerrno>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <sstream>
 #include <vector>
 
 #include "planner/sampled.hpp"
 #include "report/report.hpp"
+#include "util/atomic_file.hpp"
 
 namespace traj::report {
 
@@ -697,35 +696,19 @@ std::string path_svg(size_t n, const std::function<std::array<double, 3>(size_t)
   return o.str();
 }
 
-// Writes every file to <name>.tmp in its own directory, then renames them all
-// into place; on any failure the .tmp files are removed and a PlanError names
-// the file that could not be written.
+// Writes every file to <name>.tmp, then renames them all into place; on any
+// failure the temporary files are removed and a PlanError names the plot.
 void write_all(const std::vector<std::pair<std::string, std::string>>& files) {
-  std::vector<std::string> tmps;
+  std::vector<std::unique_ptr<util::AtomicFile>> out;
+  size_t i = 0;
   try {
-    for (const auto& f : files) {
-      const std::string tmp = f.first + ".tmp";
-      errno = 0;
-      std::ofstream o(tmp, std::ios::binary | std::ios::trunc);
-      if (!o)
-        throw PlanError("cannot write plot " + f.first + " (temporary file " + tmp +
-                        "): " + (errno ? std::strerror(errno) : "open failed"));
-      tmps.push_back(tmp);  // ours to remove from here on
-      o << f.second;
-      o.close();
-      if (!o) throw PlanError("cannot write plot " + f.first + ": write to " + tmp + " failed");
+    for (; i < files.size(); ++i) {
+      out.push_back(std::make_unique<util::AtomicFile>(files[i].first, std::ios::binary));
+      out.back()->out() << files[i].second;
     }
-    for (const auto& f : files) {
-      std::error_code ec;
-      std::filesystem::rename(f.first + ".tmp", f.first, ec);
-      if (ec) throw PlanError("cannot write plot " + f.first + ": " + ec.message());
-    }
-  } catch (...) {
-    for (const auto& t : tmps) {
-      std::error_code ec;
-      std::filesystem::remove(t, ec);
-    }
-    throw;
+    for (i = 0; i < files.size(); ++i) out[i]->commit();
+  } catch (const std::exception& e) {
+    throw PlanError("cannot write plot " + files[i].first + ": " + e.what());
   }
 }
 

@@ -1,6 +1,8 @@
 #include "util/atomic_file.hpp"
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <stdexcept>
 
@@ -9,8 +11,9 @@ namespace traj::util {
 AtomicFile::AtomicFile(const std::string& path, std::ios::openmode mode) : path_(path), tmp_(path + ".tmp") {
   const std::filesystem::path p(path);
   if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path());
+  errno = 0;
   out_.open(tmp_, mode | std::ios::out | std::ios::trunc);
-  if (!out_) throw std::runtime_error("cannot write " + tmp_);
+  if (!out_) throw std::runtime_error("cannot write " + tmp_ + (errno ? std::string(": ") + std::strerror(errno) : ""));
 }
 
 AtomicFile::~AtomicFile() {
@@ -22,7 +25,9 @@ AtomicFile::~AtomicFile() {
 void AtomicFile::commit() {
   out_.close();
   if (!out_) throw std::runtime_error("write failed: " + tmp_);
-  std::filesystem::rename(tmp_, path_);
+  std::error_code ec;
+  std::filesystem::rename(tmp_, path_, ec);
+  if (ec) throw std::runtime_error("cannot move " + tmp_ + " to " + path_ + ": " + ec.message());
   done_ = true;
 }
 
