@@ -64,6 +64,8 @@
 // format (K not a power of two up to 2^MaxDepth, a control value beyond
 // CtrlWidth bits) is refused the same way, naming the field.
 #pragma once
+#include <gmpxx.h>
+
 #include <cstdint>
 #include <cstdio>
 #include <iosfwd>
@@ -72,7 +74,7 @@
 #include <vector>
 
 #include "bcu/bcu_format.hpp"
-#include "fd/fd_compiler.hpp"
+#include "fd/fd_format.hpp"
 
 namespace traj::stream {
 

@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "fd/fd_compiler.hpp"
+#include "fd_test_util.hpp"
 
 using traj::fd::Compiled;
 using traj::fd::CompileError;
@@ -24,6 +25,7 @@ using traj::fd::Compiler;
 using traj::fd::Format;
 using traj::fd::PolySegment;
 using traj::fd::RegisterNeeds;
+using fd_test::fmt;
 
 namespace ref {
 
@@ -79,35 +81,6 @@ mpz_class quant_bound_x2(int degree, uint64_t k) {
   mpz_class s = 0;
   for (int i = 1; i <= degree; ++i) s += binom(k, i);
   return s;
-}
-// Least f >= 0 with x <= tol 2^f, tol the exact rational of the double (by
-// search, as the compiler's report test does).
-int least_f(const mpz_class& x, double tol) {
-  if (x == 0) return 0;
-  const mpq_class t = exact(tol);
-  const mpz_class p = t.get_num(), q = t.get_den();
-  const mpz_class lhs = x * q;
-  int f = 0;
-  while (lhs > (p << f)) ++f;
-  return f;
-}
-RegisterNeeds needs(int deg, uint64_t k, double tol) {
-  RegisterNeeds r;
-  r.alone.assign(deg + 1, 0);
-  r.share.assign(deg + 1, 0);
-  mpz_class sum = 0, best = -1;
-  for (int i = 1; i <= deg; ++i) {
-    const mpz_class c = binom(k, i);
-    sum += c;
-    r.alone[i] = least_f(c, tol);
-    r.share[i] = least_f(c * deg, tol);
-    if (c >= best) {
-      best = c;
-      r.binding = i;
-    }
-  }
-  r.common = least_f(sum, tol);
-  return r;
 }
 double quant_bound_lsb(const Format& f, uint64_t k) {
   return to_lsb(mpq_class(quant_bound_x2(f.degree, k), 2), f.guard_bits);
@@ -254,17 +227,6 @@ std::vector<uint64_t> words(const Format& f_, const Compiled& c) {
 
 namespace {
 
-Format fmt(int axes, int deg, int w, int c, int g, int frac) {
-  Format f;
-  f.axes = axes;
-  f.degree = deg;
-  f.width = w;
-  f.chunk_width = c;
-  f.guard_bits = g;
-  f.frac_bits = frac;
-  return f;
-}
-
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
 struct Outcome {
@@ -319,7 +281,7 @@ Outcome check_same(const Compiler& comp, const PolySegment& seg, const std::vect
     }
   }
   EXPECT_EQ(comp.words(a), ref::words(comp.format(), b)) << ctx;
-  const RegisterNeeds want = ref::needs(comp.format().degree, seg.ticks, comp.format().tol_lsb);
+  const RegisterNeeds want = fd_test::reference_needs(comp.format().degree, seg.ticks, comp.format().tol_lsb);
   EXPECT_EQ(a.needs.alone, want.alone) << ctx;
   EXPECT_EQ(a.needs.share, want.share) << ctx;
   EXPECT_EQ(a.needs.binding, want.binding) << ctx;

@@ -10,6 +10,7 @@
 #include <tuple>
 
 #include "fd/fd_compiler.hpp"
+#include "fd_test_util.hpp"
 #include "fd_drive.hpp"
 #include "traj_fd_engine.hpp"
 
@@ -63,16 +64,7 @@ struct Cfg {
   static constexpr int kDeg = D, kW = W, kC = C, kG = G;
 };
 
-Format fmt_for(int axes, int deg, int w, int c, int g, int frac) {
-  Format f;
-  f.axes = axes;
-  f.degree = deg;
-  f.width = w;
-  f.chunk_width = c;
-  f.guard_bits = g;
-  f.frac_bits = frac;
-  return f;
-}
+using fd_test::fmt;
 
 // ---------------------------------------------------------------------------
 // Group 2: hls model == host prediction, bit for bit, random chained segments.
@@ -81,7 +73,7 @@ template <class Cf>
 void check_model_vs_prediction(uint64_t seed) {
   constexpr int A = 2;
   using Eng = traj::FdEngine<A, Cf::kDeg, Cf::kW, Cf::kC, Cf::kG>;
-  const Format f = fmt_for(A, Cf::kDeg, Cf::kW, Cf::kC, Cf::kG, 4);
+  const Format f = fmt(A, Cf::kDeg, Cf::kW, Cf::kC, Cf::kG, 4);
   Compiler comp(f);
   std::mt19937_64 rng(seed);
   const double h = 1e-3;
@@ -153,7 +145,7 @@ TEST(FdModel, MatchesHostPredictionAllDegreesAndWidths) {
 TEST(FdModel, IntermediateRegistersWrapAndMatchPrediction) {
   constexpr int A = 2, D = 7, W = 48, C = 16, G = 16;
   using Eng = traj::FdEngine<A, D, W, C, G>;
-  const Format f = fmt_for(A, D, W, C, G, 4);
+  const Format f = fmt(A, D, W, C, G, 4);
   Compiler comp(f);
   const uint64_t K = 5;
   const double h = 1e-3, T = static_cast<double>(K) * h;
@@ -257,7 +249,7 @@ template <class Cf>
 BoundResult check_bound_longest(uint64_t seed) {
   constexpr int A = 1;
   using Eng = traj::FdEngine<A, Cf::kDeg, Cf::kW, Cf::kC, Cf::kG>;
-  Format f = fmt_for(A, Cf::kDeg, Cf::kW, Cf::kC, Cf::kG, 8);
+  Format f = fmt(A, Cf::kDeg, Cf::kW, Cf::kC, Cf::kG, 8);
   Compiler comp(f);
   const uint64_t K = std::min<uint64_t>(Compiler::longest_segment(Cf::kDeg, Cf::kG, f.tol_lsb), f.max_ticks);
   // one more tick must be refused (unless capped by max_ticks)
@@ -386,7 +378,7 @@ template <class Cf>
 AdvResult check_bound_adversarial(uint64_t seed) {
   constexpr int A = 1, N = Cf::kDeg, G = Cf::kG;
   using Eng = traj::FdEngine<A, N, Cf::kW, Cf::kC, G>;
-  const Format f = fmt_for(A, N, Cf::kW, Cf::kC, G, 8);
+  const Format f = fmt(A, N, Cf::kW, Cf::kC, G, 8);
   Compiler comp(f);
   const uint64_t K = std::min<uint64_t>(Compiler::longest_segment(N, G, f.tol_lsb), f.max_ticks);
   const double h = std::ldexp(1.0, -13);
@@ -553,7 +545,7 @@ TEST(FdBound, LongestSegmentIsTight) {
   // here in long double.
   for (int deg = 1; deg <= 7; ++deg) {
     const int G = 32;
-    Format f = fmt_for(1, deg, 64, 16, G, 0);
+    Format f = fmt(1, deg, 64, 16, G, 0);
     f.max_ticks = 0xffffffffu;
     Compiler comp(f);
     const uint64_t K = Compiler::longest_segment(deg, G, f.tol_lsb);
@@ -588,7 +580,7 @@ TEST(FdBound, LongestSegmentIsTight) {
 TEST(FdChain, HundredThousandSegmentsNoDrift) {
   constexpr int A = 1, D = 3, W = 64, C = 16, G = 32;
   using Eng = traj::FdEngine<A, D, W, C, G>;
-  Format f = fmt_for(A, D, W, C, G, 12);
+  Format f = fmt(A, D, W, C, G, 12);
   Compiler comp(f);
   std::mt19937_64 rng(424242);
   std::uniform_int_distribution<uint64_t> Kd(1, 64);
@@ -658,7 +650,7 @@ TEST(FdChain, HundredThousandSegmentsNoDrift) {
 // The compiler refuses bad segments with a message naming what and where.
 // ---------------------------------------------------------------------------
 TEST(FdCompiler, RefusesBadInput) {
-  Format f = fmt_for(2, 3, 64, 16, 32, 8);
+  Format f = fmt(2, 3, 64, 16, 32, 8);
   Compiler comp(f);
   auto msg = [&](PolySegment s, const std::vector<mpz_class>* start = nullptr) -> std::string {
     try {
