@@ -251,52 +251,45 @@ void write_file(const std::string& path, const Header& h, const std::vector<Reco
   }
   const auto e = encode_end(static_cast<uint32_t>(recs.size()), ticks);
   all.insert(all.end(), e.begin(), e.end());
-  std::filesystem::path p(path);
-  if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path());
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw StreamError("cannot write " + tmp);
-    out.write(reinterpret_cast<const char*>(all.data()), static_cast<std::streamsize>(all.size()));
-    out.close();
-    if (!out) {
-      std::filesystem::remove(tmp);
-      throw StreamError("write failed: " + tmp);
-    }
+  try {
+    util::AtomicFile f(path, std::ios::binary);
+    f.out().write(reinterpret_cast<const char*>(all.data()), static_cast<std::streamsize>(all.size()));
+    f.commit();
+  } catch (const std::runtime_error& e) {
+    throw StreamError(e.what());
   }
-  std::filesystem::rename(tmp, path);
 }
 
-StreamWriter::StreamWriter(const std::string& path, const Header& h) : path_(path), tmp_(path + ".tmp"), h_(h) {
-  const auto hdr = encode_header(h);
-  std::filesystem::path p(path);
-  if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path());
-  f_ = std::fopen(tmp_.c_str(), "wb");
-  if (!f_) throw StreamError("cannot write " + tmp_);
-  if (std::fwrite(hdr.data(), 1, hdr.size(), f_) != hdr.size()) throw StreamError("write failed: " + tmp_);
+namespace {
+util::AtomicFile open_stream_file(const std::string& path) try {
+  return util::AtomicFile(path, std::ios::binary);
+} catch (const std::runtime_error& e) {
+  throw StreamError(e.what());
+}
+}  // namespace
+
+StreamWriter::StreamWriter(const std::string& path, const Header& h) : h_(h), file_(open_stream_file(path)) {
+  put(encode_header(h));
 }
 
-StreamWriter::~StreamWriter() {
-  if (f_) std::fclose(f_);
-  if (!done_) std::remove(tmp_.c_str());
+void StreamWriter::put(const std::vector<uint8_t>& bytes) {
+  file_.out().write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  if (!file_.out()) throw StreamError("write failed: " + file_.tmp_path());
 }
 
 void StreamWriter::add(const Record& r) {
-  const auto b = encode_record(h_, r);
-  if (std::fwrite(b.data(), 1, b.size(), f_) != b.size()) throw StreamError("write failed: " + tmp_);
+  put(encode_record(h_, r));
   ++count_;
   ticks_ += r.ticks;
 }
 
 void StreamWriter::finish() {
-  const auto e = encode_end(static_cast<uint32_t>(count_), ticks_);
-  if (std::fwrite(e.data(), 1, e.size(), f_) != e.size() || std::fclose(f_) != 0) {
-    f_ = nullptr;
-    throw StreamError("write failed: " + tmp_);
+  put(encode_end(static_cast<uint32_t>(count_), ticks_));
+  try {
+    file_.commit();
+  } catch (const std::runtime_error& e) {
+    throw StreamError(e.what());
   }
-  f_ = nullptr;
-  std::filesystem::rename(tmp_, path_);
-  done_ = true;
 }
 
 ReadResult decode(const std::vector<uint8_t>& b, const std::string& name) {

@@ -75,6 +75,7 @@
 
 #include "bcu/bcu_format.hpp"
 #include "fd/fd_format.hpp"
+#include "util/atomic_file.hpp"
 
 namespace traj::stream {
 
@@ -133,20 +134,16 @@ void write_file(const std::string& path, const Header& h, const std::vector<Reco
 class StreamWriter {
  public:
   StreamWriter(const std::string& path, const Header& h);
-  ~StreamWriter();
-  StreamWriter(const StreamWriter&) = delete;
-  StreamWriter& operator=(const StreamWriter&) = delete;
   void add(const Record& r);
   void finish();
   uint64_t records() const { return count_; }
   uint64_t ticks() const { return ticks_; }
 
  private:
-  std::string path_, tmp_;
+  void put(const std::vector<uint8_t>& bytes);
   Header h_;
-  std::FILE* f_ = nullptr;
+  util::AtomicFile file_;
   uint64_t count_ = 0, ticks_ = 0;
-  bool done_ = false;
 };
 
 struct ReadResult {
