@@ -43,8 +43,15 @@ module traj_byte_words #(
   logic                 byte_valid_q, word_valid_q, last_in_flight;
   logic [7:0]           byte_q;
   logic [UserWidth-1:0] user_q, word_user_q;
-  logic [WordWidth-1:0] word_q;
+  logic [WordWidth-1:0] word_q, word_d;
   logic [CountBits-1:0] nbytes_q;
+
+  // the new byte enters at the top, earlier bytes move down
+  if (BytesPerWord > 1) begin : g_shift
+    assign word_d = {byte_q, word_q[WordWidth-1:8]};
+  end else begin : g_one_byte
+    assign word_d = byte_q;
+  end
 
   assign last_in_flight = byte_valid_q && (nbytes_q == LastByte);
   assign byte_ready_o   = !word_valid_q && !last_in_flight;
@@ -60,7 +67,7 @@ module traj_byte_words #(
     end else if (word_valid_q) begin
       if (m_axis_tready) word_valid_q <= 1'b0;
     end else if (byte_valid_q) begin
-      word_q      <= {byte_q, word_q[WordWidth-1:8]};
+      word_q      <= word_d;
       word_user_q <= user_q;
       if (nbytes_q == LastByte) begin
         nbytes_q     <= '0;
