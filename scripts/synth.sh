@@ -23,7 +23,7 @@
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 
-usage() { sed -n '5,10p' "$0" | sed 's/^# \{0,1\}//' >&2; exit 1; }
+usage() { sed -n '5,11p' "$0" | sed 's/^# \{0,1\}//' >&2; exit 1; }
 [ $# -ge 2 ] || usage
 unit=$1 device=$2; shift 2
 SEEDS=${SEEDS:-"1 2 3"}
@@ -77,7 +77,8 @@ for seed in $SEEDS; do
   asc="$out/${unit}_${device}_s$seed.asc"
   if ! nextpnr-ice40 --"$device" --package $package ${pcf:+--pcf "$pcf"} --freq $target_mhz \
         --timing-allow-fail --seed "$seed" --json "$json" --asc "$asc" >"$log" 2>&1; then
-    echo "$device seed $seed: nextpnr-ice40 failed, see $log" >&2; status=1; continue
+    echo "$device seed $seed: nextpnr-ice40 failed ($(grep -m1 ERROR "$log" || echo "no ERROR line")), see $log" >&2
+    status=1; continue
   fi
   if [ -n "$pcf" ] && ! icepack "$asc" "${asc%.asc}.bin"; then
     echo "$device seed $seed: icepack failed" >&2; status=1; continue
