@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Formal check of a unit's properties (its `ifdef FORMAL block): Yosys -> SMT2,
+# then yosys-smtbmc with z3: bounded model check from reset (DEPTH steps) and
+# temporal induction (depth DEPTH). Exit non-zero on any failure.
+#   usage: scripts/formal.sh UNIT WORKDIR [Param=Value ...]
+#     e.g. scripts/formal.sh traj_fd_engine /tmp/f Axes=3 Degree=3 Width=64 ChunkWidth=16 GuardBits=32
+#   env: DEPTH (24)
+set -euo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+[ $# -ge 2 ] || { sed -n '5,7p' "$0" | sed 's/^# \{0,1\}//' >&2; exit 1; }
+unit=$1 work=$2; shift 2
+DEPTH=${DEPTH:-24}
+files=$("$root/scripts/unit_files.sh" "$unit")
+sets="" tag=""
+for p in "$@"; do
+  [[ $p == *=* ]] || { echo "formal.sh: parameter '$p' is not Name=Value" >&2; exit 1; }
+  sets+=" -set ${p%%=*} ${p#*=}"; tag+="_${p#*=}"
+done
+mkdir -p "$work"
+smt="$work/$unit$tag.smt2"
+yosys -q -p "read_verilog -sv -formal -I$root/rtl $files; ${sets:+chparam$sets $unit;} \
+  prep -top $unit; async2sync; dffunmap; write_smt2 -wires $smt" 2>&1 | grep -v "Replacing memory" || true
+test -s "$smt"
+echo "bounded model check, $DEPTH steps from reset:"
+yosys-smtbmc -s z3 --presat -t "$DEPTH" "$smt" > "$work/bmc.log" 2>&1 || { cat "$work/bmc.log"; exit 1; }
+tail -1 "$work/bmc.log"
+echo "temporal induction, depth $DEPTH:"
+yosys-smtbmc -s z3 -i -t "$DEPTH" "$smt" > "$work/ind.log" 2>&1 || { cat "$work/ind.log"; exit 1; }
+tail -1 "$work/ind.log"
