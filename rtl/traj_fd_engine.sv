@@ -254,8 +254,8 @@ module traj_fd_engine #(
 
 `ifdef FORMAL
   // ---------------------------------------------------------------------
-  // Formal properties (yosys -formal; tb/formal). Bounded model checking
-  // from reset; see tb/formal/CMakeLists.txt.
+  // Formal properties (yosys -formal): bounded model checking from reset and
+  // temporal induction, run by scripts/formal.sh (the rtl.formal.* tests).
   // ---------------------------------------------------------------------
   logic f_past_valid = 1'b0;
   logic f_cnt_valid = 1'b0;  // count_q holds a value written by a header word

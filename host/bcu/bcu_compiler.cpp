@@ -35,16 +35,6 @@ double error_bound(const Format& f, double max_abs) {
          8 * eps * max_abs;
 }
 
-mpq_class exact_value(const std::vector<mpz_class>& c, int depth, int64_t j) {
-  const mpz_class K = pow2(depth);
-  const mpz_class jj = j, kj = K - jj;
-  mpz_class n = kj * kj * kj * c[0] + 3 * kj * kj * jj * c[1] + 3 * kj * jj * jj * c[2] +
-                jj * jj * jj * c[3];
-  mpq_class q(n, K * K * K);
-  q.canonicalize();
-  return q;
-}
-
 int64_t predict_sample(const std::vector<mpz_class>& c, int depth, int j, int guard_bits) {
   const mpz_class K = pow2(depth);
   const mpz_class jj = j, kj = K - jj;

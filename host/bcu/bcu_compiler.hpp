@@ -85,9 +85,6 @@ Segment compile_segment(const Controls& b, int depth, const Format& f,
 // Exact sample j (0..K) of axis a from integer control values (GMP).
 int64_t predict_sample(const std::vector<mpz_class>& c, int depth, int j, int guard_bits);
 
-// Exact rational value sum_i B_i(j/2^d) c_i (in control LSBs).
-mpq_class exact_value(const std::vector<mpz_class>& c, int depth, int64_t j);
-
 // Double-precision de Casteljau of a cubic at t.
 double de_casteljau(const double b[4], double t);
 
