@@ -18,23 +18,10 @@ void Machine::validate() const {
 }
 
 fd::Format Machine::format() const {
-  fd::Format f;
-  f.axes = 3;
-  f.chunk_width = 16;
-  if (degree == 5) {
-    f.degree = 5;
-    f.width = 96;
-    f.guard_bits = 48;
-    f.frac_bits = 32;
-  } else if (degree == 3) {
-    f.degree = 3;
-    f.width = 64;
-    f.guard_bits = 32;
-    f.frac_bits = 16;
-  } else {
-    throw PlanError("segment degree " + std::to_string(degree) + ": the tool carries engines for degree 3 and 5");
-  }
-  return f;
+  // {axes, degree, width, chunk_width, guard_bits, frac_bits}
+  if (degree == 5) return {3, 5, 96, 16, 48, 32};
+  if (degree == 3) return {3, 3, 64, 16, 32, 16};
+  throw PlanError("segment degree " + std::to_string(degree) + ": the tool carries engines for degree 3 and 5");
 }
 
 double Machine::lsb() const { return std::ldexp(1.0, -format().frac_bits); }

@@ -73,28 +73,11 @@ std::string at(const std::string& name, size_t off) { return name + ": byte " + 
 
 }  // namespace
 
-fd::Format Header::format() const {
-  fd::Format f;
-  f.axes = axes;
-  f.degree = degree;
-  f.width = width;
-  f.chunk_width = chunk_width;
-  f.guard_bits = guard_bits;
-  f.frac_bits = frac_bits;
-  return f;
-}
+fd::Format Header::format() const { return {axes, degree, width, chunk_width, guard_bits, frac_bits}; }
 
 bcu::Format Header::bcu_format() const {
   if (!has_bcu()) throw StreamError("the stream header has no BCU format (version 1)");
-  bcu::Format b;
-  b.axes = axes;
-  b.chunk_width = chunk_width;
-  b.ctrl_width = bcu_ctrl_width;
-  b.guard_bits = bcu_guard_bits;
-  b.out_width = bcu_out_width;
-  b.max_depth = bcu_max_depth;
-  b.frac_bits = frac_bits;
-  return b;
+  return {axes, chunk_width, bcu_ctrl_width, bcu_guard_bits, bcu_out_width, bcu_max_depth, frac_bits};
 }
 
 int Record::depth() const { return is_bcu() ? log2_exact(ticks) : -1; }

@@ -95,17 +95,7 @@ namespace {
 constexpr int kAx = 3, kChunk = 32, kCtrl = 71, kGuard = 8, kOut = 64, kMaxD = 16;
 using BigGen = traj::BcuGen<kAx, kChunk, kCtrl, kGuard, kOut, kMaxD>;
 
-bcu::Format big_format() {
-  bcu::Format f;
-  f.axes = kAx;
-  f.chunk_width = kChunk;
-  f.ctrl_width = kCtrl;
-  f.guard_bits = kGuard;
-  f.out_width = kOut;
-  f.max_depth = kMaxD;
-  f.frac_bits = 0;
-  return f;
-}
+bcu::Format big_format() { return {kAx, kChunk, kCtrl, kGuard, kOut, kMaxD, 0}; }
 
 // Run one segment to completion with a tick on EVERY clock from the first
 // ready sample on (the 1 sample/clock guarantee), then one underrun tick;
@@ -190,17 +180,7 @@ TEST(BcuGen, ExactAgainstRationalsDepth0To16) {
 // ---------------------------------------------------------------------------
 namespace {
 using MidGen = traj::BcuGen<3, 32, 40, 9, 32, 12>;
-bcu::Format mid_format() {
-  bcu::Format f;
-  f.axes = 3;
-  f.chunk_width = 32;
-  f.ctrl_width = 40;
-  f.guard_bits = 9;
-  f.out_width = 32;
-  f.max_depth = 12;
-  f.frac_bits = 8;
-  return f;
-}
+bcu::Format mid_format() { return {3, 32, 40, 9, 32, 12, 8}; }
 // the defaults of the synthesised generator (16-bit chunks)
 using DefGen = traj::BcuGen<3, 16, 40, 9, 32, 12>;
 bcu::Format def_format() {

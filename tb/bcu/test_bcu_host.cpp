@@ -20,17 +20,7 @@ namespace {
 constexpr int kAx = 3, kChunk = 32, kCtrl = 40, kGuard = 9, kOut = 32, kMaxD = 12, kFrac = 16;
 using Gen = traj::BcuGen<kAx, kChunk, kCtrl, kGuard, kOut, kMaxD>;
 
-bcu::Format fmt() {
-  bcu::Format f;
-  f.axes = kAx;
-  f.chunk_width = kChunk;
-  f.ctrl_width = kCtrl;
-  f.guard_bits = kGuard;
-  f.out_width = kOut;
-  f.max_depth = kMaxD;
-  f.frac_bits = kFrac;
-  return f;
-}
+bcu::Format fmt() { return {kAx, kChunk, kCtrl, kGuard, kOut, kMaxD, kFrac}; }
 
 // Play segments back to back through the hls generator, driven through its
 // public interface only (tready, sample_valid, underrun, tick_err, sample;

@@ -15,16 +15,7 @@ namespace fd_test {
 using traj::fd::Format;
 using traj::fd::RegisterNeeds;
 
-inline Format fmt(int axes, int deg, int w, int c, int g, int frac) {
-  Format f;
-  f.axes = axes;
-  f.degree = deg;
-  f.width = w;
-  f.chunk_width = c;
-  f.guard_bits = g;
-  f.frac_bits = frac;
-  return f;
-}
+inline Format fmt(int axes, int deg, int w, int c, int g, int frac) { return {axes, deg, w, c, g, frac}; }
 
 // C(k, i) = k (k-1) ... (k-i+1) / i!, numerator and denominator as products.
 inline mpz_class binom_product(uint64_t k, int i) {
