@@ -1,5 +1,5 @@
 // Curvature, its extrema and (2-D) inflection points, and the split of a curve into ACC/DEC units
-// (seed 003): between two consecutive split parameters the curvature is monotone, so the
+// ([NURBS]): between two consecutive split parameters the curvature is monotone, so the
 // curvature-limited feed is monotone too and each unit needs only an accelerating or a decelerating
 // profile.
 //

@@ -1,4 +1,4 @@
-// Curve: a B-spline/NURBS converted to piecewise power basis (seed 003): B-spline -> Bezier pieces
+// Curve: a B-spline/NURBS converted to piecewise power basis ([NURBS]): B-spline -> Bezier pieces
 // (knot insertion) -> power basis per span, with explicit coefficient tables for the first, second
 // and third derivatives. For a NURBS the tables hold the homogeneous coordinates (w x, w); the
 // rational value and derivatives come from them by the quotient rule.

@@ -1,4 +1,4 @@
-// Power-basis form (seed 003) against two independent evaluators: the textbook Cox-de Boor
+// Power-basis form ([NURBS]) against two independent evaluators: the textbook Cox-de Boor
 // recursion (ref_deboor.hpp, in long double) and Eigen's Splines module; derivatives 0..3, every
 // accepted degree (non-rational 1..kMaxDegree = 15, rational 1..kMaxDegreeRational = 7), 1..4 axes,
 // random non-uniform knots with repeated knots.
@@ -206,7 +206,7 @@ TEST(GeometryPrimitives, LineAndExactArc) {
   }
 }
 
-// Seed 004: "for a circle cascaded from 3 segments of 120 degrees each, the peripheral standard deviation
+// [ARC]: "for a circle cascaded from 3 segments of 120 degrees each, the peripheral standard deviation
 // of the graph compared to a circle based on sin/cos is in the order of 1e-3", and the speed in the
 // middle of a segment is "about 88%" of the end speed. Checked here against the exact circle: the
 // radial error of the k = 4/3 tan(30 deg) construction is 1.5e-3 r, and the speed ratio is exactly 7/8.
