@@ -1,7 +1,7 @@
 // [ARC]'s three test curves. The paper shows them (Fig. 2_01) but prints no control points, so they
 // are chosen here (units mm) to reproduce its "step fluctuation" (max/min chord at n = 20 uniform
 // parameter steps): curve 1 (asymmetric, with an inflection) 1 : 2.271, curve 3 (asymmetric, without
-// inflection) 1 : 11.108; one control coordinate of each was tuned to hit the printed ratio (to 4
+// inflection) 1 : 11.108; one control coordinate of each is tuned to hit the printed ratio (to 4
 // digits). Curve 2 is the circle of three 120-degree cubic Beziers (k = 4/3 tan 30deg), radius 50 mm.
 #pragma once
 #include "geometry/geometry.hpp"

@@ -181,7 +181,7 @@ void expect_quoted(double x, double quoted, int decimals, const std::string& wha
 
 TEST(GeometryReparam, Seed004Claims) {
   const Curve c1(seedcurves::curve1()), c2(seedcurves::curve2()), c3(seedcurves::curve3());
-  // "Before" (uniform parameter, n = 20): the chord ratios curves 1 and 3 were tuned to.
+  // Unlevelled (uniform parameter, n = 20): the chord ratios curves 1 and 3 are tuned to.
   expect_quoted(chord_ratio(c1, 0), 2.271, 3, "curve 1 before (paper 1 : 2.271)");
   expect_quoted(chord_ratio(c1, 0), 2.2709, 4, "curve 1 before (README)");
   expect_quoted(chord_ratio(c3, 0), 11.107, 3, "curve 3 before (README; paper 1 : 11.108)");
