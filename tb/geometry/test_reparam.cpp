@@ -183,8 +183,8 @@ TEST(GeometryReparam, Seed004Claims) {
   const Curve c1(seedcurves::curve1()), c2(seedcurves::curve2()), c3(seedcurves::curve3());
   // Unlevelled (uniform parameter, n = 20): the chord ratios curves 1 and 3 are tuned to.
   expect_quoted(chord_ratio(c1, 0), 2.271, 3, "curve 1 before (paper 1 : 2.271)");
-  expect_quoted(chord_ratio(c1, 0), 2.2709, 4, "curve 1 before (README)");
-  expect_quoted(chord_ratio(c3, 0), 11.107, 3, "curve 3 before (README; paper 1 : 11.108)");
+  expect_quoted(chord_ratio(c1, 0), 2.2709, 4, "curve 1 unlevelled (host/geometry/README.md)");
+  expect_quoted(chord_ratio(c3, 0), 11.107, 3, "curve 3 unlevelled (host/geometry/README.md; paper 1 : 11.108)");
   // The circle (unambiguous: three 120-degree cubic Beziers): paper 1 : 1.135 at n = 20 is not
   // reproduced; the chord ratio is 1.1226 at n = 20 and rounds to 1.135 only for n = 51..56.
   expect_quoted(chord_ratio(c2, 0), 1.1226, 4, "circle before, n = 20");
