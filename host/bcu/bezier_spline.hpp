@@ -1,4 +1,4 @@
-// traj::bcu: the C1 interpolating cubic Bezier spline of seed 000 (eq. 9-16).
+// traj::bcu: the C1 interpolating cubic Bezier spline of [BCU] (eq. 9-16).
 //
 // Points P_0..P_{N+1} (rows; one column per axis). P_0 and P_{N+1} are the
 // extra boundary points the paper asks for. Segment i (1 <= i <= N-1) joins

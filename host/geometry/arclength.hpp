@@ -2,7 +2,7 @@
 // span, and its inverse (parameter at a given arc length) by a safeguarded Newton method.
 //
 // Quadrature (per interval [a,b] inside one span, where the speed is smooth): G6 = 6-point
-// Gauss-Legendre on [a,b] (seed 003's rule), G6' = G6 on both halves. If |G6 - G6'| <= tol, G6' is
+// Gauss-Legendre on [a,b] ([NURBS]'s rule), G6' = G6 on both halves. If |G6 - G6'| <= tol, G6' is
 // accepted; else both halves recurse with tol/2. The estimate |G6 - G6'| bounds the error of G6 (for
 // smooth integrands); G6' is 2^12 times more accurate, so the accepted value is far inside tol.
 // tol for a span = rel_tol * (span length estimate); minimum interval width 1e-14 * span width.
@@ -106,7 +106,7 @@ class ArcLength {
 };
 
 // Gauss-Legendre nodes (on [-1,1]) and weights of order n (Golub-Welsch free: Newton on P_n);
-// used by the library (n = 6) and by tests to check seed 003's node spacing.
+// used by the library (n = 6) and by tests to check [NURBS]'s node spacing.
 void gauss_legendre(int n, std::vector<double>& x, std::vector<double>& w);
 
 }  // namespace traj::geo

@@ -261,7 +261,7 @@ std::vector<CurvatureExtremum> curvature_extrema(const Curve& c, const SplitOpti
   // Inside that run the root is placed between the first sample whose computed value no longer has
   // the first one's sign and its predecessor: bisection if both are in one span, the knot if they are
   // on either side of one, the sample itself if its value is exactly 0. Without zeros this is the pair
-  // of neighbouring samples (as before the noise bound); a run of zeros wider than a few samples means
+  // of neighbouring samples (the plain scan's rule); a run of zeros wider than a few samples means
   // kappa is constant to rounding there and any point of it is an extremum to working precision.
   size_t last = seq.size();  // last sample with a sign
   for (size_t i = 0; i < seq.size(); ++i) {

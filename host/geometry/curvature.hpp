@@ -1,5 +1,5 @@
 // Curvature, its extrema and (2-D) inflection points, and the split of a curve into ACC/DEC units
-// (seed 003): between two consecutive split parameters the curvature is monotone, so the
+// ([NURBS]): between two consecutive split parameters the curvature is monotone, so the
 // curvature-limited feed is monotone too and each unit needs only an accelerating or a decelerating
 // profile.
 //
@@ -51,13 +51,13 @@ struct SplitStats {
 
 struct SplitOptions {
   int samples_per_span = 64;
-  double u_tol = 1e-9;        // bisection width (|du|), must be <= 1e-7 for the requirement
+  double u_tol = 1e-9;        // bisection width (|du|), must be <= 1e-7 (the required accuracy)
   bool inflections = true;    // 2-D curves: also split at signed-curvature zero crossings
   bool minima = true;         // split at curvature minima too (else maxima only)
   // Noise-aware extremum scan: a sample whose |d(kappa^2)/du| is at most noise_factor times its
   // first-order rounding-error bound (from the magnitudes of the terms; see curvature.cpp) counts as
   // zero, and an extremum needs a sign change between two samples above their bounds. 0 = every
-  // nonzero sign counts (the scan before the bound existed; on a circle it bisected rounding noise).
+  // nonzero sign counts (the plain scan; on a circle it bisects rounding noise).
   double noise_factor = 4;
   SplitStats* stats = nullptr;  // if set, the scans add their evaluation counts here
 };

@@ -1,5 +1,5 @@
 // Per evaluated point: arithmetic operations and measured cost of De Boor-Cox vs the power basis
-// (seed 003 claims 71.1% fewer operations for the power basis, cubic, "points and their derivatives").
+// ([NURBS] claims 71.1% fewer operations for the power basis, cubic, "points and their derivatives").
 //  1. Operation counts with an instrumented scalar (kernels::Cnt: adds, multiplies, divides counted
 //     separately), position + derivatives up to order nd, degrees 3/5/7, 2 and 3 axes.
 //  2. Time per point (std::chrono, best of 5 runs of 1e6 random parameters; span search included in

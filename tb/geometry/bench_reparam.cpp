@@ -1,10 +1,10 @@
-// Feed fluctuation of four interpolators on seed 004's three curves and on the butterfly.
+// Feed fluctuation of four interpolators on [ARC]'s three curves and on the butterfly.
 //   fluctuation_k = (true arc length between consecutive samples) / (commanded feed * period) - 1,
 // the true arc length by adaptive Gauss-Legendre (rel_tol 1e-14) between the consecutive parameters.
 // The last, partial step of the Taylor interpolators and of the project's method is left out.
-// Seed 004's curves: n = 20 steps per Bezier segment as in the paper (the nominal step is L / n_total,
+// [ARC]'s curves: n = 20 steps per Bezier segment as in the paper (the nominal step is L / n_total,
 // so feed * period = L / n_total); butterfly: 50 and 100 mm/s, period 1 ms.
-// Usage: bench_reparam [--short]   (--short: seed curves and butterfly at 100 mm/s only)
+// Usage: bench_reparam [--short]   (--short: [ARC] curves and butterfly at 100 mm/s only)
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -21,25 +21,25 @@ void row(const char* method, const Fluctuation& f, const char* note = "") {
   std::printf("  %-34s %7d %+11.3e %+11.3e %10.3e %9.5f %s\n", method, f.steps, f.max, f.min, f.rms, f.ratio, note);
 }
 
-void run(const BSpline& b, double feed, double period, int seed_n_per_segment) {
+void run(const BSpline& b, double feed, double period, int arc_n_per_segment) {
   const Curve c(b);
   const ArcLength al(c);
   const double L = al.total();
   double step = feed * period;
-  if (seed_n_per_segment > 0) {  // seed 004's own resolution
-    step = L / (seed_n_per_segment * static_cast<double>(c.spans().size()));
+  if (arc_n_per_segment > 0) {  // [ARC]'s own resolution
+    step = L / (arc_n_per_segment * static_cast<double>(c.spans().size()));
     feed = step / period;
   }
   std::printf("\n%s: L = %.6f mm, feed %.3f mm/s, period %.0f ms, step %.6f mm, %zu span(s)\n", b.name.c_str(), L, feed,
               period * 1e3, step, c.spans().size());
   std::printf("  %-34s %7s %11s %11s %10s %9s\n", "method", "steps", "max", "min", "rms", "max/min");
   row("uniform parameter (no levelling)", feed_fluctuation(al, seed004_reparam_spline(c, al, step, 0), step, false),
-      "(seed 004 'before')");
+      "([ARC] unlevelled)");
   row("Taylor 1st order", feed_fluctuation(al, taylor_interpolate(c, feed, period, 1), step, true));
   row("Taylor 2nd order", feed_fluctuation(al, taylor_interpolate(c, feed, period, 2), step, true));
-  row("seed 004, 1 pass", feed_fluctuation(al, seed004_reparam_spline(c, al, step, 1), step, false));
-  row("seed 004, 3 passes (cascaded)", feed_fluctuation(al, seed004_reparam_spline(c, al, step, 3), step, false));
-  row("seed 004, 10 passes (cascaded)", feed_fluctuation(al, seed004_reparam_spline(c, al, step, 10), step, false));
+  row("[ARC] 1 pass", feed_fluctuation(al, seed004_reparam_spline(c, al, step, 1), step, false));
+  row("[ARC] 3 passes (cascaded)", feed_fluctuation(al, seed004_reparam_spline(c, al, step, 3), step, false));
+  row("[ARC] 10 passes (cascaded)", feed_fluctuation(al, seed004_reparam_spline(c, al, step, 10), step, false));
   al.reset_stats();
   const auto t0 = std::chrono::steady_clock::now();
   const auto u = equal_arclength_params(al, step);
@@ -53,7 +53,7 @@ void run(const BSpline& b, double feed, double period, int seed_n_per_segment) {
 
 // Chord-error-limited feed (the published butterfly set-up: feed F, chord error delta): per tick the
 // commanded feed is V_k = min(F, (2/T) sqrt(rho^2 - (rho - delta)^2)), rho = 1/kappa(u_k). Fluctuation
-// is then the true step over V_k T. Seed 004 (fixed equal steps) does not apply here.
+// is then the true step over V_k T. [ARC] (fixed equal steps) does not apply here.
 void run_chord_limited(const BSpline& b, double F, double T, double delta) {
   const Curve c(b);
   const ArcLength al(c);
@@ -114,7 +114,7 @@ void run_chord_limited(const BSpline& b, double F, double T, double delta) {
 int main(int argc, char** argv) {
   const bool quick = argc > 1 && std::strcmp(argv[1], "--short") == 0;
   std::printf("Feed fluctuation = true arc length per sample / (feed * period) - 1 (fractions, not percent); max/min = ratio of the\n"
-              "largest to the smallest true step (seed 004's '1 : x' figure is of this kind, with chords).\n");
+              "largest to the smallest true step ([ARC]'s '1 : x' figure is of this kind, with chords).\n");
   try {
     run(seedcurves::curve1(), 0, 1e-3, 20);
     run(seedcurves::curve2(), 0, 1e-3, 20);

@@ -284,7 +284,7 @@ std::vector<double> cubic_inflections_closed_form(const Eigen::MatrixXd& P) {
   return roots;
 }
 
-// Seed 004's curve 1 (with an inflection) and curve 3 (without), tb/geometry/seed_curves.hpp.
+// [ARC]'s curve 1 (with an inflection) and curve 3 (without), tb/geometry/seed_curves.hpp.
 TEST(GeometryCurvature, CubicInflectionsClosedForm) {
   Eigen::MatrixXd P(4, 2);
   P << 0, 0, 25, 71.5, 60, -42.9, 100, 0;
@@ -332,7 +332,7 @@ TEST(GeometryCurvature, ButterflyUnitsMonotone) {
   EXPECT_EQ(units.back().u1, butterfly().u_end());
 }
 
-// Seed 003: the 6-point Gauss-Legendre nodes, 4 of 6 per sub-interval plus both ends (4n+2 points),
+// [NURBS]: the 6-point Gauss-Legendre nodes, 4 of 6 per sub-interval plus both ends (4n+2 points),
 // have spacing 0.1694, 0.2113, 0.2386, 0.2113, 0.1694 (+0.1694 of the next) of the interval.
 TEST(GeometryArcLength, Seed003NodeSpacing) {
   std::vector<double> x, w;

@@ -15,7 +15,7 @@
 // Checks:
 //  * completeness: the scan finds as many maxima, minima and inflections as the library (and as the
 //    audit's independent 2,000,000-point finite-difference scan of kappa: 37, 36, 24), and the i-th
-//    reference point of each kind matches the library's i-th to |du| <= 1e-7 (the requirement);
+//    reference point of each kind matches the library's i-th to |du| <= 1e-7 (the required accuracy);
 //  * inflection accuracy: every library inflection within 1e-7 of its reference root (also printed:
 //    the worst |du|, expected ~1e-10 from the library's bisection width u_tol = 1e-9).
 // Density: kSamples = 2048 per span (98,352 samples, 32x finer than the library's 64 per span). A pair

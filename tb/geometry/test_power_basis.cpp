@@ -1,9 +1,9 @@
-// Power-basis form (seed 003) against two independent evaluators: the textbook Cox-de Boor
+// Power-basis form ([NURBS]) against two independent evaluators: the textbook Cox-de Boor
 // recursion (ref_deboor.hpp, in long double) and Eigen's Splines module; derivatives 0..3, every
 // accepted degree (non-rational 1..kMaxDegree = 15, rational 1..kMaxDegreeRational = 7), 1..4 axes,
 // random non-uniform knots with repeated knots.
 //
-// Tolerance: the issue's requirement, 1e-12 relative to the bounding-box diagonal of the k-th
+// Tolerance: the accuracy target, 1e-12 relative to the bounding-box diagonal of the k-th
 // hodograph's control points (test_util.hpp: derivative_scales; NURBS derivatives: max |C^(k)|).
 // Error analysis: each power coefficient is rounded once (the conversion runs in long double) and
 // Horner adds ~2 roundings per term; the terms |a_j| (h/2)^j of the expansion about the span midpoint
@@ -103,7 +103,7 @@ TEST(GeometryPowerBasis, DegreeCaps) {
 // Bezier curves of every accepted degree (1..15): Bernstein form evaluated directly (de Casteljau in
 // long double), derivative k from the k-th hodograph p!/(p-k)! Delta^k P, both written here. Error
 // relative to the bounding-box diagonal of the k-th hodograph's control points (a one-point hodograph:
-// its magnitude), limit 1e-12 (the issue's requirement).
+// its magnitude), limit 1e-12 (the accuracy target).
 TEST(GeometryBezier, MatchesDeCasteljauAndHodograph) {
   std::mt19937_64 rng(geotest::seed() + 5);
   std::uniform_real_distribution<double> U(-10, 10), T(0, 1);
@@ -206,7 +206,7 @@ TEST(GeometryPrimitives, LineAndExactArc) {
   }
 }
 
-// Seed 004: "for a circle cascaded from 3 segments of 120 degrees each, the peripheral standard deviation
+// [ARC]: "for a circle cascaded from 3 segments of 120 degrees each, the peripheral standard deviation
 // of the graph compared to a circle based on sin/cos is in the order of 1e-3", and the speed in the
 // middle of a segment is "about 88%" of the end speed. Checked here against the exact circle: the
 // radial error of the k = 4/3 tan(30 deg) construction is 1.5e-3 r, and the speed ratio is exactly 7/8.

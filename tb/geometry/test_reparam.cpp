@@ -1,6 +1,6 @@
 // Reparameterisation by arc length. The project's method is checked step by step against
 // independent arc lengths (closed form on the exact circle; composite 20-point Gauss-Legendre with the
-// Cox-de Boor reference evaluator elsewhere). Seed 004's algorithm is checked against its own claims.
+// Cox-de Boor reference evaluator elsewhere). [ARC]'s algorithm is checked against its own claims.
 #include <gtest/gtest.h>
 
 #include "geometry/geometry.hpp"
@@ -124,7 +124,7 @@ TEST(GeometryReparam, TaylorInterpolatorsBehaveAsTheoryPredicts) {
   EXPECT_LT(std::max(std::abs(f2.max), std::abs(f2.min)), 0.1 * std::max(std::abs(f1.max), std::abs(f1.min)));
 }
 
-// Seed 004's formula [2_04] tau = t_const * l_curve / (n * l_secant). The text before it says the
+// [ARC]'s formula [2_04] tau = t_const * l_curve / (n * l_secant). The text before it says the
 // deviation factor is l_secant / l_curve ([2_02]/[2_03]); that is off by the factor n (the deviation
 // factor is n l_secant / l_curve). Dividing t_const by the text's factor gives steps that sum to about
 // n instead of 1; after the paper's normalisation both give the same steps, so the algorithm survives
@@ -158,9 +158,9 @@ TEST(GeometryReparam, Seed004FormulaCheck) {
   }
 }
 
-// Seed 004's claims on its curves, and the figures host/geometry/README.md quotes (bench_reparam's
+// [ARC]'s claims on its curves, and the figures host/geometry/README.md quotes (bench_reparam's
 // method: n = 20 steps per Bezier segment, nominal step L / n_total; "true" = max/min of the arc
-// length between consecutive parameters, seed 004's "1 : x" is the same ratio with chords). Each
+// length between consecutive parameters, [ARC]'s "1 : x" is the same ratio with chords). Each
 // quoted figure must lie within half a unit of its last printed digit (the band is that rounding).
 namespace {
 double true_ratio(const Curve& c, int passes, int n_per_segment = 20) {
@@ -181,10 +181,10 @@ void expect_quoted(double x, double quoted, int decimals, const std::string& wha
 
 TEST(GeometryReparam, Seed004Claims) {
   const Curve c1(seedcurves::curve1()), c2(seedcurves::curve2()), c3(seedcurves::curve3());
-  // "Before" (uniform parameter, n = 20): the chord ratios curves 1 and 3 were tuned to.
+  // Unlevelled (uniform parameter, n = 20): the chord ratios curves 1 and 3 are tuned to.
   expect_quoted(chord_ratio(c1, 0), 2.271, 3, "curve 1 before (paper 1 : 2.271)");
-  expect_quoted(chord_ratio(c1, 0), 2.2709, 4, "curve 1 before (README)");
-  expect_quoted(chord_ratio(c3, 0), 11.107, 3, "curve 3 before (README; paper 1 : 11.108)");
+  expect_quoted(chord_ratio(c1, 0), 2.2709, 4, "curve 1 unlevelled (host/geometry/README.md)");
+  expect_quoted(chord_ratio(c3, 0), 11.107, 3, "curve 3 unlevelled (host/geometry/README.md; paper 1 : 11.108)");
   // The circle (unambiguous: three 120-degree cubic Beziers): paper 1 : 1.135 at n = 20 is not
   // reproduced; the chord ratio is 1.1226 at n = 20 and rounds to 1.135 only for n = 51..56.
   expect_quoted(chord_ratio(c2, 0), 1.1226, 4, "circle before, n = 20");
@@ -200,7 +200,7 @@ TEST(GeometryReparam, Seed004Claims) {
   expect_quoted(true_ratio(c1, 10), 1.0098, 4, "curve 1, 10 passes");
   expect_quoted(true_ratio(c3, 3), 1.078, 3, "curve 3, 3 passes");
   expect_quoted(true_ratio(c3, 10), 1.0008, 4, "curve 3, 10 passes");
-  // The same in chords (seed 004's own measure): levelled to 1.000000 after 10 passes.
+  // The same in chords ([ARC]'s own measure): levelled to 1.000000 after 10 passes.
   expect_quoted(chord_ratio(c1, 3), 1.0231, 4, "curve 1, 3 passes, chords");
   expect_quoted(chord_ratio(c3, 3), 1.0778, 4, "curve 3, 3 passes, chords");
   for (const Curve* c : {&c1, &c2, &c3}) EXPECT_LT(chord_ratio(*c, 10) - 1, 1e-6) << c->spline().name;
@@ -212,7 +212,7 @@ TEST(GeometryReparam, Seed004Claims) {
   EXPECT_TRUE(inflection_points(c3).empty());
 }
 
-// The butterfly: seed 004 applied per Bezier segment still leaves about 10% after 10 passes.
+// The butterfly: [ARC] applied per Bezier segment still leaves about 10% after 10 passes.
 TEST(GeometryReparam, Seed004OnButterfly) {
   const Curve c(load_curve(geotest::asset("butterfly_nurbs.json")));
   const ArcLength al(c);

@@ -3,11 +3,11 @@
 //    angles and sweeps) and straight lines give no split point, and the scan costs exactly its samples
 //    (no bisection): d(kappa^2)/du is zero there up to rounding, and the computed value lies within
 //    its rounding-error bound (measured: at most 0.12 of it; the scan treats 4x the bound as zero);
-//  * every real extremum is still found: on the butterfly, the seed curves and random B-splines and
+//  * every real extremum is still found: on the butterfly, the [ARC] curves and random B-splines and
 //    NURBS the split points are identical to those of the scan without the bound (noise_factor = 0),
 //    and a conic that differs from a circle by 1e-3..1e-9 in one weight has its one extremum at the
 //    symmetric point.
-// The three-120-degree cubic Bezier circle (seed 004 curve 2) is not of constant curvature and is not
+// The three-120-degree cubic Bezier circle ([ARC] curve 2) is not of constant curvature and is not
 // used here.
 #include <gtest/gtest.h>
 
@@ -144,9 +144,9 @@ TEST(GeometryCurvatureNoise, RealExtremaUnchanged) {
     }
   std::printf("butterfly: every scan sample's |d(kappa^2)/du| >= %.3g x its rounding-error bound\n", least);
   EXPECT_GT(least, 4.0);
-  same(Curve(seedcurves::curve1()), "seed 004 curve 1");
-  same(Curve(seedcurves::curve2()), "seed 004 curve 2");
-  same(Curve(seedcurves::curve3()), "seed 004 curve 3");
+  same(Curve(seedcurves::curve1()), "[ARC] curve 1");
+  same(Curve(seedcurves::curve2()), "[ARC] curve 2");
+  same(Curve(seedcurves::curve3()), "[ARC] curve 3");
   std::mt19937_64 rng(geotest::seed() + 77);
   size_t total = 0;
   for (int it = 0; it < 600; ++it) {

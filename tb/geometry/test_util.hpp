@@ -83,7 +83,7 @@ inline RandomSpline random_spline(std::mt19937_64& rng, int p, int dim, int n, b
 // Scale of the k-th derivative for relative errors: the bounding-box diagonal of the control points of
 // the k-th hodograph (they bound C^(k) by the convex hull),
 // Q^(k)_i = (p-k+1) (Q^(k-1)_{i+1} - Q^(k-1)_i) / (t_{i+p+1} - t_{i+k}) (non-rational).
-// One exception, found when the scale was changed from max(diagonal, max|Q|) to the diagonal alone:
+// One exception, where a scale of the diagonal alone fails:
 // when the k-th hodograph's control points all coincide (diagonal 0: derivative k = p of a single-span
 // spline, a constant vector Q), the bounding box is a point and an error relative to it is undefined;
 // both evaluators round that constant by ~eps |Q| (1e-14 absolute was seen, relative to 1e-300 that is

@@ -1,7 +1,7 @@
 // Independent checks of the core's output samples for the planner tests: the
 // limits as the samples show them, and the distance of every sample to the
-// path. Written apart from the planner's own report (pipeline.cpp) and fit
-// checks (segments.cpp, sampled.hpp), from the definitions in the README:
+// path. Written apart from the planner's own report (report/report.cpp) and fit
+// checks (segments.cpp, sampled.hpp), from the definitions in host/planner/README.md:
 //   per axis: v, a, j = first, second, third difference over h, h^2, h^3;
 //   path speed = chord / h; tangential a, j = first, second difference of the
 //   chord speed; centripetal a = the part of the second difference normal to

@@ -135,7 +135,7 @@ TEST(Streaming, G1ChainsKeepGuaranteesAtEveryWindowSize) {
   // (window, seed): seeds 1, 2 have a corner every 11th curve, where the
   // commit moves to the nearest smooth junction (windows from 3 curves work);
   // seed 3 is a polyline (every junction a corner): the commit cuts the curve
-  // after the corner (windows from 8 curves; see the README for smaller ones)
+  // after the corner (windows from 8 curves; see host/job/README.md for smaller ones)
   const std::pair<size_t, uint64_t> cases[] = {{3, 1}, {3, 2}, {4, 1}, {4, 2}, {8, 1}, {8, 2}, {16, 1},
                                                {16, 2}, {8, 3}, {16, 3}, {64, 3}};
   for (const auto& [window, seed] : cases) {
