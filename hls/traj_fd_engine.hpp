@@ -8,7 +8,7 @@
 //
 //     r[i] <- r[i] + r[i+1]      for i = 0 .. Degree-1, all from the OLD values
 //
-// (seed 002 prints the recurrence the other way round, r[i+1] += r[i] with the
+// ([FD] prints the recurrence the other way round, r[i+1] += r[i] with the
 // output in r[N]; that keeps r[0] constant and does not reproduce p(t0+kh).
 // tb/fd/fd_recurrence_test.cpp derives and tests the right one.)
 //

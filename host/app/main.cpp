@@ -5,7 +5,7 @@
 //   trajcore run   <path.json> --out-dir DIR   both, with the full report and SVG plots
 //   trajcore demo                              the built-in circle demo (cubic engine)
 //   trajcore demo --engine bcu|mixed           the circle through traj_core (BCU / FD+BCU segments)
-//   trajcore spline <points.json> -o out.trj   seed 000's C1 spline through points -> BCU segment stream
+//   trajcore spline <points.json> -o out.trj   [BCU]'s C1 spline through points -> BCU segment stream
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
@@ -80,7 +80,7 @@ int main(int argc, char** argv) {
 
   traj::app::SplineOptions spl;
   auto* sp = app.add_subcommand(
-      "spline", "Seed 000's C1 interpolating cubic Bezier spline through points (JSON {\"points\": [[x, y(, z)], "
+      "spline", "[BCU]'s C1 interpolating cubic Bezier spline through points (JSON {\"points\": [[x, y(, z)], "
                 "...]}), compiled to BCU segments for traj_core: a version-2 segment stream for `trajcore sim`");
   sp->add_option("points", spl.input, "points JSON file")->required();
   sp->add_option("-o,--output", spl.output, "segment stream to write")->capture_default_str();

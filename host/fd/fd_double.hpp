@@ -8,7 +8,7 @@
 //     output:    y_k = r_0 before the k-th update.
 // Proof: Delta^i y_{k+1} = Delta^i y_k + Delta^{i+1} y_k by the definition of
 // Delta; Delta^N y is constant for degree N.
-// Seed 002 (sec. 3.2-3.3) prints r_{i+1} <- r_{i+1} + r_i with the output in
+// [FD] (sec. 3.2-3.3) prints r_{i+1} <- r_{i+1} + r_i with the output in
 // r_N. That keeps y_0 = r_0 constant and sums it into the higher registers:
 // it does not reproduce p (tb/fd/fd_recurrence_test.cpp shows both).
 #pragma once
@@ -39,7 +39,7 @@ inline void fd_step(std::vector<double>& r) {
   for (size_t i = 0; i + 1 < r.size(); ++i) r[i] += r[i + 1];
 }
 
-// Seed 002's printed update (kept to show that it fails).
+// [FD]'s printed update (kept to show that it fails).
 inline void fd_step_seed002(std::vector<double>& r) {
   for (size_t i = 0; i + 1 < r.size(); ++i) r[i + 1] += r[i];
 }

@@ -3,7 +3,7 @@
 // segments only (traj_fd_engine); version 2 adds the BCU generator's format to
 // the header and BCU segment records (traj_core: both engines behind one word
 // stream, tuser = kind). A writer emits version 1 whenever the header has no
-// BCU format (so FD-only streams are byte for byte what they were), version 2
+// BCU format (so an FD-only stream reads on an FD-only reader), version 2
 // otherwise; the reader accepts both.
 //
 // All integers little-endian. CRC-32 is zlib's (IEEE 802.3 polynomial).

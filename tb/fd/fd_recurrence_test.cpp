@@ -1,5 +1,5 @@
 // Test group 1: the forward-difference recurrence in double reproduces Horner
-// evaluation, degrees 0..7; seed 002's printed recurrence does not.
+// evaluation, degrees 0..7; [FD]'s printed recurrence does not.
 #include <gtest/gtest.h>
 
 #include <cmath>
