@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "sim/ports.hpp"
 #include "sim/vl_bits.hpp"
@@ -57,7 +58,8 @@ class Lockstep {
     rtl_->eval();
     trace_.dump(*ctx_);
     read_rtl();
-    if (armed_) compare();
+    compared_ = armed_;
+    if (compared_) compare();
     else why_.clear();
     if (!in.rst_n) armed_ = true;
     model_.clock(in);
@@ -70,7 +72,7 @@ class Lockstep {
 
   bool ok() const { return why_.empty(); }                // the last step matched
   const std::string& why() const { return why_; }          // what differed in it, one line per port
-  bool compared() const { return armed_; }                 // outputs are compared (a reset edge was seen)
+  bool compared() const { return compared_; }              // the last step's outputs were compared
   uint64_t mismatches() const { return mismatches_; }      // ports that differed, over all steps
   uint64_t cycles() const { return cycles_; }
   const M& model() const { return model_; }
@@ -133,7 +135,7 @@ class Lockstep {
   M model_;
   Out out_;
   std::string why_;
-  bool armed_ = false;
+  bool armed_ = false, compared_ = false;  // a reset edge was seen; the last step was compared
   uint64_t cycles_ = 0, mismatches_ = 0;
 };
 
