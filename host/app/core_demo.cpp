@@ -59,13 +59,14 @@ int run_core_demo(const DemoOptions& opt) {
     throw std::invalid_argument("--engine " + opt.engine + ": expected fd, bcu or mixed");
   if (!has_core()) throw std::runtime_error("this trajcore was built without host/bcu: no traj_core demo");
   const auto t_start = std::chrono::steady_clock::now();
-  const int S = core_min_tick_spacing();
+  const Build& core = carried("core");
+  const int S = core.min_tick_gap;
   const int gap = opt.tick_gap > 0 ? opt.tick_gap : S;
   if (gap < S)
     throw std::invalid_argument("--tick-gap " + std::to_string(gap) + " is shorter than the core's minimum tick spacing (" +
                                 std::to_string(S) + " cycles)");
-  const fd::Format ff = core_fd_format(opt.frac_bits);
-  const bcu::Format bf = core_bcu_format(opt.frac_bits);
+  const fd::Format ff = core.fd_format(opt.frac_bits);
+  const bcu::Format bf = core.bcu_format(opt.frac_bits);
   const std::string stream_path = opt.stream.empty() ? "out/demo_" + opt.engine + ".trj" : opt.stream;
 
   // K = 2^d ticks per arc
@@ -116,7 +117,7 @@ int run_core_demo(const DemoOptions& opt) {
     }
     recs.push_back(r);
   }
-  const stream::Header hdr = core_header(opt.frac_bits, opt.period, "mm");
+  const stream::Header hdr = core.header(opt.frac_bits, opt.period, "mm");
   stream::write_file(stream_path, hdr, recs);
   const auto rd = stream::read_file(stream_path);
   if (!rd.complete) throw std::runtime_error(rd.error);

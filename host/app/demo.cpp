@@ -1,15 +1,14 @@
 // trajcore demo: the circle of three 120-degree cubic Bezier segments (seed 004)
 // traversed in time, compiled to forward-difference segments, run through the
-// Verilated engine (and, beside it, the hls model and the host's exact
-// prediction), compared against the double-precision Bezier path.
+// Verilated engine (sim::simulate: the hls model beside it on every cycle),
+// every sample checked against the host's exact prediction and compared with
+// the double-precision Bezier path.
 //
-// The demo always runs the fixed cubic engine build Vtraj_fd_cubic
-// (3 axes, degree 3, 64-bit registers, 16-bit chunks, 32 guard bits; verilated
-// in host/app/CMakeLists.txt), not the build's TRAJ_* engine, so `trajcore`
-// builds and the demo runs whatever TRAJ_AXES/DEGREE/WIDTH/CHUNK/GUARD are.
+// The demo always runs the tool's fd_cubic build (3 axes, degree 3, 64-bit
+// registers, 16-bit chunks, 32 guard bits; host/sim/CMakeLists.txt), not the
+// build's TRAJ_* engine, so `trajcore` builds and the demo runs whatever
+// TRAJ_AXES/DEGREE/WIDTH/CHUNK/GUARD are.
 #include "demo.hpp"
-
-#include <verilated.h>
 
 #include <array>
 #include <chrono>
@@ -17,21 +16,15 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <memory>
 #include <stdexcept>
 #include <vector>
 
-#include "Vtraj_fd_cubic.h"  // fixed 3x3x64/16/32 build (host/app/CMakeLists.txt)
 #include "fd/fd_compiler.hpp"
-#include "sim/vl_bits.hpp"
-#include "traj_fd_engine.hpp"
+#include "sim/sim.hpp"
 
 namespace traj::app {
 namespace {
 
-// The parameters Vtraj_fd_cubic is verilated with (host/app/CMakeLists.txt).
-constexpr int kAxes = 3, kDegree = 3, kWidth = 64, kChunk = 16, kGuard = 32;
-using Eng = FdEngine<kAxes, kDegree, kWidth, kChunk, kGuard>;
 using Vec = std::array<double, 3>;
 
 struct Bezier {
@@ -81,19 +74,10 @@ std::vector<double> compose(const std::array<double, 4>& c, double u0, double s)
 
 }  // namespace
 
-int run_fd_demo(const DemoOptions& opt, const fd::Compiler& comp,
-                const std::chrono::steady_clock::time_point t_start);
+int run_fd_demo(const DemoOptions& opt, const std::chrono::steady_clock::time_point t_start);
 
 int run_demo(const DemoOptions& opt) {
   const auto t_start = std::chrono::steady_clock::now();
-  fd::Format f;
-  f.axes = kAxes;
-  f.degree = kDegree;
-  f.width = kWidth;
-  f.chunk_width = kChunk;
-  f.guard_bits = kGuard;
-  f.frac_bits = opt.frac_bits;
-  fd::Compiler comp(f);
   if (opt.engine != "fd") {
 #if TRAJ_APP_CORE
     return run_core_demo(opt);
@@ -103,14 +87,15 @@ int run_demo(const DemoOptions& opt) {
   }
   DemoOptions o = opt;
   if (o.tick_gap <= 0) o.tick_gap = 64;
-  return run_fd_demo(o, comp, t_start);
+  return run_fd_demo(o, t_start);
 }
 
-int run_fd_demo(const DemoOptions& opt, const fd::Compiler& comp,
-                const std::chrono::steady_clock::time_point t_start) {
-  if (opt.tick_gap < Eng::kWords + Eng::kChunks + 1)
-    throw std::invalid_argument("--tick-gap " + std::to_string(opt.tick_gap) +
-                                " is shorter than a segment load (" + std::to_string(Eng::kWords + Eng::kChunks + 1) +
+int run_fd_demo(const DemoOptions& opt, const std::chrono::steady_clock::time_point t_start) {
+  const sim::Build& build = sim::carried("fd_cubic");
+  const fd::Compiler comp(build.fd_format(opt.frac_bits));
+  if (opt.tick_gap < build.min_tick_gap)
+    throw std::invalid_argument("--tick-gap " + std::to_string(opt.tick_gap) + " is shorter than a segment load (" +
+                                std::to_string(build.min_tick_gap) +
                                 " cycles): ticks would be lost at segment boundaries");
 
   // Plan: three 120-degree arcs, each traversed with u linear in time over
@@ -145,21 +130,22 @@ int run_fd_demo(const DemoOptions& opt, const fd::Compiler& comp,
   }
 
   // Stream everything through the Verilated engine and the hls model.
-  auto ctx = std::make_unique<VerilatedContext>();
-  ctx->randReset(2);
-  auto dut = std::make_unique<Vtraj_fd_cubic>(ctx.get());
-  Eng model;
-  std::vector<uint64_t> words;
+  std::vector<stream::Record> recs;
   struct Owner {
     size_t seg;
     uint64_t k;
   };
   std::vector<Owner> owner;
   for (size_t s = 0; s < segs.size(); ++s) {
-    const auto w = comp.words(segs[s].c);
-    words.insert(words.end(), w.begin(), w.end());
+    stream::Record r;
+    r.ticks = static_cast<uint32_t>(segs[s].c.ticks);
+    r.regs = segs[s].c.regs;
+    recs.push_back(r);
     for (uint64_t k = 0; k < segs[s].c.ticks; ++k) owner.push_back({s, k});
   }
+  const sim::SimResult sr = sim::simulate(build.header(opt.frac_bits, opt.period, "mm"), recs, opt.tick_gap);
+  if (sr.samples.v.size() != owner.size()) throw std::runtime_error("the engine emitted fewer samples than planned");
+
   std::filesystem::path csv(opt.csv);
   if (csv.has_parent_path()) std::filesystem::create_directories(csv.parent_path());
   const auto tmp = csv.string() + ".tmp";
@@ -169,88 +155,53 @@ int run_fd_demo(const DemoOptions& opt, const fd::Compiler& comp,
 
   const double lsb = std::ldexp(1.0, -opt.frac_bits);
   double max_err = 0, max_bound = 0;
-  uint64_t cycles = 0, n = 0, mismatches = 0;
-  size_t wi = 0;
-  bool tick_err = false;
-  auto cycle = [&](bool rst_n, bool tvalid, uint64_t tdata, bool tick) {
-    dut->rst_ni = rst_n;
-    dut->s_axis_tvalid = tvalid;
-    dut->s_axis_tdata = tdata;
-    dut->tick_i = tick;
-    dut->clk_i = 0;
-    dut->eval();
-    Eng::In in;
-    in.rst_n = rst_n;
-    in.tvalid = tvalid;
-    in.tdata = tdata;
-    in.tick = tick;
-    model.clock(in);
-    dut->clk_i = 1;
-    dut->eval();
-    ++cycles;
-  };
-  cycle(false, false, 0, false);
-  cycle(false, false, 0, false);
-  const auto t_sim = std::chrono::steady_clock::now();
-  while (n < owner.size()) {
-    if (cycles > 1000ull * owner.size() * opt.tick_gap) throw std::runtime_error("simulation stalled");
-    if (dut->sample_valid_o) {
-      if (dut->underrun_o) throw std::runtime_error("underrun at sample " + std::to_string(n));
-      const auto& ow = owner[n];
-      const auto& si = segs[ow.seg];
-      const double u = static_cast<double>(si.k0 + ow.k) / static_cast<double>(K_arc);
-      const Vec ref = arcs[si.arc].eval(u);
-      double err = 0;
-      long long v[3];
-      const auto mo = model.outputs();
-      for (int a = 0; a < 3; ++a) {
-        v[a] = static_cast<long long>(sext(vl_bits(dut->sample_o, a * Eng::kOutWidth, Eng::kOutWidth), Eng::kOutWidth));
-        if (mo.sample[a] != vl_bits(dut->sample_o, a * Eng::kOutWidth, Eng::kOutWidth)) ++mismatches;
-        if (comp.sample_at(si.c, a, ow.k) != mpz_class(static_cast<long>(v[a]))) ++mismatches;
-        err = std::max(err, std::fabs(v[a] - ref[a] / lsb));
-      }
-      max_err = std::max(max_err, err);
-      max_bound = std::max(max_bound, si.c.bound_lsb);
-      const double t = static_cast<double>(si.arc * K_arc + si.k0 + ow.k) * opt.period;
-      out << n << ',' << t << ',' << ow.seg << ',' << v[0] << ',' << v[1] << ',' << v[2];
-      char buf[256];
-      std::snprintf(buf, sizeof buf, ",%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.6f\n", v[0] * lsb, v[1] * lsb, v[2] * lsb,
-                    ref[0], ref[1], ref[2], err);
-      out << buf;
-      ++n;
+  uint64_t n = 0, mismatches = sr.mismatches;
+  for (; n < owner.size(); ++n) {
+    const auto& ow = owner[n];
+    const auto& si = segs[ow.seg];
+    const auto& v = sr.samples.v[n];
+    const double u = static_cast<double>(si.k0 + ow.k) / static_cast<double>(K_arc);
+    const Vec ref = arcs[si.arc].eval(u);
+    double err = 0;
+    for (int a = 0; a < 3; ++a) {
+      if (comp.sample_at(si.c, a, ow.k) != mpz_class(static_cast<long>(v[a]))) ++mismatches;
+      err = std::max(err, std::fabs(v[a] - ref[a] / lsb));
     }
-    tick_err |= dut->tick_err_o;
-    const bool tvalid = wi < words.size();
-    const uint64_t tdata = tvalid ? words[wi] : 0;
-    if (tvalid && dut->s_axis_tready) ++wi;
-    const bool tick = cycles % opt.tick_gap == 0;
-    cycle(true, tvalid, tdata, tick);
+    max_err = std::max(max_err, err);
+    max_bound = std::max(max_bound, si.c.bound_lsb);
+    const double t = static_cast<double>(si.arc * K_arc + si.k0 + ow.k) * opt.period;
+    out << n << ',' << t << ',' << ow.seg << ',' << v[0] << ',' << v[1] << ',' << v[2];
+    char buf[256];
+    std::snprintf(buf, sizeof buf, ",%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.6f\n", v[0] * lsb, v[1] * lsb, v[2] * lsb,
+                  ref[0], ref[1], ref[2], err);
+    out << buf;
   }
   const auto t_end = std::chrono::steady_clock::now();
   out.close();
   if (!out) throw std::runtime_error("write failed: " + tmp);
   std::filesystem::rename(tmp, csv);
-  const double sim_s = std::chrono::duration<double>(t_end - t_sim).count();
   const double all_s = std::chrono::duration<double>(t_end - t_start).count();
 
   std::printf("trajcore demo: circle R=%g mm of three 120-degree cubic Bezier arcs, feed %g mm/s nominal, tick %g ms\n",
               opt.radius, opt.feed, opt.period * 1e3);
+  const fd::Format& f = build.fd;
   std::printf("  engine        : traj_fd_engine Axes=%d Degree=%d Width=%d ChunkWidth=%d GuardBits=%d (Verilated)\n",
-              kAxes, kDegree, kWidth, kChunk, kGuard);
-  std::printf("  output format : %d-bit samples, 1 LSB = 2^-%d mm = %.3g um\n", Eng::kOutWidth, opt.frac_bits,
+              f.axes, f.degree, f.width, f.chunk_width, f.guard_bits);
+  std::printf("  output format : %d-bit samples, 1 LSB = 2^-%d mm = %.3g um\n", f.out_width(), opt.frac_bits,
               lsb * 1e3);
   std::printf("  segments      : %zu (K = %llu ticks per arc)\n", segs.size(), static_cast<unsigned long long>(K_arc));
   std::printf("  ticks         : %llu samples in %llu clock cycles (tick every %d cycles)\n",
-              static_cast<unsigned long long>(n), static_cast<unsigned long long>(cycles), opt.tick_gap);
+              static_cast<unsigned long long>(n), static_cast<unsigned long long>(sr.cycles), opt.tick_gap);
   std::printf("  max error     : %.4f LSB (%.3g um) against the double-precision Bezier path\n", max_err,
               max_err * lsb * 1e3);
   std::printf("  stated bound  : %.4f LSB (0.5 output rounding + %.4f register error)\n", 0.5 + max_bound, max_bound);
   std::printf("  RTL == hls == host prediction: %s (%llu mismatches)\n", mismatches == 0 ? "yes" : "NO",
               static_cast<unsigned long long>(mismatches));
-  std::printf("  tick_err      : %s\n", tick_err ? "SET" : "clear");
+  std::printf("  tick_err      : %s, underruns %llu\n", sr.tick_err ? "SET" : "clear",
+              static_cast<unsigned long long>(sr.underruns));
   std::printf("  samples CSV   : %s\n", csv.string().c_str());
-  std::printf("  time          : %.3f s total, simulation %.0f cycles/s\n", all_s, cycles / sim_s);
-  const bool ok = mismatches == 0 && !tick_err && max_err <= 0.5 + max_bound + 1e-6;
+  std::printf("  time          : %.3f s total, simulation %.0f cycles/s\n", all_s, sr.cycles / sr.seconds);
+  const bool ok = mismatches == 0 && !sr.tick_err && sr.underruns == 0 && max_err <= 0.5 + max_bound + 1e-6;
   if (!ok) std::fprintf(stderr, "trajcore demo: FAILED (see above)\n");
   return ok ? 0 : 1;
 }

@@ -73,8 +73,9 @@ int run_spline(const SplineOptions& opt) {
   if (!(opt.feed > 0) || !std::isfinite(opt.feed)) throw std::invalid_argument("--feed must be positive and finite");
   if (!(opt.period > 0) || !std::isfinite(opt.period))
     throw std::invalid_argument("--period must be positive and finite");
-  const fd::Format ff = core_fd_format(opt.frac_bits);
-  const bcu::Format bf = core_bcu_format(opt.frac_bits);
+  const Build& core = carried("core");
+  const fd::Format ff = core.fd_format(opt.frac_bits);
+  const bcu::Format bf = core.bcu_format(opt.frac_bits);
   if (opt.depth > bf.max_depth)
     throw std::invalid_argument("--depth " + std::to_string(opt.depth) + " out of range 0.." +
                                 std::to_string(bf.max_depth) + " (MaxDepth)");
@@ -139,7 +140,7 @@ int run_spline(const SplineOptions& opt) {
     }
     recs.push_back(r);
   }
-  stream::write_file(opt.output, core_header(opt.frac_bits, opt.period, "mm"), recs);
+  stream::write_file(opt.output, core.header(opt.frac_bits, opt.period, "mm"), recs);
   std::printf("%s: %lld points, %zu spline segments (lambda %g, mu %g) -> %zu stream segments (%zu BCU, %zu FD), "
               "d %d..%d, %llu ticks (%.3f s), speed <= %.4g units/s, every sample within %.4f LSB of the spline "
               "(1 LSB = 2^-%d) -> %s\n",

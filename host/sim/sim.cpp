@@ -1,124 +1,329 @@
 #include "sim/sim.hpp"
 
-#include <verilated.h>
-
 #include <chrono>
-#include <memory>
+#include <deque>
 #include <stdexcept>
 #include <string>
 
-#include "Vtraj_fd_cubic.h"
-#include "Vtraj_fd_quintic.h"
-#include "sim/vl_bits.hpp"
-#include "traj_fd_engine.hpp"
+#include "engine_builds.hpp"  // generated (host/sim/CMakeLists.txt)
+#include "sim/lockstep.hpp"
+
+#if TRAJ_APP_CORE
+#include "bcu/bcu_compiler.hpp"
+#endif
 
 namespace traj::sim {
 namespace {
 
-template <class V, class Eng>
-SimResult run(const stream::Header& h, const std::vector<stream::Record>& recs, int tick_gap,
-              const std::function<void(double)>& progress) {
-  SimResult res;
-  fd::Compiler comp(h.format());
+// The stream words in order, with the kind on tuser (traj_core only).
+struct Feed {
   std::vector<uint64_t> words;
-  uint64_t total = 0;
+  std::vector<bool> bcu;  // per word; empty for traj_fd_engine
+  size_t first_len = 0;   // words of the first segment
+  uint64_t ticks = 0;     // samples the stream holds
+};
+
+Feed fd_feed(const stream::Header& h, const std::vector<stream::Record>& recs) {
+  Feed f;
+  const fd::Compiler comp(h.format());
   for (const auto& r : recs) {
     fd::Compiled c;
     c.ticks = r.ticks;
     c.regs = r.regs;
     const auto w = comp.words(c);
-    words.insert(words.end(), w.begin(), w.end());
-    total += r.ticks;
+    f.words.insert(f.words.end(), w.begin(), w.end());
+    if (f.first_len == 0) f.first_len = f.words.size();
+    f.ticks += r.ticks;
   }
-  if (tick_gap <= 0) tick_gap = Eng::kWords + Eng::kChunks + 2;
-  if (tick_gap < Eng::kWords + Eng::kChunks + 1)
-    throw std::runtime_error("tick gap " + std::to_string(tick_gap) + " cycles is shorter than a segment load (" +
-                             std::to_string(Eng::kWords + Eng::kChunks + 1) + ")");
-  auto ctx = std::make_unique<VerilatedContext>();
-  ctx->randReset(2);
-  auto dut = std::make_unique<V>(ctx.get());
-  Eng model;
-  auto cycle = [&](bool rst_n, bool tvalid, uint64_t tdata, bool tick) {
-    dut->rst_ni = rst_n;
-    dut->s_axis_tvalid = tvalid;
-    dut->s_axis_tdata = tdata;
-    dut->tick_i = tick;
-    dut->clk_i = 0;
-    dut->eval();
-    typename Eng::In in;
-    in.rst_n = rst_n;
-    in.tvalid = tvalid;
-    in.tdata = tdata;
-    in.tick = tick;
-    model.clock(in);
-    dut->clk_i = 1;
-    dut->eval();
-    ++res.cycles;
-  };
+  return f;
+}
+
+// Ticks every `gap` cycles on the absolute cycle count.
+struct EveryGap {
+  uint64_t gap;
+  bool tick(uint64_t cycle) { return cycle % gap == 0; }
+  void fed(size_t, uint64_t) {}
+};
+
+// First tick one gap after the first segment has entered the unit (a gap
+// covers a segment's load and descent), then one every gap.
+struct GapAfterFirstSegment {
+  uint64_t gap;
+  size_t first_len;
+  uint64_t next = ~0ull;
+  bool tick(uint64_t cycle) {
+    if (cycle != next) return false;
+    next += gap;
+    return true;
+  }
+  void fed(size_t words_in, uint64_t cycle) {
+    if (next == ~0ull && words_in >= first_len) next = cycle + gap;
+  }
+};
+
+// The stream through the build's RTL and hls model in lockstep (two reset
+// cycles first); on_sample(sample, seg_done) for every real sample.
+template <class B, class Ticks, class OnSample>
+void clock_stream(const Feed& f, Ticks ticks, SimResult& res, const std::function<void(double)>& progress,
+                  OnSample on_sample) {
+  using M = builds::ModelOf<B>;
+  static_assert(B::Axes == 3, "report::Samples holds three axes");
+  Lockstep<typename B::Rtl, M> ls;
   const auto t0 = std::chrono::steady_clock::now();
-  cycle(false, false, 0, false);
-  cycle(false, false, 0, false);
+  typename M::In in;
+  in.rst_n = false;
+  ls.step(in);
+  ls.step(in);
+  in.rst_n = true;
+  res.samples.v.reserve(f.ticks);
+  const uint64_t limit = (f.ticks + 4) * static_cast<uint64_t>(res.tick_gap) * 4 + f.words.size() * 4 + 10000;
   size_t wi = 0;
-  res.samples.v.reserve(total);
-  const uint64_t limit = (total + 4) * static_cast<uint64_t>(tick_gap) * 4 + words.size() * 4 + 1000;
-  while (res.samples.v.size() < total) {
-    if (res.cycles > limit) throw std::runtime_error("simulation stalled");
-    if (dut->sample_valid_o) {
-      const auto mo = model.outputs();
+  while (res.samples.v.size() < f.ticks) {
+    if (ls.cycles() > limit) throw std::runtime_error("simulation stalled");
+    in.tvalid = wi < f.words.size();
+    in.tdata = in.tvalid ? f.words[wi] : 0;
+    if constexpr (builds::kIsCore<B>) in.tuser = in.tvalid && f.bcu[wi];
+    in.tick = ticks.tick(ls.cycles());
+    const auto& o = ls.step(in);
+    if (in.tvalid && o.tready) ++wi;
+    ticks.fed(wi, ls.cycles() - 1);
+    if (o.underrun) ++res.underruns;
+    res.tick_err |= o.tick_err;
+    if (o.sample_valid && !o.underrun) {
       std::array<long long, 3> s{};
-      for (int a = 0; a < 3; ++a) {
-        const u128 raw = vl_bits(dut->sample_o, a * Eng::kOutWidth, Eng::kOutWidth);
-        if (raw != mo.sample[a]) ++res.mismatches;
-        s[a] = static_cast<long long>(sext(raw, Eng::kOutWidth));
-      }
-      if (dut->underrun_o) ++res.underruns;
-      else res.samples.v.push_back(s);
-      if (progress && (res.samples.v.size() % 100000 == 0)) progress(double(res.samples.v.size()) / total);
+      for (int a = 0; a < B::Axes; ++a) s[a] = static_cast<long long>(sext(o.sample[a], M::kOutWidth));
+      on_sample(s, o.seg_done);
+      res.samples.v.push_back(s);
+      if (progress && (res.samples.v.size() % 100000 == 0)) progress(double(res.samples.v.size()) / f.ticks);
     }
-    if (dut->s_axis_tready != model.outputs().tready || dut->sample_valid_o != model.outputs().sample_valid)
-      ++res.mismatches;
-    res.tick_err |= dut->tick_err_o;
-    const bool tvalid = wi < words.size();
-    const uint64_t tdata = tvalid ? words[wi] : 0;
-    if (tvalid && dut->s_axis_tready) ++wi;
-    cycle(true, tvalid, tdata, res.cycles % tick_gap == 0);
   }
   res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  dut->final();
+  res.cycles = ls.cycles();
+  res.mismatches = ls.mismatches();
+}
+
+#if TRAJ_APP_CORE
+struct Expect {
+  std::array<long long, 3> v;
+  bool done;
+};
+
+// A version-2 stream's words (kind on tuser) and the exact prediction of every
+// sample from the records themselves (FD: the register recurrence in exact
+// integers, modulo 2^Width as the engine wraps; BCU: the closed form of
+// traj::bcu::predict_sample).
+template <class B>
+Feed core_feed(const stream::Header& h, const std::vector<stream::Record>& recs, std::deque<Expect>& expect,
+               SimResult& res) {
+  Feed f;
+  const fd::Compiler fdc(h.format());
+  const bcu::Format bf = h.bcu_format();
+  const mpz_class mod = mpz_class(1) << B::Width;
+  auto add = [&](const std::vector<uint64_t>& w, bool bcu) {
+    f.words.insert(f.words.end(), w.begin(), w.end());
+    f.bcu.insert(f.bcu.end(), w.size(), bcu);
+  };
+  for (size_t s = 0; s < recs.size(); ++s) {
+    const auto& r = recs[s];
+    if (r.is_bcu()) {
+      const int d = r.depth();
+      add(bcu::stream_words(r.regs, d, bf), true);
+      for (uint32_t j = 0; j < r.ticks; ++j) {
+        Expect e{};
+        for (int a = 0; a < B::Axes; ++a) e.v[a] = bcu::predict_sample(r.regs[a], d, static_cast<int>(j), bf.guard_bits);
+        e.done = j + 1 == r.ticks;
+        expect.push_back(e);
+      }
+      ++res.bcu_segments;
+    } else {
+      fd::Compiled c;
+      c.ticks = r.ticks;
+      c.regs = r.regs;
+      add(fdc.words(c), false);
+      std::vector<std::vector<mpz_class>> reg = r.regs;
+      const size_t e0 = expect.size();
+      expect.resize(e0 + r.ticks);
+      for (int a = 0; a < B::Axes; ++a) {
+        auto& x = reg[a];
+        mpz_class v;
+        for (uint32_t k = 0; k < r.ticks; ++k) {
+          v = x[0] % mod;  // the engine's r0, W bits two's complement
+          if (v < 0) v += mod;
+          if (v >= mod / 2) v -= mod;
+          mpz_fdiv_q_2exp(v.get_mpz_t(), v.get_mpz_t(), B::GuardBits);
+          expect[e0 + k].v[a] = v.get_si();
+          expect[e0 + k].done = k + 1 == r.ticks;
+          for (int i = 0; i < B::Degree; ++i) x[i] += x[i + 1];
+        }
+      }
+      ++res.fd_segments;
+    }
+    if (s > 0 && r.kind != recs[s - 1].kind) ++res.switches;
+    if (s == 0) f.first_len = f.words.size();
+    f.ticks += r.ticks;
+  }
+  return f;
+}
+#endif
+
+template <class B>
+SimResult run(const stream::Header& h, const std::vector<stream::Record>& recs, int tick_gap,
+              const std::function<void(double)>& progress) {
+  using M = builds::ModelOf<B>;
+  using U = typename B::Unit;
+  constexpr int kMin = U::template kMinGap<M>;
+  if (tick_gap <= 0) tick_gap = U::template kDefaultGap<M>;
+  if (tick_gap < kMin)
+    throw std::runtime_error("tick gap " + std::to_string(tick_gap) + " cycles is shorter than " + U::kGapReason +
+                             " (" + std::to_string(kMin) + " cycles)");
+  SimResult res;
+  res.engine = U::kName;
+  res.tick_gap = tick_gap;
+  if constexpr (builds::kIsCore<B>) {
+#if TRAJ_APP_CORE
+    std::deque<Expect> expect;
+    const Feed f = core_feed<B>(h, recs, expect, res);
+    clock_stream<B>(f, GapAfterFirstSegment{static_cast<uint64_t>(tick_gap), f.first_len}, res, progress,
+                    [&](const std::array<long long, 3>& s, bool done) {
+                      const Expect& e = expect.front();
+                      if (s != e.v || done != e.done) ++res.prediction_mismatches;
+                      expect.pop_front();
+                    });
+#endif
+  } else {
+    clock_stream<B>(fd_feed(h, recs), EveryGap{static_cast<uint64_t>(tick_gap)}, res, progress,
+                    [](const std::array<long long, 3>&, bool) {});
+  }
   return res;
 }
 
-bool is(const stream::Header& h, int deg, int w, int c, int g) {
-  return h.axes == 3 && h.degree == deg && h.width == w && h.chunk_width == c && h.guard_bits == g;
+template <class B>
+Build describe() {
+  using M = builds::ModelOf<B>;
+  using U = typename B::Unit;
+  Build b;
+  b.name = B::kName;
+  b.unit = U::kName;
+  b.fd.axes = B::Axes;
+  b.fd.degree = B::Degree;
+  b.fd.width = B::Width;
+  b.fd.chunk_width = B::ChunkWidth;
+  b.fd.guard_bits = B::GuardBits;
+  if constexpr (builds::kIsCore<B>) {
+    b.has_bcu = true;
+    b.bcu.axes = B::Axes;
+    b.bcu.chunk_width = B::ChunkWidth;
+    b.bcu.ctrl_width = B::CtrlWidth;
+    b.bcu.guard_bits = B::BcuGuardBits;
+    b.bcu.out_width = M::kOutWidth;
+    b.bcu.max_depth = B::MaxDepth;
+  }
+  b.min_tick_gap = U::template kMinGap<M>;
+  b.default_tick_gap = U::template kDefaultGap<M>;
+  return b;
+}
+
+template <class... B>
+std::vector<Build> describe_all(builds::List<B...>) {
+  return {describe<B>()...};
+}
+
+bool matches(const Build& b, const stream::Header& h) {
+  const bool fd = h.axes == b.fd.axes && h.degree == b.fd.degree && h.width == b.fd.width &&
+                  h.chunk_width == b.fd.chunk_width && h.guard_bits == b.fd.guard_bits;
+  if (!b.has_bcu) return fd && !h.has_bcu();
+  return fd && h.has_bcu() && h.bcu_ctrl_width == b.bcu.ctrl_width && h.bcu_guard_bits == b.bcu.guard_bits &&
+         h.bcu_max_depth == b.bcu.max_depth && h.bcu_out_width == b.bcu.out_width;
+}
+
+std::string describe_format(const fd::Format& f, const bcu::Format* b) {
+  std::string s = "axes " + std::to_string(f.axes) + ", FD degree " + std::to_string(f.degree) + " width " +
+                  std::to_string(f.width) + " chunk " + std::to_string(f.chunk_width) + " guard " +
+                  std::to_string(f.guard_bits);
+  if (b)
+    s += ", BCU CtrlWidth " + std::to_string(b->ctrl_width) + " GuardBits " + std::to_string(b->guard_bits) +
+         " MaxDepth " + std::to_string(b->max_depth) + " OutWidth " + std::to_string(b->out_width);
+  return s;
+}
+
+std::string describe_format(const stream::Header& h) {
+  const bcu::Format b = h.has_bcu() ? h.bcu_format() : bcu::Format{};
+  return describe_format(h.format(), h.has_bcu() ? &b : nullptr);
+}
+
+std::string describe_carried() {
+  std::string s;
+  for (const auto& b : carried()) {
+    if (!s.empty()) s += "; ";
+    s += b.name + " (" + b.unit + ": " + describe_format(b.fd, b.has_bcu ? &b.bcu : nullptr) + ")";
+  }
+  return s;
+}
+
+template <class... B>
+SimResult dispatch(builds::List<B...>, const stream::Header& h, const std::vector<stream::Record>& recs,
+                   int tick_gap, const std::function<void(double)>& progress) {
+  SimResult res;
+  bool found = false;
+  auto try_one = [&](auto tag) {
+    using One = typename decltype(tag)::type;
+    if (found || !matches(describe<One>(), h)) return;
+    found = true;
+    res = run<One>(h, recs, tick_gap, progress);
+  };
+  (try_one(std::common_type<B>{}), ...);
+  if (!found)
+    throw std::runtime_error("no engine for this stream (" + describe_format(h) + "): this tool carries " +
+                             describe_carried());
+  return res;
 }
 
 }  // namespace
 
-#if TRAJ_APP_CORE
-SimResult simulate_core(const stream::Header& h, const std::vector<stream::Record>& recs, int tick_gap,
-                        const std::function<void(double)>& progress);  // core_sim.cpp
-#else
-bool has_core() { return false; }
-#endif
+fd::Format Build::fd_format(int frac_bits) const {
+  fd::Format f = fd;
+  f.frac_bits = frac_bits;
+  return f;
+}
+
+bcu::Format Build::bcu_format(int frac_bits) const {
+  bcu::Format f = bcu;
+  f.frac_bits = frac_bits;
+  return f;
+}
+
+stream::Header Build::header(int frac_bits, double period, const std::string& units) const {
+  return has_bcu ? stream::Header::from(fd_format(frac_bits), bcu_format(frac_bits), period, units)
+                 : stream::Header::from(fd_format(frac_bits), period, units);
+}
+
+const std::vector<Build>& carried() {
+  static const std::vector<Build> all = describe_all(builds::Carried{});
+  return all;
+}
+
+const Build& carried(const std::string& name) {
+  for (const auto& b : carried())
+    if (b.name == name) return b;
+  throw std::runtime_error("this trajcore carries no engine build " + name + " (it carries " + describe_carried() +
+                           ")");
+}
+
+bool has_core() {
+  for (const auto& b : carried())
+    if (b.has_bcu) return true;
+  return false;
+}
 
 SimResult simulate(const stream::Header& h, const std::vector<stream::Record>& recs, int tick_gap,
                    const std::function<void(double)>& progress) {
-  if (h.has_bcu()) {
-#if TRAJ_APP_CORE
-    return simulate_core(h, recs, tick_gap, progress);
-#else
+  if (!h.has_bcu())
+    for (const auto& r : recs)
+      if (r.is_bcu()) throw std::runtime_error("BCU segment in a stream without a BCU format");
+  if (h.has_bcu() && !has_core())
     throw std::runtime_error("this stream carries a BCU format (version 2) and this trajcore was built without "
                              "host/bcu (TRAJ_SKIP): no traj_core to run it on");
-#endif
-  }
-  for (const auto& r : recs)
-    if (r.is_bcu()) throw std::runtime_error("BCU segment in a stream without a BCU format");
-  if (is(h, 3, 64, 16, 32)) return run<Vtraj_fd_cubic, FdEngine<3, 3, 64, 16, 32>>(h, recs, tick_gap, progress);
-  if (is(h, 5, 96, 16, 48)) return run<Vtraj_fd_quintic, FdEngine<3, 5, 96, 16, 48>>(h, recs, tick_gap, progress);
-  throw std::runtime_error("no engine for this stream: axes " + std::to_string(h.axes) + ", degree " +
-                           std::to_string(h.degree) + ", width " + std::to_string(h.width) + ", chunk " +
-                           std::to_string(h.chunk_width) + ", guard " + std::to_string(h.guard_bits) +
-                           " (this tool carries 3x3x64/16/32 and 3x5x96/16/48)");
+  return dispatch(builds::Carried{}, h, recs, tick_gap, progress);
 }
 
 }  // namespace traj::sim

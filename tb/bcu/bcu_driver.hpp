@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "sim/ports.hpp"
 #include "traj_bcu_gen.hpp"
 
 namespace traj::bcu::test {
@@ -28,10 +29,12 @@ struct Driver {
     in.tick = tick;
     in.tvalid = offer && wi < words.size();
     in.tdata = in.tvalid ? words[wi] : 0;
-    const bool acc = gen.tready() && in.tvalid;
-    if (gen.sample_valid() || gen.underrun()) {
-      Event e{cycle, gen.sample_valid(), gen.underrun(), gen.seg_done(), {}};
-      for (int a = 0; a < Gen::kAxes; ++a) e.sample.push_back(gen.sample(a));
+    const auto o = sim::hls_ports(gen);
+    const bool acc = o.tready && in.tvalid;
+    if (o.sample_valid || o.underrun) {
+      Event e{cycle, o.sample_valid, o.underrun, o.seg_done, {}};
+      for (int a = 0; a < Gen::kAxes; ++a)
+        e.sample.push_back(static_cast<int64_t>(sext(gen.sample_bits(a), Gen::kOutWidth)));
       events.push_back(e);
     }
     gen.clock(in);

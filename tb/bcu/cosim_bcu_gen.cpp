@@ -23,29 +23,13 @@
 #include <memory>
 #include <random>
 #include <string>
-#include <type_traits>
 
 #include "Vtraj_bcu_gen.h"
 #include "bcu/bcu_compiler.hpp"
+#include "sim/lockstep.hpp"
 #include "traj_bcu_gen.hpp"
-#include "verilated.h"
 
-using traj::u128;
 using Gen = traj::BcuGen<BCU_AXES, BCU_CHUNK, BCU_CTRL, BCU_GUARD, BCU_OUT, BCU_DEPTH>;
-
-template <class T>
-static u128 field(const T& v, int lo, int n) {
-  if constexpr (std::is_integral_v<T>) {
-    return (u128(v) >> lo) & traj::mask(n);
-  } else {
-    u128 r = 0;
-    for (int b = 0; b < n; ++b) {
-      const int i = lo + b;
-      if ((v[i / 32] >> (i % 32)) & 1u) r |= u128(1) << b;
-    }
-    return r;
-  }
-}
 
 struct Expect {  // host prediction of one sample
   std::vector<int64_t> v;
@@ -68,11 +52,8 @@ int main(int argc, char** argv) {
               BCU_AXES, BCU_CHUNK, BCU_CTRL, BCU_GUARD, BCU_OUT, BCU_DEPTH,
               (unsigned long long)seed, (unsigned long long)cycles, (unsigned long long)seed);
 
-  auto ctx = std::make_unique<VerilatedContext>();
-  ctx->randReset(2);
-  ctx->randSeed(static_cast<int>(seed & 0x7fffffff));
-  auto top = std::make_unique<Vtraj_bcu_gen>(ctx.get());
-  Gen hls;
+  traj::sim::Lockstep<Vtraj_bcu_gen, Gen> ls(static_cast<int>(seed & 0x7fffffff));
+  const Gen& hls = ls.model();
   std::mt19937_64 rng(seed);
 
   traj::bcu::Format f;
@@ -135,12 +116,11 @@ int main(int argc, char** argv) {
   uint64_t next_tick = 0, phase_end = 0, phase_len = 1;
   uint64_t n_samples = 0, n_underrun = 0, n_done = 0, n_resets = 0, n_tickerr = 0, n_checked = 0;
   uint64_t n_done_max = 0, n_run_ticks = 0;
-  bool in_reset = true, synced = false;
+  bool in_reset = true;
   int reset_left = 3;
   const int S = Gen::kMinTickSpacing;
   const uint64_t max_seg = (uint64_t(1) << BCU_DEPTH) + Gen::kStartLatencyMax;
 
-  top->clk_i = 0;
   for (uint64_t cyc = 0; cyc < cycles; ++cyc) {
     if (cyc >= phase_end) {
       // the previous phase ends: a reset after a too-fast phase (tick_err is
@@ -183,42 +163,32 @@ int main(int argc, char** argv) {
     const bool offer = !words.empty() && int(rng() % 100) < offer_pct;
     const uint64_t data = offer ? words.front() : rng();  // garbage when not valid
 
-    top->rst_ni = rst_n;
-    top->tick_i = tick;
-    top->s_axis_tvalid = offer;
-    top->s_axis_tdata = data & ((BCU_CHUNK >= 64) ? ~0ull : ((1ull << BCU_CHUNK) - 1));
-    top->clk_i = 0;
-    top->eval();
+    typename Gen::In in;
+    in.rst_n = rst_n;
+    in.tick = tick;
+    in.tvalid = offer;
+    in.tdata = data & ((BCU_CHUNK >= 64) ? ~0ull : ((1ull << BCU_CHUNK) - 1));
+    const bool acc = hls.tready() && offer;
+    if (trace_from && cyc >= trace_from)
+      std::printf("cyc %llu rst %d tick %d offer %d acc %d st %d lvl %d pc %d j %u tq %d\n",
+                  (unsigned long long)cyc, rst_n, tick, offer, acc, hls.state(),
+                  hls.regs().lvl_q, hls.regs().pc_q, hls.regs().j_q, hls.regs().tick_q);
+    // the model's state before the edge, for the messages below
+    const int st = hls.state(), depth_q = hls.regs().depth_q;
+    const unsigned j_q = hls.regs().j_q;
+    const auto& o = ls.step(in);  // RTL == hls on every port, then the clock edge
 
-    // compare (from the first clock edge with reset applied on: before that
-    // the RTL holds its random initial state, --x-initial unique)
     bool bad = false;
-    if (synced) {
-    auto chk = [&](const char* name, uint64_t r, uint64_t h) {
-      if (r != h) {
-        std::printf("MISMATCH cycle %llu %s rtl=%llu hls=%llu\n", (unsigned long long)cyc, name,
-                    (unsigned long long)r, (unsigned long long)h);
-        bad = true;
-      }
-    };
-    chk("s_axis_tready", top->s_axis_tready, hls.tready());
-    chk("sample_valid_o", top->sample_valid_o, hls.sample_valid());
-    chk("underrun_o", top->underrun_o, hls.underrun());
-    chk("seg_done_o", top->seg_done_o, hls.seg_done());
-    chk("tick_err_o", top->tick_err_o, hls.tick_err());
-    if (hls.sample_valid()) {
-      for (int a = 0; a < BCU_AXES; ++a) {
-        const u128 r = field(top->sample_o, a * BCU_OUT, BCU_OUT);
-        if (r != hls.sample_bits(a)) {
-          std::printf("MISMATCH cycle %llu sample axis %d rtl=%lld hls=%lld\n", (unsigned long long)cyc,
-                      a, (long long)traj::sext(r, BCU_OUT), (long long)hls.sample(a));
-          bad = true;
-        }
-      }
+    if (!ls.ok()) {
+      std::printf("MISMATCH %s\n", ls.why().c_str());
+      bad = true;
+    }
+    if (ls.compared() && !bad) {
+    if (o.sample_valid) {
       // hls == host prediction
       std::vector<int64_t> got;
-      for (int a = 0; a < BCU_AXES; ++a) got.push_back(hls.sample(a));
-      if (hls.underrun()) {
+      for (int a = 0; a < BCU_AXES; ++a) got.push_back(static_cast<int64_t>(traj::sext(o.sample[a], BCU_OUT)));
+      if (o.underrun) {
         if (got != end_value) {
           std::printf("MISMATCH cycle %llu underrun sample is not the end value\n", (unsigned long long)cyc);
           bad = true;
@@ -226,8 +196,7 @@ int main(int argc, char** argv) {
       } else {
         if (expect.empty() || got != expect.front().v) {
           std::printf("MISMATCH cycle %llu sample != host prediction (state %d j %u depth %d, "
-                      "queued %zu)\n", (unsigned long long)cyc, hls.state(), hls.regs().j_q,
-                      hls.regs().depth_q, expect.size());
+                      "queued %zu)\n", (unsigned long long)cyc, st, j_q, depth_q, expect.size());
           for (int a = 0; a < BCU_AXES; ++a)
             std::printf("  axis %d got %lld want %lld\n", a, (long long)got[a],
                         expect.empty() ? 0ll : (long long)expect.front().v[a]);
@@ -240,45 +209,27 @@ int main(int argc, char** argv) {
           bad = true;
         } else {
           if (trace_from && cyc >= trace_from)
-            std::printf("   ok d=%d j=%d (hls j %u d %d)\n", expect.front().depth, expect.front().j,
-                        hls.regs().j_q, hls.regs().depth_q);
+            std::printf("   ok d=%d j=%d (hls j %u d %d)\n", expect.front().depth, expect.front().j, j_q, depth_q);
           expect.pop_front();
           ++n_checked;
         }
-        if (hls.seg_done() && !expect.empty() && expect.front().depth == BCU_DEPTH) ++n_done_max;
-        if (hls.seg_done() && !expect.empty()) {
+        if (o.seg_done && !expect.empty() && expect.front().depth == BCU_DEPTH) ++n_done_max;
+        if (o.seg_done && !expect.empty()) {
           end_value = expect.front().v;
           expect.pop_front();
         }
       }
     }
-    n_samples += hls.sample_valid() && !hls.underrun();
-    n_underrun += hls.underrun();
-    n_done += hls.seg_done();
-    n_tickerr += hls.tick_err();
+    n_samples += o.sample_valid && !o.underrun;
+    n_underrun += o.underrun;
+    n_done += o.seg_done;
+    n_tickerr += o.tick_err;
     }
     if (bad) {
       std::printf("FAIL (seed %llu)\n", (unsigned long long)seed);
       return 1;
     }
-
-    if (trace_from && cyc >= trace_from)
-      std::printf("cyc %llu rst %d tick %d offer %d acc %d st %d lvl %d pc %d j %u tq %d\n",
-                  (unsigned long long)cyc, rst_n, tick, offer, hls.tready() && offer, hls.state(),
-                  hls.regs().lvl_q, hls.regs().pc_q, hls.regs().j_q, hls.regs().tick_q);
-    // clock edge
-    typename Gen::In in;
-    in.rst_n = rst_n;
-    in.tick = tick;
-    in.tvalid = offer;
-    in.tdata = top->s_axis_tdata;
-    const bool acc = hls.tready() && offer;
-    hls.clock(in);
-    top->clk_i = 1;
-    top->eval();
-    top->clk_i = 0;
     if (acc && rst_n) words.pop_front();
-    if (!rst_n) synced = true;
     if (reset_ends) {  // the host restarts its stream after a reset
       ++n_resets;
       words.clear();
@@ -287,7 +238,6 @@ int main(int argc, char** argv) {
       have_prev = false;
     }
   }
-  top->final();
   std::printf("PASS: %llu samples (%llu checked against the host prediction), %llu seg_done "
               "(%llu at d = MaxDepth = %d), %llu ticks in every-clock phases, %llu underrun ticks, "
               "%llu resets, %llu cycles with tick_err set (%.1f %%)\n",

@@ -4,9 +4,11 @@
 #include <cstdio>
 #include <memory>
 
+#include <verilated.h>
+
 #include "Vtraj_bcu.h"
+#include "sim/vl_bits.hpp"
 #include "traj_bcu.hpp"
-#include "verilated.h"
 
 int main(int argc, char** argv) {
   constexpr int kIn = 4, kOut = kIn + 3;
@@ -25,8 +27,8 @@ int main(int argc, char** argv) {
     const long exact_l[4] = {8 * A, 4 * (A + B), 2 * (A + 2 * B + C), A + 3 * B + 3 * C + D};
     const long exact_r[4] = {A + 3 * B + 3 * C + D, 2 * (B + 2 * C + D), 4 * (C + D), 8 * D};
     for (int k = 0; k < 4; ++k) {
-      const traj::u128 rl = (top->left_o >> (k * kOut)) & ((1u << kOut) - 1);
-      const traj::u128 rr = (top->right_o >> (k * kOut)) & ((1u << kOut) - 1);
+      const traj::u128 rl = traj::vl_bits(top->left_o, k * kOut, kOut);
+      const traj::u128 rr = traj::vl_bits(top->right_o, k * kOut, kOut);
       if (rl != o.l[k] || rr != o.r[k] || traj::sext(rl, kOut) != exact_l[k] ||
           traj::sext(rr, kOut) != exact_r[k]) {
         if (bad < 10)

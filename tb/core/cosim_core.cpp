@@ -26,9 +26,8 @@
 #include "Vtraj_core.h"
 #include "bcu/bcu_compiler.hpp"
 #include "fd/fd_compiler.hpp"
-#include "sim/vl_bits.hpp"
+#include "sim/lockstep.hpp"
 #include "traj_core.hpp"
-#include "verilated.h"
 
 using traj::u128;
 using Core = traj::Core<C_AXES, C_DEGREE, C_WIDTH, C_CHUNK, C_GUARD, C_CTRL, C_BGUARD, C_DEPTH>;
@@ -62,11 +61,8 @@ int main(int argc, char** argv) {
               Core::kMinTickSpacing, (unsigned long long)seed, (unsigned long long)cycles,
               (unsigned long long)seed, (unsigned long long)seed);
 
-  auto ctx = std::make_unique<VerilatedContext>();
-  ctx->randReset(2);
-  ctx->randSeed(static_cast<int>(seed & 0x7fffffff));
-  auto top = std::make_unique<Vtraj_core>(ctx.get());
-  Core hls;
+  traj::sim::Lockstep<Vtraj_core, Core> ls(static_cast<int>(seed & 0x7fffffff));
+  const Core& hls = ls.model();
   std::mt19937_64 rng(seed);
 
   traj::bcu::Format bf;
@@ -156,7 +152,7 @@ int main(int argc, char** argv) {
   bool starve = false;
   uint64_t next_tick = 0, phase_end = 0;
   uint64_t n_run = 0, n_samples_unchecked = 0, n_samples = 0, n_underrun = 0, n_done = 0, n_resets = 0, n_err = 0, n_switch = 0;
-  bool in_reset = true, synced = false, last_was_bcu = false, have_last_kind = false;
+  bool in_reset = true, last_was_bcu = false, have_last_kind = false;
   int reset_left = 3;
   std::vector<int64_t> last_out, last_bcu_end;
   const int S = Core::kMinTickSpacing;
@@ -217,61 +213,48 @@ int main(int argc, char** argv) {
     const uint64_t data = (offer ? words.front().data : rng()) & cmask;
     const bool user = offer ? words.front().kind : (rng() & 1);
 
-    top->rst_ni = rst_n;
-    top->tick_i = tick;
-    top->s_axis_tvalid = offer;
-    top->s_axis_tdata = data;
-    top->s_axis_tuser = user;
-    top->clk_i = 0;
-    top->eval();
-
     Core::In in;
     in.rst_n = rst_n;
     in.tick = tick;
     in.tvalid = offer;
     in.tdata = data;
     in.tuser = user;
+    const bool acc = hls.tready(in) && offer;
+    if (cyc >= trace_from) {
+      const auto c = hls.comb(in);
+      std::printf("cyc %llu rst %d tick %d->%s offer %d kind %d acc %d | nb %d fdf %d fpos %d last %d sel %d | "
+                  "fd v%d u%d d%d act %d | bcu v%d u%d d%d st %d | out v%d u%d | exp %zu %s\n",
+                  (unsigned long long)cyc, rst_n, tick, c.tick_kind ? "bcu" : "fd", offer, user, acc,
+                  hls.regs().nb_q, hls.regs().fdf_q, hls.regs().fpos_q, hls.regs().last_kind_q,
+                  hls.regs().sel_q, hls.fd().outputs().sample_valid, hls.fd().outputs().underrun,
+                  hls.fd().outputs().seg_done, hls.fd().active(), hls.bcu().sample_valid(),
+                  hls.bcu().underrun(), hls.bcu().seg_done(), hls.bcu().state(), hls.sample_valid(),
+                  hls.underrun(), expect.size(), expect.empty() ? "-" : (expect.front().bcu ? "bcu" : "fd"));
+    }
+    const auto& o = ls.step(in);  // RTL == hls on every port, then the clock edge
 
     bool bad = false;
-    if (synced) {
-      auto chk = [&](const char* name, uint64_t r, uint64_t h) {
-        if (r != h) {
-          std::printf("MISMATCH cycle %llu %s rtl=%llu hls=%llu\n", (unsigned long long)cyc, name,
-                      (unsigned long long)r, (unsigned long long)h);
-          bad = true;
-        }
-      };
-      chk("s_axis_tready", top->s_axis_tready, hls.tready(in));
-      chk("sample_valid_o", top->sample_valid_o, hls.sample_valid());
-      chk("underrun_o", top->underrun_o, hls.underrun());
-      chk("seg_done_o", top->seg_done_o, hls.seg_done());
-      chk("tick_err_o", top->tick_err_o, hls.tick_err());
-      if (hls.sample_valid()) {
+    if (!ls.ok()) {
+      std::printf("MISMATCH %s\n", ls.why().c_str());
+      bad = true;
+    }
+    if (ls.compared() && !bad) {
+      if (o.sample_valid) {
         std::vector<int64_t> got;
-        for (int a = 0; a < C_AXES; ++a) {
-          const u128 r = traj::vl_bits(top->sample_o, a * kOut, kOut);
-          if (r != hls.sample_bits(a)) {
-            std::printf("MISMATCH cycle %llu sample axis %d rtl=%lld hls=%lld\n",
-                        (unsigned long long)cyc, a, (long long)traj::sext(r, kOut),
-                        (long long)hls.sample(a));
-            bad = true;
-          }
-          got.push_back(hls.sample(a));
-        }
-        if (hls.tick_err()) {
+        for (int a = 0; a < C_AXES; ++a) got.push_back(static_cast<int64_t>(traj::sext(o.sample[a], kOut)));
+        if (o.tick_err) {
           // ticks faster than the engines: samples may be late or out of
           // order; only RTL == hls is checked until the next reset
           ++n_samples_unchecked;
-        } else if (hls.underrun()) {
+        } else if (o.underrun) {
           if (got != last_out && got != last_bcu_end) {
             std::printf("MISMATCH cycle %llu underrun sample neither holds nor is the BCU end value\n",
                         (unsigned long long)cyc);
             bad = true;
           }
-        } else if (expect.empty() || got != expect.front().v ||
-                   hls.seg_done() != expect.front().done) {
+        } else if (expect.empty() || got != expect.front().v || o.seg_done != expect.front().done) {
           std::printf("MISMATCH cycle %llu sample != host prediction (queued %zu, seg_done %d)\n",
-                      (unsigned long long)cyc, expect.size(), hls.seg_done());
+                      (unsigned long long)cyc, expect.size(), o.seg_done);
           for (int a = 0; a < C_AXES; ++a)
             std::printf("  axis %d got %lld want %lld\n", a, (long long)got[a],
                         expect.empty() ? 0ll : (long long)expect.front().v[a]);
@@ -287,33 +270,15 @@ int main(int argc, char** argv) {
         }
         last_out = got;
       }
-      n_underrun += hls.underrun();
-      n_done += hls.seg_done();
-      n_err += hls.tick_err();
+      n_underrun += o.underrun;
+      n_done += o.seg_done;
+      n_err += o.tick_err;
     }
     if (bad) {
       std::printf("FAIL (seed %llu)\n", (unsigned long long)seed);
       return 1;
     }
-
-    const bool acc = hls.tready(in) && offer;
-    if (cyc >= trace_from) {
-      const auto c = hls.comb(in);
-      std::printf("cyc %llu rst %d tick %d->%s offer %d kind %d acc %d | nb %d fdf %d fpos %d last %d sel %d | "
-                  "fd v%d u%d d%d act %d | bcu v%d u%d d%d st %d | out v%d u%d | exp %zu %s\n",
-                  (unsigned long long)cyc, rst_n, tick, c.tick_kind ? "bcu" : "fd", offer, user, acc,
-                  hls.regs().nb_q, hls.regs().fdf_q, hls.regs().fpos_q, hls.regs().last_kind_q,
-                  hls.regs().sel_q, hls.fd().outputs().sample_valid, hls.fd().outputs().underrun,
-                  hls.fd().outputs().seg_done, hls.fd().active(), hls.bcu().sample_valid(),
-                  hls.bcu().underrun(), hls.bcu().seg_done(), hls.bcu().state(), hls.sample_valid(),
-                  hls.underrun(), expect.size(), expect.empty() ? "-" : (expect.front().bcu ? "bcu" : "fd"));
-    }
-    hls.clock(in);
-    top->clk_i = 1;
-    top->eval();
-    top->clk_i = 0;
     if (acc && rst_n) words.pop_front();
-    if (!rst_n) synced = true;
     if (reset_ends) {  // the host restarts its stream after a reset
       ++n_resets;
       words.clear();
@@ -324,7 +289,6 @@ int main(int argc, char** argv) {
       have_last_kind = false;
     }
   }
-  top->final();
   std::printf("PASS: %llu samples checked against the host prediction (%llu more under tick_err: RTL == hls only), %llu kind switches, "
               "%llu seg_done, %llu ticks in BCU runs at one per clock, %llu underrun ticks, %llu resets, %llu cycles with tick_err set\n",
               (unsigned long long)n_samples, (unsigned long long)n_samples_unchecked, (unsigned long long)n_switch,

@@ -1,7 +1,8 @@
 // Test group 3: the Verilated RTL (rtl/traj_fd_engine.sv) against the hls model
-// (hls/traj_fd_engine.hpp), every cycle. Control outputs (tready, sample_valid,
-// underrun, seg_done, tick_err) are compared on every cycle; the sample bus on
-// every cycle where sample_valid is high (it holds otherwise).
+// (hls/traj_fd_engine.hpp), every cycle, through the lockstep driver
+// (host/sim/lockstep.hpp): control outputs (tready, sample_valid, underrun,
+// seg_done, tick_err) on every cycle; the sample bus on every cycle where
+// sample_valid is high (it holds otherwise).
 //
 // Built once per parameter set (see CMakeLists.txt): VTOP names the Verilated
 // class, FD_AXES/FD_DEGREE/FD_WIDTH/FD_CHUNK/FD_GUARD the parameters.
@@ -18,110 +19,73 @@
 #include <vector>
 
 #include "fd/fd_compiler.hpp"
-#include "sim/vl_bits.hpp"
+#include "sim/lockstep.hpp"
 #include "traj_fd_engine.hpp"
 #include VTOP_H
 
 namespace {
 
 using Eng = traj::FdEngine<FD_AXES, FD_DEGREE, FD_WIDTH, FD_CHUNK, FD_GUARD>;
-using traj::u128;
 
 struct Stim {
   bool rst_n, tvalid, tick;
   uint64_t tdata;
 };
 
+// Writes <name>.vcd when TRAJ_TRACE is set.
+struct VcdTrace {
+  explicit VcdTrace(std::string f) : file(std::move(f)) {}
+  VcdTrace(VcdTrace&&) = default;
+  std::string file;
+  std::unique_ptr<VerilatedVcdC> vcd;
+  template <class V>
+  void open(V& dut, VerilatedContext& ctx) {
+    if (file.empty()) return;
+    ctx.traceEverOn(true);
+    vcd = std::make_unique<VerilatedVcdC>();
+    dut.trace(vcd.get(), 99);
+    vcd->open(file.c_str());
+  }
+  void dump(VerilatedContext& ctx) {
+    if (!vcd) return;
+    vcd->dump(ctx.time());
+    ctx.timeInc(1);
+  }
+  ~VcdTrace() {
+    if (vcd) vcd->close();
+  }
+};
+
 class Bench {
  public:
-  explicit Bench(const std::string& name) : ctx_(std::make_unique<VerilatedContext>()) {
-    ctx_->randReset(2);  // unreset state starts random: a dependence on it shows up as a mismatch
-    dut_ = std::make_unique<VTOP>(ctx_.get());
-    if (std::getenv("TRAJ_TRACE")) {
-      ctx_->traceEverOn(true);
-      trace_ = std::make_unique<VerilatedVcdC>();
-      dut_->trace(trace_.get(), 99);
-      trace_->open((name + ".vcd").c_str());
-    }
-    dut_->clk_i = 0;
-    dut_->rst_ni = 0;
-    dut_->eval();
-  }
-  ~Bench() {
-    if (trace_) trace_->close();
-    dut_->final();
-  }
+  explicit Bench(const std::string& name)
+      : ls_(0, VcdTrace(std::getenv("TRAJ_TRACE") ? name + ".vcd" : std::string())) {}
 
   // Returns false (with a message) on the first mismatch.
   bool cycle(const Stim& s, std::string* why) {
-    dut_->rst_ni = s.rst_n;
-    dut_->s_axis_tvalid = s.tvalid;
-    dut_->s_axis_tdata = s.tdata;
-    dut_->tick_i = s.tick;
-    dut_->clk_i = 0;
-    dut_->eval();
-    if (trace_) trace_->dump(ctx_->time());
-    ctx_->timeInc(1);
-    const auto o = model_.outputs();
-    // Before the first reset edge the RTL's state is random (--x-initial
-    // unique): outputs are compared from the first cycle after reset on.
-    if (armed_ && !compare(o, why)) return false;
-    if (!s.rst_n) armed_ = true;
+    const auto o = traj::sim::hls_ports(ls_.model());
     typename Eng::In in;
     in.rst_n = s.rst_n;
     in.tvalid = s.tvalid;
     in.tdata = s.tdata;
     in.tick = s.tick;
-    model_.clock(in);
-    dut_->clk_i = 1;
-    dut_->eval();
-    if (trace_) trace_->dump(ctx_->time());
-    ctx_->timeInc(1);
-    ++cycles_;
+    ls_.step(in);
+    if (!ls_.ok()) {
+      *why = ls_.why();
+      return false;
+    }
     if (o.sample_valid) ++samples_;
     if (o.underrun) ++underruns_;
     return true;
   }
-  bool tready() const { return model_.outputs().tready; }
-  uint64_t cycles() const { return cycles_; }
+  bool tready() const { return ls_.model().outputs().tready; }
+  uint64_t cycles() const { return ls_.cycles(); }
   uint64_t samples() const { return samples_; }
   uint64_t underruns() const { return underruns_; }
 
  private:
-  bool compare(const typename Eng::Out& o, std::string* why) {
-    char buf[256];
-    auto diff = [&](const char* sig, unsigned long long rtl, unsigned long long hls) {
-      std::snprintf(buf, sizeof buf, "cycle %llu: %s rtl=%llx hls=%llx", static_cast<unsigned long long>(cycles_),
-                    sig, rtl, hls);
-      *why = buf;
-      return false;
-    };
-    if (dut_->s_axis_tready != o.tready) return diff("s_axis_tready", dut_->s_axis_tready, o.tready);
-    if (dut_->sample_valid_o != o.sample_valid) return diff("sample_valid_o", dut_->sample_valid_o, o.sample_valid);
-    if (dut_->underrun_o != o.underrun) return diff("underrun_o", dut_->underrun_o, o.underrun);
-    if (dut_->seg_done_o != o.seg_done) return diff("seg_done_o", dut_->seg_done_o, o.seg_done);
-    if (dut_->tick_err_o != o.tick_err) return diff("tick_err_o", dut_->tick_err_o, o.tick_err);
-    if (o.sample_valid) {
-      for (int a = 0; a < FD_AXES; ++a) {
-        const u128 r = traj::vl_bits(dut_->sample_o, a * Eng::kOutWidth, Eng::kOutWidth);
-        if (r != o.sample[a]) {
-          std::snprintf(buf, sizeof buf, "cycle %llu: sample_o axis %d rtl=%llx.. hls=%llx..",
-                        static_cast<unsigned long long>(cycles_), a, static_cast<unsigned long long>(r),
-                        static_cast<unsigned long long>(o.sample[a]));
-          *why = buf;
-          return false;
-        }
-      }
-    }
-    return true;
-  }
-
-  std::unique_ptr<VerilatedContext> ctx_;
-  std::unique_ptr<VTOP> dut_;
-  std::unique_ptr<VerilatedVcdC> trace_;
-  Eng model_;
-  bool armed_ = false;
-  uint64_t cycles_ = 0, samples_ = 0, underruns_ = 0;
+  traj::sim::Lockstep<VTOP, Eng, VcdTrace> ls_;
+  uint64_t samples_ = 0, underruns_ = 0;
 };
 
 // Segment word source: compiled segments from the host compiler (a continuous

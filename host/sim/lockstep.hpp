@@ -1,0 +1,142 @@
+// The lockstep driver: a Verilated unit (V) and its hls model (M) clocked
+// together with the same inputs; on every cycle from the first reset edge on,
+// every output port of the RTL is compared with the model's (tready,
+// sample_valid, underrun, seg_done, tick_err always; the sample bus where the
+// model's sample_valid is high). Before the first reset edge the RTL holds its
+// random initial state (--x-initial unique), so nothing is compared.
+//
+// The caller chooses the inputs of every cycle (step(in)); the driver is a
+// template with no per-cycle indirection: it is the simulation's inner loop.
+// Trace: a policy with open(V&, VerilatedContext&) and dump(VerilatedContext&),
+// called after every evaluation (NoTrace: none).
+#pragma once
+#include <verilated.h>
+
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <utility>
+
+#include "sim/ports.hpp"
+#include "sim/vl_bits.hpp"
+
+namespace traj::sim {
+
+struct NoTrace {
+  template <class V>
+  void open(V&, VerilatedContext&) {}
+  void dump(VerilatedContext&) {}
+};
+
+template <class V, class M, class Trace = NoTrace>
+class Lockstep {
+ public:
+  using Model = M;
+  using In = typename M::In;
+  using Out = Ports<kAxesOf<M>>;
+  static constexpr int kAxes = kAxesOf<M>;
+  static constexpr int kOutWidth = M::kOutWidth;
+
+  // rand_seed: the seed of the RTL's random initial state (0: Verilator's default).
+  explicit Lockstep(int rand_seed = 0, Trace trace = {})
+      : ctx_(std::make_unique<VerilatedContext>()), trace_(std::move(trace)) {
+    ctx_->randReset(2);  // a dependence on unreset state shows up as a mismatch
+    if (rand_seed) ctx_->randSeed(rand_seed);
+    rtl_ = std::make_unique<V>(ctx_.get());
+    trace_.open(*rtl_, *ctx_);
+    rtl_->clk_i = 0;
+  }
+  ~Lockstep() { rtl_->final(); }
+  Lockstep(const Lockstep&) = delete;
+  Lockstep& operator=(const Lockstep&) = delete;
+
+  // One clock cycle: the inputs applied, the outputs of the cycle compared,
+  // then the rising edge of both. Returns the RTL's ports of the cycle.
+  const Out& step(const In& in) {
+    apply(in);
+    rtl_->clk_i = 0;
+    rtl_->eval();
+    trace_.dump(*ctx_);
+    read_rtl();
+    compared_ = armed_;
+    if (compared_) compare();
+    else why_.clear();
+    if (!in.rst_n) armed_ = true;
+    model_.clock(in);
+    rtl_->clk_i = 1;
+    rtl_->eval();
+    trace_.dump(*ctx_);
+    ++cycles_;
+    return out_;
+  }
+
+  bool ok() const { return why_.empty(); }                // the last step matched
+  const std::string& why() const { return why_; }          // what differed in it, one line per port
+  bool compared() const { return compared_; }              // the last step's outputs were compared
+  uint64_t mismatches() const { return mismatches_; }      // ports that differed, over all steps
+  uint64_t cycles() const { return cycles_; }
+  const M& model() const { return model_; }
+  V& rtl() { return *rtl_; }
+
+ private:
+  void apply(const In& in) {
+    rtl_->rst_ni = in.rst_n;
+    rtl_->s_axis_tvalid = in.tvalid;
+    rtl_->s_axis_tdata = static_cast<uint64_t>(in.tdata);
+    if constexpr (has_tuser()) rtl_->s_axis_tuser = in.tuser;
+    rtl_->tick_i = in.tick;
+  }
+  static constexpr bool has_tuser() { return HasTuser<In>::value; }
+  template <class I, class = void>
+  struct HasTuser : std::false_type {};
+  template <class I>
+  struct HasTuser<I, std::void_t<decltype(I::tuser)>> : std::true_type {};
+
+  void read_rtl() {
+    out_.tready = rtl_->s_axis_tready;
+    out_.sample_valid = rtl_->sample_valid_o;
+    out_.underrun = rtl_->underrun_o;
+    out_.seg_done = rtl_->seg_done_o;
+    out_.tick_err = rtl_->tick_err_o;
+    if (out_.sample_valid)
+      for (int a = 0; a < kAxes; ++a) out_.sample[a] = vl_bits(rtl_->sample_o, a * kOutWidth, kOutWidth);
+  }
+
+  void compare() {
+    why_.clear();
+    const Out h = hls_ports(model_);
+    port("s_axis_tready", out_.tready, h.tready);
+    port("sample_valid_o", out_.sample_valid, h.sample_valid);
+    port("underrun_o", out_.underrun, h.underrun);
+    port("seg_done_o", out_.seg_done, h.seg_done);
+    port("tick_err_o", out_.tick_err, h.tick_err);
+    if (h.sample_valid)
+      for (int a = 0; a < kAxes; ++a) {
+        const u128 r = out_.sample_valid ? out_.sample[a] : vl_bits(rtl_->sample_o, a * kOutWidth, kOutWidth);
+        if (r != h.sample[a]) differ("sample_o axis " + std::to_string(a), r, h.sample[a]);
+      }
+  }
+  void port(const char* name, bool rtl, bool hls) {
+    if (rtl != hls) differ(name, rtl, hls);
+  }
+  void differ(const std::string& name, u128 rtl, u128 hls) {
+    ++mismatches_;
+    char buf[192];
+    std::snprintf(buf, sizeof buf, "cycle %llu: %s rtl=%llx hls=%llx%s", static_cast<unsigned long long>(cycles_),
+                  name.c_str(), static_cast<unsigned long long>(rtl), static_cast<unsigned long long>(hls),
+                  (rtl >> 64) || (hls >> 64) ? " (low 64 bits)" : "");
+    if (!why_.empty()) why_ += '\n';
+    why_ += buf;
+  }
+
+  std::unique_ptr<VerilatedContext> ctx_;
+  std::unique_ptr<V> rtl_;
+  Trace trace_;
+  M model_;
+  Out out_;
+  std::string why_;
+  bool armed_ = false, compared_ = false;  // a reset edge was seen; the last step was compared
+  uint64_t cycles_ = 0, mismatches_ = 0;
+};
+
+}  // namespace traj::sim
