@@ -1,5 +1,5 @@
 // trajcore demo --engine bcu | mixed: the circle of three 120-degree cubic
-// Bezier arcs (seed 004), the BCU generator's native input, compiled for
+// Bezier arcs ([ARC]), the BCU generator's native input, compiled for
 // traj_core and run through it (Verilated, hls beside it on every cycle).
 //   bcu  : every arc is one BCU segment of K = 2^d ticks;
 //   mixed: arcs FD, BCU, FD (the FD arcs cut into --pieces segments, more if

@@ -1,4 +1,4 @@
-// trajcore demo: the circle of three 120-degree cubic Bezier segments (seed 004)
+// trajcore demo: the circle of three 120-degree cubic Bezier segments ([ARC])
 // traversed in time, compiled to forward-difference segments, run through the
 // Verilated engine (sim::simulate: the hls model beside it on every cycle),
 // every sample checked against the host's exact prediction and compared with

@@ -23,7 +23,7 @@ int run_demo(const DemoOptions& opt);
 // and run through the Verilated traj_core.
 int run_core_demo(const DemoOptions& opt);
 
-// trajcore spline (spline_cmd.cpp): seed 000's C1 interpolating cubic Bezier
+// trajcore spline (spline_cmd.cpp): [BCU]'s C1 interpolating cubic Bezier
 // spline through the points of a JSON file, compiled for traj_core.
 struct SplineOptions {
   std::string input;              // {"points": [[x, y(, z)], ...]}

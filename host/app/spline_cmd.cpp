@@ -1,4 +1,4 @@
-// trajcore spline: seed 000's C1 interpolating cubic Bezier spline (eq. 9,
+// trajcore spline: [BCU]'s C1 interpolating cubic Bezier spline (eq. 9,
 // host/bcu/bezier_spline.hpp) through the points of a JSON file, compiled for
 // traj_core as BCU segments (or, --engine mixed, odd segments as FD), chained
 // exactly (traj::bcu::MixedChain), written as a version-2 segment stream.
