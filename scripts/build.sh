@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# Configure and build trajcore (Release) into ${TRAJ_BUILD_DIR:-build}.
+# Install what is missing (setup.sh), then configure and build trajcore (Release)
+# into ${TRAJ_BUILD_DIR:-build}.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
+"$root/scripts/setup.sh"
 build=${TRAJ_BUILD_DIR:-$root/build}
 gen=()
 command -v ninja >/dev/null 2>&1 && gen=(-G Ninja)

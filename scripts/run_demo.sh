@@ -9,7 +9,6 @@
 # Extra arguments go to `trajcore run` (e.g. --feed 100).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
-"$root/scripts/setup.sh"
 "$root/scripts/build.sh"
 build=${TRAJ_BUILD_DIR:-$root/build}
 cd "$root"

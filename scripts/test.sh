@@ -3,7 +3,6 @@
 # (unit tests, hls-vs-host, Verilator co-simulation, RTL lint/elaboration/synthesis checks).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
-"$root/scripts/setup.sh"
 "$root/scripts/build.sh"
 build=${TRAJ_BUILD_DIR:-$root/build}
 cd "$build"

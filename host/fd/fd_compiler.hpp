@@ -61,7 +61,7 @@
 // C(K,i) <= sum_j C(K,j) <= N max_j C(K,j)), i.e. for K >= 2N-1
 // alone[N] <= common <= share[N]: the common LSB is r[N]'s need under any
 // split of the budget that gives r[N] between 1/N and all of it. Example (cubic, K = 4096, tol = 0.5): alone 13/24/35, share
-// 15/26/36, common 35. The design notes' 12/23/34 are ceil(log2 C(4096,i)),
+// 15/26/36, common 35. The rule of thumb 12/23/34 is ceil(log2 C(4096,i)),
 // i.e. the "alone" rule with 1/2 output LSB per register (tol = 1), a total
 // of up to N/2 LSB rather than a share of tol/2.
 #pragma once

@@ -10,7 +10,6 @@
 //     flags (traj_sample_fold), so that no generator output can be optimised away.
 // Everything is registered at the pins, so the measured Fmax is the core's.
 `default_nettype none
-`include "traj_check.svh"
 
 module traj_bcu_synth_top #(
   parameter int Axes       = 3,   // axes in lockstep
@@ -32,8 +31,6 @@ module traj_bcu_synth_top #(
   output logic       seg_done_o,
   output logic       tick_err_o
 );
-  `TRAJ_PARAM_CHECK(g_bad_chunk8, ChunkWidth % 8 == 0,
-                    "traj_bcu_synth_top: ChunkWidth must be a multiple of 8")
 
   logic                     rst_nq, tick_q;
   logic [ChunkWidth-1:0]    word;

@@ -11,7 +11,6 @@
 //     flags (traj_sample_fold), so that no core output can be optimised away.
 // Everything is registered at the pins, so the measured Fmax is the core's.
 `default_nettype none
-`include "traj_check.svh"
 
 module traj_core_synth_top #(
   parameter int Axes         = 3,   // axes in lockstep
@@ -38,8 +37,6 @@ module traj_core_synth_top #(
 );
   localparam int OutWidth = Width - GuardBits;
 
-  `TRAJ_PARAM_CHECK(g_bad_chunk8, ChunkWidth % 8 == 0,
-                    "traj_core_synth_top: ChunkWidth must be a multiple of 8")
 
   logic                     rst_nq, tick_q;
   logic [ChunkWidth-1:0]    word;

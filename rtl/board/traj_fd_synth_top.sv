@@ -10,7 +10,6 @@
 //     flags (traj_sample_fold), so that no engine output can be optimised away.
 // Everything is registered at the pins so that measured Fmax is the core's.
 `default_nettype none
-`include "traj_check.svh"
 
 module traj_fd_synth_top #(
   parameter int Axes       = 3,
@@ -33,8 +32,6 @@ module traj_fd_synth_top #(
 );
   localparam int OutWidth = Width - GuardBits;
 
-  `TRAJ_PARAM_CHECK(g_bad_chunk8, ChunkWidth % 8 == 0,
-                    "traj_fd_synth_top: ChunkWidth must be a multiple of 8")
 
   logic                     rst_nq, tick_q;
   logic [ChunkWidth-1:0]    word;

@@ -42,7 +42,7 @@ int main(int argc, char** argv) {
   // Per-register needs. alone: register i with the whole budget tol/2 (no
   // format can give it fewer bits); share: within an equal share tol/(2N)
   // (every register meeting it is enough); common: the least common guard
-  // count, max alone <= common <= max share. The design notes' 12/23/34 for a
+  // count, max alone <= common <= max share. The rule of thumb 12/23/34 for a
   // cubic over 4096 ticks are the alone rule at tol = 1 (1/2 LSB per register).
   std::printf("\nFraction bits below the output LSB needed per difference register (tol = %g LSB):\n\n", tol);
   std::printf("| degree | K | alone r[1..N] | equal share r[1..N] | binding | common (guard_bits) |\n");

@@ -119,9 +119,9 @@ TEST(FdRegisterNeeds, MatchIndependentOnRandomKAndTolAndExactBoundaries) {
   EXPECT_GT(n, 5000);
 }
 
-// The design notes' figures, by hand: log2 C(4096, i) = 12, 22.9996, 33.414
+// The rule-of-thumb figures, by hand: log2 C(4096, i) = 12, 22.9996, 33.414
 // (and 43.413, 53.090 for i = 4, 5).
-TEST(FdRegisterNeeds, DesignNotesCubicAndQuinticOver4096Ticks) {
+TEST(FdRegisterNeeds, RuleOfThumbCubicAndQuinticOver4096Ticks) {
   // 1/2 output LSB per register (tol = 1): ceil(log2 C(4096, i)), the notes' 12/23/34.
   RegisterNeeds n = Compiler::register_needs(3, 4096, 1.0);
   EXPECT_EQ(n.alone, (std::vector<int>{0, 12, 23, 34}));
