@@ -67,15 +67,36 @@ module traj_core #(
                     "traj_core: the BCU sample (CtrlWidth-BcuGuardBits+1 bits) must fit the FD output width")
 
   // ---------------------------------------------------------------------
-  // Engines.
+  // State and signals (declared before use). Input slice: valid bits reset,
+  // data not. Router: control, all reset.
   // ---------------------------------------------------------------------
+  // input register slice
+  logic                  out_v_q, sk_v_q, out_u_q, sk_u_q, fd_v_q, bcu_v_q;
+  logic [ChunkWidth-1:0] out_d_q, sk_d_q;
+  // router and segments in flight
+  logic               in_seg_q, kind_q, last_kind_q, sel_q, primed_q;
+  logic [1:0]         nb_q, fpos_q;
+  logic               fdf_q;
+  logic [RemBits-1:0] rem_q;
+  logic [1:0]         pend_fd_q, pend_bcu_q;
+  logic               err_q;
+  // engine ports
   logic                     fd_tvalid, fd_tready, fd_tick;
   logic                     fd_valid, fd_underrun, fd_done, fd_err;
   logic [Axes*OutWidth-1:0] fd_sample;
   logic                     bcu_tvalid, bcu_tready, bcu_tick;
   logic                     bcu_valid, bcu_underrun, bcu_done, bcu_err;
   logic [Axes*OutWidth-1:0] bcu_sample;
+  // next-state decode
+  logic       load_out, out_v_d, out_u_d, in_seg_d, kind_d, kind_nx;
+  logic       accept, push, pop_b, pop_f, owner1, last1, tick_kind;
+  logic [1:0] nb1, fpos1, pf, pb;
+  logic       fdf1;
+  logic       sel_now, fd_real, bcu_real;
 
+  // ---------------------------------------------------------------------
+  // Engines.
+  // ---------------------------------------------------------------------
   traj_fd_engine #(
     .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits)
   ) u_fd (
@@ -103,17 +124,6 @@ module traj_core #(
   // older than it. Counted on a segment's first word, dropped on its engine's
   // seg_done (each engine finishes in order). State is control: all reset.
   // ---------------------------------------------------------------------
-  logic               in_seg_q, kind_q, last_kind_q, sel_q, primed_q;
-  logic [1:0]         nb_q, nb1, fpos_q, fpos1;
-  logic               fdf_q, fdf1;
-  logic [RemBits-1:0] rem_q;
-  logic [1:0]         pend_fd_q, pend_bcu_q;
-  logic               err_q;
-  logic [1:0]         pf, pb;
-
-  logic accept, push, pop_b, pop_f, owner1, last1, tick_kind;
-  logic sel_now, fd_real, bcu_real;
-
   // Input register slice (skid buffer): s_axis_tready is a flop; the router
   // sees out_*. Valid bits are reset, data is not.
   //
@@ -124,9 +134,6 @@ module traj_core #(
   // load control (the BCU's ring shift enables 1088 flops). This is a
   // re-encoding, not a new pipeline stage: the cycle schedule is unchanged.
   // Where out_v_q is known to be set (accept, push) the word's kind is bcu_v_q.
-  logic                  out_v_q, sk_v_q, out_u_q, sk_u_q, fd_v_q, bcu_v_q;
-  logic                  load_out, out_v_d, out_u_d, in_seg_d, kind_d, kind_nx;
-  logic [ChunkWidth-1:0] out_d_q, sk_d_q;
   assign s_axis_tready = !sk_v_q;
   assign load_out      = !out_v_q || accept;
   assign out_v_d       = load_out ? (sk_v_q || s_axis_tvalid) : 1'b1;
