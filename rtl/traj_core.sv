@@ -67,12 +67,9 @@ module traj_core #(
                     "traj_core: the BCU sample (CtrlWidth-BcuGuardBits+1 bits) must fit the FD output width")
 
   // ---------------------------------------------------------------------
-  // State and signals (declared before use). Input slice: valid bits reset,
-  // data not. Router: control, all reset.
+  // State (Core::Regs, same names, same order) and signals, declared before
+  // use. Router: control, all reset. Input slice: valid bits reset, data not.
   // ---------------------------------------------------------------------
-  // input register slice
-  logic                  out_v_q, sk_v_q, out_u_q, sk_u_q, fd_v_q, bcu_v_q;
-  logic [ChunkWidth-1:0] out_d_q, sk_d_q;
   // router and segments in flight
   logic               in_seg_q, kind_q, last_kind_q, sel_q, primed_q;
   logic [1:0]         nb_q, fpos_q;
@@ -80,6 +77,9 @@ module traj_core #(
   logic [RemBits-1:0] rem_q;
   logic [1:0]         pend_fd_q, pend_bcu_q;
   logic               err_q;
+  // input register slice
+  logic                  out_v_q, sk_v_q, out_u_q, sk_u_q, fd_v_q, bcu_v_q;
+  logic [ChunkWidth-1:0] out_d_q, sk_d_q;
   // engine ports
   logic                     fd_tvalid, fd_tready, fd_tick;
   logic                     fd_valid, fd_underrun, fd_done, fd_err;
@@ -95,37 +95,77 @@ module traj_core #(
   logic       sel_now, fd_real, bcu_real;
 
   // ---------------------------------------------------------------------
-  // Engines.
-  // ---------------------------------------------------------------------
-  traj_fd_engine #(
-    .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits)
-  ) u_fd (
-    .clk_i, .rst_ni,
-    .s_axis_tdata(out_d_q), .s_axis_tvalid(fd_tvalid), .s_axis_tready(fd_tready),
-    .tick_i(fd_tick),
-    .sample_valid_o(fd_valid), .sample_o(fd_sample),
-    .underrun_o(fd_underrun), .seg_done_o(fd_done), .tick_err_o(fd_err)
-  );
-
-  traj_bcu_gen #(
-    .Axes(Axes), .ChunkWidth(ChunkWidth), .CtrlWidth(CtrlWidth), .GuardBits(BcuGuardBits),
-    .OutWidth(OutWidth), .MaxDepth(MaxDepth)
-  ) u_bcu (
-    .clk_i, .rst_ni,
-    .s_axis_tdata(out_d_q), .s_axis_tvalid(bcu_tvalid), .s_axis_tready(bcu_tready),
-    .tick_i(bcu_tick),
-    .sample_valid_o(bcu_valid), .sample_o(bcu_sample),
-    .underrun_o(bcu_underrun), .seg_done_o(bcu_done), .tick_err_o(bcu_err)
-  );
-
-  // ---------------------------------------------------------------------
   // Router and segments in flight: nb_q BCU segments (playing, prepared,
   // loading: 0..3), fdf_q an FD segment (at most one), fpos_q BCU segments
   // older than it. Counted on a segment's first word, dropped on its engine's
   // seg_done (each engine finishes in order). State is control: all reset.
   // ---------------------------------------------------------------------
+  assign accept        = (fd_v_q && fd_tready) || (bcu_v_q && bcu_tready);
+  assign push          = accept && !in_seg_q;
+  assign pop_b         = (nb_q != 2'd0) && bcu_done;
+  assign pop_f         = fdf_q && fd_done;
+  assign nb1           = nb_q - {1'b0, pop_b};
+  assign fdf1          = fdf_q && !pop_f;
+  assign fpos1         = (pop_b && fpos_q != 2'd0) ? fpos_q - 1'b1 : fpos_q;
+  assign last1         = pop_b ? 1'b1 : (pop_f ? 1'b0 : last_kind_q);
+  assign owner1        = fdf1 || (nb1 != 2'd0) || push;
+  always_comb begin
+    if (fdf1 && fpos1 == 2'd0) tick_kind = 1'b0;
+    else if (nb1 != 2'd0)      tick_kind = 1'b1;
+    else if (fdf1)             tick_kind = 1'b0;
+    else if (push)             tick_kind = bcu_v_q;
+    else                       tick_kind = last1;
+  end
+
+  assign fd_tick    = tick_i && !tick_kind;
+  assign bcu_tick   = tick_i && tick_kind;
+
+  always_ff @(posedge clk_i) begin
+    if (!rst_ni) begin
+      in_seg_q    <= 1'b0;
+      kind_q      <= 1'b0;
+      rem_q       <= '0;
+      nb_q        <= '0;
+      fdf_q       <= 1'b0;
+      fpos_q      <= '0;
+      last_kind_q <= 1'b0;
+      sel_q       <= 1'b0;
+      primed_q    <= 1'b0;
+      pend_fd_q   <= '0;
+      pend_bcu_q  <= '0;
+      err_q       <= 1'b0;
+    end else begin
+      in_seg_q <= in_seg_d;
+      kind_q   <= kind_d;
+      if (accept) begin
+        rem_q <= in_seg_q ? rem_q - 1'b1
+                          : (bcu_v_q ? RemBits'(BcuWords - 1) : RemBits'(FdWords - 1));
+      end
+      last_kind_q <= last1;
+      nb_q        <= nb1 + {1'b0, push && bcu_v_q};
+      fdf_q       <= fdf1 || (push && !bcu_v_q);
+      fpos_q      <= (push && !bcu_v_q) ? nb1 : fpos1;
+      sel_q      <= sel_now;
+      primed_q   <= primed_q || fd_real || bcu_real;
+      pend_fd_q  <= pf + {1'b0, fd_tick};
+      pend_bcu_q <= pb + {1'b0, bcu_tick};
+      if ((pop_b && pb != 2'd0 && owner1 && !tick_kind) || (pop_f && pf != 2'd0 && owner1 && tick_kind))
+        err_q <= 1'b1;
+    end
+  end
+
+  // Pending ticks per engine: +1 per routed tick, -1 per answer (every
+  // processed tick gives sample_valid or underrun one cycle later). If the
+  // owner of a finished segment still holds a tick while the next segment in
+  // flight is the other engine's, that tick would be served out of order:
+  // sticky error, reported on tick_err_o.
+  assign pf = pend_fd_q - {1'b0, fd_valid || fd_underrun};
+  assign pb = pend_bcu_q - {1'b0, bcu_valid || bcu_underrun};
+
+  // ---------------------------------------------------------------------
   // Input register slice (skid buffer): s_axis_tready is a flop; the router
   // sees out_*. Valid bits are reset, data is not.
+  // ---------------------------------------------------------------------
   //
   // Per-engine valid, registered (timing): fd_v_q/bcu_v_q hold exactly
   //   out_v_q && kind of the word in out_* (in_seg_q ? kind_q : out_u_q)
@@ -173,69 +213,33 @@ module traj_core #(
     out_u_q <= out_u_d;
   end
 
-  assign accept        = (fd_v_q && fd_tready) || (bcu_v_q && bcu_tready);
-  assign push          = accept && !in_seg_q;
-  assign pop_b         = (nb_q != 2'd0) && bcu_done;
-  assign pop_f         = fdf_q && fd_done;
-  assign nb1           = nb_q - {1'b0, pop_b};
-  assign fdf1          = fdf_q && !pop_f;
-  assign fpos1         = (pop_b && fpos_q != 2'd0) ? fpos_q - 1'b1 : fpos_q;
-  assign last1         = pop_b ? 1'b1 : (pop_f ? 1'b0 : last_kind_q);
-  assign owner1        = fdf1 || (nb1 != 2'd0) || push;
-  always_comb begin
-    if (fdf1 && fpos1 == 2'd0) tick_kind = 1'b0;
-    else if (nb1 != 2'd0)      tick_kind = 1'b1;
-    else if (fdf1)             tick_kind = 1'b0;
-    else if (push)             tick_kind = bcu_v_q;
-    else                       tick_kind = last1;
-  end
 
+  // ---------------------------------------------------------------------
+  // Engines: each takes the slice's word when its registered valid is set.
+  // ---------------------------------------------------------------------
   assign fd_tvalid  = fd_v_q;
   assign bcu_tvalid = bcu_v_q;
-  assign fd_tick    = tick_i && !tick_kind;
-  assign bcu_tick   = tick_i && tick_kind;
 
-  always_ff @(posedge clk_i) begin
-    if (!rst_ni) begin
-      in_seg_q    <= 1'b0;
-      kind_q      <= 1'b0;
-      rem_q       <= '0;
-      nb_q        <= '0;
-      fdf_q       <= 1'b0;
-      fpos_q      <= '0;
-      last_kind_q <= 1'b0;
-      sel_q       <= 1'b0;
-      primed_q    <= 1'b0;
-      pend_fd_q   <= '0;
-      pend_bcu_q  <= '0;
-      err_q       <= 1'b0;
-    end else begin
-      in_seg_q <= in_seg_d;
-      kind_q   <= kind_d;
-      if (accept) begin
-        rem_q <= in_seg_q ? rem_q - 1'b1
-                          : (bcu_v_q ? RemBits'(BcuWords - 1) : RemBits'(FdWords - 1));
-      end
-      last_kind_q <= last1;
-      nb_q        <= nb1 + {1'b0, push && bcu_v_q};
-      fdf_q       <= fdf1 || (push && !bcu_v_q);
-      fpos_q      <= (push && !bcu_v_q) ? nb1 : fpos1;
-      sel_q      <= sel_now;
-      primed_q   <= primed_q || fd_real || bcu_real;
-      pend_fd_q  <= pf + {1'b0, fd_tick};
-      pend_bcu_q <= pb + {1'b0, bcu_tick};
-      if ((pop_b && pb != 2'd0 && owner1 && !tick_kind) || (pop_f && pf != 2'd0 && owner1 && tick_kind))
-        err_q <= 1'b1;
-    end
-  end
+  traj_fd_engine #(
+    .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits)
+  ) u_fd (
+    .clk_i, .rst_ni,
+    .s_axis_tdata(out_d_q), .s_axis_tvalid(fd_tvalid), .s_axis_tready(fd_tready),
+    .tick_i(fd_tick),
+    .sample_valid_o(fd_valid), .sample_o(fd_sample),
+    .underrun_o(fd_underrun), .seg_done_o(fd_done), .tick_err_o(fd_err)
+  );
 
-  // Pending ticks per engine: +1 per routed tick, -1 per answer (every
-  // processed tick gives sample_valid or underrun one cycle later). If the
-  // owner of a finished segment still holds a tick while the next segment in
-  // flight is the other engine's, that tick would be served out of order:
-  // sticky error, reported on tick_err_o.
-  assign pf = pend_fd_q - {1'b0, fd_valid || fd_underrun};
-  assign pb = pend_bcu_q - {1'b0, bcu_valid || bcu_underrun};
+  traj_bcu_gen #(
+    .Axes(Axes), .ChunkWidth(ChunkWidth), .CtrlWidth(CtrlWidth), .GuardBits(BcuGuardBits),
+    .OutWidth(OutWidth), .MaxDepth(MaxDepth)
+  ) u_bcu (
+    .clk_i, .rst_ni,
+    .s_axis_tdata(out_d_q), .s_axis_tvalid(bcu_tvalid), .s_axis_tready(bcu_tready),
+    .tick_i(bcu_tick),
+    .sample_valid_o(bcu_valid), .sample_o(bcu_sample),
+    .underrun_o(bcu_underrun), .seg_done_o(bcu_done), .tick_err_o(bcu_err)
+  );
 
   // ---------------------------------------------------------------------
   // Output: the engine that emitted last.
