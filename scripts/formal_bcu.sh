@@ -3,6 +3,9 @@
 # Yosys -> SMT2, then yosys-smtbmc with z3: bounded model check from reset
 # (depth 8) and temporal induction (depth 8); the properties are 1-inductive. Exit non-zero on any failure.
 #   usage: scripts/formal_bcu.sh WORKDIR Axes ChunkWidth CtrlWidth GuardBits OutWidth MaxDepth
+# The model is bit-blasted (techmap; abc -g AND) before write_smt2: z3 4.8
+# does not finish even step 0 on this unit's word-level model (its nested
+# FSM multiplexers), and finishes the AND-gate model in seconds.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 work=$1; shift
