@@ -88,24 +88,25 @@ class Core {
     bool tick = false;
   };
 
+  // State (the RTL's flops, same names, same order). Router: control, all
+  // reset. Input slice: valid bits reset, data not.
   struct Regs {
-    // control (reset)
-    bool in_seg_q = false;  // a segment is being forwarded
-    bool kind_q = false;    // its kind
-    int rem_q = 0;          // words of it still to come
-    int nb_q = 0;                       // BCU segments in flight (0..3)
-    bool fdf_q = false;                 // an FD segment is in flight
-    int fpos_q = 0;                     // BCU segments in flight older than it
+    // router and segments in flight
+    bool in_seg_q = false;              // a segment is being forwarded
+    bool kind_q = false;                // its kind
     bool last_kind_q = false;           // kind of the last segment finished
     bool sel_q = false;                 // engine that emitted the last sample
     bool primed_q = false;              // a sample has been emitted since reset
+    int nb_q = 0;                       // BCU segments in flight (0..3)
+    int fpos_q = 0;                     // BCU segments in flight older than the FD one
+    bool fdf_q = false;                 // an FD segment is in flight
+    int rem_q = 0;                      // words of the forwarded segment still to come
     int pend_fd_q = 0, pend_bcu_q = 0;  // ticks routed to an engine not yet answered (0..3)
-    // input register slice (skid buffer): valid bits reset, data not
-    bool out_v_q = false, sk_v_q = false;
-    bool fd_v_q = false, bcu_v_q = false;  // out_v_q && the out word's kind is FD / BCU
-    bool out_u_q = false, sk_u_q = false;
-    u128 out_d_q = 0, sk_d_q = 0;
     bool err_q = false;                 // sticky: a segment ended with a tick still pending
+    // input register slice
+    bool out_v_q = false, sk_v_q = false, out_u_q = false, sk_u_q = false;
+    bool fd_v_q = false, bcu_v_q = false;  // out_v_q && the out word's kind is FD / BCU
+    u128 out_d_q = 0, sk_d_q = 0;
   };
 
   // Combinational view of one cycle (needs the inputs: tready depends on tuser
@@ -174,18 +175,15 @@ class Core {
     const Comb c = comb(in);
     const Regs& q = r_;
     Regs n = r_;
-    // engines
-    typename Fd::In fi;
-    fi.rst_n = in.rst_n;
-    fi.tdata = static_cast<uint64_t>(q.out_d_q);
-    fi.tvalid = q.fd_v_q;
-    fi.tick = in.tick && !c.tick_kind;
-    typename Bcu::In bi;
-    bi.rst_n = in.rst_n;
-    bi.tdata = q.out_d_q;
-    bi.tvalid = q.bcu_v_q;
-    bi.tick = in.tick && c.tick_kind;
-    // router
+
+    // -------------------------------------------------------------------
+    // Router and segments in flight: nb_q BCU segments (playing, prepared,
+    // loading: 0..3), fdf_q an FD segment (at most one), fpos_q BCU segments
+    // older than it. Counted on a segment's first word, dropped on its
+    // engine's seg_done (each engine finishes in order).
+    // -------------------------------------------------------------------
+    const bool fd_tick = in.tick && !c.tick_kind;
+    const bool bcu_tick = in.tick && c.tick_kind;
     if (c.accept) {
       if (!q.in_seg_q) {
         n.in_seg_q = true;
@@ -196,7 +194,7 @@ class Core {
         if (q.rem_q == 1) n.in_seg_q = false;
       }
     }
-    // segments in flight: finish (seg_done of their engine), then start
+    // finish (seg_done of their engine), then start
     n.last_kind_q = c.last1;
     n.nb_q = (c.nb1 + ((c.push && c.kind_now) ? 1 : 0)) & 3;
     n.fdf_q = c.fdf1 || (c.push && !c.kind_now);
@@ -210,18 +208,19 @@ class Core {
     // processed tick gives sample_valid or underrun one cycle later). If the
     // owner of a finished segment still holds a tick while the next segment
     // in flight is the other engine's, that tick would be served out of
-    // order: flag it (sticky tick_err).
-    const bool ev_fd = fo.sample_valid || fo.underrun;
-    const bool ev_bcu = bcu_.sample_valid() || bcu_.underrun();
-    const int pf = q.pend_fd_q - (ev_fd ? 1 : 0);
-    const int pb = q.pend_bcu_q - (ev_bcu ? 1 : 0);
+    // order: sticky error, reported on tick_err.
+    const int pf = q.pend_fd_q - ((fo.sample_valid || fo.underrun) ? 1 : 0);
+    const int pb = q.pend_bcu_q - ((bcu_.sample_valid() || bcu_.underrun()) ? 1 : 0);
+    n.pend_fd_q = (pf + (fd_tick ? 1 : 0)) & 3;
+    n.pend_bcu_q = (pb + (bcu_tick ? 1 : 0)) & 3;
     if ((c.pop_b && pb > 0 && c.owner1 && !c.tick_kind) || (c.pop_f && pf > 0 && c.owner1 && c.tick_kind))
       n.err_q = true;
-    n.pend_fd_q = (pf + (fi.tick ? 1 : 0)) & 3;
-    n.pend_bcu_q = (pb + (bi.tick ? 1 : 0)) & 3;
 
-    // input register slice
-    const bool in_acc = in.tvalid && !q.sk_v_q;
+    // -------------------------------------------------------------------
+    // Input register slice (skid buffer): s_axis_tready is a flop; the router
+    // sees out_*. Valid bits are reset, data is not. Per-engine valid,
+    // registered (timing): the next out word's kind, from the next state.
+    // -------------------------------------------------------------------
     if (!q.out_v_q || c.accept) {
       if (q.sk_v_q) {
         n.out_v_q = true;
@@ -235,17 +234,31 @@ class Core {
           n.out_u_q = in.tuser;
         }
       }
-    } else if (in_acc) {
+    } else if (in.tvalid && !q.sk_v_q) {
       n.sk_v_q = true;
       n.sk_d_q = in.tdata;
       n.sk_u_q = in.tuser;
     }
-    // registered per-engine valid: the next out word's kind (next state)
     const bool kind_nx = n.in_seg_q ? n.kind_q : n.out_u_q;
     n.fd_v_q = n.out_v_q && !kind_nx;
     n.bcu_v_q = n.out_v_q && kind_nx;
+
+    // -------------------------------------------------------------------
+    // Engines: each takes the slice's word when its registered valid is set.
+    // -------------------------------------------------------------------
+    typename Fd::In fi;
+    fi.rst_n = in.rst_n;
+    fi.tdata = static_cast<uint64_t>(q.out_d_q);
+    fi.tvalid = q.fd_v_q;
+    fi.tick = fd_tick;
+    typename Bcu::In bi;
+    bi.rst_n = in.rst_n;
+    bi.tdata = q.out_d_q;
+    bi.tvalid = q.bcu_v_q;
+    bi.tick = bcu_tick;
     fd_.clock(fi);
     bcu_.clock(bi);
+
     if (!in.rst_n) {  // control only: the slice data registers keep their value
       const u128 od = n.out_d_q, sd = n.sk_d_q;
       const bool ou = n.out_u_q, su = n.sk_u_q;

@@ -67,35 +67,32 @@ module traj_core #(
                     "traj_core: the BCU sample (CtrlWidth-BcuGuardBits+1 bits) must fit the FD output width")
 
   // ---------------------------------------------------------------------
-  // Engines.
+  // State (Core::Regs, same names, same order) and signals, declared before
+  // use. Router: control, all reset. Input slice: valid bits reset, data not.
   // ---------------------------------------------------------------------
+  // router and segments in flight
+  logic               in_seg_q, kind_q, last_kind_q, sel_q, primed_q;
+  logic [1:0]         nb_q, fpos_q;
+  logic               fdf_q;
+  logic [RemBits-1:0] rem_q;
+  logic [1:0]         pend_fd_q, pend_bcu_q;
+  logic               err_q;
+  // input register slice
+  logic                  out_v_q, sk_v_q, out_u_q, sk_u_q, fd_v_q, bcu_v_q;
+  logic [ChunkWidth-1:0] out_d_q, sk_d_q;
+  // engine ports
   logic                     fd_tvalid, fd_tready, fd_tick;
   logic                     fd_valid, fd_underrun, fd_done, fd_err;
   logic [Axes*OutWidth-1:0] fd_sample;
   logic                     bcu_tvalid, bcu_tready, bcu_tick;
   logic                     bcu_valid, bcu_underrun, bcu_done, bcu_err;
   logic [Axes*OutWidth-1:0] bcu_sample;
-
-  traj_fd_engine #(
-    .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits)
-  ) u_fd (
-    .clk_i, .rst_ni,
-    .s_axis_tdata(out_d_q), .s_axis_tvalid(fd_tvalid), .s_axis_tready(fd_tready),
-    .tick_i(fd_tick),
-    .sample_valid_o(fd_valid), .sample_o(fd_sample),
-    .underrun_o(fd_underrun), .seg_done_o(fd_done), .tick_err_o(fd_err)
-  );
-
-  traj_bcu_gen #(
-    .Axes(Axes), .ChunkWidth(ChunkWidth), .CtrlWidth(CtrlWidth), .GuardBits(BcuGuardBits),
-    .OutWidth(OutWidth), .MaxDepth(MaxDepth)
-  ) u_bcu (
-    .clk_i, .rst_ni,
-    .s_axis_tdata(out_d_q), .s_axis_tvalid(bcu_tvalid), .s_axis_tready(bcu_tready),
-    .tick_i(bcu_tick),
-    .sample_valid_o(bcu_valid), .sample_o(bcu_sample),
-    .underrun_o(bcu_underrun), .seg_done_o(bcu_done), .tick_err_o(bcu_err)
-  );
+  // next-state decode
+  logic       load_out, out_v_d, out_u_d, in_seg_d, kind_d, kind_nx;
+  logic       accept, push, pop_b, pop_f, owner1, last1, tick_kind;
+  logic [1:0] nb1, fpos1, pf, pb;
+  logic       fdf1;
+  logic       sel_now, fd_real, bcu_real;
 
   // ---------------------------------------------------------------------
   // Router and segments in flight: nb_q BCU segments (playing, prepared,
@@ -103,69 +100,6 @@ module traj_core #(
   // older than it. Counted on a segment's first word, dropped on its engine's
   // seg_done (each engine finishes in order). State is control: all reset.
   // ---------------------------------------------------------------------
-  logic               in_seg_q, kind_q, last_kind_q, sel_q, primed_q;
-  logic [1:0]         nb_q, nb1, fpos_q, fpos1;
-  logic               fdf_q, fdf1;
-  logic [RemBits-1:0] rem_q;
-  logic [1:0]         pend_fd_q, pend_bcu_q;
-  logic               err_q;
-  logic [1:0]         pf, pb;
-
-  logic accept, push, pop_b, pop_f, owner1, last1, tick_kind;
-  logic sel_now, fd_real, bcu_real;
-
-  // Input register slice (skid buffer): s_axis_tready is a flop; the router
-  // sees out_*. Valid bits are reset, data is not.
-  //
-  // Per-engine valid, registered (timing): fd_v_q/bcu_v_q hold exactly
-  //   out_v_q && kind of the word in out_* (in_seg_q ? kind_q : out_u_q)
-  // computed from the next-state values, so each engine's tvalid is a flop
-  // and the kind decode is off the path from the slice into the engines'
-  // load control (the BCU's ring shift enables 1088 flops). This is a
-  // re-encoding, not a new pipeline stage: the cycle schedule is unchanged.
-  // Where out_v_q is known to be set (accept, push) the word's kind is bcu_v_q.
-  logic                  out_v_q, sk_v_q, out_u_q, sk_u_q, fd_v_q, bcu_v_q;
-  logic                  load_out, out_v_d, out_u_d, in_seg_d, kind_d, kind_nx;
-  logic [ChunkWidth-1:0] out_d_q, sk_d_q;
-  assign s_axis_tready = !sk_v_q;
-  assign load_out      = !out_v_q || accept;
-  assign out_v_d       = load_out ? (sk_v_q || s_axis_tvalid) : 1'b1;
-  assign out_u_d       = (load_out && sk_v_q) ? sk_u_q
-                       : ((load_out && s_axis_tvalid) ? s_axis_tuser : out_u_q);
-  assign in_seg_d      = accept ? (!in_seg_q || rem_q != RemBits'(1)) : in_seg_q;
-  assign kind_d        = push ? bcu_v_q : kind_q;
-  assign kind_nx       = in_seg_d ? kind_d : out_u_d;
-  always_ff @(posedge clk_i) begin
-    if (!rst_ni) begin
-      out_v_q <= 1'b0;
-      sk_v_q  <= 1'b0;
-      fd_v_q  <= 1'b0;
-      bcu_v_q <= 1'b0;
-    end else begin
-      out_v_q <= out_v_d;
-      fd_v_q  <= out_v_d && !kind_nx;
-      bcu_v_q <= out_v_d && kind_nx;
-      if (load_out) begin
-        sk_v_q <= 1'b0;
-      end else if (s_axis_tvalid && !sk_v_q) begin
-        sk_v_q <= 1'b1;
-      end
-    end
-  end
-  always_ff @(posedge clk_i) begin
-    if (load_out) begin
-      if (sk_v_q) begin
-        out_d_q <= sk_d_q;
-      end else if (s_axis_tvalid) begin
-        out_d_q <= s_axis_tdata;
-      end
-    end else if (s_axis_tvalid && !sk_v_q) begin
-      sk_d_q <= s_axis_tdata;
-      sk_u_q <= s_axis_tuser;
-    end
-    out_u_q <= out_u_d;
-  end
-
   assign accept        = (fd_v_q && fd_tready) || (bcu_v_q && bcu_tready);
   assign push          = accept && !in_seg_q;
   assign pop_b         = (nb_q != 2'd0) && bcu_done;
@@ -183,8 +117,6 @@ module traj_core #(
     else                       tick_kind = last1;
   end
 
-  assign fd_tvalid  = fd_v_q;
-  assign bcu_tvalid = bcu_v_q;
   assign fd_tick    = tick_i && !tick_kind;
   assign bcu_tick   = tick_i && tick_kind;
 
@@ -229,6 +161,85 @@ module traj_core #(
   // sticky error, reported on tick_err_o.
   assign pf = pend_fd_q - {1'b0, fd_valid || fd_underrun};
   assign pb = pend_bcu_q - {1'b0, bcu_valid || bcu_underrun};
+
+  // ---------------------------------------------------------------------
+  // Input register slice (skid buffer): s_axis_tready is a flop; the router
+  // sees out_*. Valid bits are reset, data is not.
+  // ---------------------------------------------------------------------
+  //
+  // Per-engine valid, registered (timing): fd_v_q/bcu_v_q hold exactly
+  //   out_v_q && kind of the word in out_* (in_seg_q ? kind_q : out_u_q)
+  // computed from the next-state values, so each engine's tvalid is a flop
+  // and the kind decode is off the path from the slice into the engines'
+  // load control (the BCU's ring shift enables 1088 flops). This is a
+  // re-encoding, not a new pipeline stage: the cycle schedule is unchanged.
+  // Where out_v_q is known to be set (accept, push) the word's kind is bcu_v_q.
+  assign s_axis_tready = !sk_v_q;
+  assign load_out      = !out_v_q || accept;
+  assign out_v_d       = load_out ? (sk_v_q || s_axis_tvalid) : 1'b1;
+  assign out_u_d       = (load_out && sk_v_q) ? sk_u_q
+                       : ((load_out && s_axis_tvalid) ? s_axis_tuser : out_u_q);
+  assign in_seg_d      = accept ? (!in_seg_q || rem_q != RemBits'(1)) : in_seg_q;
+  assign kind_d        = push ? bcu_v_q : kind_q;
+  assign kind_nx       = in_seg_d ? kind_d : out_u_d;
+  always_ff @(posedge clk_i) begin
+    if (!rst_ni) begin
+      out_v_q <= 1'b0;
+      sk_v_q  <= 1'b0;
+      fd_v_q  <= 1'b0;
+      bcu_v_q <= 1'b0;
+    end else begin
+      out_v_q <= out_v_d;
+      fd_v_q  <= out_v_d && !kind_nx;
+      bcu_v_q <= out_v_d && kind_nx;
+      if (load_out) begin
+        sk_v_q <= 1'b0;
+      end else if (s_axis_tvalid && !sk_v_q) begin
+        sk_v_q <= 1'b1;
+      end
+    end
+  end
+  always_ff @(posedge clk_i) begin
+    if (load_out) begin
+      if (sk_v_q) begin
+        out_d_q <= sk_d_q;
+      end else if (s_axis_tvalid) begin
+        out_d_q <= s_axis_tdata;
+      end
+    end else if (s_axis_tvalid && !sk_v_q) begin
+      sk_d_q <= s_axis_tdata;
+      sk_u_q <= s_axis_tuser;
+    end
+    out_u_q <= out_u_d;
+  end
+
+
+  // ---------------------------------------------------------------------
+  // Engines: each takes the slice's word when its registered valid is set.
+  // ---------------------------------------------------------------------
+  assign fd_tvalid  = fd_v_q;
+  assign bcu_tvalid = bcu_v_q;
+
+  traj_fd_engine #(
+    .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits)
+  ) u_fd (
+    .clk_i, .rst_ni,
+    .s_axis_tdata(out_d_q), .s_axis_tvalid(fd_tvalid), .s_axis_tready(fd_tready),
+    .tick_i(fd_tick),
+    .sample_valid_o(fd_valid), .sample_o(fd_sample),
+    .underrun_o(fd_underrun), .seg_done_o(fd_done), .tick_err_o(fd_err)
+  );
+
+  traj_bcu_gen #(
+    .Axes(Axes), .ChunkWidth(ChunkWidth), .CtrlWidth(CtrlWidth), .GuardBits(BcuGuardBits),
+    .OutWidth(OutWidth), .MaxDepth(MaxDepth)
+  ) u_bcu (
+    .clk_i, .rst_ni,
+    .s_axis_tdata(out_d_q), .s_axis_tvalid(bcu_tvalid), .s_axis_tready(bcu_tready),
+    .tick_i(bcu_tick),
+    .sample_valid_o(bcu_valid), .sample_o(bcu_sample),
+    .underrun_o(bcu_underrun), .seg_done_o(bcu_done), .tick_err_o(bcu_err)
+  );
 
   // ---------------------------------------------------------------------
   // Output: the engine that emitted last.
