@@ -1,5 +1,5 @@
 // trajcore hls: BCU (Basic Calculation Unit), one de Casteljau mid-subdivision
-// of a cubic Bernstein polynomial in the scaled form (seed 000, eq. 8).
+// of a cubic Bernstein polynomial in the scaled form ([BCU], eq. 8).
 // Mirrors rtl/traj_bcu.sv.
 //
 // Input: the four Bernstein coefficients (A, B, C, D) of a cubic on [t0, t1],

@@ -35,7 +35,7 @@
 //      exact integers, shifts and adds only:
 //          S0 = A + 2^(S-1)  (the output rounding constant folded in),
 //          D1 = D - A,   D2 = 6(B - 2C + D),   D3 = 6(D - 3C + 3B - A).
-//      (This is the brief's S_0/Delta formulas with m = 0 at the first leaf:
+//      (These are the S_0/Delta formulas with m = 0 at the first leaf:
 //      c1 = 3(B-A), c2 = 3(A-2B+C), c3 = D-3C+3B-A, Delta1 = c1+c2+c3,
 //      Delta2 = 2c2+6c3, Delta3 = 6c3.)
 //   3. The forward-difference stage S += D1; D1 += D2; D2 += D3 gives
@@ -122,7 +122,7 @@
 // outputs), each section under the same comment. The RTL's timing copies
 // (xk1_q, vlo_q, slo_q) are registers here too, checked against their
 // definitions every cycle (always on, also in Release builds); the RTL
-// proves the same properties formally (scripts/formal_bcu.sh).
+// proves the same properties formally (scripts/formal.sh).
 //
 // Interface rules (shared with traj_fd_engine)
 //   * ticks are latched in tick_q; a tick while one is pending and not being

@@ -1,5 +1,5 @@
 // trajcore: BCU (Basic Calculation Unit), one de Casteljau mid-subdivision of
-// a cubic Bernstein polynomial in the scaled form (seed 000, eq. 8).
+// a cubic Bernstein polynomial in the scaled form ([BCU], eq. 8).
 // Mirrors hls/traj_bcu.hpp (traj::bcu_split). Purely combinational.
 //
 //   L = ( 8A, 4(A+B), 2(A+2B+C), A+3B+3C+D )

@@ -2,7 +2,7 @@
 // t = j/2^d, j = 0..2^d-1, in increasing time order, ONE SAMPLE PER CLOCK once
 // a segment has started, then holds the end value round(D). Mirrors
 // hls/traj_bcu_gen.hpp cycle for cycle; the full description (method,
-// exactness, schedule, timing rules) is there and in tb/bcu/README.md. In short:
+// exactness, schedule, timing rules) is there and in rtl/README.md. In short:
 //   * the host sends every control value pre-scaled by 8^(MaxDepth-d); d
 //     scaled mid-subdivisions along the left spine (digit-serial BCU, in place
 //     in block RAM) give the first leaf (A, B, C, D), 8^MaxDepth times the
@@ -718,7 +718,7 @@ module traj_bcu_gen #(
 
 `ifdef FORMAL
   // ---------------------------------------------------------------------
-  // Formal properties (scripts/formal_bcu.sh: yosys-smtbmc + z3, bounded
+  // Formal properties (scripts/formal.sh: yosys-smtbmc + z3, bounded
   // from reset and induction). The timing copies equal their definitions,
   // and the read-address shortcut (rd_dg) is exact: no transfer step in a
   // pass.

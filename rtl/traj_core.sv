@@ -1,6 +1,6 @@
 // trajcore: the core, one segment stream for both sampling engines
 // (traj_fd_engine and traj_bcu_gen). Mirrors hls/traj_core.hpp cycle for
-// cycle; the full description is there and in tb/core/README.md. In short:
+// cycle; the full description is there and in rtl/README.md. In short:
 //   * one ChunkWidth-bit AXI4-Stream segment input behind a register slice
 //     (skid buffer: s_axis_tready is a flop, and each engine's tvalid is a
 //     flop too: no decode between the slice and the engines' load control);

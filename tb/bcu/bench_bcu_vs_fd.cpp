@@ -343,7 +343,7 @@ int main(int argc, char** argv) {
     char adds[64];
     // BCU generator: d scaled subdivisions (6 additions each) down the left
     // spine, 9 additions to form S0, D1, D2, D3 (rounding folded into S0),
-    // then 3 additions per sample (rtl/traj_bcu_gen.sv, tb/bcu/README.md)
+    // then 3 additions per sample (rtl/traj_bcu_gen.sv, rtl/README.md)
     if (is_bcu) std::snprintf(adds, sizeof adds, "3 + (6d + 9)/K = %.3f (rounding folded in)", 3.0 + (6.0 * 12 + 9) / kK);
     else std::snprintf(adds, sizeof adds, "3 + 0 (rounding is the +1/2 in r[0])");
     std::printf("| %s | %d | %d%s | %d (|x| < %g) | %s | %.4f | %.4f | %d, %d | %s |\n", r.name.c_str(), r.guard,

@@ -326,7 +326,7 @@ TEST(BcuGen, StartLatencyIsExact) {
 }
 
 TEST(BcuGen, MinTickSpacingBackToBack) {
-  // Uniform ticks kMinTickSpacing apart (the old contract) serve every mix of
+  // Uniform ticks kMinTickSpacing apart serve every mix of
   // depths, with latency 2, exactly; the stream is always offered.
   std::mt19937_64 rng(test_seed() + 2);
   bcu::test::Driver<MidGen> drv;

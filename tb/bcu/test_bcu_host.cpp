@@ -1,5 +1,5 @@
 // host/bcu: segment compiler (errors, exact prediction == hls, bound vs double
-// at every sample) and the seed-000 C1 spline (eq. 9-16) sampled by the hls
+// at every sample) and the [BCU] C1 spline (eq. 9-16) sampled by the hls
 // generator (1, 3, 5 and 8 axes; d up to MaxDepth 12). The generator is driven
 // through its public interface only (it is being reworked for throughput;
 // timing constants come from its header).
@@ -149,7 +149,7 @@ TEST(BcuCompiler, PredictionIsHlsAndWithinBound) {
 }
 
 // ---------------------------------------------------------------------------
-// Seed 000, eq. 9-16.
+// [BCU], eq. 9-16.
 // ---------------------------------------------------------------------------
 namespace {
 Eigen::MatrixXd random_points(std::mt19937_64& rng, int n, int axes) {

@@ -1,6 +1,6 @@
 // rtl/traj_bcu.sv (the single combinational BCU, Verilated at InWidth = 4)
 // == hls traj::bcu_split, exhaustively: all 16^4 inputs, both halves, and the
-// exact rational formula (8x the halves of seed 000's eq. 8).
+// exact rational formula (8x the halves of [BCU]'s eq. 8).
 #include <cstdio>
 #include <memory>
 

@@ -176,7 +176,7 @@ TEST(FdRegisterNeeds, ReportedByCompileAndDecideAcceptance) {
 // Refusals say what would fit
 // ---------------------------------------------------------------------------
 
-// The README's example, word for word.
+// host/fd/README.md's example, word for word.
 TEST(FdRefusal, TooLongExactMessage) {
   const Compiler comp(fmt(2, 3, 64, 16, 32, 8));
   const PolySegment s{{{1.0, 2.0}, {0.0}}, 1e-3, 100000};
