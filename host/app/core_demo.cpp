@@ -29,6 +29,7 @@
 
 #include "bcu/chain.hpp"
 #include "demo.hpp"
+#include "util/atomic_file.hpp"
 #include "sim/sim.hpp"
 #include "stream/segment_stream.hpp"
 
@@ -126,12 +127,9 @@ int run_core_demo(const DemoOptions& opt) {
   // Compare: host prediction (the chain's), hand-offs, double reference.
   const double lsb = std::ldexp(1.0, -opt.frac_bits);
   const double eps = std::numeric_limits<double>::epsilon() / 2;
-  std::filesystem::path csv(opt.csv);
-  if (csv.has_parent_path()) std::filesystem::create_directories(csv.parent_path());
-  const auto tmp = csv.string() + ".tmp";
-  std::ofstream out(tmp);
-  if (!out) throw std::runtime_error("cannot write " + tmp);
-  out << "tick,t_s,segment,x_lsb,y_lsb,z_lsb,x_mm,y_mm,z_mm,x_ref_mm,y_ref_mm,z_ref_mm,err_lsb\n";
+  util::AtomicFile csv(opt.csv);
+  std::ofstream& out = csv.out();
+  out << kDemoCsvHeader;
   uint64_t n = 0, pred_mismatch = 0, handoffs = 0, handoff_ok = 0, over = 0;
   double max_err = 0, max_bound = 0, worst_margin = std::numeric_limits<double>::infinity();
   const auto& pieces = chain.pieces();
@@ -169,9 +167,7 @@ int run_core_demo(const DemoOptions& opt) {
       out << buf;
     }
   }
-  out.close();
-  if (!out) throw std::runtime_error("write failed: " + tmp);
-  std::filesystem::rename(tmp, csv);
+  csv.commit();
   const auto t_end = std::chrono::steady_clock::now();
 
   size_t nf = 0, nb = 0;
@@ -200,7 +196,7 @@ int run_core_demo(const DemoOptions& opt) {
               static_cast<unsigned long long>(mism));
   std::printf("  tick_err      : %s, underruns %llu\n", sr.tick_err ? "SET" : "clear",
               static_cast<unsigned long long>(sr.underruns));
-  std::printf("  samples CSV   : %s\n", csv.string().c_str());
+  std::printf("  samples CSV   : %s\n", opt.csv.c_str());
   std::printf("  time          : %.3f s total\n", std::chrono::duration<double>(t_end - t_start).count());
   const bool ok = mism == 0 && !sr.tick_err && sr.underruns == 0 && over == 0 && handoff_ok == handoffs &&
                   n == sr.samples.v.size();

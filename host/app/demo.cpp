@@ -9,12 +9,12 @@
 // build's TRAJ_* engine, so `trajcore` builds and the demo runs whatever
 // TRAJ_AXES/DEGREE/WIDTH/CHUNK/GUARD are.
 #include "demo.hpp"
+#include "util/atomic_file.hpp"
 
 #include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <stdexcept>
 #include <vector>
@@ -146,12 +146,9 @@ int run_fd_demo(const DemoOptions& opt, const std::chrono::steady_clock::time_po
   const sim::SimResult sr = sim::simulate(build.header(opt.frac_bits, opt.period, "mm"), recs, opt.tick_gap);
   if (sr.samples.v.size() != owner.size()) throw std::runtime_error("the engine emitted fewer samples than planned");
 
-  std::filesystem::path csv(opt.csv);
-  if (csv.has_parent_path()) std::filesystem::create_directories(csv.parent_path());
-  const auto tmp = csv.string() + ".tmp";
-  std::ofstream out(tmp);
-  if (!out) throw std::runtime_error("cannot write " + tmp);
-  out << "tick,t_s,segment,x_lsb,y_lsb,z_lsb,x_mm,y_mm,z_mm,x_ref_mm,y_ref_mm,z_ref_mm,err_lsb\n";
+  util::AtomicFile csv(opt.csv);
+  std::ofstream& out = csv.out();
+  out << kDemoCsvHeader;
 
   const double lsb = std::ldexp(1.0, -opt.frac_bits);
   double max_err = 0, max_bound = 0;
@@ -177,9 +174,7 @@ int run_fd_demo(const DemoOptions& opt, const std::chrono::steady_clock::time_po
     out << buf;
   }
   const auto t_end = std::chrono::steady_clock::now();
-  out.close();
-  if (!out) throw std::runtime_error("write failed: " + tmp);
-  std::filesystem::rename(tmp, csv);
+  csv.commit();
   const double all_s = std::chrono::duration<double>(t_end - t_start).count();
 
   std::printf("trajcore demo: circle R=%g mm of three 120-degree cubic Bezier arcs, feed %g mm/s nominal, tick %g ms\n",
@@ -199,7 +194,7 @@ int run_fd_demo(const DemoOptions& opt, const std::chrono::steady_clock::time_po
               static_cast<unsigned long long>(mismatches));
   std::printf("  tick_err      : %s, underruns %llu\n", sr.tick_err ? "SET" : "clear",
               static_cast<unsigned long long>(sr.underruns));
-  std::printf("  samples CSV   : %s\n", csv.string().c_str());
+  std::printf("  samples CSV   : %s\n", opt.csv.c_str());
   std::printf("  time          : %.3f s total, simulation %.0f cycles/s\n", all_s, sr.cycles / sr.seconds);
   const bool ok = mismatches == 0 && !sr.tick_err && sr.underruns == 0 && max_err <= 0.5 + max_bound + 1e-6;
   if (!ok) std::fprintf(stderr, "trajcore demo: FAILED (see above)\n");

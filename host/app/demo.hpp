@@ -3,6 +3,10 @@
 
 namespace traj::app {
 
+// The columns of the demos' sample CSV (tb/app/check_demo_csv.cmake checks them).
+inline constexpr const char* kDemoCsvHeader =
+    "tick,t_s,segment,x_lsb,y_lsb,z_lsb,x_mm,y_mm,z_mm,x_ref_mm,y_ref_mm,z_ref_mm,err_lsb\n";
+
 struct DemoOptions {
   double radius = 50.0;   // mm
   double feed = 50.0;     // mm/s

@@ -35,7 +35,7 @@
 // |delta| <= 0.252 LSB + |Delta|; the first BCU sample is exact (the FD end
 // sample), the offset fades out as (1-t)^3, and the BCU's own end c_D is
 // round(b3 2^(F+Gb)) again: nothing is carried further (no drift).
-// (tb/core/test_mixed_chain.cpp checks every step of this in exact rationals.)
+// (tb/core/mixed_chain_test.cpp checks every step of this in exact rationals.)
 //
 // BCU -> FD. c_D = the BCU segment's exact end control value. The FD start is
 //     r0 = floor(c_D 2^Gf / 2^Gb) + 2^(Gf-1)

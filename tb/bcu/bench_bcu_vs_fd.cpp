@@ -112,13 +112,7 @@ struct Row {
 template <int W, int G>
 Row run_fd(const bcu::Controls& b, double tol, const std::vector<std::vector<mpq_class>>& ref) {
   using Eng = traj::FdEngine<kAxes, 3, W, kChunk, G>;
-  fd::Format f;
-  f.axes = kAxes;
-  f.degree = 3;
-  f.width = W;
-  f.chunk_width = kChunk;
-  f.guard_bits = G;
-  f.frac_bits = kF;
+  fd::Format f{kAxes, 3, W, kChunk, G, kF};
   f.tol_lsb = tol;
   const fd::Compiler comp(f);
   const fd::Compiled c = comp.compile(bcu::fd_poly_of_bezier(b, kK, kH), nullptr, "bench");
@@ -184,14 +178,7 @@ Row run_fd(const bcu::Controls& b, double tol, const std::vector<std::vector<mpq
 template <int Ctrl, int G, int Out>
 Row run_bcu(const bcu::Controls& b, const std::vector<std::vector<mpq_class>>& ref) {
   using Gen = traj::BcuGen<kAxes, kChunk, Ctrl, G, Out, kD>;
-  bcu::Format f;
-  f.axes = kAxes;
-  f.chunk_width = kChunk;
-  f.ctrl_width = Ctrl;
-  f.guard_bits = G;
-  f.out_width = Out;
-  f.max_depth = kD;
-  f.frac_bits = kF;
+  bcu::Format f{kAxes, kChunk, Ctrl, G, Out, kD, kF};
   const bcu::Segment seg = bcu::compile_segment(b, kD, f);
   std::vector<std::vector<int64_t>> got;
   bool need_l2 = false;

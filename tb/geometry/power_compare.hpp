@@ -1,5 +1,5 @@
 // Comparison of Curve::eval against the Cox-de Boor reference and Eigen's Splines module, shared by
-// test_power_basis.cpp and bench_power_soak.cpp.
+// power_basis_test.cpp and bench_power_soak.cpp.
 #pragma once
 #include <functional>
 #include <memory>

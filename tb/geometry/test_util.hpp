@@ -10,21 +10,14 @@
 
 #include "geometry/bspline.hpp"
 #include "ref_deboor.hpp"
+#include "test_seed.hpp"
 
 namespace geotest {
 
 inline std::string asset(const std::string& name) { return std::string(GEO_ASSETS_DIR) + "/" + name; }
 
-// Seed: GEO_TEST_SEED from the environment, else a fixed default; printed so any failure reproduces.
-inline unsigned seed() {
-  static const unsigned s = [] {
-    const char* e = std::getenv("GEO_TEST_SEED");
-    const unsigned v = e ? static_cast<unsigned>(std::strtoul(e, nullptr, 10)) : 20240604u;
-    std::printf("GEO_TEST_SEED=%u\n", v);
-    return v;
-  }();
-  return s;
-}
+// The random seed (tb/common/test_seed.hpp): TRAJ_SEED or a fixed default.
+inline unsigned seed() { return static_cast<unsigned>(traj::test::test_seed(20240604u)); }
 
 struct RandomSpline {
   traj::geo::BSpline lib;

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <random>
 
+#include "test_seed.hpp"
 #include "input/path_json.hpp"
 #include "report/report.hpp"
 #include "planner/profile.hpp"
@@ -198,7 +199,7 @@ TEST(PlannerCore, ButterflyThroughVerilatedCore) {
 }
 
 TEST(PlannerCore, RandomSplinesThroughVerilatedCore) {
-  std::mt19937_64 rng(std::getenv("TRAJ_SEED") ? std::strtoull(std::getenv("TRAJ_SEED"), nullptr, 0) : 99);
+  std::mt19937_64 rng(traj::test::test_seed(99));
   std::uniform_real_distribution<double> U(-1, 1);
   for (int rep = 0; rep < 6; ++rep) {
     geo::BSpline sp;

@@ -26,7 +26,7 @@
 //   * Refusals: a jump, incompatible formats, a missing previous segment.
 // The core model is driven through its public interface only (tready,
 // sample_valid, underrun, seg_done, tick_err, sample).
-// Seed: env TRAJ_CORE_SEED (default 20240613), printed.
+// Seed: env TRAJ_SEED (default 20240613), printed.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -38,6 +38,7 @@
 #include <string>
 #include <vector>
 
+#include "test_seed.hpp"
 #include "bcu/chain.hpp"
 #include "fd/fd_compiler.hpp"
 #include "traj_core.hpp"
@@ -51,37 +52,13 @@ constexpr int kF = 16;
 constexpr double kH = 1e-3;
 const double kEps = std::numeric_limits<double>::epsilon() / 2;  // unit roundoff
 
-uint64_t test_seed() {
-  const char* s = std::getenv("TRAJ_CORE_SEED");
-  const uint64_t seed = s ? std::strtoull(s, nullptr, 0) : 20240613ull;
-  static bool printed = false;
-  if (!printed) {
-    std::printf("TRAJ_CORE_SEED=%llu\n", static_cast<unsigned long long>(seed));
-    printed = true;
-  }
-  return seed;
-}
+uint64_t test_seed() { return traj::test::test_seed(20240613ull); }
 
 fd::Format fd_format(int width = C_WIDTH, int guard = C_GUARD) {
-  fd::Format f;
-  f.axes = C_AXES;
-  f.degree = C_DEGREE;
-  f.width = width;
-  f.chunk_width = C_CHUNK;
-  f.guard_bits = guard;
-  f.frac_bits = kF;
-  return f;
+  return {C_AXES, C_DEGREE, width, C_CHUNK, guard, kF};
 }
 bcu::Format bcu_format(int ctrl = C_CTRL, int guard = C_BGUARD, int out = Core::kOutWidth) {
-  bcu::Format f;
-  f.axes = C_AXES;
-  f.chunk_width = C_CHUNK;
-  f.ctrl_width = ctrl;
-  f.guard_bits = guard;
-  f.out_width = out;
-  f.max_depth = C_DEPTH;
-  f.frac_bits = kF;
-  return f;
+  return {C_AXES, C_CHUNK, ctrl, guard, out, C_DEPTH, kF};
 }
 
 mpq_class exact(double x) {

@@ -13,7 +13,7 @@
 // order, across kind switches; every underrun sample must hold the last output
 // or be the last BCU segment's end value.
 //
-// usage: cosim_core [--seed N] [--cycles N]   (or env TRAJ_CORE_SEED)
+// usage: cosim_core [--seed N] [--cycles N]   (or env TRAJ_SEED)
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -23,6 +23,7 @@
 #include <random>
 #include <vector>
 
+#include "test_seed.hpp"
 #include "Vtraj_core.h"
 #include "bcu/bcu_compiler.hpp"
 #include "fd/fd_compiler.hpp"
@@ -46,7 +47,7 @@ struct Expect {
 
 int main(int argc, char** argv) {
   uint64_t seed = 1;
-  if (const char* s = std::getenv("TRAJ_CORE_SEED")) seed = std::strtoull(s, nullptr, 0);
+  seed = traj::test::env_seed(seed);
   uint64_t cycles = 1000000;
   uint64_t trace_from = ~0ull;
   if (const char* s = std::getenv("TRAJ_CORE_TRACE")) trace_from = std::strtoull(s, nullptr, 0);
@@ -56,7 +57,7 @@ int main(int argc, char** argv) {
   }
   std::printf("cosim_core: Axes=%d Degree=%d Width=%d ChunkWidth=%d GuardBits=%d CtrlWidth=%d "
               "BcuGuardBits=%d MaxDepth=%d min tick spacing %d, seed=%llu cycles=%llu "
-              "(reproduce: --seed %llu or TRAJ_CORE_SEED=%llu)\n",
+              "(reproduce: --seed %llu or TRAJ_SEED=%llu)\n",
               C_AXES, C_DEGREE, C_WIDTH, C_CHUNK, C_GUARD, C_CTRL, C_BGUARD, C_DEPTH,
               Core::kMinTickSpacing, (unsigned long long)seed, (unsigned long long)cycles,
               (unsigned long long)seed, (unsigned long long)seed);
@@ -65,19 +66,8 @@ int main(int argc, char** argv) {
   const Core& hls = ls.model();
   std::mt19937_64 rng(seed);
 
-  traj::bcu::Format bf;
-  bf.axes = C_AXES;
-  bf.chunk_width = C_CHUNK;
-  bf.ctrl_width = C_CTRL;
-  bf.guard_bits = C_BGUARD;
-  bf.out_width = kOut;
-  bf.max_depth = C_DEPTH;
-  traj::fd::Format ff;
-  ff.axes = C_AXES;
-  ff.degree = C_DEGREE;
-  ff.width = C_WIDTH;
-  ff.chunk_width = C_CHUNK;
-  ff.guard_bits = C_GUARD;
+  traj::bcu::Format bf{C_AXES, C_CHUNK, C_CTRL, C_BGUARD, kOut, C_DEPTH};
+  traj::fd::Format ff{C_AXES, C_DEGREE, C_WIDTH, C_CHUNK, C_GUARD};
   const traj::fd::Compiler fdc(ff);
 
   std::deque<Word> words;

@@ -6,6 +6,7 @@
 #include <gmpxx.h>
 #include <random>
 
+#include "test_seed.hpp"
 #include "bcu/bcu_compiler.hpp"
 #include "bcu_driver.hpp"
 #include "traj_bcu.hpp"
@@ -15,16 +16,7 @@ using traj::i128;
 using traj::u128;
 namespace bcu = traj::bcu;
 
-static uint64_t test_seed() {
-  const char* s = std::getenv("TRAJ_BCU_SEED");
-  const uint64_t seed = s ? std::strtoull(s, nullptr, 0) : 20240611ull;
-  static bool printed = false;
-  if (!printed) {
-    std::printf("TRAJ_BCU_SEED=%llu\n", static_cast<unsigned long long>(seed));
-    printed = true;
-  }
-  return seed;
-}
+static uint64_t test_seed() { return traj::test::test_seed(20240611ull); }
 
 // Random w-bit signed value, biased to the extremes now and then.
 static mpz_class rand_ctrl(std::mt19937_64& rng, int w) {

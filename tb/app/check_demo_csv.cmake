@@ -1,4 +1,4 @@
-# Checks the samples CSV written by `trajcore demo` (CTest app.demo_csv).
+# Checks the samples CSV written by `trajcore demo` (CTest app.cli.demo_csv).
 #   cmake -DCSV=<file> -DROWS=<expected data rows> -P check_demo_csv.cmake
 # Fails (non-zero exit, one message) if the file is missing or empty, the
 # header is not the demo's, a row does not have 13 fields, or the row count

@@ -10,6 +10,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "test_seed.hpp"
 #include "bcu/bcu_compiler.hpp"
 #include "bcu/bezier_spline.hpp"
 #include "traj_bcu_gen.hpp"
@@ -75,12 +76,7 @@ std::vector<std::vector<int64_t>> play_gen(const std::vector<bcu::Segment>& segs
 
 std::vector<std::vector<int64_t>> play(const std::vector<bcu::Segment>& segs) { return play_gen<Gen>(segs); }
 
-uint64_t seed() {
-  const char* s = std::getenv("TRAJ_BCU_SEED");
-  const uint64_t v = s ? std::strtoull(s, nullptr, 0) : 20240611ull;
-  std::printf("TRAJ_BCU_SEED=%llu\n", static_cast<unsigned long long>(v));
-  return v;
-}
+uint64_t seed() { return traj::test::test_seed(20240611ull); }
 
 void expect_message(const std::function<void()>& f, const std::string& part) {
   try {

@@ -13,7 +13,7 @@
 // long segments are not cut. Every sample is also checked against the exact
 // GMP prediction of the host (hls == host).
 //
-// usage: cosim_bcu_gen [--seed N] [--cycles N]   (or env TRAJ_BCU_SEED)
+// usage: cosim_bcu_gen [--seed N] [--cycles N]   (or env TRAJ_SEED)
 // Prints the seed; a failure is reproducible from it.
 #include <cstdio>
 #include <cstdlib>
@@ -24,6 +24,7 @@
 #include <random>
 #include <string>
 
+#include "test_seed.hpp"
 #include "Vtraj_bcu_gen.h"
 #include "bcu/bcu_compiler.hpp"
 #include "sim/lockstep.hpp"
@@ -39,7 +40,7 @@ struct Expect {  // host prediction of one sample
 
 int main(int argc, char** argv) {
   uint64_t seed = 1;
-  if (const char* s = std::getenv("TRAJ_BCU_SEED")) seed = std::strtoull(s, nullptr, 0);
+  seed = traj::test::env_seed(seed);
   uint64_t cycles = 1000000;
   uint64_t trace_from = 0;
   if (const char* s = std::getenv("TRAJ_BCU_TRACE")) trace_from = std::strtoull(s, nullptr, 0);
@@ -56,13 +57,7 @@ int main(int argc, char** argv) {
   const Gen& hls = ls.model();
   std::mt19937_64 rng(seed);
 
-  traj::bcu::Format f;
-  f.axes = BCU_AXES;
-  f.chunk_width = BCU_CHUNK;
-  f.ctrl_width = BCU_CTRL;
-  f.guard_bits = BCU_GUARD;
-  f.out_width = BCU_OUT;
-  f.max_depth = BCU_DEPTH;
+  traj::bcu::Format f{BCU_AXES, BCU_CHUNK, BCU_CTRL, BCU_GUARD, BCU_OUT, BCU_DEPTH};
 
   std::deque<uint64_t> words;
   std::deque<Expect> expect;      // predicted samples of queued/active segments

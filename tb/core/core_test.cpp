@@ -8,7 +8,7 @@
 //     every sample is within the stated bound of the double-precision path;
 //   * the same path with idle cycles on the stream and sparser ticks;
 //   * underrun after the last segment holds the output.
-// Seed: env TRAJ_CORE_SEED (default 20240612), printed.
+// Seed: env TRAJ_SEED (default 20240612), printed.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "test_seed.hpp"
 #include "bcu/bcu_compiler.hpp"
 #include "fd/fd_compiler.hpp"
 #include "traj_core.hpp"
@@ -29,37 +30,13 @@ using Core = traj::Core<C_AXES, C_DEGREE, C_WIDTH, C_CHUNK, C_GUARD, C_CTRL, C_B
 constexpr int kF = 16;  // output LSB = 2^-16 mm, both engines
 constexpr double kH = 1e-3;
 
-uint64_t test_seed() {
-  const char* s = std::getenv("TRAJ_CORE_SEED");
-  const uint64_t seed = s ? std::strtoull(s, nullptr, 0) : 20240612ull;
-  static bool printed = false;
-  if (!printed) {
-    std::printf("TRAJ_CORE_SEED=%llu\n", static_cast<unsigned long long>(seed));
-    printed = true;
-  }
-  return seed;
-}
+uint64_t test_seed() { return traj::test::test_seed(20240612ull); }
 
 traj::fd::Format fd_format() {
-  traj::fd::Format f;
-  f.axes = C_AXES;
-  f.degree = C_DEGREE;
-  f.width = C_WIDTH;
-  f.chunk_width = C_CHUNK;
-  f.guard_bits = C_GUARD;
-  f.frac_bits = kF;
-  return f;
+  return {C_AXES, C_DEGREE, C_WIDTH, C_CHUNK, C_GUARD, kF};
 }
 traj::bcu::Format bcu_format() {
-  traj::bcu::Format f;
-  f.axes = C_AXES;
-  f.chunk_width = C_CHUNK;
-  f.ctrl_width = C_CTRL;
-  f.guard_bits = C_BGUARD;
-  f.out_width = Core::kOutWidth;
-  f.max_depth = C_DEPTH;
-  f.frac_bits = kF;
-  return f;
+  return {C_AXES, C_CHUNK, C_CTRL, C_BGUARD, Core::kOutWidth, C_DEPTH, kF};
 }
 
 struct Piece {
