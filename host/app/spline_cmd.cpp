@@ -24,6 +24,7 @@
 #include "geometry/json_io.hpp"
 #include "sim/sim.hpp"
 #include "stream/segment_stream.hpp"
+#include "util/tick_period.hpp"
 
 namespace traj::app {
 
@@ -71,8 +72,7 @@ int run_spline(const SplineOptions& opt) {
     throw std::invalid_argument("--engine " + opt.engine + ": expected bcu or mixed");
   if (!has_core()) throw std::runtime_error("this trajcore was built without host/bcu: no BCU segments");
   if (!(opt.feed > 0) || !std::isfinite(opt.feed)) throw std::invalid_argument("--feed must be positive and finite");
-  if (!(opt.period > 0) || !std::isfinite(opt.period))
-    throw std::invalid_argument("--period must be positive and finite");
+  if (const std::string m = util::tick_period_problem(opt.period); !m.empty()) throw std::invalid_argument("--period: " + m);
   const Build& core = carried("core");
   const fd::Format ff = core.fd_format(opt.frac_bits);
   const bcu::Format bf = core.bcu_format(opt.frac_bits);

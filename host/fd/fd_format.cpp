@@ -1,18 +1,13 @@
 #include "fd/fd_format.hpp"
 
 #include <cmath>
-#include <sstream>
 
 #include "fd/detail/fd_internal.hpp"
+#include "util/format.hpp"
 
 namespace traj::fd {
 
-std::string detail::fmt_double(double v) {
-  std::ostringstream os;
-  os.precision(6);
-  os << v;
-  return os.str();
-}
+std::string detail::fmt_double(double v) { return util::num(v); }
 
 void Format::validate() const {
   auto bad = [](const std::string& what) { throw CompileError("format: " + what); };

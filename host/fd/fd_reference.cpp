@@ -6,6 +6,7 @@
 
 #include "fd/detail/fd_internal.hpp"
 #include "fd/fd_compiler.hpp"
+#include "util/tick_period.hpp"
 
 namespace traj::fd {
 namespace detail {
@@ -201,7 +202,7 @@ void check_segment(const Format& f_, const PolySegment& seg, const std::vector<m
   auto fail = [&](const std::string& what) { throw CompileError(where + ": " + what); };
   if (static_cast<int>(seg.coef.size()) != A)
     fail("has " + std::to_string(seg.coef.size()) + " axes, the engine has " + std::to_string(A));
-  if (!(seg.h > 0) || !std::isfinite(seg.h)) fail("tick period h=" + fmt_double(seg.h) + " must be positive and finite");
+  if (const std::string m = util::tick_period_problem(seg.h); !m.empty()) fail(m);
   if (seg.ticks < 1) fail("tick count K=0: a segment needs at least one tick");
   if (seg.ticks > f_.max_ticks)
     fail("K=" + std::to_string(seg.ticks) + " ticks exceeds max_ticks=" + std::to_string(f_.max_ticks) +

@@ -1,5 +1,7 @@
 #include "stream/segment_stream.hpp"
 
+#include "util/tick_period.hpp"
+
 #include <zlib.h>
 
 #include <cmath>
@@ -142,7 +144,7 @@ std::string bcu_header_problem(const Header& h, size_t& off) {
 
 std::vector<uint8_t> encode_header(const Header& h) {
   if (h.units.size() > 15) throw StreamError("units '" + h.units + "' longer than 15 characters");
-  if (!(h.period > 0) || !std::isfinite(h.period)) throw StreamError("tick period must be positive and finite");
+  if (const std::string m = util::tick_period_problem(h.period); !m.empty()) throw StreamError(m);
   h.format().validate();
   if (h.has_bcu()) {
     size_t off = 0;

@@ -120,7 +120,7 @@ Compiled compile(const Format& f_, const PolySegment& seg, const std::vector<mpz
   auto fail = [&](const std::string& what) { throw CompileError(where + ": " + what); };
   if (static_cast<int>(seg.coef.size()) != A)
     fail("has " + std::to_string(seg.coef.size()) + " axes, the engine has " + std::to_string(A));
-  if (!(seg.h > 0) || !std::isfinite(seg.h)) fail("tick period h=" + fmt_double(seg.h) + " must be positive and finite");
+  if (!(seg.h > 0) || !std::isfinite(seg.h)) fail("tick period " + fmt_double(seg.h) + " s must be positive and finite");
   if (seg.ticks < 1) fail("tick count K=0: a segment needs at least one tick");
   if (seg.ticks > f_.max_ticks)
     fail("K=" + std::to_string(seg.ticks) + " ticks exceeds max_ticks=" + std::to_string(f_.max_ticks) +
