@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore hls: BCU (Basic Calculation Unit), one de Casteljau mid-subdivision
 // of a cubic Bernstein polynomial in the scaled form ([BCU], eq. 8).
 // Mirrors rtl/traj_bcu.sv.

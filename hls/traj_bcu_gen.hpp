@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore hls: BCU generator. Samples a cubic Bernstein polynomial per axis
 // at t = j/2^d, j = 0..2^d-1, in increasing time order, ONE SAMPLE PER CLOCK
 // once a segment has started, then holds the end value. Mirrors

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore hls: shared widths and bit helpers for every hardware model.
 //
 // Subset rules for everything under hls/: fixed-width integers only, no floating

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore hls: the core, one segment stream for both sampling engines.
 // Cycle-accurate model of rtl/traj_core.sv: it instantiates the
 // forward-difference engine (hls/traj_fd_engine.hpp) and the BCU generator

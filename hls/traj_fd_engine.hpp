@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore hls: forward-difference sampling engine, cycle-accurate model of
 // rtl/traj_fd_engine.sv.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore: BCU (Basic Calculation Unit), one de Casteljau mid-subdivision of
 // a cubic Bernstein polynomial in the scaled form ([BCU], eq. 8).
 // Mirrors hls/traj_bcu.hpp (traj::bcu_split). Purely combinational.

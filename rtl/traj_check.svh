@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore: elaboration-time parameter check that Verilator, Yosys and Icarus 11
 // all honour. Verilator and Yosys stop on $error in a generate block at
 // elaboration; Icarus 11 rejects elaboration tasks there, so it gets an initial

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore: the core, one segment stream for both sampling engines
 // (traj_fd_engine and traj_bcu_gen). Mirrors hls/traj_core.hpp cycle for
 // cycle; the full description is there and in rtl/README.md. In short:

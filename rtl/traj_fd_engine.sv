@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore: forward-difference sampling engine.
 //
 // Mirrors hls/traj_fd_engine.hpp cycle for cycle; see that file for the full

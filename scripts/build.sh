@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Install what is missing (setup.sh), then configure and build trajcore (Release)
 # into ${TRAJ_BUILD_DIR:-build}.
 set -euo pipefail

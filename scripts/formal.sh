@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Formal check of a unit's properties (its `ifdef FORMAL block): Yosys -> SMT2,
 # then yosys-smtbmc with z3: bounded model check from reset (DEPTH steps) and
 # temporal induction (depth DEPTH). Exit non-zero on any failure.

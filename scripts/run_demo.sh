@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The main job on a fresh machine: install what is missing, build, then
 #  1. plan the butterfly NURBS (host/assets/butterfly_nurbs.json) at 50 mm/s with
 #     1 ms ticks and the limits below, compile it to quintic forward-difference

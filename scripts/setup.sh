@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Install, idempotently, every Debian package trajcore needs.
 # Safe to run repeatedly; skips apt entirely when everything is already present.
 set -euo pipefail

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Soak: the FD engine co-simulation (RTL == hls, every cycle) at every built
 # parameter set, on N random seeds each (default 20). CTest runs fixed seeds;
 # this is the long randomised run. A failing seed is printed with the command

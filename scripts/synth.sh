@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # iCE40 synthesis and place-and-route of one RTL unit: Yosys synth_ice40 ->
 # nextpnr-ice40 (one run per seed) -> icepack for units with a board pin file.
 #

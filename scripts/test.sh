@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The test suite on a fresh machine: install what is missing, build, run CTest
 # (unit tests, hls-vs-host, Verilator co-simulation, RTL lint/elaboration/synthesis checks).
 set -euo pipefail

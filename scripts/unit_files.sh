@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Prints the RTL files of one unit (absolute paths, elaboration order) from the
 # unit table rtl/units.txt; exits non-zero for a unit the table does not name.
 #   usage: scripts/unit_files.sh UNIT

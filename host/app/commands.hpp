@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The path commands of the trajcore tool: plan, run, sim (main.cpp parses the
 // command line into these and reports errors).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore demo --engine bcu | mixed: the circle of three 120-degree cubic
 // Bezier arcs ([ARC]), the BCU generator's native input, compiled for
 // traj_core and run through it (Verilated, hls beside it on every cycle).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore demo: the circle of three 120-degree cubic Bezier segments ([ARC])
 // traversed in time, compiled to forward-difference segments, run through the
 // Verilated engine (sim::simulate: the hls model beside it on every cycle),

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore: command-line tool.
 //   trajcore plan  <path.json> -o out.trj      plan + compile -> segment stream (+ plan report)
 //   trajcore plan  <path.jsonl> -o out.trj     the same, streamed: one curve per line, bounded memory

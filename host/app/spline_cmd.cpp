@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore spline: [BCU]'s C1 interpolating cubic Bezier spline (eq. 9,
 // host/bcu/bezier_spline.hpp) through the points of a JSON file, compiled for
 // traj_core as BCU segments (or, --engine mixed, odd segments as FD), chained

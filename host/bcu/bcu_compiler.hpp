@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // traj::bcu: host compiler for the BCU generator (rtl/traj_bcu_gen.sv,
 // hls/traj_bcu_gen.hpp).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // traj::bcu::Format: the number format of the BCU generator (rtl/traj_bcu_gen.sv,
 // hls/traj_bcu_gen.hpp) as the host sees it. Header-only (no link dependency),
 // so that the segment stream (host/stream) can carry and check it.

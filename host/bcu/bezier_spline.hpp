@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // traj::bcu: the C1 interpolating cubic Bezier spline of [BCU] (eq. 9-16).
 //
 // Points P_0..P_{N+1} (rows; one column per axis). P_0 and P_{N+1} are the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // traj::bcu chaining across segment kinds: forward-difference segments
 // (traj::fd::Compiler, traj_fd_engine) and BCU segments (traj::bcu, traj_bcu_gen)
 // played one after the other by traj_core (one stream, tuser = kind).

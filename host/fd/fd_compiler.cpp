@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The forward-difference compiler's public entry points (fd_compiler.hpp).
 // The paths behind compile() are in fd_grid*.cpp, fd_exact.cpp and
 // fd_reference.cpp (see detail/fd_internal.hpp); the budget functions in

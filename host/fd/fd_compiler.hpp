@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore host: forward-difference segment compiler.
 //
 // Turns a per-axis polynomial in time into the engine's fixed-point difference

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore host: the forward-difference recurrence in double precision, the
 // reference form of the algorithm (the engine runs the same recurrence on
 // fixed-point registers).
@@ -40,7 +41,7 @@ inline void fd_step(std::vector<double>& r) {
 }
 
 // [FD]'s printed update (kept to show that it fails).
-inline void fd_step_seed002(std::vector<double>& r) {
+inline void fd_step_printed(std::vector<double>& r) {
   for (size_t i = 0; i + 1 < r.size(); ++i) r[i + 1] += r[i];
 }
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The forward-difference compiler's exact integer path: exact dyadic sums on
 // limb arrays sized per axis (mpz beyond them), for the segments the grid
 // path cannot settle; see detail/fd_internal.hpp.

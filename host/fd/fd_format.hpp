@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore host: the forward-difference engine's number format (fd::Format),
 // shared by the compiler (fd_compiler.hpp, which explains the format and its
 // error analysis) and the segment stream's header.

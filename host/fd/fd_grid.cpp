@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The forward-difference compiler's fixed-point grid path: compile_grid()
 // bounds the segment, picks the 2-, 3- or 4-limb grid and writes the result;
 // see detail/fd_grid.hpp.

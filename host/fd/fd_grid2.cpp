@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The forward-difference compiler's grid path on 2 limbs (the common case):
 // see detail/fd_grid.hpp.
 #include <algorithm>

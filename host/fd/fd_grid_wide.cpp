@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The forward-difference compiler's grid path on 3 or 4 limbs (wider values,
 // or a rounding the 2-limb grid left open): see detail/fd_grid.hpp.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Per-segment-length data of the forward-difference compiler's fast paths:
 // the binomials C(K, i) and the register needs derived from them (exact, on
 // limbs, no GMP), cached per thread; and Compiler::register_needs.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The long double range check of the forward-difference compiler's fast paths
 // (see detail/fd_internal.hpp): power-basis bound first, then the Bernstein
 // coefficients with an a-priori error bound.

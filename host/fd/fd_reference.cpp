@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The exact rational reference of the forward-difference compiler (mpq
 // throughout), the exact budget functions, and the refusal messages with what
 // would fit instead.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore host: multi-word integers for the forward-difference compiler's
 // fast exact paths (fd_grid*.cpp, fd_exact.cpp, fd_needs.cpp).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Arc length of a Curve: adaptive Gauss-Legendre quadrature of the speed |r'(u)| per power-basis
 // span, and its inverse (parameter at a given arc length) by a safeguarded Newton method.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // B-spline / NURBS curve description and the exact (knot-insertion) operations on it.
 //
 // A curve of degree p with n control points P_i (rows of `ctrl`, any number of axes), optional

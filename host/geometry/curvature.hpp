@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Curvature, its extrema and (2-D) inflection points, and the split of a curve into ACC/DEC units
 // ([NURBS]): between two consecutive split parameters the curvature is monotone, so the
 // curvature-limited feed is monotone too and each unit needs only an accelerating or a decelerating

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Curve: a B-spline/NURBS converted to piecewise power basis ([NURBS]): B-spline -> Bezier pieces
 // (knot insertion) -> power basis per span, with explicit coefficient tables for the first, second
 // and third derivatives. For a NURBS the tables hold the homogeneous coordinates (w x, w); the

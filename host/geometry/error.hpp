@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // traj::geo error type. Errors the user can cause (bad file, bad field, bad parameter) are
 // reported by throwing GeometryError with one message naming the place (file, field, index).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // traj::geo umbrella header: B-spline/NURBS -> piecewise power basis, arc length, curvature split,
 // reparameterisation by arc length. See host/geometry/README.md.
 #pragma once

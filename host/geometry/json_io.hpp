@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Curve files (the shared butterfly format):
 //   { "name": str, "units": str, "degree": int, "rational": bool,
 //     "control_points": [[x, y, ...], ...], "weights": [...] (required if rational), "knots": [...] }

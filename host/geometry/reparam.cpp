@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "geometry/reparam.hpp"
 
 #include <algorithm>
@@ -29,8 +30,8 @@ std::vector<double> equal_arclength_params(const ArcLength& al, double step, boo
   return u;
 }
 
-std::vector<double> seed004_reparam(const Curve& c, double ua, double ub, int n, int passes) {
-  if (n < 1) throw GeometryError("seed004_reparam: n must be >= 1");
+std::vector<double> arc_paper_reparam(const Curve& c, double ua, double ub, int n, int passes) {
+  if (n < 1) throw GeometryError("arc_paper_reparam: n must be >= 1");
   std::vector<double> tau(n, 1.0 / n), u(n + 1);
   const int dim = c.dim();
   std::vector<double> P((n + 1) * dim);
@@ -63,13 +64,13 @@ std::vector<double> seed004_reparam(const Curve& c, double ua, double ub, int n,
   return u;
 }
 
-std::vector<double> seed004_reparam_spline(const Curve& c, const ArcLength& al, double step, int passes) {
+std::vector<double> arc_paper_reparam_spline(const Curve& c, const ArcLength& al, double step, int passes) {
   std::vector<double> out{c.u_begin()};
   const auto& spans = c.spans();
   for (size_t i = 0; i < spans.size(); ++i) {
     const double Li = al.cumulative()[i + 1] - al.cumulative()[i];
     const int n = std::max(1, static_cast<int>(std::lround(Li / step)));
-    const std::vector<double> u = seed004_reparam(c, spans[i].u0, spans[i].u1, n, passes);
+    const std::vector<double> u = arc_paper_reparam(c, spans[i].u0, spans[i].u1, n, passes);
     out.insert(out.end(), u.begin() + 1, u.end());
   }
   return out;

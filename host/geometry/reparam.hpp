@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reparameterisation by arc length, and the interpolators it is compared with.
 //
 // Project method (equal_arclength_params): u_0 = u_begin; u_{k+1} solves length(u_k, u) = step by the
@@ -27,9 +28,9 @@ namespace traj::geo {
 std::vector<double> equal_arclength_params(const ArcLength& al, double step, bool include_end = true);
 
 // [ARC]'s levelling on [ua, ub] with n steps and `passes` passes (passes = 0: uniform parameter).
-std::vector<double> seed004_reparam(const Curve& c, double ua, double ub, int n, int passes);
+std::vector<double> arc_paper_reparam(const Curve& c, double ua, double ub, int n, int passes);
 // [ARC] applied per Bezier segment of a spline, n_i proportional to the segment arc length.
-std::vector<double> seed004_reparam_spline(const Curve& c, const ArcLength& al, double step, int passes);
+std::vector<double> arc_paper_reparam_spline(const Curve& c, const ArcLength& al, double step, int passes);
 
 // Taylor interpolator of order 1 or 2 at feed*period per tick; ends with u_end (partial last step).
 std::vector<double> taylor_interpolate(const Curve& c, double feed, double period, int order);

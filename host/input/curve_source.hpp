@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A path read one curve at a time: what every input reader gives the
 // streaming planner (job/streaming.hpp), so that memory is bounded by the
 // planning window, not by the file.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // JSON Lines path files, read as a stream.
 //
 // Format (`*.jsonl`): one curve per line, each line a curve object of the

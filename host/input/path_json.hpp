@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // JSON path files: one curve object (the butterfly format: degree, knots,
 // control_points, optional weights) or {"curves": [curve, ...]} whose curves
 // meet end to end. Every error is a plan::PlanError naming file:line:column

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A synthetic toolpath of any length: a raster (boustrophedon) pocketing
 // pattern of straight passes joined by 180-degree arcs (exact rational
 // quadratic NURBS), tangent-continuous everywhere. Used by the streaming

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A toolpath as the input readers produce it (G-code, SVG, DXF): moves in
 // program order, each a curve of the path with how it is to be run.
 //

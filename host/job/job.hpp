@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A job: a whole path planned, fitted and compiled into the engine's segment
 // stream (run_job). Streaming over paths of any length is job/streaming.hpp;
 // the report on what the core outputs is report/report.hpp.

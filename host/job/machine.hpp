@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The machine a job is planned for: the servo tick period, the units, and the
 // engine that samples the segments. This is the one owner of the tick period:
 // the planner, the compiler and the stream header take it from here, and it

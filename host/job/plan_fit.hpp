@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The one loop that turns a path (the whole path, or one streaming window)
 // into time segments: plan -> sample every tick -> check every tick against
 // the limits -> cap the speed locally where a check or the fit fails -> plan

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Bounded-memory streaming over paths of any length.
 //
 // Curves come one at a time from a CurveSource. The planner holds a window of

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore planner: a fast arc-length inverse for marching along one curve.
 //
 // The planner asks, at every servo tick and every grid point, for the curve

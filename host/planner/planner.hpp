@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore planner: from a curve to a jerk-limited, time-parameterised motion.
 //
 // Guarantee (checked, not assumed): on the planned trajectory no per-axis

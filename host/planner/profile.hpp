@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore planner: jerk-limited (S-curve) feed profile along arc length.
 //
 // The motion along the path is a sequence of constant-jerk pieces in time:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore planner: kinematics of sampled positions, one definition for the
 // fit's checks, the report and the plots.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore planner: per-axis time polynomials on the tick grid.
 //
 // Each segment [k0, k0+K] (integer ticks) holds, per axis, the quintic Hermite

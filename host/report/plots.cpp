@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SVG plots of a job (report.hpp, write_plots).
 //
 //   path_feed.svg  the x-y path of the core's output samples (equal aspect,

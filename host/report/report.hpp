@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The report on a job: what the core outputs (the host's exact prediction of
 // its samples, or the samples of a simulation) measured against the path and
 // the limits, as text and as SVG plots.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The units an engine build of the tool can be (engine_builds.hpp, generated
 // from TRAJ_SIM_BUILDS in host/sim/CMakeLists.txt): each names its hls model
 // from the build's RTL parameters.

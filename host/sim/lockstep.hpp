@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The lockstep driver: a Verilated unit (V) and its hls model (M) clocked
 // together with the same inputs; on every cycle from the first reset edge on,
 // every output port of the RTL is compared with the model's (tready,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The output ports of a streaming unit (traj_fd_engine, traj_bcu_gen,
 // traj_core) in one cycle, read the same way from each hls model, and the
 // clocking of an hls model alone (the runs without RTL beside it).

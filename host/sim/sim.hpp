@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore: run a segment stream through a Verilated engine, with its hls
 // model beside it on every cycle (the lockstep driver, lockstep.hpp).
 // Version-1 streams (forward-difference segments only) run on a

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # traj_verilate_unit(<target> <prefix> <unit> [TRACE] [FAST] PARAMS Name=Value ...)
 # Verilates one unit of rtl/ into <target> as class <prefix>, with the
 # parameters given (-G), random initial state and X (the lockstep driver,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Bits [lo, lo+n) (n <= 128) of a Verilator port: an integral type for ports
 // up to 64 bits, a VlWide (array of 32-bit words) above.
 #pragma once

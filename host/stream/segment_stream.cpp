@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "stream/segment_stream.hpp"
 
 #include "util/tick_period.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore segment stream: the file (or link) format that carries compiled
 // segments from the host to the core. Version 1 carries forward-difference
 // segments only (traj_fd_engine); version 2 adds the BCU generator's format to

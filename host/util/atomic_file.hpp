@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Atomic file output: nothing half-written is ever left under the final name.
 //
 // AtomicFile writes to "<path>.tmp" and renames it onto `path` in commit();

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Number formatting for messages and reports: one place, so every message
 // prints a number the same way.
 #pragma once

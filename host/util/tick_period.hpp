@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The one validity rule (and message) for a servo tick period, shared by every
 // layer that takes one: the job's machine description, the planner, the
 // compiler, the stream header.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore: narrow-pin wrapper of traj_bcu_gen for iCE40 synthesis and
 // place-and-route measurements (same pin-out as traj_fd_synth_top).
 //

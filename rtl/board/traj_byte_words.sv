@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore: byte-to-word assembler at a board wrapper's pins: a registered
 // byte port (byte_valid_i/byte_i, least significant byte first; byte_ready_o
 // is back-pressure) in, an AXI4-Stream word out.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore: narrow-pin wrapper of traj_core (FD engine + BCU generator behind
 // one segment stream) for iCE40 synthesis and place-and-route measurements.
 //

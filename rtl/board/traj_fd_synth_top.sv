@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore: narrow-pin wrapper of traj_fd_engine for iCE40 synthesis and
 // place-and-route measurements (and a starting point for a board top).
 //

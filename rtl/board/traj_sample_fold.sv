@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore: the output side of a board wrapper. XOR-folds every bit of a wide
 // sample bus into an 8-bit register (so that synthesis keeps every sample bit
 // of the core behind it) and registers the status flags, so that every output

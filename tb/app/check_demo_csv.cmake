@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Checks the samples CSV written by `trajcore demo` (CTest app.cli.demo_csv).
 #   cmake -DCSV=<file> -DROWS=<expected data rows> -P check_demo_csv.cmake
 # Fails (non-zero exit, one message) if the file is missing or empty, the

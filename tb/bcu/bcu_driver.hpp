@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Test driver for the hls BCU generator: feeds stream words, ticks, records.
 #pragma once
 #include <cstdint>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // hls BCU and BCU generator: exactness against GMP rationals (d = 0..16),
 // schedule/timing, interface rules (underrun, tick_err, reset).
 #include <gtest/gtest.h>

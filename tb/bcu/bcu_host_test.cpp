@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // host/bcu: segment compiler (errors, exact prediction == hls, bound vs double
 // at every sample) and the [BCU] C1 spline (eq. 9-16) sampled by the hls
 // generator (1, 3, 5 and 8 axes; d up to MaxDepth 12). The generator is driven
@@ -157,7 +158,7 @@ Eigen::MatrixXd random_points(std::mt19937_64& rng, int n, int axes) {
 }
 }  // namespace
 
-TEST(Seed000Spline, Eq10InterpolatesAndEq13MatchesEq9) {
+TEST(BcuPaperSpline, Eq10InterpolatesAndEq13MatchesEq9) {
   std::mt19937_64 rng(seed() + 1);
   for (int axes : {1, 2, 3, 5}) {
     const auto p = random_points(rng, 8, axes);
@@ -174,7 +175,7 @@ TEST(Seed000Spline, Eq10InterpolatesAndEq13MatchesEq9) {
   }
 }
 
-TEST(Seed000Spline, Eq11PrintedFormIsOffByThree) {
+TEST(BcuPaperSpline, Eq11PrintedFormIsOffByThree) {
   std::mt19937_64 rng(seed() + 2);
   const auto p = random_points(rng, 6, 3);
   const double lam = 0.25, mu = 0.4;
@@ -202,7 +203,7 @@ TEST(Seed000Spline, Eq11PrintedFormIsOffByThree) {
   }
 }
 
-TEST(Seed000Spline, C1IffLambdaEqualsMuElseG1) {
+TEST(BcuPaperSpline, C1IffLambdaEqualsMuElseG1) {
   std::mt19937_64 rng(seed() + 3);
   const auto p = random_points(rng, 10, 3);
   const auto c1 = bcu::c1_spline(p, 0.3);
@@ -267,7 +268,7 @@ TYPED_TEST(SplineThroughGenerator, SampledWithinBound) {
           << "point " << i << " axis " << a;
 }
 
-TEST(Seed000Spline, ClearErrors) {
+TEST(BcuPaperSpline, ClearErrors) {
   Eigen::MatrixXd p = Eigen::MatrixXd::Zero(5, 2);
   expect_message([&] { bcu::c1_spline(p.topRows(3), 0.2); }, "at least 4 points");
   p(3, 1) = std::nan("");

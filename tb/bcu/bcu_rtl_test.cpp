@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // rtl/traj_bcu.sv (the single combinational BCU, Verilated at InWidth = 4)
 // == hls traj::bcu_split, exhaustively: all 16^4 inputs, both halves, and the
 // exact rational formula (8x the halves of [BCU]'s eq. 8).

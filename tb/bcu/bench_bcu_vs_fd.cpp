@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Benchmark program (prints figures, never fails on a slow machine):
 // BCU generator vs forward differences (FD) for a 3-axis cubic Bezier at
 // K = 4096 ticks (d = 12), output LSB 2^-16 (units of the input, e.g. mm),

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Planner benchmark: planning + compilation time per second of motion, time to
 // the first segment, and memory while streaming long raster paths.
 //   usage: bench_planner [max_pieces=1000000] [butterfly.json]

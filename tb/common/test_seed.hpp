@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The random seed of a randomised test. Every test and co-simulation reads the
 // same variable, TRAJ_SEED: a number reruns that seed, "random" draws a fresh
 // one (scripts/soak_cosim.sh), unset gives the test's fixed default, so a

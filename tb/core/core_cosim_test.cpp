@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Verilator co-simulation: rtl/traj_core.sv == hls/traj_core.hpp, every cycle:
 // control outputs (s_axis_tready, sample_valid_o, underrun_o, seg_done_o,
 // tick_err_o) always, sample_o when sample_valid_o. Random mixed-kind segment

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // traj_core (hls model, hls/traj_core.hpp) with both host compilers:
 //   * a chained path of mixed FD and BCU segments (random cubic Bezier pieces,
 //     G0-continuous), compiled by traj::fd::Compiler and traj::bcu, played

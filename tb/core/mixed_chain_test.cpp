@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Exact chaining across segment kinds through the host library
 // (traj::bcu::MixedChain, bcu/chain.hpp) and the core model (hls/traj_core.hpp):
 //   * FdToBcuHandOffExactRationals: every FD -> BCU hand-off, for several

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Benchmark (not a test): microseconds per segment of traj::fd::Compiler for the
 // main formats, on chained random segments (each starts at the previous end).
 //

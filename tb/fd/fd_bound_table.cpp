@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Prints the forward-difference error-bound table: for each degree and
 // register width (output width fixed, guard bits = width - out_width), the
 // longest segment K the compiler accepts at the tolerance, and what it means

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What the compiler reports: per-register fraction-bit needs (against an
 // independent exact computation: binomials as explicit products, tol as the
 // exact rational of the double, an integer log2 by bit length and a final

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The compiler's fast exact path (integer dyadic arithmetic, long double range
 // pre-check, cached budget) against the straightforward exact mpq form kept
 // here as the reference (the compiler as it was before the fast path): on many

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Test group 3: the Verilated RTL (rtl/traj_fd_engine.sv) against the hls model
 // (hls/traj_fd_engine.hpp), every cycle, through the lockstep driver
 // (host/sim/lockstep.hpp): control outputs (tready, sample_valid, underrun,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Test helper: drive an hls FdEngine with compiled segments and ticks.
 #pragma once
 #include <functional>

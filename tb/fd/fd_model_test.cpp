@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Test groups 2, 4 and 5 (hls model against the host), plus the compiler's
 // refusals. References: the host's exact closed-form prediction (GMP) for the
 // bit-exact checks, and the double-coefficient polynomial evaluated in

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Test group 1: the forward-difference recurrence in double reproduces Horner
 // evaluation, degrees 0..7; [FD]'s printed recurrence does not.
 #include <gtest/gtest.h>
@@ -9,7 +10,7 @@
 
 using traj::fd::fd_init;
 using traj::fd::fd_step;
-using traj::fd::fd_step_seed002;
+using traj::fd::fd_step_printed;
 using traj::fd::horner;
 
 namespace {
@@ -42,7 +43,7 @@ TEST(FdRecurrence, ReproducesHornerExactlyDegrees0To7) {
   }
 }
 
-TEST(FdRecurrence, Seed002PrintedRecurrenceFails) {
+TEST(FdRecurrence, FdPaperPrintedRecurrenceFails) {
   // The printed update keeps r_0 constant and outputs r_N: for any degree >= 1
   // with a non-zero derivative it departs from p; demonstrate on p(t) = t.
   std::vector<double> c = {0.0, 1.0, 0.0, 0.0};
@@ -50,7 +51,7 @@ TEST(FdRecurrence, Seed002PrintedRecurrenceFails) {
   int mismatches = 0;
   for (int k = 0; k < 8; ++k) {
     if (r[3] != horner(c, k)) ++mismatches;
-    fd_step_seed002(r);
+    fd_step_printed(r);
   }
   EXPECT_GT(mismatches, 0);
 }

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Test-only helpers of the forward-difference compiler tests: a format
 // builder, and the per-register needs computed independently of the compiler
 // (exact GMP arithmetic by plain loops, not the compiler's limb code).

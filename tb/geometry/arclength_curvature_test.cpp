@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Arc length, inverse arc length, curvature extrema / inflections and the ACC/DEC split, checked
 // against published data (the butterfly, host/assets/README.md) and independent references:
 // closed forms (circle, line), a chord-polygon length with Richardson extrapolation evaluated with the
@@ -284,7 +285,7 @@ std::vector<double> cubic_inflections_closed_form(const Eigen::MatrixXd& P) {
   return roots;
 }
 
-// [ARC]'s curve 1 (with an inflection) and curve 3 (without), tb/geometry/seed_curves.hpp.
+// [ARC]'s curve 1 (with an inflection) and curve 3 (without), tb/geometry/paper_curves.hpp.
 TEST(GeometryCurvature, CubicInflectionsClosedForm) {
   Eigen::MatrixXd P(4, 2);
   P << 0, 0, 25, 71.5, 60, -42.9, 100, 0;
@@ -334,7 +335,7 @@ TEST(GeometryCurvature, ButterflyUnitsMonotone) {
 
 // [NURBS]: the 6-point Gauss-Legendre nodes, 4 of 6 per sub-interval plus both ends (4n+2 points),
 // have spacing 0.1694, 0.2113, 0.2386, 0.2113, 0.1694 (+0.1694 of the next) of the interval.
-TEST(GeometryArcLength, Seed003NodeSpacing) {
+TEST(GeometryArcLength, NurbsPaperNodeSpacing) {
   std::vector<double> x, w;
   gauss_legendre(6, x, w);
   double sw = 0;

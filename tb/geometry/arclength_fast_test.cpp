@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ArcLength::advance fast path (Taylor guess, Gauss-Kronrod 7/15 with error estimate, Newton with
 // 2-point Gauss corrections) against independent references:
 //   * a long-double composite 20-point Gauss-Legendre length of the returned step (arclength_ref.hpp,

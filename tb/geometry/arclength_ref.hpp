@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Independent arc-length reference for the arc-length benchmark and test: composite 20-point
 // Gauss-Legendre in long double (nodes by Newton on P_20 in long double), speed |r'(u)| from
 // Curve::eval_span (the power-basis evaluator, not ArcLength's speed kernel) with the norm taken in

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Cost and accuracy of ArcLength::advance (the planner's per-tick arc-length inverse) on the butterfly.
 // For each step ds: `advance(u, ds)` from N random start parameters (uniform on the curve, fixed seed)
 // and from N start parameters within +-2e-3 of the two cusps (u = 0.2563501, 0.7436435), timed (best

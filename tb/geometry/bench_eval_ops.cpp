@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Per evaluated point: arithmetic operations and measured cost of De Boor-Cox vs the power basis
 // ([NURBS] claims 71.1% fewer operations for the power basis, cubic, "points and their derivatives").
 //  1. Operation counts with an instrumented scalar (kernels::Cnt: adds, multiplies, divides counted

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Soak run of the power-basis validation: 10^6 random parameters (default) over random splines of every
 // accepted degree (non-rational 1..kMaxDegree, rational 1..kMaxDegreeRational; 1..4 axes, non-uniform
 // knots with repeats, some unclamped; non-rational ones also against Eigen's Splines module, rational

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Feed fluctuation of four interpolators on [ARC]'s three curves and on the butterfly.
 //   fluctuation_k = (true arc length between consecutive samples) / (commanded feed * period) - 1,
 // the true arc length by adaptive Gauss-Legendre (rel_tol 1e-14) between the consecutive parameters.
@@ -11,7 +12,7 @@
 #include <string>
 
 #include "geometry/geometry.hpp"
-#include "seed_curves.hpp"
+#include "paper_curves.hpp"
 
 using namespace traj::geo;
 
@@ -33,13 +34,13 @@ void run(const BSpline& b, double feed, double period, int arc_n_per_segment) {
   std::printf("\n%s: L = %.6f mm, feed %.3f mm/s, period %.0f ms, step %.6f mm, %zu span(s)\n", b.name.c_str(), L, feed,
               period * 1e3, step, c.spans().size());
   std::printf("  %-34s %7s %11s %11s %10s %9s\n", "method", "steps", "max", "min", "rms", "max/min");
-  row("uniform parameter (no levelling)", feed_fluctuation(al, seed004_reparam_spline(c, al, step, 0), step, false),
+  row("uniform parameter (no levelling)", feed_fluctuation(al, arc_paper_reparam_spline(c, al, step, 0), step, false),
       "([ARC] unlevelled)");
   row("Taylor 1st order", feed_fluctuation(al, taylor_interpolate(c, feed, period, 1), step, true));
   row("Taylor 2nd order", feed_fluctuation(al, taylor_interpolate(c, feed, period, 2), step, true));
-  row("[ARC] 1 pass", feed_fluctuation(al, seed004_reparam_spline(c, al, step, 1), step, false));
-  row("[ARC] 3 passes (cascaded)", feed_fluctuation(al, seed004_reparam_spline(c, al, step, 3), step, false));
-  row("[ARC] 10 passes (cascaded)", feed_fluctuation(al, seed004_reparam_spline(c, al, step, 10), step, false));
+  row("[ARC] 1 pass", feed_fluctuation(al, arc_paper_reparam_spline(c, al, step, 1), step, false));
+  row("[ARC] 3 passes (cascaded)", feed_fluctuation(al, arc_paper_reparam_spline(c, al, step, 3), step, false));
+  row("[ARC] 10 passes (cascaded)", feed_fluctuation(al, arc_paper_reparam_spline(c, al, step, 10), step, false));
   al.reset_stats();
   const auto t0 = std::chrono::steady_clock::now();
   const auto u = equal_arclength_params(al, step);

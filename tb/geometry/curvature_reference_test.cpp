@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Curvature extrema and inflections of the butterfly against an independent long-double reference.
 //
 // Reference (shares no code with host/geometry): derivatives 1..3 from the plain Cox-de Boor

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The two evaluation kernels compared by the benchmarks, templated on the scalar so that an
 // instrumented scalar can count their arithmetic. Both evaluate a non-rational B-spline's position and
 // derivatives 1..nd at u in a known span (span search is not counted in either).

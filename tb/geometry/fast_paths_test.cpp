@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The library's fast paths against its general ones:
 //  * Curve::eval_span (specialised kernel detail::eval_span_fixed: 1..3 axes, degree 1..5, rational or
 //    not) against Curve::eval_span_general (runtime-sized Horner + rational_derivatives): bitwise

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Curve files: the butterfly loads; every bad-input case gives one GeometryError naming the file and
 // the field. Bad files are written to a temporary directory from the good one, one field broken each.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Power-basis form ([NURBS]) against two independent evaluators: the textbook Cox-de Boor
 // recursion (ref_deboor.hpp, in long double) and Eigen's Splines module; derivatives 0..3, every
 // accepted degree (non-rational 1..kMaxDegree = 15, rational 1..kMaxDegreeRational = 7), 1..4 axes,
@@ -210,7 +211,7 @@ TEST(GeometryPrimitives, LineAndExactArc) {
 // of the graph compared to a circle based on sin/cos is in the order of 1e-3", and the speed in the
 // middle of a segment is "about 88%" of the end speed. Checked here against the exact circle: the
 // radial error of the k = 4/3 tan(30 deg) construction is 1.5e-3 r, and the speed ratio is exactly 7/8.
-TEST(GeometryBezier, Seed004BezierCircleClaims) {
+TEST(GeometryBezier, ArcPaperBezierCircleClaims) {
   const Curve c(traj::geo::make_bezier_circle(Eigen::Vector2d(0, 0), 1.0, 3));
   double rmax = 0, vmin = 1e300, vmax = 0;
   for (int s = 0; s <= 30000; ++s) {

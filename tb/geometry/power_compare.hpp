@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Comparison of Curve::eval against the Cox-de Boor reference and Eigen's Splines module, shared by
 // power_basis_test.cpp and bench_power_soak.cpp.
 #pragma once

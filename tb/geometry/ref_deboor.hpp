@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Independent reference evaluators for tests and benchmarks (tb only; shares no code with
 // host/geometry). Everything here is the textbook form, written separately:
 //  * cox_de_boor_derivs<R>: the plain Cox-de Boor recursion (in precision R: double or long double) of the basis functions

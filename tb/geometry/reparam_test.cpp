@@ -1,10 +1,11 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reparameterisation by arc length. The project's method is checked step by step against
 // independent arc lengths (closed form on the exact circle; composite 20-point Gauss-Legendre with the
 // Cox-de Boor reference evaluator elsewhere). [ARC]'s algorithm is checked against its own claims.
 #include <gtest/gtest.h>
 
 #include "geometry/geometry.hpp"
-#include "seed_curves.hpp"
+#include "paper_curves.hpp"
 #include "test_util.hpp"
 
 using namespace traj::geo;
@@ -129,7 +130,7 @@ TEST(GeometryReparam, TaylorInterpolatorsBehaveAsTheoryPredicts) {
 // factor is n l_secant / l_curve). Dividing t_const by the text's factor gives steps that sum to about
 // n instead of 1; after the paper's normalisation both give the same steps, so the algorithm survives
 // the slip. Checked here: the [2_04] steps sum to ~1 before normalisation, the text's to ~n.
-TEST(GeometryReparam, Seed004FormulaCheck) {
+TEST(GeometryReparam, ArcPaperFormulaCheck) {
   const Curve c(seedcurves::curve1());
   const int n = 20;
   double lcurve = 0;
@@ -150,7 +151,7 @@ TEST(GeometryReparam, Seed004FormulaCheck) {
   EXPECT_NEAR(sumtext, n, 0.2 * n);
   for (int i = 0; i < n; ++i) EXPECT_NEAR(a[i] / sum204, b[i] / sumtext, 1e-15);
   // One pass of the library's implementation equals these normalised steps.
-  const auto u = seed004_reparam(c, 0, 1, n, 1);
+  const auto u = arc_paper_reparam(c, 0, 1, n, 1);
   double t = 0;
   for (int i = 0; i < n; ++i) {
     EXPECT_NEAR(u[i], t, 1e-14);
@@ -166,12 +167,12 @@ namespace {
 double true_ratio(const Curve& c, int passes, int n_per_segment = 20) {
   const ArcLength al(c);
   const double step = al.total() / (n_per_segment * static_cast<double>(c.spans().size()));
-  return feed_fluctuation(al, seed004_reparam_spline(c, al, step, passes), step, false).ratio;
+  return feed_fluctuation(al, arc_paper_reparam_spline(c, al, step, passes), step, false).ratio;
 }
 double chord_ratio(const Curve& c, int passes, int n_per_segment = 20) {
   const ArcLength al(c);
   const double step = al.total() / (n_per_segment * static_cast<double>(c.spans().size()));
-  return chord_fluctuation(c, seed004_reparam_spline(c, al, step, passes)).ratio;
+  return chord_fluctuation(c, arc_paper_reparam_spline(c, al, step, passes)).ratio;
 }
 // |x - quoted| <= half a unit of the quoted figure's last digit (`decimals` digits after the point).
 void expect_quoted(double x, double quoted, int decimals, const std::string& what) {
@@ -179,7 +180,7 @@ void expect_quoted(double x, double quoted, int decimals, const std::string& wha
 }
 }  // namespace
 
-TEST(GeometryReparam, Seed004Claims) {
+TEST(GeometryReparam, ArcPaperClaims) {
   const Curve c1(seedcurves::curve1()), c2(seedcurves::curve2()), c3(seedcurves::curve3());
   // Unlevelled (uniform parameter, n = 20): the chord ratios curves 1 and 3 are tuned to.
   expect_quoted(chord_ratio(c1, 0), 2.271, 3, "curve 1 before (paper 1 : 2.271)");
@@ -213,10 +214,10 @@ TEST(GeometryReparam, Seed004Claims) {
 }
 
 // The butterfly: [ARC] applied per Bezier segment still leaves about 10% after 10 passes.
-TEST(GeometryReparam, Seed004OnButterfly) {
+TEST(GeometryReparam, ArcPaperOnButterfly) {
   const Curve c(load_curve(geotest::asset("butterfly_nurbs.json")));
   const ArcLength al(c);
-  const Fluctuation f = feed_fluctuation(al, seed004_reparam_spline(c, al, 0.1, 10), 0.1, false);
+  const Fluctuation f = feed_fluctuation(al, arc_paper_reparam_spline(c, al, 0.1, 10), 0.1, false);
   expect_quoted(f.ratio, 1.121, 3, "butterfly, 0.1 mm, 10 passes");
   expect_quoted(f.max, 0.106, 3, "butterfly, 0.1 mm, 10 passes, max");
   expect_quoted(f.min, -0.014, 3, "butterfly, 0.1 mm, 10 passes, min");

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The noise-aware curvature-extremum scan (curvature.cpp; SplitOptions::noise_factor):
 //  * circle arcs (exact rational quadratics, 2-D and tilted into 3-D: many radii, centres, start
 //    angles and sweeps) and straight lines give no split point, and the scan costs exactly its samples
@@ -15,7 +16,7 @@
 #include <random>
 
 #include "geometry/geometry.hpp"
-#include "seed_curves.hpp"
+#include "paper_curves.hpp"
 #include "test_util.hpp"
 
 using namespace traj::geo;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Shared helpers for the geometry tests: random splines (built once, handed both to the library and
 // to the independent reference), the asset path, and the test seed.
 #pragma once

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Checks that one hls header keeps to the subset stated in hls/traj_common.hpp:
 # fixed-width integers only (no floating point), no heap, no dynamic containers.
 #   usage: check_hls_subset.sh CXX WORKDIR HEADER [INCLUDE_DIR ...]

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ArcTable (the planner's fast arc-length inverse) against an independent
 // reference: composite 20-point Gauss-Legendre in long double over the
 // curve's own power-basis speed (tb/geometry/arclength_ref.hpp), not the

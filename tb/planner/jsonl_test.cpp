@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // JSON Lines path files (planner/jsonl_source.hpp): streamed line by line,
 // the same segment stream as the same curves in one {"curves": [...]} file,
 // errors naming <file>:<line> and the field, joins checked as load_path

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Writes the synthetic raster toolpath (planner/raster.hpp: straight passes
 // joined by half-circle NURBS arcs) as a JSON Lines path file, one curve per
 // line, for testing and measuring `trajcore plan <file>.jsonl` on large paths.

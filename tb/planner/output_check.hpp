@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Independent checks of the core's output samples for the planner tests: the
 // limits as the samples show them, and the distance of every sample to the
 // path. Written apart from the planner's own report (report/report.cpp) and fit

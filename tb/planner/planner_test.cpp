@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Planner tests. References: exact polynomial identities, dense brute-force
 // sampling, numerical integration of the S-curve pieces, the published
 // butterfly length, and the Verilated core (RTL) for the output checks.

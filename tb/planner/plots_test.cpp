@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Tests of the SVG plots (host/planner/plots.cpp, write_plots): well-formed
 // XML, the labels a reader needs, min/max envelopes that keep a one-sample
 // spike, a bounded file size on long runs, and atomic writes that leave no

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Streaming (bounded look-ahead window) planner: the emitted segments, run
 // through the hls engine model, keep every guarantee of the whole-path planner
 // and chain exactly across windows.

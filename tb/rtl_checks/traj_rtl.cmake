@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # The RTL checks of one unit under CTest, one function for every unit:
 #
 #   traj_rtl_unit(NAME <top>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Segment stream format v1 (FD records) and v2 (v1 + the BCU format in the
 // header + BCU records): round trip, and every corruption or truncation is
 // reported with its place (byte offset and segment) while every record before

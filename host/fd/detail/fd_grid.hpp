@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore host: the forward-difference compiler's fixed-point grid path
 // (fd_grid.cpp: compile_grid and its per-h cache; fd_grid2.cpp: the 2-limb
 // grid; fd_grid_wide.cpp: the 3- and 4-limb grids). Internal.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // trajcore host: what the forward-difference compiler's source files share
 // (not part of the public API, fd_compiler.hpp).
 //

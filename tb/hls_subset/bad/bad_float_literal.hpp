@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A model outside the hls subset: a floating literal in a template that is
 // never instantiated (so no code is emitted for it). Must be refused.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A model outside the hls subset: heap allocation through the C library. Must be refused.
 #pragma once
 #include <cstdint>

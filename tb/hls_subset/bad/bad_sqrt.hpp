@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A model outside the hls subset: floating arithmetic with neither a float
 // keyword nor a floating literal. Must be refused.
 #pragma once

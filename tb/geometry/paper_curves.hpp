@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // [ARC]'s three test curves. The paper shows them (Fig. 2_01) but prints no control points, so they
 // are chosen here (units mm) to reproduce its "step fluctuation" (max/min chord at n = 20 uniform
 // parameter steps): curve 1 (asymmetric, with an inflection) 1 : 2.271, curve 3 (asymmetric, without
