@@ -155,7 +155,7 @@ std::vector<Subpath> shape_subpaths(const tinyxml2::XMLElement* e, const std::st
     try {
       return svg::parse_path_data(attr(e, "d"));
     } catch (const PathDataError& err) {
-      throw PathDataError(err.offset, std::string("d: ") + err.what());
+      throw BadAttribute(std::string("d: ") + err.what());
     }
   }
   if (tag == "line")
@@ -164,7 +164,7 @@ std::vector<Subpath> shape_subpaths(const tinyxml2::XMLElement* e, const std::st
     try {
       return polyline(svg::parse_number_list(attr(e, "points")), tag == "polygon");
     } catch (const PathDataError& err) {
-      throw PathDataError(err.offset, std::string("points: ") + err.what());
+      throw BadAttribute(std::string("points: ") + err.what());
     }
   }
   if (tag == "rect") return rect(e);
@@ -306,7 +306,7 @@ Viewport viewport(const tinyxml2::XMLElement* root, const std::string& name, std
     try {
       vb = svg::parse_number_list(vbs);
     } catch (const PathDataError& err) {
-      throw PathDataError(err.offset, std::string("viewBox: ") + err.what());
+      throw BadAttribute(std::string("viewBox: ") + err.what());
     }
     if (vb.size() != 4 || vb[2] <= 0 || vb[3] <= 0)
       throw BadAttribute("viewBox: expected four numbers, width and height positive");
