@@ -87,13 +87,24 @@ double px_per_unit(const std::string& unit, const std::string& what) {
   throw BadAttribute(what + ": unknown unit '" + unit + "' (known: mm, cm, in, pt, pc, px, Q)");
 }
 
-// A coordinate attribute of a shape in user units; `fallback` if absent.
-double coordinate(const tinyxml2::XMLElement* e, const char* name, double fallback = 0) {
+// The length a percentage of attribute `name` refers to: the viewport's width (x, cx, rx, width, ...),
+// height (y, cy, ry, height, ...) or, for r, its normalised diagonal sqrt((w^2 + h^2) / 2), in user
+// units; NaN if the viewport is unknown.
+double percent_base(const std::string& name, const Eigen::Vector2d& viewport) {
+  if (name == "r") return std::sqrt(viewport.squaredNorm() / 2);
+  const bool vertical = name.find('y') != std::string::npos || name == "height";
+  return vertical ? viewport.y() : viewport.x();
+}
+
+// A coordinate attribute of a shape in user units (0 if absent); percentages of the root viewport.
+double coordinate(const tinyxml2::XMLElement* e, const char* name, const Eigen::Vector2d& viewport) {
   const char* v = e->Attribute(name);
-  if (!v || trim(v).empty()) return fallback;
+  if (!v || trim(v).empty()) return 0;
   const Length l = split_length(v, name);
-  if (l.unit == "%") throw BadAttribute(std::string(name) + ": percentages are not supported");
-  return l.value * px_per_unit(l.unit, name);
+  if (l.unit != "%") return l.value * px_per_unit(l.unit, name);
+  const double base = percent_base(name, viewport);
+  if (std::isnan(base)) throw BadAttribute(std::string(name) + ": a percentage, but the root has no size or viewBox");
+  return l.value / 100 * base;
 }
 
 void add_segment(Subpath& sp, geo::BSpline c) {
@@ -125,13 +136,13 @@ std::vector<Subpath> ellipse(double cx, double cy, double rx, double ry) {
 }
 
 // SVG 2's rect-to-path rule: from (x + rx, y) clockwise on screen, corners as elliptical arcs.
-std::vector<Subpath> rect(const tinyxml2::XMLElement* e) {
-  const double x = coordinate(e, "x"), y = coordinate(e, "y");
-  const double w = coordinate(e, "width"), h = coordinate(e, "height");
+std::vector<Subpath> rect(const tinyxml2::XMLElement* e, const Eigen::Vector2d& vs) {
+  const double x = coordinate(e, "x", vs), y = coordinate(e, "y", vs);
+  const double w = coordinate(e, "width", vs), h = coordinate(e, "height", vs);
   if (w < 0 || h < 0) throw BadAttribute("negative width or height");
   if (w == 0 || h == 0) return {};
   const bool has_rx = e->Attribute("rx") != nullptr, has_ry = e->Attribute("ry") != nullptr;
-  double rx = coordinate(e, "rx"), ry = coordinate(e, "ry");
+  double rx = coordinate(e, "rx", vs), ry = coordinate(e, "ry", vs);
   if (has_rx && !has_ry) ry = rx;
   if (has_ry && !has_rx) rx = ry;
   rx = std::min(std::abs(rx), w / 2);
@@ -150,7 +161,8 @@ std::vector<Subpath> rect(const tinyxml2::XMLElement* e) {
   return {sp};
 }
 
-std::vector<Subpath> shape_subpaths(const tinyxml2::XMLElement* e, const std::string& tag) {
+// `vs`: the root viewport's size in user units (percentages), NaN where unknown.
+std::vector<Subpath> shape_subpaths(const tinyxml2::XMLElement* e, const std::string& tag, const Eigen::Vector2d& vs) {
   if (tag == "path") {
     try {
       return svg::parse_path_data(attr(e, "d"));
@@ -159,7 +171,7 @@ std::vector<Subpath> shape_subpaths(const tinyxml2::XMLElement* e, const std::st
     }
   }
   if (tag == "line")
-    return polyline({coordinate(e, "x1"), coordinate(e, "y1"), coordinate(e, "x2"), coordinate(e, "y2")}, false);
+    return polyline({coordinate(e, "x1", vs), coordinate(e, "y1", vs), coordinate(e, "x2", vs), coordinate(e, "y2", vs)}, false);
   if (tag == "polyline" || tag == "polygon") {
     try {
       return polyline(svg::parse_number_list(attr(e, "points")), tag == "polygon");
@@ -167,13 +179,13 @@ std::vector<Subpath> shape_subpaths(const tinyxml2::XMLElement* e, const std::st
       throw BadAttribute(std::string("points: ") + err.what());
     }
   }
-  if (tag == "rect") return rect(e);
+  if (tag == "rect") return rect(e, vs);
   if (tag == "circle") {
-    const double r = coordinate(e, "r");
-    return ellipse(coordinate(e, "cx"), coordinate(e, "cy"), r, r);
+    const double r = coordinate(e, "r", vs);
+    return ellipse(coordinate(e, "cx", vs), coordinate(e, "cy", vs), r, r);
   }
   // ellipse
-  return ellipse(coordinate(e, "cx"), coordinate(e, "cy"), coordinate(e, "rx"), coordinate(e, "ry"));
+  return ellipse(coordinate(e, "cx", vs), coordinate(e, "cy", vs), coordinate(e, "rx", vs), coordinate(e, "ry", vs));
 }
 
 const std::set<std::string> kShapes = {"path", "line", "polyline", "polygon", "rect", "circle", "ellipse"};
@@ -185,7 +197,8 @@ const std::set<std::string> kNotDrawn = {"defs", "symbol", "clipPath", "mask", "
 // Walks the element tree, collecting one cut per subpath.
 class Walker {
  public:
-  Walker(std::string name, Affine page) : name_(std::move(name)), page_(std::move(page)) {}
+  Walker(std::string name, Affine page, Eigen::Vector2d viewport)
+      : name_(std::move(name)), page_(std::move(page)), viewport_(std::move(viewport)) {}
 
   void children(const tinyxml2::XMLElement* parent, const Affine& ctm, int depth) {
     for (const tinyxml2::XMLElement* e = parent->FirstChildElement(); e; e = e->NextSiblingElement())
@@ -240,7 +253,7 @@ class Walker {
     }
     std::vector<Subpath> subpaths;
     try {
-      subpaths = shape_subpaths(e, tag);
+      subpaths = shape_subpaths(e, tag, viewport_);
     } catch (const std::runtime_error& err) {  // PathDataError, BadAttribute, geometry errors
       fail(where, err.what());
     }
@@ -254,12 +267,14 @@ class Walker {
 
   std::string name_;
   Affine page_;
+  Eigen::Vector2d viewport_;
   std::set<std::string> noted_;
 };
 
 struct Viewport {
   Affine user_to_mm = Affine::Identity();  // root user units -> mm, y down
   double height_mm = std::nan("");         // page height, NaN if unknown
+  Eigen::Vector2d user_size{std::nan(""), std::nan("")};  // the viewport in user units (percentages)
 };
 
 // preserveAspectRatio: the viewBox's scale and alignment in the viewport (px).
@@ -301,6 +316,7 @@ Viewport viewport(const tinyxml2::XMLElement* root, const std::string& name, std
   double w = size_px("width"), h = size_px("height");
   Viewport vp;
   Affine to_px = Affine::Identity();
+  vp.user_size = {w, h};
   if (const char* vbs = root->Attribute("viewBox")) {
     std::vector<double> vb;
     try {
@@ -319,6 +335,7 @@ Viewport viewport(const tinyxml2::XMLElement* root, const std::string& name, std
       h = w * vb[3] / vb[2];
     }
     to_px = viewbox_transform(vb, w, h, attr(root, "preserveAspectRatio"));
+    vp.user_size = {vb[2], vb[3]};
   }
   Affine px_to_mm = Affine::Identity();
   px_to_mm(0, 0) = px_to_mm(1, 1) = kMmPerPx;
@@ -343,7 +360,7 @@ Toolpath read_document(tinyxml2::XMLDocument& doc, const std::string& name) {
   Affine flip = Affine::Identity();
   flip(1, 1) = -1;
   if (!std::isnan(vp.height_mm)) flip(1, 2) = vp.height_mm;
-  Walker walker(name, flip * vp.user_to_mm);
+  Walker walker(name, flip * vp.user_to_mm, vp.user_size);
   Affine ctm = Affine::Identity();
   try {
     if (const char* t = root->Attribute("transform")) ctm = svg::parse_transform(t);

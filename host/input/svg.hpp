@@ -16,6 +16,7 @@
 // <style>, <title>, <desc>, <metadata> and elements of other namespaces (sodipodi:, inkscape:).
 // Skipped with a note (Toolpath::notes): elements with display:none (hidden layers), <text>,
 // <image> and other elements the reader does not draw; a percentage width/height of the root.
+// Percentages in shape attributes refer to the root viewport (viewBox, else width/height).
 // Errors (InputError "<file>: <element>: <why>", the element named by its id or as "path #3", the
 // third shape in document order): unreadable XML, malformed path data (with the character offset),
 // unknown units, <use> clones and nested <svg> (not followed), a file without any shape.

@@ -284,6 +284,21 @@ TEST(SvgDocument, UnitsAndViewBox) {
   EXPECT_NE(error_of(doc(line, R"~(width="10em" height="10em")~")).find("unknown unit 'em'"), std::string::npos);
 }
 
+TEST(SvgDocument, PercentagesOfTheViewport) {
+  // viewBox 200 x 100: x/width refer to 200, y/height to 100, r to sqrt((200^2 + 100^2) / 2)
+  const Toolpath tp = traj::input::parse_svg(
+      doc(R"~(<rect x="10%" y="10%" width="50%" height="50%"/><circle cx="0" cy="0" r="10%"/>)~",
+          R"~(width="200mm" height="100mm" viewBox="0 0 200 100")~"),
+      "t.svg");
+  const auto f = feeds(tp);
+  ASSERT_EQ(f.size(), 5u);
+  EXPECT_LT((first(f[0]->curve) - Eigen::Vector2d(20, 90)).norm(), 1e-12);
+  EXPECT_LT((last(f[0]->curve) - Eigen::Vector2d(120, 90)).norm(), 1e-12);
+  EXPECT_LT((last(f[1]->curve) - Eigen::Vector2d(120, 40)).norm(), 1e-12);
+  EXPECT_NEAR(first(f[4]->curve).x(), 0.1 * std::sqrt((200.0 * 200 + 100 * 100) / 2), 1e-12);
+  EXPECT_NE(error_of(doc(R"~(<rect width="50%" height="1"/>)~", "")).find("rect #1: width: a percentage"), std::string::npos);
+}
+
 TEST(SvgDocument, ToolpathStructure) {
   const Toolpath tp = traj::input::parse_svg(doc(R"~(<path id="p" d="M10 90 H20 M30 90 H40"/>)~"), "t.svg");
   ASSERT_EQ(tp.moves.size(), 4u);
