@@ -216,7 +216,8 @@ class Walker {
 
   std::string label(const tinyxml2::XMLElement* e, const std::string& tag, int index) const {
     const char* id = e->Attribute("id");
-    return tag + " " + (id ? std::string(id) : "#" + std::to_string(index));
+    if (id) return tag + " " + id;
+    return index > 0 ? tag + " #" + std::to_string(index) : tag + " without id";
   }
 
   void note_once(const std::string& kind, const std::string& text) {
@@ -370,8 +371,11 @@ Toolpath read_document(tinyxml2::XMLDocument& doc, const std::string& name) {
   walker.children(root, ctm, 0);
   std::size_t segments = 0;
   for (const Cut& c : walker.cuts) segments += c.size();
-  if (segments == 0)
-    throw InputError(name + ": no paths: no path, line, polyline, polygon, rect, circle or ellipse with any length");
+  if (segments == 0) {
+    std::string skipped;
+    for (const std::string& n : walker.notes) skipped += "; " + n.substr(name.size() + 2);
+    throw InputError(name + ": no paths: no path, line, polyline, polygon, rect, circle or ellipse with any length" + skipped);
+  }
   Toolpath tp = toolpath_from_cuts(walker.cuts, 2);
   tp.notes = notes;
   tp.notes.insert(tp.notes.end(), walker.notes.begin(), walker.notes.end());

@@ -340,10 +340,12 @@ TEST(SvgDocument, Errors) {
   EXPECT_NE(e.find("arc flag"), std::string::npos) << e;
   e = error_of(doc(R"~(<circle r="1cm"/><rect width="5em" height="1"/>)~"));
   EXPECT_NE(e.find("t.svg: rect #2: width: unknown unit 'em'"), std::string::npos) << e;
-  EXPECT_NE(error_of(doc(R"~(<use href="#a"/>)~")).find("<use>"), std::string::npos);
+  EXPECT_NE(error_of(doc(R"~(<use href="#a"/>)~")).find("t.svg: use without id: <use>"), std::string::npos);
+  e = error_of(doc(R"~(<text>only text</text>)~"));
+  EXPECT_NE(e.find("t.svg: no paths: no path, line, polyline, polygon, rect, circle or ellipse with any length; <text> not converted"), std::string::npos) << e;
   EXPECT_NE(error_of(doc(R"~(<svg><path d="M0 0 L1 1"/></svg>)~")).find("nested <svg>"), std::string::npos);
   EXPECT_NE(error_of(doc(R"~(<path d="M0 0"/>)~")).find("t.svg: no paths"), std::string::npos);
-  EXPECT_NE(error_of(doc(R"~(<g transform="rotate(1,2)"><path d="M0 0 L1 1"/></g>)~")).find("g #0: transform:"), std::string::npos);
+  EXPECT_NE(error_of(doc(R"~(<g transform="rotate(1,2)"><path d="M0 0 L1 1"/></g>)~")).find("g without id: transform:"), std::string::npos);
   EXPECT_NE(error_of("<svg><path d=\"M0 0 L1 1\"></svg>").find("t.svg: XML: line 1"), std::string::npos);
   EXPECT_NE(error_of("<html/>").find("not <svg>"), std::string::npos);
   try {
