@@ -7,6 +7,7 @@
 #include <fstream>
 #include <utility>
 
+#include "geometry/arclength.hpp"
 #include "geometry/curve.hpp"
 #include "input/dxf.hpp"
 
@@ -299,6 +300,34 @@ TEST(DxfReader, Errors) {
   } catch (const InputError& err) {
     EXPECT_STREQ(err.what(), "/nonexistent/x.dxf: cannot open");
   }
+}
+
+double length(const BSpline& b) {
+  const Curve c(b);
+  return traj::geo::ArcLength(c).total();
+}
+
+TEST(DxfReader, FileFromAnIndependentWriter) {
+  // written by ezdxf (data/ezdxf_sample.py): a closed LWPOLYLINE slot 40 x 20 with half-circle ends
+  // (bulge 1), LINE-ARC-LINE with the last line backwards, CIRCLE r 5, ELLIPSE, a rational SPLINE
+  // quarter circle r 10, a cubic SPLINE, TEXT
+  const Toolpath tp = traj::input::read_dxf(TRAJ_INPUT_DATA "/ezdxf_sample.dxf");
+  const auto f = feeds(tp);
+  ASSERT_EQ(f.size(), 11u);
+  EXPECT_EQ(rapids(tp), 5);
+  ASSERT_EQ(tp.notes.size(), 1u);
+  EXPECT_NE(tp.notes[0].find("TEXT"), std::string::npos);
+  double slot = 0, chain = 0;
+  for (int i = 0; i < 4; ++i) slot += length(f[i]->curve);
+  for (int i = 4; i < 7; ++i) chain += length(f[i]->curve);
+  EXPECT_NEAR(slot, 80 + 20 * kPi, 1e-9);
+  EXPECT_NEAR(chain, 40 + 10 * kPi, 1e-9);
+  EXPECT_EQ(last(f[6]->curve), Eigen::Vector3d(60, 20, 0));
+  EXPECT_NEAR(length(f[7]->curve), 10 * kPi, 1e-9);
+  EXPECT_NEAR(length(f[9]->curve), 5 * kPi, 1e-9);
+  for (const Eigen::Vector3d& p : samples(f[9]->curve)) EXPECT_NEAR((p - Eigen::Vector3d(150, 0, 0)).norm(), 10, 1e-12);
+  // every move starts where the previous one ended
+  for (std::size_t i = 1; i < tp.moves.size(); ++i) EXPECT_EQ(first(tp.moves[i].curve), last(tp.moves[i - 1].curve));
 }
 
 }  // namespace
