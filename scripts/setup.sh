@@ -10,6 +10,7 @@ PKGS=(
   libeigen3-dev libgtest-dev libgmock-dev
   libcli11-dev nlohmann-json3-dev libgmp-dev zlib1g-dev
   valgrind
+  libtinyxml2-dev libdxflib-dev
 )
 
 missing=()

@@ -1,0 +1,51 @@
+#include "input/cuts.hpp"
+
+namespace traj::input {
+
+Eigen::VectorXd start_point(const geo::BSpline& c) { return c.ctrl.row(0).transpose(); }
+Eigen::VectorXd end_point(const geo::BSpline& c) { return c.ctrl.row(c.n_ctrl() - 1).transpose(); }
+
+geo::BSpline reversed(const geo::BSpline& c) {
+  geo::BSpline r = c;
+  r.ctrl = c.ctrl.colwise().reverse();
+  if (c.rational()) r.weights = c.weights.reverse();
+  const double a = c.knots[0], b = c.knots[c.knots.size() - 1];
+  const Eigen::Index n = c.knots.size();
+  for (Eigen::Index i = 0; i < n; ++i) r.knots[i] = a + b - c.knots[n - 1 - i];
+  return r;
+}
+
+bool degenerate(const geo::BSpline& c) {
+  for (int i = 1; i < c.n_ctrl(); ++i)
+    if (c.ctrl.row(i) != c.ctrl.row(0)) return false;
+  return true;
+}
+
+Toolpath toolpath_from_cuts(const std::vector<Cut>& cuts, int axes) {
+  Toolpath tp;
+  tp.axes = axes;
+  Eigen::VectorXd at = Eigen::VectorXd::Zero(axes);
+  for (const Cut& cut : cuts) {
+    if (cut.empty()) continue;
+    const Eigen::VectorXd start = start_point(cut.front().curve);
+    if (start != at) {
+      Move rapid;
+      rapid.kind = Move::Kind::kRapid;
+      rapid.curve = geo::make_line(at, start);
+      rapid.exact_stop = true;
+      rapid.where = cut.front().where;
+      tp.moves.push_back(std::move(rapid));
+    }
+    for (const CutPiece& piece : cut) {
+      Move m;
+      m.kind = Move::Kind::kFeed;
+      m.curve = piece.curve;
+      m.where = piece.where;
+      tp.moves.push_back(std::move(m));
+    }
+    at = end_point(cut.back().curve);
+  }
+  return tp;
+}
+
+}  // namespace traj::input

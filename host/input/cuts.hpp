@@ -1,0 +1,34 @@
+// Cuts -> toolpath, shared by the drawing readers (SVG, DXF): each cut is a
+// chain of feed moves; consecutive cuts are joined by rapid moves.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "geometry/bspline.hpp"
+#include "input/toolpath.hpp"
+
+namespace traj::input {
+
+struct CutPiece {
+  geo::BSpline curve;  // clamped, in mm; starts where the previous piece of its cut ends
+  std::string where;   // Move::where of its feed move
+};
+using Cut = std::vector<CutPiece>;
+
+// The toolpath of `cuts` in order, curves with `axes` columns: a rapid (a straight line, exact stop)
+// from the origin to the first cut's start and from each cut's end to the next cut's start, then the
+// cut's pieces as feed moves (feed 0 = the job's feed, the job's tolerance). A rapid of zero length
+// (the next cut starts where the previous one ended, or the first at the origin) is left out. Empty
+// cuts are skipped.
+Toolpath toolpath_from_cuts(const std::vector<Cut>& cuts, int axes);
+
+// First / last point of a clamped curve (its first / last control point).
+Eigen::VectorXd start_point(const geo::BSpline& c);
+Eigen::VectorXd end_point(const geo::BSpline& c);
+// The same curve run backwards (clamped input): control points and weights in reverse order, knots
+// mirrored in the domain.
+geo::BSpline reversed(const geo::BSpline& c);
+// True if every control point equals the first: a curve of zero length, which a cut leaves out.
+bool degenerate(const geo::BSpline& c);
+
+}  // namespace traj::input

@@ -1,0 +1,333 @@
+// DXF reader: small DXF files written here by hand (group code / value lines), read back and checked
+// against hand-computed geometry (bulge arcs by the bulge formula, object coordinates, units,
+// chaining, splines).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <utility>
+
+#include "geometry/arclength.hpp"
+#include "geometry/curve.hpp"
+#include "input/dxf.hpp"
+
+namespace {
+
+using traj::geo::BSpline;
+using traj::geo::Curve;
+using traj::input::InputError;
+using traj::input::Move;
+using traj::input::Toolpath;
+
+constexpr double kPi = 3.14159265358979323846;
+
+using Groups = std::vector<std::pair<int, std::string>>;
+
+struct Dxf {
+  int insunits = 4;  // mm; < 0: no $INSUNITS
+  std::vector<Groups> entities;
+  std::string blocks;  // raw BLOCKS section body
+
+  std::string text() const {
+    std::string t = "0\nSECTION\n2\nHEADER\n9\n$ACADVER\n1\nAC1015\n";
+    if (insunits >= 0) t += "9\n$INSUNITS\n70\n" + std::to_string(insunits) + "\n";
+    t += "0\nENDSEC\n";
+    if (!blocks.empty()) t += "0\nSECTION\n2\nBLOCKS\n" + blocks + "0\nENDSEC\n";
+    t += "0\nSECTION\n2\nENTITIES\n";
+    for (const Groups& g : entities)
+      for (const auto& [code, value] : g) t += std::to_string(code) + "\n" + value + "\n";
+    return t + "0\nENDSEC\n0\nEOF\n";
+  }
+  Toolpath read(const std::string& name = "t.dxf") const {
+    const std::string path = ::testing::TempDir() + name;
+    std::ofstream(path) << text();
+    return traj::input::read_dxf(path);
+  }
+};
+
+std::string num(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
+
+Groups line(double x1, double y1, double x2, double y2, double z1 = 0, double z2 = 0) {
+  return {{0, "LINE"}, {8, "0"}, {10, num(x1)}, {20, num(y1)}, {30, num(z1)}, {11, num(x2)}, {21, num(y2)}, {31, num(z2)}};
+}
+Groups arc(double cx, double cy, double r, double a0, double a1, double nz = 1) {
+  return {{0, "ARC"}, {8, "0"}, {10, num(cx)}, {20, num(cy)}, {30, "0"}, {40, num(r)}, {210, "0"}, {220, "0"}, {230, num(nz)},
+          {50, num(a0)}, {51, num(a1)}};
+}
+Groups lwpolyline(const std::vector<std::array<double, 3>>& v, bool closed) {
+  Groups g = {{0, "LWPOLYLINE"}, {8, "0"}, {90, std::to_string(v.size())}, {70, closed ? "1" : "0"}};
+  for (const auto& p : v) {
+    g.push_back({10, num(p[0])});
+    g.push_back({20, num(p[1])});
+    if (p[2] != 0) g.push_back({42, num(p[2])});
+  }
+  return g;
+}
+
+Eigen::Vector3d first(const BSpline& c) { return c.ctrl.row(0).transpose(); }
+Eigen::Vector3d last(const BSpline& c) { return c.ctrl.row(c.n_ctrl() - 1).transpose(); }
+
+std::vector<const Move*> feeds(const Toolpath& tp) {
+  std::vector<const Move*> f;
+  for (const Move& m : tp.moves)
+    if (m.kind == Move::Kind::kFeed) f.push_back(&m);
+  return f;
+}
+int rapids(const Toolpath& tp) {
+  int n = 0;
+  for (const Move& m : tp.moves) n += m.kind == Move::Kind::kRapid;
+  return n;
+}
+
+std::vector<Eigen::Vector3d> samples(const BSpline& b, int n = 200) {
+  const Curve c(b);
+  std::vector<Eigen::Vector3d> out;
+  for (int i = 0; i <= n; ++i) out.push_back(c.point(b.u_begin() + (b.u_end() - b.u_begin()) * i / n).head<3>());
+  return out;
+}
+
+std::string error_of(const Dxf& d) {
+  try {
+    d.read("err.dxf");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(DxfReader, ChainsLineArcLineReversingWhereNeeded) {
+  Dxf d;
+  // square-ish loop: line (0,0)-(10,0); arc centre (10,5) r 5 from -90 to 90 degrees (ends at (10,10));
+  // line given from (0,10) to (10,10): run backwards
+  d.entities = {line(0, 0, 10, 0), arc(10, 5, 5, -90, 90), line(0, 10, 10, 10)};
+  const Toolpath tp = d.read();
+  EXPECT_EQ(tp.axes, 3);
+  EXPECT_EQ(rapids(tp), 0);  // starts at the origin
+  const auto f = feeds(tp);
+  ASSERT_EQ(f.size(), 3u);
+  EXPECT_TRUE(f[1]->curve.rational());
+  EXPECT_LT((last(f[1]->curve) - Eigen::Vector3d(10, 10, 0)).norm(), 1e-12);
+  EXPECT_EQ(first(f[2]->curve), last(f[1]->curve));
+  EXPECT_EQ(last(f[2]->curve), Eigen::Vector3d(0, 10, 0));
+  EXPECT_NE(f[2]->where.find("entity 3 (LINE)"), std::string::npos) << f[2]->where;
+  for (const Eigen::Vector3d& p : samples(f[1]->curve)) {
+    EXPECT_NEAR((p - Eigen::Vector3d(10, 5, 0)).norm(), 5, 1e-12);
+    EXPECT_GE(p.x(), 10 - 1e-12);  // the right half: counter-clockwise from -90 to 90
+  }
+  EXPECT_TRUE(tp.notes.empty());
+}
+
+TEST(DxfReader, ChainsOnlyWithinTolerance) {
+  Dxf d;
+  d.entities = {line(0, 0, 10, 0), line(10 + 5e-7, 0, 20, 0), line(20 + 1e-5, 0, 30, 0)};
+  const Toolpath tp = d.read();
+  ASSERT_EQ(tp.moves.size(), 4u);  // two feeds, a rapid, a feed
+  EXPECT_EQ(tp.moves[1].kind, Move::Kind::kFeed);
+  EXPECT_EQ(first(tp.moves[1].curve), Eigen::Vector3d(10, 0, 0));  // joint closed exactly
+  EXPECT_EQ(tp.moves[2].kind, Move::Kind::kRapid);
+  EXPECT_TRUE(tp.moves[2].exact_stop);
+  EXPECT_EQ(first(tp.moves[2].curve), Eigen::Vector3d(20, 0, 0));
+  EXPECT_EQ(last(tp.moves[2].curve), Eigen::Vector3d(20 + 1e-5, 0, 0));
+  // a chain is also extended backwards from its first entity
+  Dxf b;
+  b.entities = {line(10, 0, 20, 0), line(50, 0, 60, 0), line(0, 0, 10, 0)};
+  const Toolpath read_back = b.read();
+  const auto f = feeds(read_back);
+  ASSERT_EQ(f.size(), 3u);
+  EXPECT_EQ(first(f[0]->curve), Eigen::Vector3d(0, 0, 0));
+  EXPECT_EQ(last(f[1]->curve), Eigen::Vector3d(20, 0, 0));
+  EXPECT_EQ(first(f[2]->curve), Eigen::Vector3d(50, 0, 0));
+}
+
+TEST(DxfReader, BulgeArcMidpointByTheBulgeFormula) {
+  // From p0 to p1 with bulge b: the arc's midpoint lies b * c / 2 (the sagitta, c the chord) to the
+  // right of the chord's midpoint; the radius is c (1 + b^2) / (4 |b|).
+  for (double b : {0.5, -0.5, 2.0, -0.3, 1.0}) {
+    const Eigen::Vector2d p0(1, 2), p1(9, 8);
+    Dxf d;
+    d.entities = {lwpolyline({{{p0.x(), p0.y(), b}}, {{p1.x(), p1.y(), 0}}}, false)};
+    const Toolpath read_back = d.read();
+  const auto f = feeds(read_back);
+    ASSERT_EQ(f.size(), 1u);
+    const BSpline& a = f[0]->curve;
+    EXPECT_EQ(first(a), Eigen::Vector3d(1, 2, 0));
+    EXPECT_EQ(last(a), Eigen::Vector3d(9, 8, 0));
+    const double c = (p1 - p0).norm();
+    const Eigen::Vector2d right = Eigen::Vector2d((p1 - p0).y(), -(p1 - p0).x()) / c;
+    const Eigen::Vector2d mid = (p0 + p1) / 2 + right * (b * c / 2);
+    const double r = c * (1 + b * b) / (4 * std::abs(b));
+    // centre: on the chord's bisector, r from the midpoint of the arc, towards the chord
+    const Eigen::Vector2d centre = mid - right * (b > 0 ? r : -r);
+    double closest = 1e9;
+    for (const Eigen::Vector3d& p : samples(a, 4000)) {
+      EXPECT_NEAR((p.head<2>() - centre).norm(), r, 1e-12);
+      closest = std::min(closest, (p.head<2>() - mid).norm());
+    }
+    EXPECT_LT(closest, 2 * kPi * r / 4000) << "bulge " << b;
+    // the arc's length by its included angle 4 atan(b)
+    EXPECT_NEAR(std::abs(4 * std::atan(b)) * r, [&] {
+      double len = 0;
+      const auto s = samples(a, 20000);
+      for (std::size_t i = 1; i < s.size(); ++i) len += (s[i] - s[i - 1]).norm();
+      return len;
+    }(), 1e-6 * r);
+  }
+}
+
+TEST(DxfReader, ClosedPolylineWithArcs) {
+  // a slot: two half circles (bulge 1) and two lines, closed; elevation 3
+  Dxf d;
+  Groups g = lwpolyline({{{0, 0, 0}}, {{10, 0, 1}}, {{10, 4, 0}}, {{0, 4, 1}}}, true);
+  g.push_back({38, "3"});
+  d.entities = {g};
+  const Toolpath read_back = d.read();
+  const auto f = feeds(read_back);
+  ASSERT_EQ(f.size(), 4u);
+  EXPECT_EQ(last(f[3]->curve), Eigen::Vector3d(0, 0, 3));
+  for (const Eigen::Vector3d& p : samples(f[1]->curve)) {
+    EXPECT_NEAR((p - Eigen::Vector3d(10, 2, 3)).norm(), 2, 1e-12);
+    EXPECT_GE(p.x(), 10 - 1e-12);  // counter-clockwise from (10,0) to (10,4): bulging right
+  }
+}
+
+TEST(DxfReader, ObjectCoordinatesOfAMirroredArc) {
+  // extrusion (0,0,-1): the object x axis is world -x. Arc centre (5,0), r 5, 0..90 degrees:
+  // from object (10,0) = world (-10,0) to object (5,5) = world (-5,5)
+  Dxf d;
+  d.entities = {arc(5, 0, 5, 0, 90, -1)};
+  const Toolpath read_back = d.read();
+  const auto f = feeds(read_back);
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_LT((first(f[0]->curve) - Eigen::Vector3d(-10, 0, 0)).norm(), 1e-12);
+  EXPECT_LT((last(f[0]->curve) - Eigen::Vector3d(-5, 5, 0)).norm(), 1e-12);
+  for (const Eigen::Vector3d& p : samples(f[0]->curve)) EXPECT_NEAR((p - Eigen::Vector3d(-5, 0, 0)).norm(), 5, 1e-12);
+}
+
+TEST(DxfReader, CircleAndEllipse) {
+  Dxf d;
+  d.entities = {{{0, "CIRCLE"}, {8, "0"}, {10, "1"}, {20, "2"}, {30, "4"}, {40, "3"}},
+                {{0, "ELLIPSE"}, {8, "0"}, {10, "20"}, {20, "0"}, {30, "0"}, {11, "0"}, {21, "6"}, {31, "0"},
+                 {40, "0.5"}, {41, "0"}, {42, num(2 * kPi)}}};
+  const Toolpath read_back = d.read();
+  const auto f = feeds(read_back);
+  ASSERT_EQ(f.size(), 2u);
+  EXPECT_EQ(first(f[0]->curve), last(f[0]->curve));
+  EXPECT_EQ(first(f[0]->curve), Eigen::Vector3d(4, 2, 4));
+  for (const Eigen::Vector3d& p : samples(f[0]->curve)) EXPECT_NEAR((p - Eigen::Vector3d(1, 2, 4)).norm(), 3, 1e-12);
+  // ellipse: major axis 6 along y, minor 3 along -x (z cross major)
+  EXPECT_EQ(first(f[1]->curve), last(f[1]->curve));
+  for (const Eigen::Vector3d& p : samples(f[1]->curve)) {
+    const Eigen::Vector3d q = p - Eigen::Vector3d(20, 0, 0);
+    EXPECT_NEAR(q.y() * q.y() / 36 + q.x() * q.x() / 9, 1.0, 1e-12);
+  }
+}
+
+TEST(DxfReader, RationalSplineQuarterCircle) {
+  // degree 2, knots 0 0 0 1 1 1, control points (1,0) (1,1) (0,1), weights 1 sqrt(1/2) 1, in cm
+  Dxf d;
+  d.insunits = 5;
+  d.entities = {{{0, "SPLINE"}, {8, "0"}, {70, "12"}, {71, "2"}, {72, "6"}, {73, "3"}, {74, "0"},
+                 {40, "0"}, {40, "0"}, {40, "0"}, {40, "1"}, {40, "1"}, {40, "1"},
+                 {10, "1"}, {20, "0"}, {30, "0"}, {41, "1"},
+                 {10, "1"}, {20, "1"}, {30, "0"}, {41, num(std::sqrt(0.5))},
+                 {10, "0"}, {20, "1"}, {30, "0"}, {41, "1"}}};
+  const Toolpath read_back = d.read();
+  const auto f = feeds(read_back);
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_TRUE(f[0]->curve.rational());
+  for (const Eigen::Vector3d& p : samples(f[0]->curve)) EXPECT_NEAR(p.norm(), 10, 1e-12);
+}
+
+TEST(DxfReader, UnitsAnd3D) {
+  Dxf d;
+  d.insunits = 1;
+  d.entities = {line(1, 2, 3, 4, 5, 6)};
+  Toolpath tp = d.read();
+  ASSERT_EQ(tp.moves.size(), 2u);
+  EXPECT_EQ(last(tp.moves[0].curve), Eigen::Vector3d(25.4, 50.8, 127));
+  EXPECT_LT((last(tp.moves[1].curve) - Eigen::Vector3d(3, 4, 6) * 25.4).norm(), 1e-12);
+  d.insunits = 6;
+  EXPECT_EQ(last(d.read().moves[0].curve), Eigen::Vector3d(1000, 2000, 5000));
+  d.insunits = 0;
+  tp = d.read();
+  EXPECT_EQ(last(tp.moves[0].curve), Eigen::Vector3d(1, 2, 5));
+  ASSERT_EQ(tp.notes.size(), 1u);
+  EXPECT_NE(tp.notes[0].find("unitless"), std::string::npos);
+  d.insunits = -1;
+  EXPECT_NE(d.read().notes.at(0).find("missing"), std::string::npos);
+  d.insunits = 3;  // miles
+  EXPECT_NE(error_of(d).find("$INSUNITS 3 not supported"), std::string::npos);
+}
+
+TEST(DxfReader, BlocksAreNotDrawnAndSkippedEntitiesNoted) {
+  Dxf d;
+  d.blocks = "0\nBLOCK\n8\n0\n2\nB1\n70\n0\n10\n0\n20\n0\n30\n0\n3\nB1\n0\nLINE\n8\n0\n10\n0\n20\n0\n30\n0\n11\n99\n21\n0\n31\n0\n0\nENDBLK\n8\n0\n";
+  d.entities = {{{0, "INSERT"}, {8, "0"}, {2, "B1"}, {10, "0"}, {20, "0"}, {30, "0"}},
+                {{0, "TEXT"}, {8, "0"}, {10, "0"}, {20, "0"}, {30, "0"}, {40, "1"}, {1, "hi"}},
+                line(1, 1, 2, 2)};
+  const Toolpath tp = d.read();
+  const auto f = feeds(tp);
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_NE(f[0]->where.find("entity 3 (LINE)"), std::string::npos) << f[0]->where;
+  ASSERT_EQ(tp.notes.size(), 2u);
+  EXPECT_NE(tp.notes[0].find("INSERT"), std::string::npos);
+  EXPECT_NE(tp.notes[1].find("TEXT"), std::string::npos);
+}
+
+TEST(DxfReader, Errors) {
+  Dxf fit;
+  fit.entities = {line(0, 0, 1, 0),
+                  {{0, "SPLINE"}, {8, "0"}, {70, "8"}, {71, "3"}, {72, "0"}, {73, "0"}, {74, "4"},
+                   {11, "0"}, {21, "0"}, {31, "0"}, {11, "1"}, {21, "1"}, {31, "0"},
+                   {11, "2"}, {21, "0"}, {31, "0"}, {11, "3"}, {21, "1"}, {31, "0"}}};
+  std::string e = error_of(fit);
+  EXPECT_NE(e.find("err.dxf: entity 2 (SPLINE): a spline given by fit points only"), std::string::npos) << e;
+  Dxf knots;
+  knots.entities = {{{0, "SPLINE"}, {8, "0"}, {70, "8"}, {71, "1"}, {72, "3"}, {73, "2"}, {74, "0"},
+                     {40, "0"}, {40, "0"}, {40, "1"},
+                     {10, "0"}, {20, "0"}, {30, "0"}, {10, "1"}, {20, "0"}, {30, "0"}}};
+  e = error_of(knots);
+  EXPECT_NE(e.find("entity 1 (SPLINE): degree 1, 2 control points need 4 knots, got 3"), std::string::npos) << e;
+  Dxf empty;
+  EXPECT_NE(error_of(empty).find("err.dxf: no curves"), std::string::npos);
+  try {
+    traj::input::read_dxf("/nonexistent/x.dxf");
+    FAIL();
+  } catch (const InputError& err) {
+    EXPECT_STREQ(err.what(), "/nonexistent/x.dxf: cannot open");
+  }
+}
+
+double length(const BSpline& b) {
+  const Curve c(b);
+  return traj::geo::ArcLength(c).total();
+}
+
+TEST(DxfReader, FileFromAnIndependentWriter) {
+  // written by ezdxf (data/ezdxf_sample.py): a closed LWPOLYLINE slot 40 x 20 with half-circle ends
+  // (bulge 1), LINE-ARC-LINE with the last line backwards, CIRCLE r 5, ELLIPSE, a rational SPLINE
+  // quarter circle r 10, a cubic SPLINE, TEXT
+  const Toolpath tp = traj::input::read_dxf(TRAJ_INPUT_DATA "/ezdxf_sample.dxf");
+  const auto f = feeds(tp);
+  ASSERT_EQ(f.size(), 11u);
+  EXPECT_EQ(rapids(tp), 5);
+  ASSERT_EQ(tp.notes.size(), 1u);
+  EXPECT_NE(tp.notes[0].find("TEXT"), std::string::npos);
+  double slot = 0, chain = 0;
+  for (int i = 0; i < 4; ++i) slot += length(f[i]->curve);
+  for (int i = 4; i < 7; ++i) chain += length(f[i]->curve);
+  EXPECT_NEAR(slot, 80 + 20 * kPi, 1e-9);
+  EXPECT_NEAR(chain, 40 + 10 * kPi, 1e-9);
+  EXPECT_EQ(last(f[6]->curve), Eigen::Vector3d(60, 20, 0));
+  EXPECT_NEAR(length(f[7]->curve), 10 * kPi, 1e-9);
+  EXPECT_NEAR(length(f[9]->curve), 5 * kPi, 1e-9);
+  for (const Eigen::Vector3d& p : samples(f[9]->curve)) EXPECT_NEAR((p - Eigen::Vector3d(150, 0, 0)).norm(), 10, 1e-12);
+  // every move starts where the previous one ended
+  for (std::size_t i = 1; i < tp.moves.size(); ++i) EXPECT_EQ(first(tp.moves[i].curve), last(tp.moves[i - 1].curve));
+}
+
+}  // namespace
