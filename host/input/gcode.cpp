@@ -90,15 +90,15 @@ class Interpreter {
       if (!text.empty() && text.back() == '\r') text.pop_back();
       const Block b = gcode::lex_line(text, line, name_);
       if (b.percent) {
-        if (!seen_content && !in_percent) {
-          in_percent = true;
-          seen_content = true;
-          continue;
-        }
-        return finish(line, true);
+        if (in_percent) return finish(line, true);
+        line_ = line;
+        if (seen_content) fail("%", "'%' only on the first line, or to close a program opened with '%'");
+        in_percent = true;
+        seen_content = true;
+        continue;
       }
+      if (text.find_first_not_of(" \t") != std::string::npos) seen_content = true;
       if (b.words.empty()) continue;
-      seen_content = true;
       if (b.block_delete && opt_.block_delete) continue;
       if (execute(b)) return finish(line, true);
     }
@@ -280,6 +280,7 @@ class Interpreter {
       }
     } else {
       exact_stop_ = true;
+      tolerance_ = -1;  // exact path or stop: no tolerance applies
     }
     (void)t;
   }
@@ -333,10 +334,15 @@ class Interpreter {
       nurbs_point(explicit_g);
       return;
     }
+    const bool arc_mode = motion_ == Motion::kCw || motion_ == Motion::kCcw;
     if (!any_axis()) {
-      if (explicit_g && (motion_ == Motion::kCw || motion_ == Motion::kCcw || motion_ == Motion::kCubic ||
-                         motion_ == Motion::kQuadratic) &&
-          (has('I') || has('J') || has('K') || has('R') || has('P') || has('Q')))
+      // LinuxCNC: a centre-format arc without end point words is a full circle back to the start.
+      if (explicit_g && arc_mode && (has('I') || has('J') || has('K'))) {
+        arc(pos_, word);
+        return;
+      }
+      if (explicit_g && (arc_mode || motion_ == Motion::kCubic || motion_ == Motion::kQuadratic) &&
+          (has('R') || has('P') || has('Q')))
         fail(motion_text_, "no end point (X, Y or Z)");
       return;
     }
@@ -375,7 +381,7 @@ class Interpreter {
   void arc(const Vector3d& e, const std::string& word) {
     const PlaneAxes pa = plane_axes();
     const char axis_letter[3] = {'X', 'Y', 'Z'};
-    if (!has(axis_letter[pa.first]) && !has(axis_letter[pa.second]))
+    if (has('R') && !has(axis_letter[pa.first]) && !has(axis_letter[pa.second]))
       fail(word, std::string(1, axis_letter[pa.first]) + " and " + axis_letter[pa.second] +
                      " words missing for an arc in this plane");
     const double f = feed_mm_s(word);

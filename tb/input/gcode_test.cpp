@@ -1,0 +1,3 @@
+#include <gtest/gtest.h>
+#include "input/gcode.hpp"
+TEST(Gcode, Placeholder) {}
