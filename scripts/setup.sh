@@ -9,6 +9,7 @@ PKGS=(
   libeigen3-dev libgtest-dev libgmock-dev
   libcli11-dev nlohmann-json3-dev libgmp-dev zlib1g-dev
   valgrind
+  linuxcnc-uspace  # rs274, LinuxCNC's interpreter: the oracle of the G-code cross-check (tb/input)
 )
 
 missing=()
