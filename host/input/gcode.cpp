@@ -1,0 +1,569 @@
+#include "input/gcode.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <set>
+
+#include "input/gcode_curves.hpp"
+#include "input/gcode_lexer.hpp"
+
+namespace traj::input {
+namespace {
+
+using gcode::Block;
+using gcode::Word;
+using Eigen::Vector3d;
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kInch = 25.4;
+
+// LinuxCNC's arc tolerances (interp_internal.hh), in inches and mm. An
+// I J K arc is refused when its end radius differs from its start radius by
+// more than the absolute tolerance and, at the same time, by more than the
+// relative one (rs274 2.9 accepts r 10 -> 10.015 mm and 100 -> 100.09 mm,
+// refuses 10 -> 10.029 mm: checked with it).
+constexpr double kRadiusTolInch = 0.00005, kRadiusTolMm = kRadiusTolInch * kInch;
+constexpr double kSpiralAbsInch = 2 * 0.001 * 1.41421356237309504880;
+constexpr double kSpiralAbsMm = 2 * 0.01 * 1.41421356237309504880;
+constexpr double kSpiralRel = 0.001;
+
+enum class Motion { kNone, kRapid, kLine, kCw, kCcw, kCubic, kQuadratic, kNurbs };
+
+// G codes as integers in tenths (G5.2 -> 52, G1 -> 10).
+int tenths(double v) { return static_cast<int>(std::lround(v * 10)); }
+
+// Modal group of an accepted G code, or -1.
+int g_group(int g) {
+  switch (g) {
+    case 0: case 10: case 20: case 30: case 50: case 51: case 52: case 53: case 800: return 1;
+    case 170: case 180: case 190: return 2;
+    case 900: case 910: return 3;
+    case 901: case 911: return 4;
+    case 940: return 5;
+    case 200: case 210: return 6;
+    case 400: return 7;
+    case 490: return 8;
+    case 540: return 12;
+    case 610: case 611: case 640: return 13;
+    default: return -1;
+  }
+}
+
+// Why a G code is refused.
+std::string g_refusal(int g) {
+  if (g == 410 || g == 420 || g == 411 || g == 421) return "cutter radius compensation is not supported";
+  if (g == 430 || g == 431 || g == 432) return "tool length offsets are not supported";
+  if ((g >= 550 && g <= 593) || g == 100 || g == 520)
+    return "work offsets are not supported (only G54, the default work offset)";
+  if (g >= 920 && g <= 923) return "coordinate offsets (G92) are not supported";
+  if (g == 530) return "machine coordinates (G53) are not supported";
+  if (g == 930) return "inverse-time feed mode is not supported (only G94, units per minute)";
+  if (g == 950) return "feed per revolution is not supported (only G94, units per minute)";
+  if ((g >= 810 && g <= 890) || g == 730 || g == 740 || g == 760) return "canned cycles are not supported";
+  if (g == 40) return "dwell is not supported";
+  if (g == 280 || g == 281 || g == 300 || g == 301) return "reference-point moves (G28/G30) are not supported";
+  if (g >= 330 && g <= 331) return "spindle-synchronised motion is not supported";
+  if (g >= 380 && g <= 385) return "probing is not supported";
+  if (g == 70 || g == 80) return "lathe diameter/radius mode is not supported";
+  if (g == 171 || g == 181 || g == 191) return "arcs in the U V W planes are not supported";
+  return "unknown or unsupported G code";
+}
+
+std::string fmt_num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+class Interpreter {
+ public:
+  Interpreter(std::string name, GcodeOptions opt) : name_(std::move(name)), opt_(opt) {}
+
+  Toolpath run(std::istream& in) {
+    std::string text;
+    int line = 0;
+    bool seen_content = false, in_percent = false;
+    while (std::getline(in, text)) {
+      ++line;
+      if (!text.empty() && text.back() == '\r') text.pop_back();
+      const Block b = gcode::lex_line(text, line, name_);
+      if (b.percent) {
+        if (in_percent) return finish(line, true);
+        line_ = line;
+        if (seen_content) fail("%", "'%' only on the first line, or to close a program opened with '%'");
+        in_percent = true;
+        seen_content = true;
+        continue;
+      }
+      if (text.find_first_not_of(" \t") != std::string::npos) seen_content = true;
+      if (b.words.empty()) continue;
+      if (b.block_delete && opt_.block_delete) continue;
+      if (execute(b)) return finish(line, true);
+    }
+    return finish(line, false);
+  }
+
+ private:
+  std::string name_;
+  GcodeOptions opt_;
+  Toolpath out_;
+  std::set<std::string> noted_;
+
+  // Machine state (mm, the program's start X0 Y0 Z0).
+  Vector3d pos_ = Vector3d::Zero();
+  double units_ = 1;  // mm per program unit
+  bool absolute_ = true, ijk_absolute_ = false;
+  int plane_ = 170;
+  Motion motion_ = Motion::kNone;
+  std::string motion_text_ = "";
+  double feed_ = 0;  // the F number, program units per minute
+  double tolerance_ = -1;
+  bool exact_stop_ = false;
+  double g5_i_ = 0, g5_j_ = 0;  // a G5 without I J continues the previous one's direction
+
+  // An open G5.2 NURBS: control points (mm) and weights, its order and place.
+  struct Nurbs {
+    std::vector<Vector3d> points;
+    std::vector<double> weights;
+    int order = 3;
+    int line = 0;
+  };
+  std::optional<Nurbs> nurbs_;
+
+  // The block being executed.
+  int line_ = 0;
+  std::map<char, Word> words_;
+  std::set<char> used_;
+
+  std::string where(int line) const { return name_ + ":" + std::to_string(line); }
+  [[noreturn]] void fail(const std::string& word, const std::string& why) const {
+    throw InputError(where(line_) + ": " + word + ": " + why);
+  }
+  void note(const std::string& kind, const std::string& word, const std::string& what) {
+    if (noted_.insert(kind).second) out_.notes.push_back(where(line_) + ": " + word + ": " + what);
+  }
+  bool has(char c) const { return words_.count(c) > 0; }
+  double value(char c) {
+    used_.insert(c);
+    return words_.at(c).value;
+  }
+  const std::string& text(char c) const { return words_.at(c).text; }
+
+  Toolpath finish(int line, bool ended) {
+    line_ = line;
+    if (nurbs_) {
+      line_ = nurbs_->line;
+      fail("G5.2", "NURBS not closed with G5.3 before the end of the program");
+    }
+    if (!ended) fail("end of file", "the program has no M2, M30 or closing '%'");
+    return std::move(out_);
+  }
+
+  // Returns true at the program's end (M2, M30).
+  bool execute(const Block& b) {
+    line_ = b.line;
+    words_.clear();
+    used_.clear();
+    std::vector<std::pair<int, std::string>> gs;
+    std::vector<std::pair<int, std::string>> ms;
+    for (const Word& w : b.words) {
+      if (w.letter == 'G') {
+        if (std::abs(w.value * 10 - tenths(w.value)) > 1e-6) fail(w.text, "unknown or unsupported G code");
+        gs.emplace_back(tenths(w.value), w.text);
+      } else if (w.letter == 'M') {
+        if (w.value != std::floor(w.value)) fail(w.text, "unknown or unsupported M code");
+        ms.emplace_back(static_cast<int>(w.value), w.text);
+      } else {
+        check_letter(w);
+        if (words_.count(w.letter)) fail(w.text, std::string("more than one ") + w.letter + " word in the block");
+        words_[w.letter] = w;
+      }
+    }
+    std::map<int, std::string> g_by_group;
+    for (const auto& [g, t] : gs) {
+      const int grp = g_group(g);
+      if (grp < 0) fail(t, g_refusal(g));
+      if (g_by_group.count(grp)) fail(t, "two G codes from the same modal group (" + g_by_group[grp] + ")");
+      g_by_group[grp] = t;
+    }
+    std::map<int, std::string> m_by_group;
+    for (const auto& [m, t] : ms) {
+      int grp;
+      if (m == 2 || m == 30) grp = 4;
+      else if (m == 3 || m == 4 || m == 5) grp = 7;
+      else if (m == 7 || m == 8 || m == 9) grp = (m == 9 ? 8 : 80 + m);  // M7 and M8 may share a block
+      else if (m == 6) grp = 6;
+      else if (m == 0 || m == 1 || m == 60) fail(t, "program pause (M0/M1/M60) is not supported");
+      else fail(t, "unknown or unsupported M code");
+      if (grp == 8 && (m_by_group.count(87) || m_by_group.count(88))) fail(t, "M9 with M7 or M8 in the same block");
+      if ((grp == 87 || grp == 88) && m_by_group.count(8)) fail(t, "M7 or M8 with M9 in the same block");
+      if (m_by_group.count(grp)) fail(t, "two M codes from the same modal group (" + m_by_group[grp] + ")");
+      m_by_group[grp] = t;
+    }
+    auto g_in = [&](int grp) -> std::optional<int> {
+      for (const auto& [g, t] : gs)
+        if (g_group(g) == grp) return g;
+      return std::nullopt;
+    };
+    auto g_text = [&](int g) {
+      for (const auto& [gg, t] : gs)
+        if (gg == g) return t;
+      return std::string();
+    };
+
+    // LinuxCNC's order of execution within a block.
+    if (g_in(5)) note("G94", g_text(940), "units-per-minute feed mode (the only one supported) accepted");
+    if (has('F')) {
+      const double f = value('F');
+      if (f < 0) fail(text('F'), "negative feed rate");
+      feed_ = f;
+    }
+    if (has('S')) {
+      value('S');
+      note("S", text('S'), "spindle speed accepted and not acted on");
+    }
+    if (has('T')) {
+      value('T');
+      note("T", text('T'), "tool selection accepted and not acted on");
+    }
+    for (const auto& [m, t] : ms) {
+      if (m == 6) note("M6", t, "tool change accepted and not acted on");
+      if (m >= 3 && m <= 5) note("M3/M4/M5", t, "spindle control accepted and not acted on");
+      if (m >= 7 && m <= 9) note("M7/M8/M9", t, "coolant control accepted and not acted on");
+    }
+    if (auto g = g_in(2)) plane_ = *g;
+    if (auto g = g_in(6)) set_units(*g == 200 ? kInch : 1.0);
+    if (g_in(7)) note("G40", g_text(400), "cutter compensation off (none is applied) accepted");
+    if (g_in(8)) note("G49", g_text(490), "tool length offset cancel (none is applied) accepted");
+    if (g_in(12)) note("G54", g_text(540), "work offset G54 (the default, zero) accepted");
+    if (auto g = g_in(13)) path_control(*g, g_text(*g));
+    if (auto g = g_in(3)) absolute_ = *g == 900;
+    if (auto g = g_in(4)) ijk_absolute_ = *g == 901;
+    const std::optional<int> mg = g_in(1);
+    if (mg) set_motion(*mg, g_text(*mg));
+    motion(mg.has_value());
+    check_unused();
+    return m_by_group.count(4) > 0;
+  }
+
+  void check_letter(const Word& w) const {
+    switch (w.letter) {
+      case 'X': case 'Y': case 'Z': case 'I': case 'J': case 'K': case 'R': case 'P': case 'Q': case 'L':
+      case 'F': case 'S': case 'T':
+        return;
+      case 'A': case 'B': case 'C': case 'U': case 'V': case 'W':
+        fail(w.text, "motion of the A/B/C/U/V/W axes is not supported: the planner carries X, Y and Z only");
+      case 'D': fail(w.text, "cutter radius compensation (D) is not supported");
+      case 'H': fail(w.text, "tool length offsets (H) are not supported");
+      default: fail(w.text, "unknown word");
+    }
+  }
+
+  void set_units(double u) {
+    units_ = u;
+  }
+
+  void path_control(int g, const std::string& t) {
+    if (g == 640) {
+      exact_stop_ = false;
+      tolerance_ = -1;
+      if (has('P')) {
+        const double p = value('P');
+        if (p < 0) fail(text('P'), "negative path tolerance");
+        if (p > 0) tolerance_ = p * units_;  // P0: no tolerance given, the job's
+      }
+      if (has('Q')) {
+        value('Q');
+        note("G64 Q", text('Q'), "G64 Q (naive CAM tolerance) accepted and ignored");
+      }
+    } else {
+      exact_stop_ = true;
+      tolerance_ = -1;  // exact path or stop: no tolerance applies
+    }
+    (void)t;
+  }
+
+  void set_motion(int g, const std::string& t) {
+    if (g == 800) {
+      note("G80", t, "canned cycle cancel (no cycle is active) accepted");
+      if (nurbs_) fail(t, "G5.2 NURBS not closed with G5.3");
+      motion_ = Motion::kNone;
+      return;
+    }
+    if (g == 53) {
+      close_nurbs(t);
+      return;
+    }
+    if (nurbs_ && g != 52) fail(t, "G5.2 NURBS not closed with G5.3");
+    motion_ = g == 0 ? Motion::kRapid : g == 10 ? Motion::kLine : g == 20 ? Motion::kCw : g == 30 ? Motion::kCcw
+            : g == 50 ? Motion::kCubic : g == 51 ? Motion::kQuadratic : Motion::kNurbs;
+    motion_text_ = t;
+  }
+
+  bool any_axis() const { return has('X') || has('Y') || has('Z'); }
+
+  Vector3d end_point() {
+    Vector3d e = pos_;
+    const char letters[3] = {'X', 'Y', 'Z'};
+    for (int i = 0; i < 3; ++i)
+      if (has(letters[i])) e[i] = value(letters[i]) * units_ + (absolute_ ? 0.0 : pos_[i]);
+    return e;
+  }
+
+  double feed_mm_s(const std::string& word) const {
+    if (feed_ <= 0) fail(word, "no feed rate: program F (units per minute) before the first feed move");
+    return feed_ * units_ / 60.0;
+  }
+
+  void emit(Move::Kind kind, geo::BSpline curve, double feed) {
+    Move m;
+    m.kind = kind;
+    m.curve = std::move(curve);
+    m.feed = feed;
+    m.tolerance = tolerance_;
+    m.exact_stop = exact_stop_ || kind == Move::Kind::kRapid;
+    m.where = where(line_);
+    out_.moves.push_back(std::move(m));
+  }
+
+  void motion(bool explicit_g) {
+    const std::string word = explicit_g ? motion_text_ : motion_text_ + " (modal)";
+    if (motion_ == Motion::kNurbs) {
+      nurbs_point(explicit_g);
+      return;
+    }
+    const bool arc_mode = motion_ == Motion::kCw || motion_ == Motion::kCcw;
+    if (!any_axis()) {
+      // LinuxCNC: a centre-format arc without end point words is a full circle back to the start.
+      if (explicit_g && arc_mode && (has('I') || has('J') || has('K'))) {
+        arc(pos_, word);
+        return;
+      }
+      if (explicit_g && (arc_mode || motion_ == Motion::kCubic || motion_ == Motion::kQuadratic) &&
+          (has('R') || has('P') || has('Q')))
+        fail(motion_text_, "no end point (X, Y or Z)");
+      return;
+    }
+    if (motion_ == Motion::kNone) {
+      const char c = has('X') ? 'X' : has('Y') ? 'Y' : 'Z';
+      fail(text(c), "axis word with no motion mode (G0, G1, G2, G3, G5, ...) in effect");
+    }
+    const Vector3d e = end_point();
+    switch (motion_) {
+      case Motion::kRapid:
+        if (e != pos_) emit(Move::Kind::kRapid, gcode::line3(pos_, e), 0);
+        break;
+      case Motion::kLine: {
+        const double f = feed_mm_s(word);
+        if (e != pos_) emit(Move::Kind::kFeed, gcode::line3(pos_, e), f);
+        break;
+      }
+      case Motion::kCw: case Motion::kCcw: arc(e, word); break;
+      case Motion::kCubic: case Motion::kQuadratic: spline(e, word); break;
+      default: break;
+    }
+    pos_ = e;
+  }
+
+  // Plane axes (LinuxCNC's order) and the letters of their centre words.
+  struct PlaneAxes {
+    int first, second, normal;
+    char i1, i2, refused;
+  };
+  PlaneAxes plane_axes() const {
+    if (plane_ == 180) return {2, 0, 1, 'K', 'I', 'J'};
+    if (plane_ == 190) return {1, 2, 0, 'J', 'K', 'I'};
+    return {0, 1, 2, 'I', 'J', 'K'};
+  }
+
+  void arc(const Vector3d& e, const std::string& word) {
+    const PlaneAxes pa = plane_axes();
+    const char axis_letter[3] = {'X', 'Y', 'Z'};
+    if (has('R') && !has(axis_letter[pa.first]) && !has(axis_letter[pa.second]))
+      fail(word, std::string(1, axis_letter[pa.first]) + " and " + axis_letter[pa.second] +
+                     " words missing for an arc in this plane");
+    const double f = feed_mm_s(word);
+    int turns = 1;
+    if (has('P')) {
+      const double p = value('P');
+      if (std::abs(p - std::round(p)) > 1e-4) fail(text('P'), "the number of turns must be an integer");
+      if (std::round(p) < 1) fail(text('P'), "the number of turns must be 1 or more");
+      turns = static_cast<int>(std::round(p));
+    }
+    const bool ijk = has('I') || has('J') || has('K');
+    const double rtol = units_ == 1 ? kRadiusTolMm : kRadiusTolInch * kInch;
+    const double s1 = pos_[pa.first], s2 = pos_[pa.second], e1 = e[pa.first], e2 = e[pa.second];
+    double c1, c2;
+    if (has('R') && ijk) fail(text('R'), "both a radius (R) and a centre (I J K) given");
+    if (has('R')) {
+      const double r = value('R') * units_;
+      if (e1 == s1 && e2 == s2) fail(text('R'), "a radius arc cannot end where it starts (use I J K for a full circle)");
+      const double ar = std::abs(r);
+      const double m1 = (e1 + s1) / 2, m2 = (e2 + s2) / 2;
+      double half = std::hypot(m1 - e1, m2 - e2);
+      if (half - ar > rtol) fail(text('R'), "the radius is too small to reach the end point");
+      if (half / ar > 1 - 1e-12) half = ar;
+      const bool cw = motion_ == Motion::kCw;
+      const double theta = std::atan2(e2 - s2, e1 - s1) + (((cw && r > 0) || (!cw && r < 0)) ? -kPi / 2 : kPi / 2);
+      const double offset = ar * std::cos(std::asin(half / ar));
+      c1 = m1 + offset * std::cos(theta);
+      c2 = m2 + offset * std::sin(theta);
+    } else if (ijk) {
+      if (has(pa.refused)) fail(text(pa.refused), std::string(1, pa.refused) + " word given for an arc in this plane");
+      auto offset = [&](char c) -> double {
+        if (has(c)) return value(c) * units_;
+        if (ijk_absolute_) fail(word, std::string(1, c) + " word missing in an absolute-centre (G90.1) arc");
+        return 0.0;
+      };
+      const double o1 = offset(pa.i1), o2 = offset(pa.i2);
+      c1 = ijk_absolute_ ? o1 : s1 + o1;
+      c2 = ijk_absolute_ ? o2 : s2 + o2;
+      const double r0 = std::hypot(c1 - s1, c2 - s2), r1 = std::hypot(c1 - e1, c2 - e2);
+      if (r0 < rtol || r1 < rtol) fail(word, "zero-radius arc (start radius " + fmt_num(r0 / units_) + ", end radius " + fmt_num(r1 / units_) + ")");
+      const double abs_err = std::abs(r0 - r1), rel_err = abs_err / std::max(r0, r1);
+      const double abs_tol = units_ == 1 ? kSpiralAbsMm : kSpiralAbsInch * kInch;
+      if (abs_err > abs_tol && rel_err > kSpiralRel)
+        fail(word, "radius to the end differs from radius to the start: " + fmt_num(r0 / units_) + " and " +
+                       fmt_num(r1 / units_) + " (more than " + fmt_num(abs_tol / units_) + " and " +
+                       fmt_num(kSpiralRel * 100) + "%)");
+    } else {
+      fail(word, "arc with neither a centre (I J K) nor a radius (R)");
+    }
+    const double a0 = std::atan2(s2 - c2, s1 - c1), a1 = std::atan2(e2 - c2, e1 - c1);
+    double sweep = a1 - a0;
+    if (motion_ == Motion::kCcw) {
+      while (sweep <= 0) sweep += 2 * kPi;
+      sweep += 2 * kPi * (turns - 1);
+    } else {
+      while (sweep >= 0) sweep -= 2 * kPi;
+      sweep -= 2 * kPi * (turns - 1);
+    }
+    gcode::ArcSpec spec;
+    spec.first = pa.first;
+    spec.second = pa.second;
+    spec.normal = pa.normal;
+    spec.start = pos_;
+    spec.end = e;
+    spec.c1 = c1;
+    spec.c2 = c2;
+    spec.sweep = sweep;
+    emit(Move::Kind::kFeed, gcode::arc3(spec), f);
+  }
+
+  void spline(const Vector3d& e, const std::string& word) {
+    if (plane_ != 170) fail(word, "splines must be in the XY plane (G17)");
+    if (has('Z')) fail(text('Z'), "splines (G5, G5.1) may not move Z");
+    const double f = feed_mm_s(word);
+    if (motion_ == Motion::kQuadratic) {
+      if (!has('I') || !has('J')) fail(word, "G5.1 needs both I and J");
+      Eigen::MatrixXd c(3, 3);
+      c.row(0) = pos_.transpose();
+      c.row(1) = Vector3d(pos_[0] + value('I') * units_, pos_[1] + value('J') * units_, pos_[2]).transpose();
+      c.row(2) = e.transpose();
+      emit(Move::Kind::kFeed, gcode::bezier3(c), f);
+      return;
+    }
+    double i, j;
+    if (has('I') != has('J')) fail(word, "G5 needs both I and J, or neither");
+    if (has('I')) {
+      i = value('I') * units_;
+      j = value('J') * units_;
+    } else {
+      i = g5_i_;
+      j = g5_j_;
+    }
+    if (!has('P') || !has('Q')) fail(word, "G5 needs both P and Q");
+    const double p = value('P') * units_, q = value('Q') * units_;
+    Eigen::MatrixXd c(4, 3);
+    c.row(0) = pos_.transpose();
+    c.row(1) = Vector3d(pos_[0] + i, pos_[1] + j, pos_[2]).transpose();
+    c.row(2) = Vector3d(e[0] + p, e[1] + q, pos_[2]).transpose();
+    c.row(3) = e.transpose();
+    g5_i_ = -p;
+    g5_j_ = -q;
+    emit(Move::Kind::kFeed, gcode::bezier3(c), f);
+  }
+
+  // A G5.2 block: the first one starts the NURBS at the current point.
+  void nurbs_point(bool explicit_g) {
+    const std::string word = explicit_g ? motion_text_ : "G5.2 (modal)";
+    if (plane_ != 170) fail(word, "NURBS (G5.2) must be in the XY plane (G17)");
+    if (has('Z')) fail(text('Z'), "NURBS (G5.2) control points are in X and Y only");
+    if (has('X') != has('Y')) fail(word, "a NURBS control point needs both X and Y");
+    if (!nurbs_) {
+      feed_mm_s(word);
+      nurbs_.emplace();
+      nurbs_->line = line_;
+      nurbs_->points.push_back(pos_);
+      nurbs_->weights.push_back(!has('X') && has('P') ? value('P') : 1.0);
+      if (!has('X') && has('P') && nurbs_->weights.back() <= 0) fail(text('P'), "weights must be positive");
+    } else if (!has('X') && has('P')) {
+      fail(text('P'), "a weight without X and Y is allowed only for the first control point");
+    }
+    if (has('L')) {
+      const double l = value('L');
+      if (l != std::floor(l) || l < 3) fail(text('L'), "the NURBS order must be an integer of 3 or more");
+      nurbs_->order = static_cast<int>(l);
+    }
+    if (has('X')) {
+      if (!has('P')) fail(word, "every NURBS control point needs a positive weight P");
+      const double w = value('P');
+      if (w <= 0) fail(text('P'), "weights must be positive");
+      // Relative (G91) control points are relative to the NURBS's start, as in LinuxCNC.
+      const Vector3d start = nurbs_->points.front();
+      Vector3d p = start;
+      p[0] = value('X') * units_ + (absolute_ ? 0.0 : start[0]);
+      p[1] = value('Y') * units_ + (absolute_ ? 0.0 : start[1]);
+      nurbs_->points.push_back(p);
+      nurbs_->weights.push_back(w);
+    }
+  }
+
+  void close_nurbs(const std::string& t) {
+    if (!nurbs_) fail(t, "G5.3 without G5.2 first");
+    const Nurbs n = *nurbs_;
+    nurbs_.reset();
+    motion_ = Motion::kNone;
+    const int count = static_cast<int>(n.points.size());
+    if (count < n.order)
+      fail(t, "a NURBS of order " + std::to_string(n.order) + " needs at least " + std::to_string(n.order) +
+                  " control points (it has " + std::to_string(count) + ")");
+    Eigen::MatrixXd c(count, 3);
+    Eigen::VectorXd w(count);
+    for (int i = 0; i < count; ++i) {
+      c.row(i) = n.points[i].transpose();
+      w[i] = n.weights[i];
+    }
+    geo::BSpline b = gcode::nurbs3(c, w, n.order);
+    const std::string err = geo::degree_range_error(b.degree, b.rational());
+    if (!err.empty()) fail(t, "NURBS order " + std::to_string(n.order) + ": " + err);
+    const int line = line_;
+    line_ = n.line;
+    emit(Move::Kind::kFeed, std::move(b), feed_mm_s(t));
+    line_ = line;
+    pos_ = n.points.back();
+  }
+
+  void check_unused() const {
+    for (const auto& [c, w] : words_)
+      if (!used_.count(c)) fail(w.text, "no G code in this block uses it");
+  }
+};
+
+}  // namespace
+
+Toolpath read_gcode(std::istream& in, const std::string& name, const GcodeOptions& options) {
+  Toolpath tp = Interpreter(name, options).run(in);
+  tp.axes = 3;
+  return tp;
+}
+
+Toolpath read_gcode(const std::string& file, const GcodeOptions& options) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file + ": cannot open");
+  return read_gcode(in, file, options);
+}
+
+}  // namespace traj::input

@@ -1,0 +1,33 @@
+// G-code reader: the RS274NGC subset CAM post-processors emit, with LinuxCNC's
+// semantics (checked against LinuxCNC's own interpreter, rs274, by the test
+// input.crosscheck.linuxcnc_examples; see host/input/README.md).
+//
+// Acted on: G0 G1 G2 G3 (centre I J K or R, helical, P turns, planes
+// G17/G18/G19), G5 G5.1 G5.2/G5.3, G20/G21, G90/G91, G90.1/G91.1,
+// G61/G61.1/G64 P, F (units per minute), comments, N, '/', '%', M2/M30.
+// Accepted with a note: S, M3/M4/M5, M7/M8/M9, T, M6, G40, G49, G54, G80,
+// G94, G64 Q. Everything else is refused with one InputError
+// "<file>:<line>: <word>: <why>".
+//
+// The program starts at X0 Y0 Z0 (as rs274 does) and ends at M2, M30 or the
+// closing '%'; a file without one of them is refused (as LinuxCNC does).
+// Moves of zero length produce no Move.
+#pragma once
+#include <istream>
+#include <string>
+
+#include "input/toolpath.hpp"
+
+namespace traj::input {
+
+struct GcodeOptions {
+  // LinuxCNC's block-delete switch: when on, lines starting with '/' are
+  // skipped; when off (LinuxCNC's default, and rs274's) they run.
+  bool block_delete = false;
+};
+
+Toolpath read_gcode(const std::string& file, const GcodeOptions& options = {});
+// The same from a stream; `name` is used in messages and Move::where.
+Toolpath read_gcode(std::istream& in, const std::string& name, const GcodeOptions& options = {});
+
+}  // namespace traj::input

@@ -1,0 +1,58 @@
+// The curves of G-code moves, in 3-D (X, Y, Z), as geo::BSpline.
+//
+// Arcs (G2/G3) live in a plane given by two axes (first, second: XY for G17,
+// ZX for G18, YZ for G19, LinuxCNC's order) and a normal axis; a positive
+// sweep turns from the first axis towards the second.
+//
+// * A planar arc is an exact rational quadratic NURBS, one piece per <= 90
+//   degrees, the middle control point where the tangents at the piece's ends
+//   meet and weight cos(half the piece's angle). When the end radius differs
+//   from the start radius (LinuxCNC accepts a small difference), the piece ends
+//   lie on the spiral whose radius changes linearly with the angle, and the
+//   tangents are the spiral's: the curve is then a tangent-continuous chain of
+//   conics through those points, within the radius difference of the spiral.
+// * A helical arc (the normal axis moves) cannot be a NURBS exactly: the helix
+//   is transcendental, and in a rational quadratic the angle is not a rational
+//   function of the parameter, so the linear axis cannot follow it. Measured in
+//   the error of z against the angle, an exact-circle rational quadratic piece
+//   with linear control values is off by about 0.064 dz h^2 (h the piece's half
+//   angle), which would need pieces of ~1e-4 rad for 1e-9 mm. Instead the helix
+//   is parameterised by its angle, so the normal axis is exactly linear, and
+//   cos/sin are replaced by their Taylor polynomials of degree 11 about each
+//   piece's middle angle: a non-rational Bezier of degree 12 per piece (the
+//   radius, linear in the angle, makes the 12th degree). Lagrange's remainder
+//   bounds the distance from the true helix point at the same angle by
+//   r_max (h^12/12! + h^13/13!) per piece; pieces are made short enough for
+//   this to be <= kHelixBound (and at most 45 degrees). Piece ends shared by
+//   two pieces are set to the exact point (the first and last to the
+//   programmed points), which adds at most the same bound.
+#pragma once
+#include <Eigen/Dense>
+#include <vector>
+
+#include "geometry/bspline.hpp"
+
+namespace traj::input::gcode {
+
+constexpr double kHelixBound = 1e-12;  // mm (or inch: the same relative size), truncation error per helix
+constexpr int kHelixTaylorDegree = 11;
+
+struct ArcSpec {
+  int first = 0, second = 1, normal = 2;  // axis indices 0..2 (X, Y, Z)
+  Eigen::Vector3d start, end;             // programmed points
+  double c1 = 0, c2 = 0;                  // centre in (first, second)
+  double sweep = 0;                       // signed angle, radians (> 0 from first towards second)
+};
+
+geo::BSpline line3(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
+// Planar (start.normal == end.normal) or helical, chosen by the spec.
+geo::BSpline arc3(const ArcSpec& a);
+// The Taylor truncation bound of a helix piece of half angle h and largest radius r.
+double helix_piece_bound(double r, double h);
+// Bezier through the given control points (rows), non-rational.
+geo::BSpline bezier3(const Eigen::MatrixXd& ctrl);
+// LinuxCNC's G5.2 NURBS: order k (degree k-1), the knot vector 0 (k times),
+// 1, 2, ..., n-k+1, n-k+2 (k times) for control points 0..n.
+geo::BSpline nurbs3(const Eigen::MatrixXd& ctrl, const Eigen::VectorXd& weights, int order);
+
+}  // namespace traj::input::gcode
