@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Cuts -> toolpath, shared by the drawing readers (SVG, DXF): each cut is a
 // chain of feed moves; consecutive cuts are joined by rapid moves.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // DXF reader (through dxflib): the drawing's curves as a toolpath (3 axes, millimetres).
 //
 // Entities of the ENTITIES section: LINE, ARC, CIRCLE, ELLIPSE, LWPOLYLINE and POLYLINE/VERTEX (2-D

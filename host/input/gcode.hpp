@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // G-code reader: the RS274NGC subset CAM post-processors emit, with LinuxCNC's
 // semantics (checked against LinuxCNC's own interpreter, rs274, by the test
 // input.crosscheck.linuxcnc_examples; see host/input/README.md).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The curves of G-code moves, in 3-D (X, Y, Z), as geo::BSpline.
 //
 // Arcs (G2/G3) live in a plane given by two axes (first, second: XY for G17,

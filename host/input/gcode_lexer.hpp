@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // G-code lines -> blocks of words, with LinuxCNC's (RS274NGC) lexical rules:
 // case-insensitive letters, blanks allowed anywhere outside comments (also
 // inside numbers: "X 1 . 5"), comments "( ... )" and "; ...", a leading '/'

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SVG reader: the drawing's outlines as a toolpath (2 axes, millimetres).
 //
 // Every <path> and every basic shape (<line>, <polyline>, <polygon>, <rect> with rounded corners,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SVG geometry in user units (y down, as in the file): path data ("d"), elliptical arcs, transforms.
 // The SVG reader (svg.hpp) maps the result to millimetres.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // DXF reader: small DXF files written here by hand (group code / value lines), read back and checked
 // against hand-computed geometry (bulge arcs by the bulge formula, object coordinates, units,
 // chaining, splines).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Cross-check of read_gcode against LinuxCNC's interpreter (rs274, batch mode),
 // through rs274's printed canonical calls only (LinuxCNC is not linked).
 //

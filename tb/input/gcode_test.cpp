@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // read_gcode: each word, each refusal (its message), arcs in all planes, helices, inches, relative
 // mode, splines. Geometry is checked by evaluating the curves (geo::Curve).
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SVG reader: path data syntax, arcs against the ellipse equation, shapes, transforms and units
 // against hand-computed coordinates, the toolpath's structure, error messages.
 #include <gtest/gtest.h>
