@@ -12,7 +12,9 @@
 #include "input/jsonl_source.hpp"
 #include "input/path_json.hpp"
 #include "input/raster.hpp"
+#include "input/toolpath_file.hpp"
 #include "job/streaming.hpp"
+#include "job/toolpath_job.hpp"
 #include "report/report.hpp"
 #include "sim/sim.hpp"
 #include "stream/segment_stream.hpp"
@@ -58,6 +60,24 @@ struct PathSource : input::CurveSource {
   size_t i = 0;
 };
 
+// A path file and the configuration to plan it with: a JSON path as it is; a
+// toolpath (G-code, SVG, DXF) with its moves' speeds and stops as speed caps.
+struct Loaded {
+  plan::Path path;
+  job::JobConfig cfg;
+};
+
+Loaded load(const std::string& file, const std::string& format, const job::JobConfig& cfg) {
+  const input::FileKind kind = input::file_kind(file, format);
+  if (!input::is_toolpath(kind)) return {input::load_path(file), cfg};
+  const input::Toolpath tp = input::read_toolpath(file, kind);
+  for (const auto& n : tp.notes) std::fprintf(stderr, "trajcore: note: %s\n", n.c_str());
+  job::ToolpathPlan tpp = job::toolpath_plan(tp, cfg);
+  std::fprintf(stderr, "%s: %zu feed moves, %zu rapids, %zu exact stops\n", file.c_str(), tpp.feed_moves,
+               tpp.rapids, tpp.stops);
+  return {std::move(tpp.path), std::move(tpp.cfg)};
+}
+
 bool passes(const job::JobConfig& cfg, const report::Report& rep) {
   return rep.max_deviation <= cfg.limits.tol && rep.worst_plan <= 1 + 1e-9 && rep.worst_fit <= 1 + 1e-9 &&
          rep.worst_out <= 1 + 1e-9;
@@ -99,17 +119,19 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
 
 int plan_whole(const PlanArgs& a) {
   if (a.input.empty()) throw PlanError("give a path file");
-  const auto path = input::load_path(a.input);
-  const auto res = job::run_job(path, a.cfg, progress);
+  const Loaded in = load(a.input, a.format, a.cfg);
+  const plan::Path& path = in.path;
+  const job::JobConfig& cfg = in.cfg;
+  const auto res = job::run_job(path, cfg, progress);
   stream::write_file(a.output, res.header, job::records_of(res));
   std::printf("%s: %zu segments, %zu ticks (%.3f s of motion) -> %s\n", a.input.c_str(), res.segments.size(),
               res.ticks.size(), res.plan.duration(), a.output.c_str());
   // the plan report; the output columns are the host's exact prediction of
   // the core's samples (`trajcore run` confirms them on the Verilated core)
-  const auto rep = report::make_report(path, a.cfg, res, report::predicted_samples(res));
-  std::fputs(report::report_text(a.cfg, rep, res).c_str(), stdout);
+  const auto rep = report::make_report(path, cfg, res, report::predicted_samples(res));
+  std::fputs(report::report_text(cfg, rep, res).c_str(), stdout);
   std::printf("(output columns: the host's exact prediction of the core's samples)\n");
-  const bool ok = passes(a.cfg, rep);
+  const bool ok = passes(cfg, rep);
   if (!ok) std::fprintf(stderr, "trajcore plan: a check FAILED (see the report)\n");
   return ok ? 0 : 1;
 }
@@ -138,7 +160,11 @@ std::string core_line(const sim::SimResult& sr) {
 }  // namespace
 
 int plan_command(const PlanArgs& a) {
-  const bool jsonl = !a.input.empty() && a.raster == 0 && input::is_jsonl(a.input, a.format);
+  if (!a.input.empty() && a.raster == 0 && input::is_toolpath(input::file_kind(a.input, a.format)) &&
+      a.window > 0)
+    throw PlanError("plan: " + a.input + ": a toolpath file is planned whole; --window (streaming) takes JSON "
+                    "and JSON Lines paths");
+  const bool jsonl = !a.input.empty() && a.raster == 0 && input::file_kind(a.input, a.format) == input::FileKind::kJsonl;
   if (jsonl && a.window_given && a.window == 0)
     throw PlanError("plan: a JSON Lines path is always streamed: --window must be at least 2");
   if (a.window > 0 || a.raster > 0 || jsonl) return plan_streamed(a, jsonl);
@@ -146,13 +172,15 @@ int plan_command(const PlanArgs& a) {
 }
 
 int run_command(const RunArgs& a) {
-  if (input::is_jsonl(a.input))
+  if (input::file_kind(a.input, a.format) == input::FileKind::kJsonl)
     throw PlanError("run: " + a.input + " is a JSON Lines path, which is planned as a stream; run needs the whole "
                     "path in memory (report, plots): use `trajcore plan " + a.input + " -o plan.trj` (streamed) then "
                     "`trajcore sim plan.trj`");
   if (a.input.empty()) throw PlanError("give a path file");
-  const auto path = input::load_path(a.input);
-  const auto res = job::run_job(path, a.cfg, progress);
+  const Loaded in = load(a.input, a.format, a.cfg);
+  const plan::Path& path = in.path;
+  const job::JobConfig& cfg = in.cfg;
+  const auto res = job::run_job(path, cfg, progress);
   // everything is written into a staging folder inside out_dir and moved
   // into place only when all of it is written (nothing half-written)
   const std::vector<std::string> names = {"plan.trj", "samples.csv", "report.txt", "path_feed.svg", "profile.svg"};
@@ -169,9 +197,9 @@ int run_command(const RunArgs& a) {
   const auto sr = sim::simulate(res.header, records, 0, [](double f) { progress("sim", f); });
   std::fprintf(stderr, "\n");
   write_csv(stage.dir + "/samples.csv", res.header, sr.samples);
-  const auto rep = report::make_report(path, a.cfg, res, sr.samples);
-  report::write_plots(stage.dir, path, a.cfg, res, sr.samples);
-  const std::string text = report::report_text(a.cfg, rep, res) + core_line(sr);
+  const auto rep = report::make_report(path, cfg, res, sr.samples);
+  report::write_plots(stage.dir, path, cfg, res, sr.samples);
+  const std::string text = report::report_text(cfg, rep, res) + core_line(sr);
   {
     util::AtomicFile f(stage.dir + "/report.txt");
     f.out() << text;
@@ -180,7 +208,7 @@ int run_command(const RunArgs& a) {
   for (const auto& n : names) fs::rename(stage.dir + "/" + n, a.out_dir + "/" + n);
   std::fputs(text.c_str(), stdout);
   std::printf("Wrote %s/{plan.trj, samples.csv, report.txt, path_feed.svg, profile.svg}\n", a.out_dir.c_str());
-  const bool ok = sr.mismatches == 0 && !sr.tick_err && passes(a.cfg, rep);
+  const bool ok = sr.mismatches == 0 && !sr.tick_err && passes(cfg, rep);
   if (!ok) std::fprintf(stderr, "trajcore run: a check FAILED (see the report)\n");
   return ok ? 0 : 1;
 }

@@ -12,7 +12,7 @@ namespace traj::app {
 struct PlanArgs {
   job::JobConfig cfg;
   std::string input;                 // path file (empty with raster)
-  std::string format;                // "json", "jsonl" or empty (by the file name)
+  std::string format;                // "json", "jsonl", "gcode", "svg", "dxf" or empty (by the file name)
   std::string output = "out/plan.trj";
   size_t window = 0;                 // > 0: stream with this window
   bool window_given = false;         // --window was on the command line
@@ -24,6 +24,7 @@ int plan_command(const PlanArgs& a);
 struct RunArgs {
   job::JobConfig cfg;
   std::string input;
+  std::string format;                // as PlanArgs::format
   std::string out_dir = "out";
 };
 // plan + simulate on the Verilated core + report and plots, all files or none.

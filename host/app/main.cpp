@@ -21,6 +21,11 @@ namespace {
 
 using traj::job::JobConfig;
 
+const std::vector<std::string> kFormats = {"json", "jsonl", "gcode", "svg", "dxf"};
+constexpr const char* kFormatHelp =
+    "path file format: json, jsonl, gcode, svg or dxf (default: by the name: .jsonl, .ngc/.nc/.gcode/.tap/.cnc, "
+    ".svg, .dxf; JSON otherwise)";
+
 void add_limits(CLI::App* c, JobConfig& cfg, std::vector<double>& v_axis, std::vector<double>& a_axis,
                 std::vector<double>& j_axis) {
   auto& L = cfg.limits;
@@ -105,8 +110,8 @@ int main(int argc, char** argv) {
   std::vector<double> v_axis, a_axis, j_axis;
   auto* pl = app.add_subcommand("plan", "Plan and compile a path (curve JSON) into a segment stream");
   pl->add_option("path", pa.input,
-                 "curve or path JSON (the butterfly format, or {\"curves\": [...]}), or a JSON Lines path "
-                 "(*.jsonl: one curve object per line, read as a stream)");
+                 "G-code (.ngc .nc .gcode .tap), SVG, DXF, curve or path JSON (the butterfly format, or "
+                 "{\"curves\": [...]}), or a JSON Lines path (*.jsonl: one curve object per line, read as a stream)");
   pl->add_option("-o,--output", pa.output, "segment stream to write")->capture_default_str();
   auto* window_opt = pl->add_option(
       "--window", pa.window,
@@ -114,8 +119,7 @@ int main(int argc, char** argv) {
       "(half below 16), "
       "write segments as they are final (0: plan the whole path at once; a .jsonl path is always streamed, "
       "default window 64)");
-  pl->add_option("--format", pa.format, "path file format: json or jsonl (default: jsonl for a name ending in .jsonl)")
-      ->check(CLI::IsMember({"json", "jsonl"}));
+  pl->add_option("--format", pa.format, kFormatHelp)->check(CLI::IsMember(kFormats));
   pl->footer(
       "JSON Lines paths (*.jsonl or --format jsonl): one curve per line, each a curve object of the butterfly "
       "format (degree, knots, control_points, optional weights); blank lines and lines starting with # are "
@@ -134,8 +138,11 @@ int main(int argc, char** argv) {
              "from `trajcore demo --engine bcu|mixed` or `trajcore spline`) on traj_core.");
 
   auto* rn = app.add_subcommand("run", "Plan, compile, simulate on the Verilated core, and report (text + SVG)");
-  rn->add_option("path", ra.input, "curve or path JSON (not .jsonl: plan a JSON Lines path with `plan`, then `sim`)")
+  rn->add_option("path", ra.input,
+                 "G-code (.ngc .nc .gcode .tap), SVG, DXF, or curve/path JSON (not .jsonl: plan a JSON Lines path "
+                 "with `plan`, then `sim`)")
       ->required();
+  rn->add_option("--format", ra.format, kFormatHelp)->check(CLI::IsMember(kFormats));
   rn->add_option("--out-dir", ra.out_dir, "where to write plan.trj, samples.csv, report.txt, *.svg")->capture_default_str();
   add_limits(rn, ra.cfg, v_axis, a_axis, j_axis);
 

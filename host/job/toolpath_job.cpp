@@ -1,0 +1,46 @@
+#include "job/toolpath_job.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "util/format.hpp"
+
+namespace traj::job {
+
+using plan::PlanError;
+
+ToolpathPlan toolpath_plan(const input::Toolpath& tp, const JobConfig& cfg, const ToolpathOptions& o) {
+  if (tp.moves.empty()) throw PlanError("the toolpath has no moves");
+  ToolpathPlan r;
+  r.cfg = cfg;
+  double v_axis_min = cfg.limits.v_axis[0];
+  for (int a = 1; a < tp.axes && a < plan::kMaxAxes; ++a) v_axis_min = std::min(v_axis_min, cfg.limits.v_axis[a]);
+  const double rapid = o.rapid > 0 ? o.rapid : v_axis_min;
+  double fastest = 0;
+  std::vector<double> speed(tp.moves.size());
+  for (size_t i = 0; i < tp.moves.size(); ++i) {
+    const input::Move& m = tp.moves[i];
+    r.path.add(m.curve, m.where);
+    const bool is_rapid = m.kind == input::Move::Kind::kRapid;
+    speed[i] = is_rapid ? rapid : (m.feed > 0 ? m.feed : cfg.limits.feed);
+    if (!(speed[i] > 0) || !std::isfinite(speed[i]))
+      throw PlanError(m.where + ": feed " + util::num(speed[i]) + " mm/s must be positive");
+    fastest = std::max(fastest, speed[i]);
+    (is_rapid ? r.rapids : r.feed_moves)++;
+  }
+  r.cfg.limits.feed = fastest;
+  auto& caps = r.cfg.plan.caps;
+  const double eps = 1e-9 * std::max(1.0, r.path.length());
+  for (size_t i = 0; i < tp.moves.size(); ++i) {
+    const double s0 = r.path.offset(i), s1 = r.path.offset(i + 1);
+    if (speed[i] < fastest) caps.push_back({s0, s1, speed[i]});
+    const bool last = i + 1 == tp.moves.size();
+    if (tp.moves[i].exact_stop && !last) {  // the path's end is a stop anyway
+      caps.push_back({s1 - eps, s1 + eps, 0.0});
+      ++r.stops;
+    }
+  }
+  return r;
+}
+
+}  // namespace traj::job

@@ -1,0 +1,36 @@
+// A toolpath (G-code, SVG, DXF) as the planner's input: the path of its moves,
+// and each move's speed as a speed cap over its arc length.
+//
+//   feed move   its programmed feed (F / 60), or the job's feed where the file
+//               programs none (SVG, DXF);
+//   rapid       the rapid speed (ToolpathOptions::rapid; by default the
+//               smallest per-axis velocity limit, which every direction can
+//               take);
+//   exact stop  the speed is 0 at the end of a move that asks for it (every
+//               rapid, G61): a cap of speed 0 over the junction point.
+// The planner's own speed limit (Limits::feed) becomes the largest of these
+// speeds, so the caps, not it, set the speed of each move.
+#pragma once
+#include <cstddef>
+#include <vector>
+
+#include "input/toolpath.hpp"
+#include "job/job.hpp"
+
+namespace traj::job {
+
+struct ToolpathOptions {
+  double rapid = 0;  // mm/s; 0: the smallest per-axis velocity limit
+};
+
+struct ToolpathPlan {
+  plan::Path path;
+  JobConfig cfg;     // the job's configuration with the caps and the feed limit of the toolpath
+  size_t feed_moves = 0, rapids = 0, stops = 0;
+};
+
+// PlanError naming the move if the moves do not chain (a reader's bug) or a
+// feed is not positive.
+ToolpathPlan toolpath_plan(const input::Toolpath& tp, const JobConfig& cfg, const ToolpathOptions& o = {});
+
+}  // namespace traj::job
