@@ -393,9 +393,9 @@ struct TrajResult {
 TrajResult run_trajcore(const input::Toolpath& programmed, const input::Toolpath& prepared, const job::JobConfig& cfg,
                         const VectorXd* probe) {
   TrajResult t;
+  const auto t0 = std::chrono::steady_clock::now();
   try {
     const job::ToolpathPlan tpp = job::toolpath_plan(prepared, cfg);
-    const auto t0 = std::chrono::steady_clock::now();
     const job::JobResult r = job::run_job(tpp.path, tpp.cfg);
     t.host = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const report::Samples s = report::predicted_samples(r);
@@ -420,6 +420,7 @@ TrajResult run_trajcore(const input::Toolpath& programmed, const input::Toolpath
     t.ok = true;
   } catch (const std::exception& e) {
     t.error = e.what();
+    t.host = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
   return t;
 }
@@ -430,12 +431,15 @@ void print_header(const Preparation& prep) {
   std::printf(
       "trajcore against an acceleration-only junction-deviation planner (GRBL-like reference, no jerk limit)\n"
       "preparation before trajcore plans: %s (%s)\n"
+      "limits (i): feed = v_axis 100, a 3000, j 60000 (per axis, tangential, centripetal), tol 0.05 mm, 0.5 ms\n"
+      "limits (ii): the main job's (feed 50, v_axis 200, a_axis 2000, j_axis 50000, a_tan 1000, j_tan 20000,\n"
+      "  a_cen 1000, j_cen 50000, tol 0.001 mm, 1 ms ticks)\n"
       "columns: moves = feed moves after preparation; corners = junctions whose tangent turns (trajcore\n"
       "  stops there); traj_s = trajcore's motion time (output samples); ref_s = the reference's time on the\n"
       "  programmed toolpath (same feed, accelerations, delta = path tolerance); ratio = traj_s / ref_s;\n"
-      "  host_s = run_job wall time (plan, ticks, fit, compile); dev_mm = report.max_deviation (output to the\n"
-      "  planned path); prog_dev_mm = output to the programmed toolpath (curves as chords within\n"
-      "  1e-4 tol); worst = largest output peak / limit\n",
+      "  host_s = toolpath_plan + run_job wall time (plan, ticks, fit, compile; until the error if it\n"
+      "  fails); dev_mm = report.max_deviation (output to the planned path); prog_dev_mm = output to the\n"
+      "  programmed toolpath (curves as chords within 1e-4 tol); worst = largest output peak / limit\n",
       prep.name, prep.what);
   std::printf("%-10s %-5s %6s %7s %9s %9s %7s %8s %11s %11s %s\n", "case", "lims", "moves", "corners", "traj_s",
               "ref_s", "ratio", "host_s", "dev_mm", "prog_dev_mm", "worst (what)");
@@ -463,8 +467,8 @@ Row run_case(const char* name, const LimitSet& ls, const input::Toolpath& progra
                 prepared.moves.size(), corners, row.traj.motion, row.ref.time, row.traj.motion / row.ref.time,
                 row.traj.host, row.traj.dev, row.traj.dev_prog, row.traj.worst_out, row.traj.worst_what.c_str());
   else
-    std::printf("%-10s %-5s %6zu %7d %9s %9.3f %7s %8s   trajcore failed: %s\n", name, ls.name, prepared.moves.size(),
-                corners, "-", row.ref.time, "-", "-", row.traj.error.c_str());
+    std::printf("%-10s %-5s %6zu %7d %9s %9.3f %7s %8.3f   trajcore failed: %s\n", name, ls.name,
+                prepared.moves.size(), corners, "-", row.ref.time, "-", row.traj.host, row.traj.error.c_str());
   std::fflush(stdout);
   return row;
 }
