@@ -51,7 +51,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <functional>
 #include <limits>
@@ -268,7 +267,6 @@ struct RefResult {
   double time = 0;
   std::vector<double> v_vertex;        // speed at every vertex (block ends), size blocks + 1
   std::vector<size_t> move_end_vertex;  // vertex index at the end of each move
-  size_t blocks = 0;
 };
 
 // Largest value along unit vector u that keeps every axis within its limit (GRBL's limit_value_by_axis_maximum).
@@ -337,7 +335,6 @@ RefResult grbl_reference(const input::Toolpath& tp, const job::JobConfig& cfg) {
   for (size_t i = 0; i < n; ++i)
     res.time += trapezoid_time(blocks[i].len, std::sqrt(v2[i]), std::sqrt(v2[i + 1]), blocks[i].v_nom, blocks[i].acc);
   for (double x : v2) res.v_vertex.push_back(std::sqrt(x));
-  res.blocks = n;
   return res;
 }
 
