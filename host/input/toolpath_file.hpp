@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reads a toolpath file by its kind: G-code (.ngc .nc .gcode .tap .cnc),
 // SVG (.svg) or DXF (.dxf). JSON and JSON Lines paths are curves without
 // moves (path_json.hpp, jsonl_source.hpp).

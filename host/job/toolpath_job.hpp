@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A toolpath (G-code, SVG, DXF) as the planner's input: the path of its moves,
 // and each move's speed as a speed cap over its arc length.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Toolpath benchmark: trajcore's motion time on CAM-like toolpaths against an
 // acceleration-only junction-deviation planner (the reference, as in GRBL).
 //   usage: bench_toolpaths [--short] [--prepare NAME] [--only SUBSTRING]
