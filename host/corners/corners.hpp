@@ -27,6 +27,12 @@ struct BlendOptions {
   double kink = 1e-6;         // turning angle (rad) up to which a join is passed as it is (the planner's corner_tol)
   double max_turn = 3.12413936106985;  // turning angle (rad, 179 degrees) above which the corner is an exact stop
   double min_line = 1e-6;     // mm: a segment remnant shorter than this is dropped (the blends meet directly)
+  // Runs of corners whose blends meet (every segment between them used up: short segments) become one
+  // cubic B-spline whose control points are the run's vertices, entered and left like a single blend
+  // (README.md, "Runs"). Its deviation is measured (sampled, then refined), not closed-form; a run
+  // that measures above the tolerance keeps its separate blends.
+  bool merge_runs = true;
+  int run_samples = 32;       // samples per knot span for a run's deviation check
 };
 
 // One curve of the output chain, with what it inherits from its move.
@@ -36,7 +42,7 @@ struct ChainCurve {
   double feed = 0;     // the move's feed (a blend: the smaller of its two moves' feeds)
   input::Move::Kind kind = input::Move::Kind::kFeed;
   bool exact_stop = false;  // stop at the end of this curve (the move's exact_stop, on its last curve)
-  bool blend = false;       // a corner transition
+  bool blend = false;       // a corner transition (a single corner's blend or a run's curve)
 };
 
 enum class StopReason { kRapid, kExactStop, kReversal, kCurvedMove };
@@ -58,7 +64,14 @@ struct Blend {
   double deviation = 0;     // (d/2) sin(turn/2)
   double tol = 0;           // tolerance that applied (the smaller of the two moves')
   bool shortened = false;   // d limited by a leg's share: deviation < tol
-  double peak_curvature = 0;
+  double peak_curvature = 0;  // of the separate blend (not of a run)
+  bool in_run = false;      // part of a merged run: deviation is the measured distance of the vertex to the run
+};
+
+// A run of corners merged into one curve.
+struct Run {
+  size_t first_blend = 0, corners = 0;  // indices into BlendResult::blends
+  double deviation = 0;                 // measured: the larger of vertex-to-curve and curve-to-polyline
 };
 
 struct BlendResult {
@@ -67,6 +80,7 @@ struct BlendResult {
   int joins_passed = 0;        // collinear or nearly (turn <= kink): left as they are
   double max_deviation = 0;    // largest blend deviation, mm
   std::vector<Blend> blends;
+  std::vector<Run> runs;
   std::vector<CornerStop> stops;
 };
 
@@ -77,6 +91,13 @@ double blend_peak_curvature(double d, double turn);
 // The blend at corner v between unit directions t_in (arriving) and t_out (leaving), spacing d.
 geo::BSpline corner_blend(const Eigen::VectorXd& v, const Eigen::VectorXd& t_in, const Eigen::VectorXd& t_out,
                           double d);
+
+// One cubic B-spline over a run of vertices v[0..m-1] (m >= 1), entered from direction t_in with
+// spacing d_first and left along t_out with spacing d_last: control points
+//   v0 - 2 d_first t_in, v0 - d_first t_in, v0, ..., v_{m-1}, v_{m-1} + d_last t_out, v_{m-1} + 2 d_last t_out,
+// clamped knots with the m interior knots uniform. m = 1 with d_first = d_last is corner_blend.
+geo::BSpline run_spline(const std::vector<Eigen::VectorXd>& v, const Eigen::VectorXd& t_in, double d_first,
+                        const Eigen::VectorXd& t_out, double d_last);
 
 // Blend every corner between two straight feed segments (degree-1 moves, each split at its vertices:
 // a degree-1 curve of many points is a polyline). Rapids, curved moves and their joins pass through
