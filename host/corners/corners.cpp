@@ -1,0 +1,354 @@
+#include "corners/corners.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "geometry/curve.hpp"
+
+namespace traj::corners {
+namespace {
+
+using Vec = Eigen::VectorXd;
+using Kind = input::Move::Kind;
+
+// A piece of the toolpath between two joins: one straight segment of a degree-1 move, or a whole
+// curved move (kept as it is).
+struct Element {
+  size_t move = 0;
+  bool segment = false;
+  Vec a, b;               // segment ends (segments only)
+  double length = 0;      // segments only
+  Vec t_start, t_end;     // unit tangents at the ends
+  bool last_of_move = false;
+};
+
+enum class JoinKind { kPass, kStop, kBlend };
+struct Join {
+  JoinKind kind = JoinKind::kPass;
+  double turn = 0;
+  double d = 0;
+};
+
+// Turning angle between unit tangents, accurate near 0 and near pi.
+double turning_angle(const Vec& t_in, const Vec& t_out) {
+  return 2 * std::atan2((t_out - t_in).norm(), (t_out + t_in).norm());
+}
+
+Vec unit_tangent(const geo::Curve& c, double u) {
+  const Eigen::MatrixXd e = c.eval(u, 1);
+  return e.col(1).normalized();
+}
+
+void add_move_elements(const input::Move& m, size_t index, std::vector<Element>& out) {
+  const size_t first = out.size();
+  const geo::BSpline spline = geo::clamp(m.curve);
+  if (spline.degree == 1) {
+    // A polyline: one element per non-degenerate span (knot spans map to control-point pairs).
+    for (int i = 0; i + 1 < spline.n_ctrl(); ++i) {
+      Element e;
+      e.move = index;
+      e.segment = true;
+      e.a = spline.ctrl.row(i).transpose();
+      e.b = spline.ctrl.row(i + 1).transpose();
+      e.length = (e.b - e.a).norm();
+      if (!(e.length > 0)) continue;
+      e.t_start = e.t_end = (e.b - e.a) / e.length;
+      out.push_back(std::move(e));
+    }
+  } else {
+    const geo::Curve c(spline, m.where);
+    Element e;
+    e.move = index;
+    e.t_start = unit_tangent(c, c.u_begin());
+    e.t_end = unit_tangent(c, c.u_end());
+    out.push_back(std::move(e));
+  }
+  if (out.size() > first) out.back().last_of_move = true;
+}
+
+double move_tol(const input::Move& m, double default_tol) { return m.tolerance < 0 ? default_tol : m.tolerance; }
+
+// What happens at the join between elements k and k+1 (d left 0 for blends; set later).
+Join classify(const input::Toolpath& tp, const Element& l, const Element& r, const BlendOptions& o,
+              BlendResult& res) {
+  Join j;
+  j.turn = turning_angle(l.t_end, r.t_start);
+  const input::Move& ml = tp.moves[l.move];
+  const input::Move& mr = tp.moves[r.move];
+  auto stop = [&](StopReason why) {
+    j.kind = JoinKind::kStop;
+    if (why == StopReason::kExactStop || j.turn > o.kink) res.stops.push_back({l.move, ml.where, why, j.turn});
+    return j;
+  };
+  if (l.last_of_move && ml.exact_stop) return stop(StopReason::kExactStop);
+  if (ml.kind == Kind::kRapid || mr.kind == Kind::kRapid) return stop(StopReason::kRapid);
+  if (j.turn <= o.kink) {
+    ++res.joins_passed;
+    return j;
+  }
+  if (!l.segment || !r.segment) return stop(StopReason::kCurvedMove);
+  if (j.turn > o.max_turn) return stop(StopReason::kReversal);
+  j.kind = JoinKind::kBlend;
+  return j;
+}
+
+std::string blend_where(const input::Move& l, const input::Move& r, const std::string& what = "corner blend") {
+  return (l.where == r.where ? l.where : l.where + " / " + r.where) + ": " + what;
+}
+
+double dist_to_segment(const Vec& p, const Vec& a, const Vec& b) {
+  const Vec ab = b - a;
+  const double L2 = ab.squaredNorm();
+  const double t = L2 > 0 ? std::clamp((p - a).dot(ab) / L2, 0.0, 1.0) : 0.0;
+  return (p - (a + t * ab)).norm();
+}
+
+// Golden-section minimum of f on [a, b] (f unimodal there), to 3e-13 of the interval.
+template <class F>
+double golden_min(F f, double a, double b) {
+  const double g = 0.5 * (std::sqrt(5.0) - 1);
+  double x1 = b - g * (b - a), x2 = a + g * (b - a), f1 = f(x1), f2 = f(x2);
+  for (int it = 0; it < 60; ++it) {  // 0.618^60 = 3e-13 of the interval
+    if (f1 < f2) {
+      b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = f(x1);
+    } else {
+      a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = f(x2);
+    }
+  }
+  return std::min({f1, f2, f(0.5 * (a + b))});
+}
+
+// Measured deviation of a run's curve from its control polygon (which lies on the programmed
+// polyline): the larger of (1) the largest distance of a curve point from the polygon, sampled
+// `samples` times per knot span and refined by golden section at the worst sample, and (2) the
+// distance of each vertex (control points 2..n-3) to the curve, searched near its knot the same way.
+double run_deviation(const geo::BSpline& s, int samples) {
+  const geo::Curve c(s, "run");
+  const int n = s.n_ctrl();
+  const int spans = n - 3;
+  auto row = [&](int i) -> Vec { return s.ctrl.row(i).transpose(); };
+  // The curve on knot span j lies in the hull of control points j..j+3: the polygon edges j-1..j+3 near it.
+  auto dist_poly = [&](double u, int j) {
+    const Vec p = c.point(u);
+    double best = INFINITY;
+    for (int e = std::max(0, j - 1); e <= std::min(n - 2, j + 3); ++e) best = std::min(best, dist_to_segment(p, row(e), row(e + 1)));
+    return best;
+  };
+  double worst = 0;
+  for (int j = 0; j < spans; ++j) {
+    const double u0 = s.knots[j + 3], u1 = s.knots[j + 4];
+    int arg = 0;
+    double w = -1;
+    for (int i = 0; i <= samples; ++i) {
+      const double d = dist_poly(u0 + (u1 - u0) * i / samples, j);
+      if (d > w) w = d, arg = i;
+    }
+    const double h = (u1 - u0) / samples;
+    const double ua = u0 + h * std::max(0, arg - 1), ub = u0 + h * std::min(samples, arg + 1);
+    worst = std::max({worst, w, -golden_min([&](double u) { return -dist_poly(u, j); }, ua, ub)});
+  }
+  // Points of the programmed polyline: each vertex (control points 2..n-3) and the midpoint of each
+  // polygon edge between two vertices, against the curve between the Greville abscissae of the
+  // neighbouring control points (a B-spline is nearest its control point i about its Greville
+  // abscissa xi_i = (t_{i+1} + t_{i+2} + t_{i+3}) / 3, also next to the clamped ends).
+  auto greville = [&](int i) { return (s.knots[i + 1] + s.knots[i + 2] + s.knots[i + 3]) / 3; };
+  auto dist_curve = [&](const Vec& p, double ua, double ub) {
+    double best = INFINITY, arg = ua;
+    for (int k = 0; k <= 2 * samples; ++k) {
+      const double u = ua + (ub - ua) * k / (2 * samples);
+      const double d = (c.point(u) - p).norm();
+      if (d < best) best = d, arg = u;
+    }
+    const double h = (ub - ua) / (2 * samples);
+    return std::min(best, golden_min([&](double u) { return (c.point(u) - p).norm(); }, std::max(ua, arg - h),
+                                     std::min(ub, arg + h)));
+  };
+  for (int i = 2; i <= n - 3; ++i) {
+    worst = std::max(worst, dist_curve(row(i), greville(i - 1), greville(i + 1)));
+    if (i < n - 3) worst = std::max(worst, dist_curve(0.5 * (row(i) + row(i + 1)), greville(i - 1), greville(i + 2)));
+  }
+  return worst;
+}
+
+}  // namespace
+
+const char* to_string(StopReason r) {
+  switch (r) {
+    case StopReason::kRapid: return "rapid";
+    case StopReason::kExactStop: return "exact stop";
+    case StopReason::kReversal: return "reversal";
+    case StopReason::kCurvedMove: return "curved move";
+  }
+  return "?";
+}
+
+double blend_deviation(double d, double turn) { return 0.5 * d * std::sin(0.5 * turn); }
+
+double blend_spacing_for(double tol, double turn) { return 2 * tol / std::sin(0.5 * turn); }
+
+double blend_peak_curvature(double d, double turn) {
+  const double c = std::cos(0.5 * turn);
+  return 4.0 / 3.0 * std::sin(0.5 * turn) / (d * c * c);
+}
+
+geo::BSpline corner_blend(const Vec& v, const Vec& t_in, const Vec& t_out, double d) {
+  geo::BSpline b;
+  b.degree = 3;
+  b.ctrl.resize(5, v.size());
+  b.ctrl.row(0) = (v - 2 * d * t_in).transpose();
+  b.ctrl.row(1) = (v - d * t_in).transpose();
+  b.ctrl.row(2) = v.transpose();
+  b.ctrl.row(3) = (v + d * t_out).transpose();
+  b.ctrl.row(4) = (v + 2 * d * t_out).transpose();
+  b.knots.resize(9);
+  b.knots << 0, 0, 0, 0, 0.5, 1, 1, 1, 1;
+  b.name = "corner blend";
+  return b;
+}
+
+geo::BSpline run_spline(const std::vector<Vec>& v, const Vec& t_in, double d_first, const Vec& t_out,
+                        double d_last) {
+  const int m = static_cast<int>(v.size());
+  const int n = m + 4;
+  geo::BSpline b;
+  b.degree = 3;
+  b.ctrl.resize(n, v[0].size());
+  b.ctrl.row(0) = (v[0] - 2 * d_first * t_in).transpose();
+  b.ctrl.row(1) = (v[0] - d_first * t_in).transpose();
+  for (int i = 0; i < m; ++i) b.ctrl.row(2 + i) = v[i].transpose();
+  b.ctrl.row(n - 2) = (v[m - 1] + d_last * t_out).transpose();
+  b.ctrl.row(n - 1) = (v[m - 1] + 2 * d_last * t_out).transpose();
+  b.knots.resize(n + 4);
+  for (int i = 0; i < 4; ++i) b.knots[i] = 0, b.knots[n + i] = 1;
+  for (int i = 1; i <= m; ++i) b.knots[3 + i] = double(i) / (m + 1);
+  b.name = m == 1 ? "corner blend" : "corner run";
+  return b;
+}
+
+BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const BlendOptions& o) {
+  if (!(default_tol > 0)) throw std::invalid_argument("blend_corners: default tolerance must be positive");
+  if (!(o.share > 0 && o.share <= 1)) throw std::invalid_argument("blend_corners: share must be in (0, 1]");
+  BlendResult res;
+  std::vector<Element> el;
+  for (size_t i = 0; i < tp.moves.size(); ++i) add_move_elements(tp.moves[i], i, el);
+  if (el.empty()) return res;
+
+  std::vector<Join> joins(el.size() - 1);
+  for (size_t k = 0; k + 1 < el.size(); ++k) joins[k] = classify(tp, el[k], el[k + 1], o, res);
+
+  // Spacing: the tolerance's, shortened to the share of each leg.
+  std::vector<size_t> blend_of(joins.size(), 0);
+  for (size_t k = 0; k < joins.size(); ++k) {
+    Join& j = joins[k];
+    if (j.kind != JoinKind::kBlend) continue;
+    const input::Move& ml = tp.moves[el[k].move];
+    const input::Move& mr = tp.moves[el[k + 1].move];
+    const double tol = std::min(move_tol(ml, default_tol), move_tol(mr, default_tol));
+    if (!(tol > 0)) throw std::invalid_argument(ml.where + ": tolerance must be positive");
+    const double d_tol = blend_spacing_for(tol, j.turn);
+    const double d_leg = 0.5 * o.share * std::min(el[k].length, el[k + 1].length);
+    j.d = std::min(d_tol, d_leg);
+    Blend b;
+    b.move = el[k].move;
+    b.turn = j.turn;
+    b.d = j.d;
+    b.deviation = blend_deviation(j.d, j.turn);
+    b.tol = tol;
+    b.shortened = d_leg < d_tol;
+    b.peak_curvature = blend_peak_curvature(j.d, j.turn);
+    blend_of[k] = res.blends.size();
+    res.blends.push_back(b);
+    ++res.corners_blended;
+  }
+
+  // Emit: each segment trimmed by 2d at a blended end, each blend starting where the chain ends.
+  Vec last_end;
+  // A segment between two blended joins that the two blends use up.
+  auto used_up = [&](size_t seg) {
+    return seg > 0 && seg < joins.size() && joins[seg - 1].kind == JoinKind::kBlend &&
+           joins[seg].kind == JoinKind::kBlend && el[seg].length - 2 * joins[seg - 1].d - 2 * joins[seg].d < o.min_line;
+  };
+  // Vertices from join k on that can share one curve: consecutive blended joins with used-up segments
+  // between them, each vertex's second difference (a uniform cubic B-spline's knot point lies
+  // |V_{i-1} - 2 V_i + V_{i+1}| / 6 from V_i) within half its tolerance.
+  auto run_length = [&](size_t k) {
+    auto smooth_enough = [&](size_t kk) {
+      if (kk + 1 >= el.size() || !el[kk].segment || !el[kk + 1].segment) return false;
+      const Vec dd = el[kk].a - 2 * el[kk].b + el[kk + 1].b;
+      return dd.norm() / 6 <= 0.5 * res.blends[blend_of[kk]].tol;
+    };
+    size_t m = 1;
+    while (k + m < joins.size() && used_up(k + m) && smooth_enough(k + m - 1) && smooth_enough(k + m)) ++m;
+    return m;
+  };
+  // Emit joins k .. k+m-1 as one curve, if it measures within tolerance.
+  auto emit_run = [&](size_t k, size_t m) {
+    std::vector<Vec> v;
+    double tol = INFINITY, feed = INFINITY;
+    for (size_t i = 0; i < m; ++i) {
+      v.push_back(el[k + i].b);
+      tol = std::min(tol, res.blends[blend_of[k + i]].tol);
+      feed = std::min(feed, tp.moves[el[k + i].move].feed);
+    }
+    feed = std::min(feed, tp.moves[el[k + m].move].feed);
+    geo::BSpline rs = run_spline(v, el[k].t_end, joins[k].d, el[k + m].t_start, joins[k + m - 1].d);
+    rs.ctrl.row(0) = last_end.transpose();
+    const double dev = run_deviation(rs, o.run_samples);
+    if (!(dev <= tol)) return false;
+    Run run{blend_of[k], m, dev};
+    for (size_t i = 0; i < m; ++i) {
+      Blend& b = res.blends[blend_of[k + i]];
+      b.in_run = true;
+      b.deviation = dev;
+    }
+    res.runs.push_back(run);
+    res.curves.push_back({rs, blend_where(tp.moves[el[k].move], tp.moves[el[k + m].move],
+                                          "run of " + std::to_string(m) + " corners"),
+                          feed, Kind::kFeed, false, true});
+    last_end = rs.ctrl.row(rs.n_ctrl() - 1).transpose();
+    return true;
+  };
+  for (size_t k = 0; k < el.size(); ++k) {
+    const Element& e = el[k];
+    const input::Move& m = tp.moves[e.move];
+    const bool stop_here = e.last_of_move && m.exact_stop;
+    if (!e.segment) {
+      res.curves.push_back({geo::clamp(m.curve), m.where, m.feed, m.kind, stop_here, false});
+      const auto& c = res.curves.back().curve;
+      last_end = c.ctrl.row(c.n_ctrl() - 1).transpose();
+      continue;
+    }
+    const bool blend_before = k > 0 && joins[k - 1].kind == JoinKind::kBlend;
+    const bool blend_after = k < joins.size() && joins[k].kind == JoinKind::kBlend;
+    const double cut0 = blend_before ? 2 * joins[k - 1].d : 0;
+    const double cut1 = blend_after ? 2 * joins[k].d : 0;
+    const Vec a = blend_before ? last_end : Vec(e.a);
+    const Vec b = e.b - cut1 * e.t_end;
+    if (e.length - cut0 - cut1 >= o.min_line || !blend_after) {
+      res.curves.push_back({geo::make_line(a, b), m.where, m.feed, m.kind, stop_here, false});
+      last_end = b;
+    } else {
+      last_end = a;  // the remnant is dropped: the next blend starts here, on the same segment line
+    }
+    if (blend_after && o.merge_runs) {
+      const size_t m = run_length(k);
+      if (m >= 2 && emit_run(k, m)) {
+        k += m - 1;  // segments k+1 .. k+m-1 are used up; segment k+m starts at the run's end
+        continue;
+      }
+    }
+    if (blend_after) {
+      const Element& r = el[k + 1];
+      geo::BSpline bl = corner_blend(e.b, e.t_end, r.t_start, joins[k].d);
+      bl.ctrl.row(0) = last_end.transpose();
+      const input::Move& mr = tp.moves[r.move];
+      res.curves.push_back({bl, blend_where(m, mr), std::min(m.feed, mr.feed), Kind::kFeed, false, true});
+      last_end = bl.ctrl.row(4).transpose();
+    }
+  }
+  for (const Blend& b : res.blends) res.max_deviation = std::max(res.max_deviation, b.deviation);
+  return res;
+}
+
+}  // namespace traj::corners

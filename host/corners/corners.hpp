@@ -1,0 +1,115 @@
+// Corner blending: the feed moves of a toolpath turned into a curvature-continuous (G2) chain of
+// curves within the path tolerance (README.md: method, formulas, limits).
+//
+// At each corner where two straight feed segments meet with a tangent break, a piece of length 2d of
+// each segment is replaced by a symmetric cubic B-spline of five control points
+//   P0 = V - 2d t_in, P1 = V - d t_in, P2 = V, P3 = V + d t_out, P4 = V + 2d t_out,
+//   knots {0,0,0,0,1/2,1,1,1,1},
+// tangent to both legs with curvature 0 at both joins (P0, P1, P2 collinear, and P2, P3, P4). With
+// theta the turning angle (0: straight on, pi: reversal), in closed form:
+//   deviation (distance from the corner V to the blend, = Hausdorff distance to the polyline)
+//     delta = (d / 2) sin(theta / 2),
+//   peak curvature (at u = 1/2)   kappa_max = (4/3) sin(theta/2) / (d cos^2(theta/2)).
+// d is the largest value with delta <= tol and 2d <= share * (length of each leg).
+#pragma once
+#include <Eigen/Dense>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "geometry/bspline.hpp"
+#include "input/toolpath.hpp"
+
+namespace traj::corners {
+
+struct BlendOptions {
+  double share = 0.5;         // largest share of a segment one blend may take (from each leg): no overlaps
+  double kink = 1e-6;         // turning angle (rad) up to which a join is passed as it is (the planner's corner_tol)
+  double max_turn = 3.12413936106985;  // turning angle (rad, 179 degrees) above which the corner is an exact stop
+  double min_line = 1e-6;     // mm: a segment remnant shorter than this is dropped (the blends meet directly)
+  // Runs of corners whose blends meet (every segment between them used up: short segments) become one
+  // cubic B-spline whose control points are the run's vertices, entered and left like a single blend
+  // (README.md, "Runs"). Its deviation is measured (sampled, then refined), not closed-form; a run
+  // that measures above the tolerance keeps its separate blends.
+  bool merge_runs = true;
+  int run_samples = 32;       // samples per knot span for a run's deviation check
+};
+
+// One curve of the output chain, with what it inherits from its move.
+struct ChainCurve {
+  geo::BSpline curve;  // clamped, mm
+  std::string where;   // the move's where; blends: "<where in> / <where out>: corner blend"
+  double feed = 0;     // the move's feed (a blend: the smaller of its two moves' feeds)
+  input::Move::Kind kind = input::Move::Kind::kFeed;
+  bool exact_stop = false;  // stop at the end of this curve (the move's exact_stop, on its last curve)
+  bool blend = false;       // a corner transition (a single corner's blend or a run's curve)
+};
+
+enum class StopReason { kRapid, kExactStop, kReversal, kCurvedMove };
+const char* to_string(StopReason r);
+
+// A corner (tangent break) left as it is: the planner stops there (or passes it at its corner speed).
+struct CornerStop {
+  size_t move = 0;      // index of the move that ends at the corner
+  std::string where;
+  StopReason reason = StopReason::kExactStop;
+  double turn = 0;      // turning angle, rad
+};
+
+// A blended corner.
+struct Blend {
+  size_t move = 0;          // index of the move that ends at (or contains) the corner
+  double turn = 0;          // turning angle, rad
+  double d = 0;             // control-point spacing; each leg loses 2d
+  double deviation = 0;     // (d/2) sin(turn/2)
+  double tol = 0;           // tolerance that applied (the smaller of the two moves')
+  bool shortened = false;   // d limited by a leg's share: deviation < tol
+  double peak_curvature = 0;  // of the separate blend (not of a run)
+  bool in_run = false;      // part of a merged run: deviation is the measured distance of the vertex to the run
+};
+
+// A run of corners merged into one curve.
+struct Run {
+  size_t first_blend = 0, corners = 0;  // indices into BlendResult::blends
+  double deviation = 0;                 // measured: the larger of vertex-to-curve and curve-to-polyline
+};
+
+struct BlendResult {
+  std::vector<ChainCurve> curves;
+  int corners_blended = 0;
+  int joins_passed = 0;        // collinear or nearly (turn <= kink): left as they are
+  double max_deviation = 0;    // largest blend deviation, mm
+  std::vector<Blend> blends;
+  std::vector<Run> runs;
+  std::vector<CornerStop> stops;
+};
+
+// Closed forms of the five-point blend (README.md derives them).
+double blend_deviation(double d, double turn);
+double blend_spacing_for(double tol, double turn);  // d with blend_deviation(d, turn) == tol
+double blend_peak_curvature(double d, double turn);
+// The blend at corner v between unit directions t_in (arriving) and t_out (leaving), spacing d.
+geo::BSpline corner_blend(const Eigen::VectorXd& v, const Eigen::VectorXd& t_in, const Eigen::VectorXd& t_out,
+                          double d);
+
+// One cubic B-spline over a run of vertices v[0..m-1] (m >= 1), entered from direction t_in with
+// spacing d_first and left along t_out with spacing d_last: control points
+//   v0 - 2 d_first t_in, v0 - d_first t_in, v0, ..., v_{m-1}, v_{m-1} + d_last t_out, v_{m-1} + 2 d_last t_out,
+// clamped knots with the m interior knots uniform. m = 1 with d_first = d_last is corner_blend.
+geo::BSpline run_spline(const std::vector<Eigen::VectorXd>& v, const Eigen::VectorXd& t_in, double d_first,
+                        const Eigen::VectorXd& t_out, double d_last);
+
+// Blend every corner between two straight feed segments (degree-1 moves, each split at its vertices:
+// a degree-1 curve of many points is a polyline). Rapids, curved moves and their joins pass through
+// unchanged. default_tol applies where a move's tolerance is < 0. Throws std::invalid_argument on a
+// non-positive tolerance or share outside (0, 1].
+BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const BlendOptions& o = {});
+
+// Append the chain to a planner path (plan::Path::add(spline, where) checks each join), or to any
+// type with that member: this library does not depend on the planner.
+template <class PathT>
+void append_to(PathT& path, const BlendResult& r) {
+  for (const ChainCurve& c : r.curves) path.add(c.curve, c.where);
+}
+
+}  // namespace traj::corners

@@ -1,0 +1,501 @@
+// Corner blending against references that do not use the closed forms under test: the blends are
+// evaluated by a separate textbook Cox-de Boor recursion (tb/geometry/ref_deboor.hpp), distances
+// are measured by dense sampling and golden-section search, curvature by that reference's
+// derivatives.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "corners/corners.hpp"
+#include "planner/planner.hpp"
+#include "ref_deboor.hpp"
+
+namespace {
+
+using traj::corners::BlendOptions;
+using traj::corners::BlendResult;
+using traj::corners::StopReason;
+using traj::input::Move;
+using traj::input::Toolpath;
+using Vec = Eigen::VectorXd;
+namespace geo = traj::geo;
+namespace plan = traj::plan;
+const double kPi = std::acos(-1.0);
+
+Vec v2(double x, double y) {
+  Vec v(2);
+  v << x, y;
+  return v;
+}
+
+// A toolpath of one feed move per segment of the polyline.
+Toolpath polyline(const std::vector<Vec>& pts, double feed = 100, double tol = -1) {
+  Toolpath tp;
+  tp.axes = static_cast<int>(pts[0].size());
+  for (size_t i = 0; i + 1 < pts.size(); ++i) {
+    Move m;
+    m.curve = geo::make_line(pts[i], pts[i + 1]);
+    m.feed = feed;
+    m.tolerance = tol;
+    m.where = "seg" + std::to_string(i);
+    tp.moves.push_back(m);
+  }
+  return tp;
+}
+
+ref::Spline to_ref(const geo::BSpline& b) {
+  ref::Spline r;
+  r.p = b.degree;
+  for (int i = 0; i < b.knots.size(); ++i) r.U.push_back(b.knots[i]);
+  for (int i = 0; i < b.n_ctrl(); ++i) {
+    std::vector<double> p;
+    for (int d = 0; d < b.dim(); ++d) p.push_back(b.ctrl(i, d));
+    r.P.push_back(p);
+  }
+  return r;
+}
+
+struct Eval {
+  Vec c, d1, d2;
+};
+Eval eval_ref(const ref::Spline& s, double u) {
+  const auto D = ref::cox_de_boor_derivs(s, u, 2);
+  Eval e;
+  e.c.resize(s.dim());
+  e.d1.resize(s.dim());
+  e.d2.resize(s.dim());
+  for (int k = 0; k < s.dim(); ++k) {
+    e.c[k] = D[0][k];
+    e.d1[k] = D[1][k];
+    e.d2[k] = D[2][k];
+  }
+  return e;
+}
+
+// kappa = |r''_perp| / |r'|^2 (r''_perp: the part of r'' normal to r'), any dimension; this form has
+// no cancellation where the curvature is near 0 (sqrt(|r'|^2 |r''|^2 - (r'.r'')^2) has).
+double curvature_ref(const Eval& e) {
+  const double a = e.d1.squaredNorm();
+  return (e.d2 - (e.d2.dot(e.d1) / a) * e.d1).norm() / a;
+}
+
+double dist_to_segment(const Vec& p, const Vec& a, const Vec& b) {
+  const Vec ab = b - a;
+  const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+  return (p - (a + t * ab)).norm();
+}
+
+double dist_to_polyline(const Vec& p, const std::vector<Vec>& pts) {
+  double best = INFINITY;
+  for (size_t i = 0; i + 1 < pts.size(); ++i) best = std::min(best, dist_to_segment(p, pts[i], pts[i + 1]));
+  return best;
+}
+
+// Golden-section search of the minimum of f on [a, b] (f unimodal there), to |b - a| <= 1e-13.
+template <class F>
+double golden_min(F f, double a, double b) {
+  const double g = (std::sqrt(5.0) - 1) / 2;
+  double x1 = b - g * (b - a), x2 = a + g * (b - a), f1 = f(x1), f2 = f(x2);
+  while (b - a > 1e-13) {
+    if (f1 < f2) {
+      b = x2; x2 = x1; f2 = f1; x1 = b - g * (b - a); f1 = f(x1);
+    } else {
+      a = x1; x1 = x2; f1 = f2; x2 = a + g * (b - a); f2 = f(x2);
+    }
+  }
+  return f(0.5 * (a + b));
+}
+
+// Distance from point v to the curve: dense sampling brackets the minimum, golden section refines it.
+double dist_point_to_curve(const ref::Spline& s, const Vec& v) {
+  const int n = 4000;
+  int best = 0;
+  double bd = INFINITY;
+  for (int i = 0; i <= n; ++i) {
+    const double d = (eval_ref(s, double(i) / n).c - v).norm();
+    if (d < bd) bd = d, best = i;
+  }
+  auto f = [&](double u) { return (eval_ref(s, std::clamp(u, 0.0, 1.0)).c - v).norm(); };
+  return std::min(bd, golden_min(f, std::max(0, best - 1) / double(n), std::min(n, best + 1) / double(n)));
+}
+
+// Largest distance of the curve from the polyline (dense sampling).
+double max_dist_curve_to_polyline(const ref::Spline& s, const std::vector<Vec>& pts, int n = 2000) {
+  double worst = 0;
+  for (int i = 0; i <= n; ++i) worst = std::max(worst, dist_to_polyline(eval_ref(s, double(i) / n).c, pts));
+  return worst;
+}
+
+std::vector<Vec> corner_pts(double turn, double leg) {
+  return {v2(-leg, 0), v2(0, 0), v2(leg * std::cos(turn), leg * std::sin(turn))};
+}
+
+// (a) The deviation: distance from the corner to the blend equals (d/2) sin(turn/2) = tol where the
+// legs are long enough; no blend point is farther than tol from the polyline.
+TEST(CornerBlend, DeviationIsTheToleranceAtEveryAngle) {
+  for (double deg : {0.01, 1.0, 10.0, 45.0, 90.0, 135.0, 170.0, 179.0}) {
+    for (double tol : {1e-3, 0.05}) {
+      const double turn = deg * kPi / 180;
+      const auto pts = corner_pts(turn, 1e4);
+      const BlendResult r = traj::corners::blend_corners(polyline(pts), tol);
+      ASSERT_EQ(r.corners_blended, 1) << deg;
+      ASSERT_EQ(r.curves.size(), 3u);
+      const ref::Spline s = to_ref(r.curves[1].curve);
+      const double dev = dist_point_to_curve(s, pts[1]);
+      EXPECT_NEAR(dev, tol, 1e-9 * tol) << deg << " deg";
+      EXPECT_NEAR(r.blends[0].deviation, tol, 1e-12 * tol);
+      EXPECT_FALSE(r.blends[0].shortened);
+      EXPECT_LE(max_dist_curve_to_polyline(s, pts), tol * (1 + 1e-12)) << deg << " deg";
+    }
+  }
+}
+
+// Short legs: the blend takes half of the shorter leg and reports the smaller deviation, exact too.
+TEST(CornerBlend, ShortLegShrinksTheBlend) {
+  const double turn = 60 * kPi / 180;
+  const auto pts = corner_pts(turn, 0.02);
+  const BlendResult r = traj::corners::blend_corners(polyline(pts), 0.05);
+  ASSERT_EQ(r.corners_blended, 1);
+  EXPECT_TRUE(r.blends[0].shortened);
+  EXPECT_DOUBLE_EQ(r.blends[0].d, 0.005);  // 2d = half of 0.02
+  const ref::Spline s = to_ref(r.curves[1].curve);
+  EXPECT_NEAR(dist_point_to_curve(s, pts[1]), r.blends[0].deviation, 1e-9 * r.blends[0].deviation);
+  EXPECT_LT(r.max_deviation, 0.05);
+}
+
+// (b) G2 at both joins: position, unit tangent and curvature (0) equal the legs'; the peak curvature
+// (golden-section maximum of the reference curvature) equals the closed form.
+TEST(CornerBlend, JoinsAreG2AndPeakCurvatureMatches) {
+  for (double deg : {1.0, 30.0, 90.0, 150.0, 179.0}) {
+    const double turn = deg * kPi / 180;
+    const auto pts = corner_pts(turn, 10);
+    const BlendResult r = traj::corners::blend_corners(polyline(pts), 0.05);
+    ASSERT_EQ(r.curves.size(), 3u);
+    const ref::Spline s = to_ref(r.curves[1].curve);
+    const Vec t_in = (pts[1] - pts[0]).normalized(), t_out = (pts[2] - pts[1]).normalized();
+    const Eval e0 = eval_ref(s, 0), e1 = eval_ref(s, 1);
+    const auto& l0 = r.curves[0].curve;
+    const auto& l2 = r.curves[2].curve;
+    EXPECT_LE((e0.c - l0.ctrl.row(1).transpose()).norm(), 1e-12 * 10);
+    EXPECT_LE((e1.c - l2.ctrl.row(0).transpose()).norm(), 1e-12 * 10);
+    EXPECT_LE((e0.d1.normalized() - t_in).norm(), 1e-12);
+    EXPECT_LE((e1.d1.normalized() - t_out).norm(), 1e-12);
+    const double kp = r.blends[0].peak_curvature;
+    EXPECT_LE(curvature_ref(e0), 1e-9 * kp) << deg;
+    EXPECT_LE(curvature_ref(e1), 1e-9 * kp) << deg;
+    // Curvature by finite differences of the unit tangent over arc length next to the joins: -> 0.
+    auto fd_kappa = [&](double u, double h) {
+      const Eval a = eval_ref(s, u), b = eval_ref(s, u + h);
+      return (b.d1.normalized() - a.d1.normalized()).norm() / (b.c - a.c).norm();
+    };
+    EXPECT_LE(fd_kappa(0, 1e-6), 1e-4 * kp) << deg;
+    EXPECT_LE(fd_kappa(1 - 1e-6, 1e-6), 1e-4 * kp) << deg;
+    // Peak: sampled maximum, refined by golden section.
+    int best = 0;
+    double bk = 0;
+    for (int i = 0; i <= 2000; ++i) {
+      const double k = curvature_ref(eval_ref(s, i / 2000.0));
+      if (k > bk) bk = k, best = i;
+    }
+    const double peak = -golden_min([&](double u) { return -curvature_ref(eval_ref(s, u)); },
+                                    (best - 1) / 2000.0, (best + 1) / 2000.0);
+    EXPECT_NEAR(peak, kp, 1e-9 * kp) << deg;
+    EXPECT_NEAR(best / 2000.0, 0.5, 1e-3) << deg;
+  }
+}
+
+// Joins left as they are: collinear (passed), reversal, exact stop, rapid.
+TEST(CornerBlend, StopsAndPassedJoins) {
+  // collinear and a 1e-8 rad kink: passed, no blend
+  {
+    const auto pts = std::vector<Vec>{v2(0, 0), v2(1, 0), v2(2, 0), v2(3, 1e-8)};
+    const BlendResult r = traj::corners::blend_corners(polyline(pts), 0.01);
+    EXPECT_EQ(r.corners_blended, 0);
+    EXPECT_EQ(r.joins_passed, 2);
+    EXPECT_TRUE(r.stops.empty());
+    EXPECT_EQ(r.curves.size(), 3u);
+  }
+  // 179.5 degrees turn: a reversal, left as an exact stop
+  {
+    const BlendResult r = traj::corners::blend_corners(polyline(corner_pts(179.5 * kPi / 180, 5)), 0.01);
+    EXPECT_EQ(r.corners_blended, 0);
+    ASSERT_EQ(r.stops.size(), 1u);
+    EXPECT_EQ(r.stops[0].reason, StopReason::kReversal);
+  }
+  // exact stop on the first move, rapid between the second and third
+  {
+    const auto pts = std::vector<Vec>{v2(0, 0), v2(1, 0), v2(1, 1), v2(2, 1), v2(2, 2)};
+    Toolpath tp = polyline(pts);
+    tp.moves[0].exact_stop = true;
+    tp.moves[2].kind = Move::Kind::kRapid;
+    tp.moves[2].exact_stop = true;
+    const BlendResult r = traj::corners::blend_corners(tp, 0.01);
+    EXPECT_EQ(r.corners_blended, 0);
+    ASSERT_EQ(r.stops.size(), 3u);
+    EXPECT_EQ(r.stops[0].reason, StopReason::kExactStop);
+    EXPECT_EQ(r.stops[1].reason, StopReason::kRapid);
+    EXPECT_EQ(r.stops[2].reason, StopReason::kExactStop);
+    EXPECT_TRUE(r.curves[0].exact_stop);
+  }
+  // a curved move (arc) next to a line with a tangent break: left to the planner
+  {
+    Toolpath tp = polyline({v2(-1, 0), v2(0, 0)});
+    Move arc;
+    arc.curve = geo::make_arc(Eigen::Vector2d(1, 0), 1, kPi, kPi / 2);  // starts at (0,0) heading up
+    arc.feed = 100;
+    arc.where = "arc";
+    tp.moves.push_back(arc);
+    const BlendResult r = traj::corners::blend_corners(tp, 0.01);
+    EXPECT_EQ(r.corners_blended, 0);
+    ASSERT_EQ(r.stops.size(), 1u);
+    EXPECT_EQ(r.stops[0].reason, StopReason::kCurvedMove);
+  }
+}
+
+// A degree-1 move of many points is a polyline: its inner vertices are blended too.
+TEST(CornerBlend, PolylineMoveIsSplitAtItsVertices) {
+  Eigen::MatrixXd P(4, 2);
+  P << 0, 0, 1, 0, 1, 1, 2, 1;
+  Toolpath tp;
+  tp.axes = 2;
+  Move m;
+  m.curve.degree = 1;
+  m.curve.ctrl = P;
+  m.curve.knots.resize(6);
+  m.curve.knots << 0, 0, 0.3, 0.6, 1, 1;
+  m.feed = 50;
+  m.where = "poly";
+  tp.moves.push_back(m);
+  const BlendResult r = traj::corners::blend_corners(tp, 0.01);
+  EXPECT_EQ(r.corners_blended, 2);
+  EXPECT_EQ(r.curves.size(), 5u);
+  for (const auto& c : r.curves) EXPECT_EQ(c.feed, 50);
+}
+
+// Random walk: turns in [1, 179] degrees, either side, in 2-D or 3-D.
+std::vector<Vec> random_polyline(std::mt19937& g, int n, int dim) {
+  std::uniform_real_distribution<double> U(0, 1);
+  std::vector<Vec> pts{Vec::Zero(dim)};
+  Vec t = Vec::Zero(dim);
+  t[0] = 1;
+  for (int i = 0; i < n; ++i) {
+    const double len = std::pow(10.0, -3 + 4 * U(g));  // 1e-3 .. 10 mm
+    const Vec next = pts.back() + len * t;
+    pts.push_back(next);
+    const double turn = (1 + 178 * U(g)) * kPi / 180;
+    Vec axis = Vec::Zero(dim);  // a unit vector normal to t: rotate t towards it by `turn`
+    do {
+      for (int k = 0; k < dim; ++k) axis[k] = U(g) - 0.5;
+      double along = 0;  // axis . t, by hand: GCC 12 flags Eigen's packet dot on 3-vectors (-Warray-bounds)
+      for (int k = 0; k < dim; ++k) along += axis[k] * t[k];
+      axis -= along * t;
+    } while (axis.norm() < 1e-3);
+    axis.normalize();
+    t = (std::cos(turn) * t + std::sin(turn) * axis).normalized();
+  }
+  return pts;
+}
+
+// (c) Random polylines: every blend within tolerance (measured), no two blends share a piece of a
+// segment, and the chain is continuous.
+TEST(CornerBlend, RandomPolylinesStayWithinToleranceAndDoNotOverlap) {
+  std::mt19937 g(12345);
+  int blends = 0, shortened = 0;
+  double worst_rel = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    const int dim = trial % 2 ? 3 : 2;
+    const double tol = trial % 3 ? 0.01 : 0.05;
+    const auto pts = random_polyline(g, 60, dim);
+    BlendOptions separate;
+    separate.merge_runs = false;
+    const BlendResult r = traj::corners::blend_corners(polyline(pts), tol, separate);
+    EXPECT_EQ(r.corners_blended, 59);
+    EXPECT_LE(r.max_deviation, tol * (1 + 1e-12));
+    blends += r.corners_blended;
+    for (const auto& b : r.blends) shortened += b.shortened;
+    // continuity
+    for (size_t i = 1; i < r.curves.size(); ++i) {
+      const auto& a = r.curves[i - 1].curve;
+      const auto& b = r.curves[i].curve;
+      EXPECT_LE((a.ctrl.row(a.n_ctrl() - 1) - b.ctrl.row(0)).norm(), 1e-12) << trial << " " << i;
+    }
+    // each blend: within tol of the polyline, its corner within the reported deviation (measured),
+    // and its ends on the two legs inside the half of each leg next to the corner (no overlap)
+    size_t corner = 1;
+    for (const auto& c : r.curves) {
+      if (!c.blend) continue;
+      const Vec& V = pts[corner];
+      const Vec& A = pts[corner - 1];
+      const Vec& B = pts[corner + 1];
+      const ref::Spline s = to_ref(c.curve);
+      const auto& bl = r.blends[corner - 1];
+      const double dev = dist_point_to_curve(s, V);
+      EXPECT_LE(dev, tol * (1 + 1e-9));
+      worst_rel = std::max(worst_rel, std::abs(dev - bl.deviation) / bl.deviation);
+      EXPECT_LE(max_dist_curve_to_polyline(s, {A, V, B}, 400), tol * (1 + 1e-9));
+      const Vec p0 = c.curve.ctrl.row(0).transpose(), p4 = c.curve.ctrl.row(4).transpose();
+      EXPECT_LE(dist_to_segment(p0, A, V), 1e-12);
+      EXPECT_LE(dist_to_segment(p4, V, B), 1e-12);
+      // (rounding: coordinates up to ~100 mm, so 1e-13 mm absolute)
+      EXPECT_LE((p0 - V).norm(), 0.5 * (A - V).norm() + 1e-13);
+      EXPECT_LE((p4 - V).norm(), 0.5 * (B - V).norm() + 1e-13);
+      ++corner;
+    }
+    EXPECT_EQ(corner, pts.size() - 1);
+  }
+  std::printf("random polylines: %d blends, %d shortened by a short leg; measured vs closed-form deviation: %.2e relative\n",
+              blends, shortened, worst_rel);
+  EXPECT_LE(worst_rel, 1e-6);
+}
+
+std::vector<Vec> ngon(int n, double R, double turns = 1) {
+  std::vector<Vec> pts;
+  for (int i = 0; i <= n * turns; ++i) pts.push_back(v2(R * std::cos(2 * kPi * i / n), R * std::sin(2 * kPi * i / n)));
+  return pts;
+}
+
+struct CurvatureRange {
+  double lo = INFINITY, hi = 0, mean = 0, length = 0;
+};
+// Curvature over the chain, sampled in u, mean weighted by arc length (from the blends' first vertex
+// to the last: the open ends are lines).
+CurvatureRange curvature_range(const BlendResult& r) {
+  CurvatureRange cr;
+  double integral = 0;
+  for (const auto& c : r.curves) {
+    const ref::Spline s = to_ref(c.curve);
+    const int n = c.blend ? 200 : 1;
+    Vec prev = eval_ref(s, 0).c;
+    for (int i = 0; i <= n; ++i) {
+      const Eval e = eval_ref(s, double(i) / n);
+      const double k = c.blend ? curvature_ref(e) : 0.0;
+      cr.lo = std::min(cr.lo, k);
+      cr.hi = std::max(cr.hi, k);
+      const double ds = (e.c - prev).norm();
+      integral += k * ds;
+      cr.length += ds;
+      prev = e.c;
+    }
+  }
+  cr.mean = integral / cr.length;
+  return cr;
+}
+
+plan::Limits circle_limits() {
+  plan::Limits L;
+  L.feed = 100;
+  for (int a = 0; a < plan::kMaxAxes; ++a) L.a_axis[a] = 3000, L.j_axis[a] = 60000;
+  L.tol = 0.05;
+  return L;
+}
+
+double plan_time(const BlendResult& r) {
+  plan::Path p;
+  traj::corners::append_to(p, r);
+  const plan::Plan pl = plan::plan_path(p, circle_limits(), plan::PlanOptions{});
+  return pl.duration();
+}
+
+// (c, merged runs) Random polylines with runs merged: the chain is continuous, every curve stays
+// within tolerance of the polyline, every vertex is within tolerance of the curve that replaces it.
+TEST(CornerBlend, RandomPolylinesWithRunsStayWithinTolerance) {
+  std::mt19937 g(999);
+  size_t runs = 0, in_runs = 0;
+  double worst = 0;
+  for (int trial = 0; trial < 10; ++trial) {
+    const double tol = 0.02;
+    const auto pts = random_polyline(g, 60, trial % 2 ? 3 : 2);
+    const BlendResult r = traj::corners::blend_corners(polyline(pts), tol);
+    runs += r.runs.size();
+    for (const auto& run : r.runs) in_runs += run.corners;
+    for (size_t i = 1; i < r.curves.size(); ++i) {
+      const auto& a = r.curves[i - 1].curve;
+      EXPECT_LE((a.ctrl.row(a.n_ctrl() - 1) - r.curves[i].curve.ctrl.row(0)).norm(), 1e-12);
+    }
+    size_t vertex = 1;
+    for (const auto& c : r.curves) {
+      if (!c.blend) continue;
+      const ref::Spline s = to_ref(c.curve);
+      const double off = max_dist_curve_to_polyline(s, pts, 40 * (c.curve.n_ctrl() - 3));
+      EXPECT_LE(off, tol * (1 + 1e-9));
+      worst = std::max(worst, off);
+      for (int i = 2; i <= c.curve.n_ctrl() - 3; ++i, ++vertex) {
+        ASSERT_LE((c.curve.ctrl.row(i).transpose() - pts[vertex]).norm(), 0.0);
+        const double dv = dist_point_to_curve(s, pts[vertex]);
+        EXPECT_LE(dv, tol * (1 + 1e-9));
+        worst = std::max(worst, dv);
+      }
+    }
+    EXPECT_EQ(vertex, pts.size() - 1);
+  }
+  std::printf("random polylines, runs merged: %zu runs of %zu corners in all; worst measured deviation %.4f (tol 0.02)\n",
+              runs, in_runs, worst);
+}
+
+// (d) The 360-gon of radius 20 mm at tol 0.05: deviation, curvature along the blended path, and the
+// planned motion time raw, with separate blends and with the run merged (report).
+TEST(CornerBlend, Circle360Gon) {
+  const auto pts = ngon(360, 20);
+  const Toolpath tp = polyline(pts);
+  BlendOptions separate;
+  separate.merge_runs = false;
+  const BlendResult rs = traj::corners::blend_corners(tp, 0.05, separate);
+  EXPECT_EQ(rs.corners_blended, 359);
+  EXPECT_LE(rs.max_deviation, 0.05);
+  const CurvatureRange cs = curvature_range(rs);
+  std::printf("360-gon R20 tol 0.05, separate blends: max deviation %.3e mm; curvature min %.4f max %.4f mean %.4f (1/R = %.4f)\n",
+              rs.max_deviation, cs.lo, cs.hi, cs.mean, 1 / 20.0);
+  // Every blend takes half of each leg (the tolerance would allow far more): curvature 0 at each
+  // join, (4/3) sin(theta/2) / (d cos^2(theta/2)) with d = L/4 at each vertex.
+  const double L = (pts[1] - pts[0]).norm(), th = 2 * kPi / 360;
+  EXPECT_NEAR(cs.hi, 16.0 / 3.0 * std::sin(th / 2) / (L * std::cos(th / 2) * std::cos(th / 2)), 1e-6);
+  EXPECT_NEAR(cs.mean, 1 / 20.0, 0.01 / 20);
+
+  const BlendResult rm = traj::corners::blend_corners(tp, 0.05);
+  ASSERT_EQ(rm.runs.size(), 1u);
+  EXPECT_EQ(rm.runs[0].corners, 359u);
+  EXPECT_LE(rm.max_deviation, 0.05);
+  // The run's curvature, by the reference, between its second and its second-last vertex (its ends
+  // ramp from 0 at the joins with the first and last segment).
+  const ref::Spline s = to_ref(rm.curves[1].curve);
+  const int n = rm.curves[1].curve.n_ctrl();
+  double lo = INFINITY, hi = 0, lo_all = INFINITY;
+  for (int i = 0; i <= 40 * n; ++i) {
+    const double u = double(i) / (40 * n);
+    const double k = curvature_ref(eval_ref(s, u));
+    lo_all = std::min(lo_all, k);
+    if (u < 3.0 / (n - 3) || u > 1 - 3.0 / (n - 3)) continue;
+    lo = std::min(lo, k), hi = std::max(hi, k);
+  }
+  std::printf("360-gon, run merged: 1 curve of %d control points, deviation %.3e mm (measured); curvature %.5f .. %.5f "
+              "inside, %.5f at the ends\n", n, rm.max_deviation, lo, hi, lo_all);
+  EXPECT_GE(lo, 0.8 / 20);
+  EXPECT_LE(hi, 1.2 / 20);
+
+  BlendOptions none;
+  none.max_turn = 0;  // every corner a stop: the raw polyline
+  const double t_raw = plan_time(traj::corners::blend_corners(tp, 0.05, none));
+  const double t_sep = plan_time(rs), t_run = plan_time(rm);
+  // A straight line of the circle's length: the same start and stop ramps, no curvature.
+  const double t_line = plan_time(traj::corners::blend_corners(polyline({v2(0, 0), v2(2 * kPi * 20, 0)}), 0.05));
+  std::printf("360-gon plan time at feed 100, a_axis 3000, j_axis 60000: raw %.3f s, separate blends %.3f s, run %.3f s, "
+              "ideal %.3f s (a straight line as long: %.3f s)\n", t_raw, t_sep, t_run, 2 * kPi * 20 / 100, t_line);
+  EXPECT_LT(t_sep, t_raw);
+  EXPECT_LT(t_run, t_sep);
+}
+
+// The chain goes into a planner path (its join check) and plans on a random polyline.
+TEST(CornerBlend, ChainPlansThroughThePlanner) {
+  std::mt19937 g(7);
+  const auto pts = random_polyline(g, 20, 3);
+  const BlendResult r = traj::corners::blend_corners(polyline(pts), 0.02);
+  plan::Path p;
+  traj::corners::append_to(p, r);
+  EXPECT_EQ(p.size(), r.curves.size());
+  const plan::Plan pl = plan::plan_path(p, circle_limits(), plan::PlanOptions{});
+  EXPECT_GT(pl.duration(), 0);
+}
+
+}  // namespace
