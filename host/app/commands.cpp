@@ -65,6 +65,7 @@ struct PathSource : input::CurveSource {
 struct Loaded {
   plan::Path path;
   job::JobConfig cfg;
+  std::string toolpath_text;  // a toolpath's moves and corners, for the report
 };
 
 Loaded load(const std::string& file, const std::string& format, const job::JobConfig& cfg) {
@@ -73,9 +74,15 @@ Loaded load(const std::string& file, const std::string& format, const job::JobCo
   const input::Toolpath tp = input::read_toolpath(file, kind);
   for (const auto& n : tp.notes) std::fprintf(stderr, "trajcore: note: %s\n", n.c_str());
   job::ToolpathPlan tpp = job::toolpath_plan(tp, cfg);
-  std::fprintf(stderr, "%s: %zu feed moves, %zu rapids, %zu exact stops\n", file.c_str(), tpp.feed_moves,
-               tpp.rapids, tpp.stops);
-  return {std::move(tpp.path), std::move(tpp.cfg)};
+  char b[512];
+  std::snprintf(b, sizeof b,
+                "Toolpath\n  moves                %zu programmed; %zu feed and %zu rapid curves after blending, %zu exact "
+                "stops\n"
+                "  corners              %d blended (largest blend deviation %.4g mm, within half the tolerance), "
+                "%zu kept as stops\n",
+                tp.moves.size(), tpp.feed_moves, tpp.rapids, tpp.stops, tpp.corners_blended, tpp.blend_deviation,
+                tpp.corner_stops);
+  return {std::move(tpp.path), std::move(tpp.cfg), b};
 }
 
 bool passes(const job::JobConfig& cfg, const report::Report& rep) {
@@ -129,7 +136,7 @@ int plan_whole(const PlanArgs& a) {
   // the plan report; the output columns are the host's exact prediction of
   // the core's samples (`trajcore run` confirms them on the Verilated core)
   const auto rep = report::make_report(path, cfg, res, report::predicted_samples(res));
-  std::fputs(report::report_text(cfg, rep, res).c_str(), stdout);
+  std::fputs((in.toolpath_text + report::report_text(cfg, rep, res)).c_str(), stdout);
   std::printf("(output columns: the host's exact prediction of the core's samples)\n");
   const bool ok = passes(cfg, rep);
   if (!ok) std::fprintf(stderr, "trajcore plan: a check FAILED (see the report)\n");
@@ -199,7 +206,7 @@ int run_command(const RunArgs& a) {
   write_csv(stage.dir + "/samples.csv", res.header, sr.samples);
   const auto rep = report::make_report(path, cfg, res, sr.samples);
   report::write_plots(stage.dir, path, cfg, res, sr.samples);
-  const std::string text = report::report_text(cfg, rep, res) + core_line(sr);
+  const std::string text = in.toolpath_text + report::report_text(cfg, rep, res) + core_line(sr);
   {
     util::AtomicFile f(stage.dir + "/report.txt");
     f.out() << text;

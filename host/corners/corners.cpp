@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "corners/corners.hpp"
 
 #include <algorithm>
@@ -349,6 +350,23 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
   }
   for (const Blend& b : res.blends) res.max_deviation = std::max(res.max_deviation, b.deviation);
   return res;
+}
+
+input::Toolpath to_toolpath(const BlendResult& r, const input::Toolpath& original) {
+  input::Toolpath tp;
+  tp.axes = original.axes;
+  tp.notes = original.notes;
+  tp.moves.reserve(r.curves.size());
+  for (const ChainCurve& c : r.curves) {
+    input::Move m;
+    m.kind = c.kind;
+    m.curve = c.curve;
+    m.feed = c.feed;
+    m.exact_stop = c.exact_stop;
+    m.where = c.where;
+    tp.moves.push_back(std::move(m));
+  }
+  return tp;
 }
 
 }  // namespace traj::corners

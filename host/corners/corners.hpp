@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Corner blending: the feed moves of a toolpath turned into a curvature-continuous (G2) chain of
 // curves within the path tolerance (README.md: method, formulas, limits).
 //
@@ -107,6 +108,10 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
 
 // Append the chain to a planner path (plan::Path::add(spline, where) checks each join), or to any
 // type with that member: this library does not depend on the planner.
+// The blended chain as a toolpath (each curve a move with its kind, feed, exact stop and where), for
+// the job (job/toolpath_job.hpp). `axes` and `notes` are the original toolpath's.
+input::Toolpath to_toolpath(const BlendResult& r, const input::Toolpath& original);
+
 template <class PathT>
 void append_to(PathT& path, const BlendResult& r) {
   for (const ChainCurve& c : r.curves) path.add(c.curve, c.where);

@@ -4,16 +4,35 @@
 #include <algorithm>
 #include <cmath>
 
+#include "corners/corners.hpp"
 #include "util/format.hpp"
 
 namespace traj::job {
 
 using plan::PlanError;
 
-ToolpathPlan toolpath_plan(const input::Toolpath& tp, const JobConfig& cfg, const ToolpathOptions& o) {
-  if (tp.moves.empty()) throw PlanError("the toolpath has no moves");
+namespace {
+
+// The toolpath with its corners blended within half of each move's tolerance.
+input::Toolpath blended(const input::Toolpath& tp, double tol, ToolpathPlan& r) {
+  input::Toolpath half = tp;
+  for (auto& m : half.moves)
+    if (m.tolerance >= 0) m.tolerance /= 2;
+  const corners::BlendResult b = corners::blend_corners(half, tol / 2);
+  r.corners_blended = b.corners_blended;
+  r.blend_deviation = b.max_deviation;
+  r.corner_stops = b.stops.size();
+  return corners::to_toolpath(b, tp);
+}
+
+}  // namespace
+
+ToolpathPlan toolpath_plan(const input::Toolpath& original, const JobConfig& cfg, const ToolpathOptions& o) {
+  if (original.moves.empty()) throw PlanError("the toolpath has no moves");
   ToolpathPlan r;
   r.cfg = cfg;
+  const input::Toolpath tp = o.blend ? blended(original, cfg.limits.tol, r) : original;
+  if (o.blend) r.cfg.limits.tol = cfg.limits.tol / 2;
   double v_axis_min = cfg.limits.v_axis[0];
   for (int a = 1; a < tp.axes && a < plan::kMaxAxes; ++a) v_axis_min = std::min(v_axis_min, cfg.limits.v_axis[a]);
   const double rapid = o.rapid > 0 ? o.rapid : v_axis_min;

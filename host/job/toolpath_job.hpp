@@ -11,6 +11,12 @@
 //               rapid, G61): a cap of speed 0 over the junction point.
 // The planner's own speed limit (Limits::feed) becomes the largest of these
 // speeds, so the caps, not it, set the speed of each move.
+//
+// Corners between straight feed moves are blended (ToolpathOptions::blend,
+// host/corners: curvature-continuous transitions) within half of the path
+// tolerance (the move's G64 P, else the job's --tol), and the fit gets the
+// other half of --tol, so the output stays within the tolerance of the
+// programmed toolpath.
 #pragma once
 #include <cstddef>
 #include <vector>
@@ -21,13 +27,17 @@
 namespace traj::job {
 
 struct ToolpathOptions {
-  double rapid = 0;  // mm/s; 0: the smallest per-axis velocity limit
+  double rapid = 0;   // mm/s; 0: the smallest per-axis velocity limit
+  bool blend = true;  // blend the corners between straight feed moves (host/corners)
 };
 
 struct ToolpathPlan {
   plan::Path path;
   JobConfig cfg;     // the job's configuration with the caps and the feed limit of the toolpath
   size_t feed_moves = 0, rapids = 0, stops = 0;
+  int corners_blended = 0;     // corners replaced by a G2 transition
+  double blend_deviation = 0;  // largest distance of a transition from its corner, mm
+  size_t corner_stops = 0;     // corners left as stops (rapids, exact stops, reversals, arc ends)
 };
 
 // PlanError naming the move if the moves do not chain (a reader's bug) or a

@@ -82,12 +82,15 @@ struct Preparation {
   const char* name;
   const char* what;
   Prepare fn;
+  bool blend = false;  // job::ToolpathOptions::blend: corner blending within half the tolerance
 };
 
 // The preparations --prepare can name; corner blending plugs in as one more entry.
 const std::vector<Preparation>& preparations() {
   static const std::vector<Preparation> list = {
-      {"none", "identity: the toolpath as programmed", [](const input::Toolpath& tp, double) { return tp; }},
+      {"none", "identity: the toolpath as programmed", [](const input::Toolpath& tp, double) { return tp; }, false},
+      {"blend", "corners blended within half the tolerance (host/corners), the fit within the other half",
+       [](const input::Toolpath& tp, double) { return tp; }, true},
   };
   return list;
 }
@@ -389,11 +392,11 @@ struct TrajResult {
 };
 
 TrajResult run_trajcore(const input::Toolpath& programmed, const input::Toolpath& prepared, const job::JobConfig& cfg,
-                        const VectorXd* probe) {
+                        const job::ToolpathOptions& opts, const VectorXd* probe) {
   TrajResult t;
   const auto t0 = std::chrono::steady_clock::now();
   try {
-    const job::ToolpathPlan tpp = job::toolpath_plan(prepared, cfg);
+    const job::ToolpathPlan tpp = job::toolpath_plan(prepared, cfg, opts);
     const job::JobResult r = job::run_job(tpp.path, tpp.cfg);
     t.host = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const report::Samples s = report::predicted_samples(r);
@@ -455,7 +458,9 @@ Row run_case(const char* name, const LimitSet& ls, const input::Toolpath& progra
   input::Toolpath prepared = programmed;
   try {
     prepared = prep.fn(programmed, ls.cfg.limits.tol);
-    row.traj = run_trajcore(programmed, prepared, ls.cfg, probe);
+    job::ToolpathOptions opts;
+    opts.blend = prep.blend;
+    row.traj = run_trajcore(programmed, prepared, ls.cfg, opts, probe);
   } catch (const std::exception& e) {
     row.traj.error = std::string("preparation: ") + e.what();
   }

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Corner blending against references that do not use the closed forms under test: the blends are
 // evaluated by a separate textbook Cox-de Boor recursion (tb/geometry/ref_deboor.hpp), distances
 // are measured by dense sampling and golden-section search, curvature by that reference's
