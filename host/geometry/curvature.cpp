@@ -212,12 +212,6 @@ double signed_curvature(const Curve& c, double u) {
   return (b[2] * b[5] - b[3] * b[4]) / (v * v * v);
 }
 
-double curvature_derivative(const Curve& c, double u) {
-  const Local l = products(c, c.find_span(u), u);
-  const double k = kappa_of(l);
-  return k > 0 ? dk2(l) / (2 * k) : 0.0;
-}
-
 CurvatureSqDerivative curvature_sq_derivative(const Curve& c, int span, double u) {
   EvalBuf b(c.dim());
   c.eval_span(span, u, 3, b.p);

@@ -25,8 +25,6 @@ namespace traj::geo {
 double curvature(const Curve& c, double u);
 // Signed curvature of a planar curve ((x'y'' - y'x'') / |r'|^3); throws if dim != 2.
 double signed_curvature(const Curve& c, double u);
-// d kappa / du (0 where kappa = 0).
-double curvature_derivative(const Curve& c, double u);
 
 // d(kappa^2)/du at u evaluated in span `span` (as the extremum scan does), with a bound on its
 // rounding error (first order in the evaluation errors; +inf where |r'| is rounding noise). On a circle

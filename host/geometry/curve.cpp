@@ -16,13 +16,6 @@ double binom(int n, int k) {
 }
 }  // namespace
 
-Eigen::MatrixXd PowerSpan::coefficients(int k) const {
-  Eigen::MatrixXd m(degree + 1 - k, cols);
-  for (int j = 0; j <= degree - k; ++j)
-    for (int c = 0; c < cols; ++c) m(j, c) = coef[offset(k) + j * cols + c];
-  return m;
-}
-
 namespace {
 // Hodograph of a non-rational B-spline (any number of columns): degree p-1, control points
 // Q'_i = p (Q_{i+1} - Q_i) / (t_{i+p+1} - t_{i+1}) (0 where the denominator is 0), knots without the

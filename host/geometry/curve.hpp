@@ -31,8 +31,6 @@ struct PowerSpan {
   std::vector<double> coef;
   int degree = 0, cols = 0;
   int offset(int k) const { return cols * (k * (degree + 1) - k * (k - 1) / 2); }
-  // Coefficient table of derivative k as a matrix (rows: powers of tau, columns: x.., [w]).
-  Eigen::MatrixXd coefficients(int k) const;
 };
 
 namespace detail {
