@@ -1,10 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // SVG plots of a job (report.hpp, write_plots).
 //
-//   path_feed.svg  the x-y path of the core's output samples (equal aspect,
-//                  axes in units), coloured by the output feed (chord speed of
-//                  consecutive samples) on a labelled colour bar from 0 to the
-//                  commanded feed; steps above the feed in a colour of their own.
+//   path_feed.svg  the path of the core's output samples (plot_path.cpp).
 //   profile.svg    against time, the whole motion, one panel each: path speed,
 //                  tangential acceleration and jerk, acceleration and jerk of
 //                  each axis, centripetal acceleration and jerk; the plan and
@@ -14,9 +11,9 @@
 // the samples over 1, 2, 3 ticks, each drawn at the centre of its ticks. Where a
 // pixel column holds more than one sample, a series is drawn as its min/max
 // envelope over the column (a band), so no extreme is lost to decimation. The
-// y range always covers the data and the limits: nothing is clamped. Both files
-// stay small whatever the length of the run (the profile: a few points per
-// pixel column and series; the path: at most 40,000 points).
+// y range always covers the data and the limits: nothing is clamped. The
+// profile stays small whatever the length of the run (a few points per pixel
+// column and series).
 //
 // Both files are written to <name>.tmp in `dir`, then renamed into place;
 // on failure the temporary files are removed (`trajcore run` also stages the
@@ -33,6 +30,7 @@
 #include <vector>
 
 #include "planner/sampled.hpp"
+#include "report/plot_svg.hpp"
 #include "report/report.hpp"
 #include "util/atomic_file.hpp"
 
@@ -41,124 +39,9 @@ namespace traj::report {
 using namespace plan;
 using job::JobConfig;
 using job::JobResult;
+using namespace svg;
 
 namespace {
-
-constexpr const char* kFont = "DejaVu Sans, Helvetica, Arial, sans-serif";
-constexpr const char* kLimitColour = "#c0392b";
-constexpr const char* kPlanColour = "#f28e2b";
-constexpr const char* kOutColour = "#1f4e99";
-constexpr const char* kOverColour = "#e7298a";
-
-// Fixed-point text with `dec` decimals, trailing zeros dropped, "-0" -> "0".
-std::string num(double v, int dec = 1) {
-  if (!std::isfinite(v)) v = 0;
-  char b[48];
-  std::snprintf(b, sizeof b, "%.*f", std::clamp(dec, 0, 12), v);
-  std::string s = b;
-  if (s.find('.') != std::string::npos) {
-    while (s.back() == '0') s.pop_back();
-    if (s.back() == '.') s.pop_back();
-  }
-  if (s == "-0") s = "0";
-  return s;
-}
-
-std::string gfmt(double v, int sig = 4) {
-  char b[48];
-  std::snprintf(b, sizeof b, "%.*g", sig, v);
-  return b;
-}
-
-// A measured value: 4 significant digits, no exponent between 1e-4 and 1e7.
-std::string vfmt(double v) {
-  const double a = std::fabs(v);
-  if (a == 0) return "0";
-  if (a < 1e-4 || a >= 1e7 || !std::isfinite(a)) return gfmt(v);
-  return num(v, std::max(0, 3 - static_cast<int>(std::floor(std::log10(a)))));
-}
-
-// Tick label: a typographic minus for negative values.
-std::string tick_label(double v, int dec) {
-  std::string s = num(v, dec);
-  if (!s.empty() && s[0] == '-') s = "\xE2\x88\x92" + s.substr(1);
-  return s;
-}
-
-std::string esc(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      case '\'': o += "&apos;"; break;
-      default: o += c;
-    }
-  }
-  return o;
-}
-
-struct Ticks {
-  double step = 1;
-  int dec = 0;
-  std::vector<double> v;
-};
-
-// 1, 2, 5 x 10^k ticks inside [lo, hi], about `target` of them.
-Ticks nice_ticks(double lo, double hi, int target) {
-  Ticks t;
-  double span = hi - lo;
-  if (!(span > 0) || !std::isfinite(span)) span = std::max(1.0, std::fabs(lo));
-  const double raw = span / std::max(1, target);
-  const double mag = std::pow(10.0, std::floor(std::log10(raw)));
-  const double f = raw / mag;
-  t.step = (f < 1.5 ? 1 : f < 3.5 ? 2 : f < 7.5 ? 5 : 10) * mag;
-  t.dec = std::max(0, static_cast<int>(-std::floor(std::log10(t.step) + 1e-9)));
-  const double first = std::ceil(lo / t.step - 1e-9);
-  for (double i = first;; i += 1) {
-    const double x = i * t.step;
-    if (x > hi + 1e-9 * t.step || t.v.size() > 100) break;
-    t.v.push_back(std::fabs(x) < 1e-12 * t.step ? 0.0 : x);
-  }
-  return t;
-}
-
-// Perceptually uniform colour map (viridis stops), f in [0, 1].
-std::string viridis(double f) {
-  static const double c[11][3] = {{68, 1, 84},    {72, 36, 117},  {65, 68, 135},  {53, 95, 141},
-                                  {42, 120, 142}, {33, 145, 140}, {34, 168, 132}, {68, 191, 112},
-                                  {122, 209, 81}, {189, 223, 38}, {253, 231, 37}};
-  f = std::clamp(f, 0.0, 1.0) * 10;
-  const int i = std::min(9, static_cast<int>(f));
-  const double w = f - i;
-  char s[16];
-  std::snprintf(s, sizeof s, "#%02x%02x%02x", static_cast<int>(std::lround(c[i][0] + w * (c[i + 1][0] - c[i][0]))),
-                static_cast<int>(std::lround(c[i][1] + w * (c[i + 1][1] - c[i][1]))),
-                static_cast<int>(std::lround(c[i][2] + w * (c[i + 1][2] - c[i][2]))));
-  return s;
-}
-
-std::string svg_open(double w, double h) {
-  std::ostringstream o;
-  o << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg xmlns=\"http://www.w3.org/2000/svg\" xmlns:xlink=\"http://www.w3.org/1999/xlink\" width=\"" << num(w)
-    << "\" height=\"" << num(h) << "\" viewBox=\"0 0 " << num(w) << " " << num(h) << "\" font-family=\"" << kFont
-    << "\" font-size=\"11\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
-  return o.str();
-}
-
-std::string text(double x, double y, const std::string& s, const char* extra = "") {
-  return "<text x=\"" + num(x) + "\" y=\"" + num(y) + "\"" + extra + ">" + esc(s) + "</text>\n";
-}
-
-// Approximate width of a label at 11 px (DejaVu Sans averages ~6.3 px a character).
-double text_w(const std::string& s, double size = 11) {
-  size_t chars = 0;
-  for (unsigned char c : s)
-    if ((c & 0xC0) != 0x80) ++chars;  // count UTF-8 code points
-  return chars * size * 0.58;
-}
 
 // Profile page layout (pixels).
 constexpr double kPageW = 1000, kLeft = 84, kRight = 22, kPlotW = kPageW - kLeft - kRight;
@@ -199,39 +82,6 @@ struct Panel {
   double allowance = 0;           // quantisation allowance on the output (report.txt)
 };
 
-// SVG path data in tenths of a pixel: absolute moves, relative lines of
-// rounded differences (no drift), so that a pixel column costs a few characters.
-class PathData {
- public:
-  void move(double x, double y) {
-    X_ = std::lround(x * 10), Y_ = std::lround(y * 10);
-    d_ += "M" + t(X_) + " " + t(Y_);
-    open_ = false;
-  }
-  void line(double x, double y) {
-    const long nx = std::lround(x * 10), ny = std::lround(y * 10);
-    d_ += open_ ? " " : "l";
-    d_ += t(nx - X_) + " " + t(ny - Y_);
-    X_ = nx, Y_ = ny;
-    open_ = true;
-  }
-  void close() {
-    d_ += "Z";
-    open_ = false;
-  }
-  bool empty() const { return d_.empty(); }
-  const std::string& str() const { return d_; }
-
- private:
-  static std::string t(long v) {  // tenths -> "12.3", "-0.4", "7"
-    std::string s = std::to_string(std::labs(v) / 10);
-    if (v % 10) s += "." + std::to_string(std::labs(v) % 10);
-    return v < 0 ? "-" + s : s;
-  }
-  std::string d_;
-  long X_ = 0, Y_ = 0;
-  bool open_ = false;
-};
 
 // Draws one series over [ta, tb] into a plot box: a polyline where a pixel
 // column holds at most one sample, else per pixel column the min/max envelope:
@@ -456,246 +306,6 @@ std::string profile_svg(const std::string& title, const std::string& subtitle, c
   return o.str();
 }
 
-// Douglas-Peucker: marks the points of pts to keep so that the polyline stays
-// within tol (pixels) of every point; the ends are kept.
-void simplify(const std::vector<std::array<double, 2>>& pts, double tol, std::vector<char>& keep) {
-  const size_t n = pts.size();
-  keep.assign(n, 0);
-  if (!n) return;
-  keep[0] = keep[n - 1] = 1;
-  std::vector<std::pair<size_t, size_t>> stack{{0, n - 1}};
-  while (!stack.empty()) {
-    const auto [i, j] = stack.back();
-    stack.pop_back();
-    if (j <= i + 1) continue;
-    const double dx = pts[j][0] - pts[i][0], dy = pts[j][1] - pts[i][1], L = std::hypot(dx, dy);
-    double worst = -1;
-    size_t wk = i;
-    for (size_t k = i + 1; k < j; ++k) {
-      const double ex = pts[k][0] - pts[i][0], ey = pts[k][1] - pts[i][1];
-      const double e = L > 1e-12 ? std::fabs(ex * dy - ey * dx) / L : std::hypot(ex, ey);
-      if (e > worst) worst = e, wk = k;
-    }
-    if (worst > tol) {
-      keep[wk] = 1;
-      stack.push_back({i, wk});
-      stack.push_back({wk, j});
-    }
-  }
-}
-
-// The x-y path of the samples, coloured by the output feed.
-std::string path_svg(size_t n, const std::function<std::array<double, 3>(size_t)>& pos, int d, const JobConfig& cfg,
-                     double h, double allow_v) {
-  const std::string& u = cfg.machine.units;
-  const double feed = cfg.limits.feed;
-  // data range (x, y), a margin, equal scales on both axes
-  double x0 = 0, x1 = 0, y0 = 0, y1 = 0;
-  for (size_t k = 0; k < n; ++k) {
-    const auto p = pos(k);
-    if (k == 0) x0 = x1 = p[0], y0 = y1 = p[1];
-    x0 = std::min(x0, p[0]), x1 = std::max(x1, p[0]);
-    y0 = std::min(y0, p[1]), y1 = std::max(y1, p[1]);
-  }
-  const double span = std::max({x1 - x0, y1 - y0, 1e-9});
-  const double mxs = std::max(x1 - x0, 0.05 * span), mys = std::max(y1 - y0, 0.05 * span);
-  const double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);
-  x0 = cx - 0.54 * mxs, x1 = cx + 0.54 * mxs, y0 = cy - 0.54 * mys, y1 = cy + 0.54 * mys;
-  const double sc = std::min(720 / (x1 - x0), 620 / (y1 - y0));
-  const double Wp = (x1 - x0) * sc, Hp = (y1 - y0) * sc;
-  const double left = 70, top = 74, cbw = 16;
-  const double W = left + Wp + 120, H = top + Hp + 52;
-  auto PX = [&](const std::array<double, 3>& p) { return std::array<double, 2>{left + (p[0] - x0) * sc, top + Hp - (p[1] - y0) * sc}; };
-  // Chord speed of each step in colour bands over [0, feed] (a band changes
-  // once the speed is a fifth of a band beyond it: no flicker at a boundary);
-  // steps above feed + the quantisation allowance in a band of their own.
-  // Consecutive steps are merged into strokes at least `spacing` pixels long
-  // (0: every step), each coloured by its mean speed, or as above the feed if
-  // any of its steps is. Runs of one band become simplified subpaths (tolerance
-  // `tol` px), one <path> per band. Spacing and tolerance grow until at most
-  // kMaxPoints points remain, so the file stays small whatever the run length.
-  constexpr size_t kMaxPoints = 40000;
-  const int nb = 20;
-  std::vector<std::string> bands(nb + 1);
-  double smin = 0, smax = 0;
-  size_t over = 0;
-  for (size_t k = 0; k + 1 < n; ++k) {
-    const auto a = pos(k), b = pos(k + 1);
-    const double s = chord_speed(a.data(), b.data(), d, h);
-    smin = k ? std::min(smin, s) : s;
-    smax = std::max(smax, s);
-    if (s > feed + allow_v) ++over;
-  }
-  double tol = 0.25, spacing = 0;
-  for (int attempt = 0; attempt < 64; ++attempt) {
-    for (auto& b : bands) b.clear();
-    size_t total = 0;
-    std::vector<std::array<double, 2>> run;
-    std::vector<char> keep;
-    int cur = -1;
-    auto flush = [&]() {
-      if (run.size() < 2) return;
-      simplify(run, tol, keep);
-      PathData pd;
-      bool first = true;
-      for (size_t i = 0; i < run.size(); ++i)
-        if (keep[i]) {
-          if (first)
-            pd.move(run[i][0], run[i][1]);
-          else
-            pd.line(run[i][0], run[i][1]);
-          first = false;
-          ++total;
-        }
-      bands[cur] += pd.str();
-    };
-    std::array<double, 3> prev = n ? pos(0) : std::array<double, 3>{};
-    std::array<double, 2> start_px = PX(prev);  // the current stroke's first point
-    double len = 0;                              // its length (units) and steps
-    size_t steps = 0;
-    bool stroke_over = false;
-    for (size_t k = 0; k + 1 < n; ++k) {
-      const auto next = pos(k + 1);
-      const double s = chord_speed(prev.data(), next.data(), d, h);
-      len += s * h;
-      ++steps;
-      stroke_over = stroke_over || s > feed + allow_v;
-      prev = next;
-      const auto q = PX(next);
-      const double px = std::hypot(q[0] - start_px[0], q[1] - start_px[1]);
-      if (px < spacing && k + 2 < n) continue;  // the stroke goes on
-      int b;
-      if (stroke_over) {
-        b = nb;
-      } else {
-        const double f = std::clamp(len / (steps * h) / feed * nb, 0.0, nb - 1e-9);
-        b = static_cast<int>(f);
-        if (cur >= 0 && cur < nb && f > cur - 0.2 && f < cur + 1.2) b = cur;
-      }
-      if (b != cur) {
-        flush();
-        run.clear();
-        run.push_back(start_px);
-        cur = b;
-      }
-      // drop points within 0.1 px of the last one (they cannot change the picture)
-      if (run.size() < 2 || std::hypot(q[0] - run.back()[0], q[1] - run.back()[1]) > 0.1 || k + 2 == n)
-        run.push_back(q);
-      start_px = q;
-      len = 0, steps = 0, stroke_over = false;
-    }
-    flush();
-    if (total <= kMaxPoints) break;
-    tol = std::min(1.0, tol * 2);
-    spacing = std::max(0.5, spacing * 2);
-  }
-  std::ostringstream o;
-  o << svg_open(W, H);
-  o << text(left, 24, "Path (x-y) of the core's output samples, coloured by the output feed",
-            " font-size=\"15\" font-weight=\"bold\"");
-  o << text(left, 43,
-            std::to_string(n) + " samples at " + gfmt(h * 1e3) + " ms; output feed = chord speed |x(k+1) \xE2\x88\x92 x(k)| / h" +
-                (d > 2 ? "; projection on x-y" : "") + "; equal scales",
-            " fill=\"#444\"");
-  o << text(left, 59,
-            "output feed " + vfmt(smin) + " \xE2\x80\xA6 " + vfmt(smax) + " " + u + "/s (commanded " + vfmt(feed) + " " +
-                u + "/s)" + (over ? "; " + std::to_string(over) + " steps above the feed" : ""),
-            over ? " fill=\"#c0392b\" font-weight=\"bold\"" : " fill=\"#444\"");
-  // grid and ticks, one step on both axes
-  const double step = nice_ticks(0, std::max(x1 - x0, y1 - y0), 8).step;
-  const int dec = std::max(0, static_cast<int>(-std::floor(std::log10(step) + 1e-9)));
-  auto ticks = [&](double a, double b) {
-    std::vector<double> v;
-    for (double i = std::ceil(a / step - 1e-9); i * step <= b + 1e-9 * step; i += 1) v.push_back(i * step);
-    return v;
-  };
-  const auto xt = ticks(x0, x1), yt = ticks(y0, y1);
-  auto XP = [&](double v) { return left + (v - x0) * sc; };
-  auto YP = [&](double v) { return top + Hp - (v - y0) * sc; };
-  o << "<path stroke=\"#ececec\" d=\"";
-  for (double v : xt) o << "M" << num(XP(v)) << " " << num(top) << "V" << num(top + Hp);
-  for (double v : yt) o << "M" << num(left) << " " << num(YP(v)) << "H" << num(left + Wp);
-  o << "\"/>\n<path stroke=\"#555\" d=\"";
-  for (double v : xt) o << "M" << num(XP(v)) << " " << num(top + Hp) << "v4";
-  for (double v : yt) o << "M" << num(left) << " " << num(YP(v)) << "h-4";
-  o << "\"/>\n<g font-size=\"10\" fill=\"#333\" text-anchor=\"middle\">\n";
-  for (double v : xt) o << text(XP(v), top + Hp + 16, tick_label(v, dec));
-  o << "</g>\n<g font-size=\"10\" fill=\"#333\" text-anchor=\"end\">\n";
-  for (double v : yt) o << text(left - 7, YP(v) + 3.5, tick_label(v, dec));
-  o << "</g>\n";
-  o << text(left + Wp / 2, top + Hp + 36, "x (" + u + ")", " text-anchor=\"middle\" font-size=\"12\"");
-  o << "<text transform=\"translate(" << num(left - 48) << " " << num(top + Hp / 2)
-    << ") rotate(-90)\" text-anchor=\"middle\" font-size=\"12\">" << esc("y (" + u + ")") << "</text>\n";
-  // the path: each colour band's geometry once (<defs>), drawn twice: a thin
-  // dark casing under all of it (light colours read on white), then coloured
-  o << "<defs>\n";
-  for (int b = 0; b <= nb; ++b)
-    if (!bands[b].empty()) o << "<path id=\"band" << b << "\" d=\"" << bands[b] << "\"/>\n";
-  o << "</defs>\n<g fill=\"none\" stroke-width=\"2.4\" stroke-linecap=\"round\" stroke-linejoin=\"round\">\n";
-  o << "<g stroke=\"#333\" stroke-width=\"3.6\" stroke-opacity=\"0.55\">";
-  for (int b = 0; b <= nb; ++b)
-    if (!bands[b].empty()) o << "<use xlink:href=\"#band" << b << "\"/>";
-  o << "</g>\n";
-  for (int b = 0; b <= nb; ++b)
-    if (!bands[b].empty())
-      o << "<use xlink:href=\"#band" << b << "\" stroke=\"" << (b == nb ? kOverColour : viridis((b + 0.5) / nb))
-        << "\"/>\n";
-  o << "</g>\n<rect x=\"" << num(left) << "\" y=\"" << num(top) << "\" width=\"" << num(Wp) << "\" height=\""
-    << num(Hp) << "\" fill=\"none\" stroke=\"#555\"/>\n";
-  // start (ring), end (square), direction of travel (arrow)
-  if (n) {
-    const auto s0 = PX(pos(0)), s1 = PX(pos(n - 1));
-    for (size_t k = 1; k < n; k += std::max<size_t>(1, n / 100000)) {
-      const auto q = PX(pos(k));
-      const double dx = q[0] - s0[0], dy = q[1] - s0[1], L = std::hypot(dx, dy);
-      if (L < 22) continue;
-      const double ux = dx / L, uy = dy / L, ax = s0[0] + ux * 30, ay = s0[1] + uy * 30;
-      o << "<path fill=\"#222\" d=\"M" << num(ax) << " " << num(ay) << "L" << num(ax - 9 * ux - 4 * uy) << " "
-        << num(ay - 9 * uy + 4 * ux) << "L" << num(ax - 9 * ux + 4 * uy) << " " << num(ay - 9 * uy - 4 * ux)
-        << "Z\"/>\n";
-      break;
-    }
-    o << "<circle cx=\"" << num(s0[0]) << "\" cy=\"" << num(s0[1])
-      << "\" r=\"7\" fill=\"none\" stroke=\"#1a9850\" stroke-width=\"2.5\"/>\n";
-    o << "<rect x=\"" << num(s1[0] - 3.5) << "\" y=\"" << num(s1[1] - 3.5)
-      << "\" width=\"7\" height=\"7\" fill=\"#d73027\"/>\n";
-    auto label = [&](const std::array<double, 2>& at, const std::string& s) {
-      const bool right_side = at[0] < left + Wp - 90;
-      o << text(at[0] + (right_side ? 11 : -11), at[1] - 9, s, right_side ? "" : " text-anchor=\"end\"");
-    };
-    if (std::hypot(s1[0] - s0[0], s1[1] - s0[1]) < 10) {
-      label(s0, "start = end");
-    } else {
-      label(s0, "start");
-      label(s1, "end");
-    }
-  }
-  // colour bar, 0 .. commanded feed
-  {
-    const double bx = left + Wp + 28, bh = std::min(Hp, 360.0), by = top + (Hp - bh) / 2;
-    o << "<g id=\"colourbar\" data-vmin=\"0\" data-vmax=\"" << gfmt(feed, 10) << "\">\n";
-    for (int b = 0; b < nb; ++b)
-      o << "<rect x=\"" << num(bx) << "\" y=\"" << num(by + bh - (b + 1) * bh / nb) << "\" width=\"" << num(cbw)
-        << "\" height=\"" << num(bh / nb + 0.3) << "\" fill=\"" << viridis((b + 0.5) / nb) << "\"/>\n";
-    o << "<rect x=\"" << num(bx) << "\" y=\"" << num(by) << "\" width=\"" << num(cbw) << "\" height=\"" << num(bh)
-      << "\" fill=\"none\" stroke=\"#555\"/>\n";
-    const Ticks ct = nice_ticks(0, feed, 5);
-    o << "<path stroke=\"#555\" d=\"";
-    for (double v : ct.v) o << "M" << num(bx + cbw) << " " << num(by + bh - v / feed * bh) << "h4";
-    o << "\"/>\n";
-    for (double v : ct.v) o << text(bx + cbw + 7, by + bh - v / feed * bh + 3.5, tick_label(v, ct.dec), " font-size=\"10\"");
-    if (over) {
-      o << "<rect x=\"" << num(bx) << "\" y=\"" << num(by - 22) << "\" width=\"" << num(cbw)
-        << "\" height=\"12\" fill=\"" << kOverColour << "\"/>\n";
-      o << text(bx + cbw + 7, by - 12, "> feed", " font-size=\"10\"");
-    }
-    o << "<text transform=\"translate(" << num(bx + cbw + 52) << " " << num(by + bh / 2)
-      << ") rotate(-90)\" text-anchor=\"middle\" font-size=\"12\">" << esc("output feed (" + u + "/s)") << "</text>\n";
-    o << "</g>\n";
-  }
-  o << "</svg>\n";
-  return o.str();
-}
 
 // Writes every file to <name>.tmp, then renames them all into place; on any
 // failure the temporary files are removed and a PlanError names the plot.
