@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
-// Tests of the SVG plots (host/planner/plots.cpp, write_plots): well-formed
-// XML, the labels a reader needs, min/max envelopes that keep a one-sample
-// spike, a bounded file size on long runs, and atomic writes that leave no
-// temporary file behind on failure.
+// Tests of the SVG plots (host/report/plots.cpp, plot_path.cpp, write_plots):
+// well-formed XML, the labels a reader needs, three projections of a 3-D path,
+// min/max envelopes that keep a one-sample spike, a bounded file size on long
+// runs, and atomic writes that leave no temporary file behind on failure.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -279,6 +279,19 @@ Synth synth(size_t n, double speed, bool ticks) {
   return y;
 }
 
+// A straight 3-axis path (write_plots takes the number of axes from it).
+Path path_3d(const fs::path& dir) {
+  const fs::path f = dir / "line3.json";
+  std::ofstream(f) << "{\"degree\": 1, \"knots\": [0, 0, 1, 1], \"control_points\": [[0, 0, 0], [1, 1, 1]]}\n";
+  return load_path(f.string());
+}
+
+size_t count_of(const std::string& s, const std::string& what) {
+  size_t c = 0;
+  for (size_t at = s.find(what); at != std::string::npos; at = s.find(what, at + 1)) ++c;
+  return c;
+}
+
 }  // namespace
 
 TEST(Plots, XmlCheckerRejectsBrokenSvg) {  // the checker the other tests rely on
@@ -517,4 +530,102 @@ TEST(Plots, FailedTempFileRemovesTheOthers) {
   EXPECT_FALSE(fs::exists(dir / "path_feed.svg"));
   EXPECT_FALSE(fs::exists(dir / "profile.svg"));
   EXPECT_TRUE(fs::exists(dir / "profile.svg.tmp" / "x"));
+}
+
+// A helix (radius 10 mm, 3 turns, 6 mm down, 3 axes) is drawn as an
+// engineering drawing: top (x-y), front (x-z) and side (y-z) panels at one
+// scale, each with its axes named in units and the coloured path, views lined
+// up (x between top and front, z between front and side), one colour bar. The
+// same samples at constant z, and a 2-axis path, give the one x-y plot.
+TEST(Plots, HelixGivesThreeProjectionsFlatPathOne) {
+  const size_t n = 20000;
+  const double lsb = std::ldexp(1.0, -32), pi = std::acos(-1.0);
+  const fs::path dir = fresh_dir("helix");
+  Synth y = synth(n, 20, false);
+  y.path = path_3d(dir);
+  ASSERT_EQ(y.path.dim(), 3);
+  for (size_t k = 0; k < n; ++k) {
+    const double u = double(k) / (n - 1), phi = 6 * pi * u;
+    y.s.v[k] = {std::llround(10 * std::cos(phi) / lsb), std::llround(10 * std::sin(phi) / lsb), std::llround(-6 * u / lsb)};
+  }
+  write_plots(dir.string(), y.path, y.cfg, y.res, y.s);
+  const std::string svg = slurp(dir / "path_feed.svg");
+  ASSERT_EQ(xml_problem(svg), "");
+  EXPECT_EQ(svg.find("nan"), std::string::npos);
+  struct Want {
+    const char *id, *title, *axes, *h, *v;
+  };
+  const Want want[] = {{"xy", "top (x-y)", "x y", "x (mm)", "y (mm)"},
+                       {"xz", "front (x-z)", "x z", "x (mm)", "z (mm)"},
+                       {"yz", "side (y-z)", "y z", "y (mm)", "z (mm)"}};
+  std::map<std::string, std::map<std::string, std::string>> geo;
+  for (const Want& w : want) {
+    SCOPED_TRACE(w.id);
+    const std::string P = panel_text(svg, w.id);
+    ASSERT_FALSE(P.empty());
+    geo[w.id] = attrs_of(svg, std::string("id=\"panel-") + w.id + "\"");
+    EXPECT_EQ(geo[w.id]["data-axes"], w.axes);
+    EXPECT_NE(P.find(std::string(">") + w.title + "</text>"), std::string::npos);
+    EXPECT_EQ(count_of(P, std::string(">") + w.h + "</text>"), 1u);
+    EXPECT_EQ(count_of(P, std::string(">") + w.v + "</text>"), 1u);
+    EXPECT_NE(P.find(std::string("<use xlink:href=\"#") + w.id + "-band"), std::string::npos);  // the coloured path
+    EXPECT_NE(P.find(">start"), std::string::npos);
+  }
+  EXPECT_EQ(count_of(svg, "id=\"panel-"), 3u);
+  EXPECT_EQ(count_of(svg, "id=\"colourbar\""), 1u);
+  EXPECT_EQ(geo["xy"]["data-scale"], geo["xz"]["data-scale"]);
+  EXPECT_EQ(geo["xz"]["data-scale"], geo["yz"]["data-scale"]);
+  EXPECT_EQ(geo["xy"]["data-left"], geo["xz"]["data-left"]);
+  EXPECT_EQ(geo["xy"]["data-width"], geo["xz"]["data-width"]);
+  EXPECT_EQ(geo["xz"]["data-top"], geo["yz"]["data-top"]);
+  EXPECT_EQ(geo["xz"]["data-height"], geo["yz"]["data-height"]);
+  EXPECT_GT(std::stod(geo["xz"]["data-top"]), std::stod(geo["xy"]["data-top"]) + std::stod(geo["xy"]["data-height"]));
+  EXPECT_GT(std::stod(geo["yz"]["data-left"]), std::stod(geo["xz"]["data-left"]) + std::stod(geo["xz"]["data-width"]));
+
+  // one x-y plot: the helix flattened (3 axes, z constant) and a 2-axis path
+  auto one_plot = [&](const std::string& f) {
+    EXPECT_EQ(xml_problem(f), "");
+    EXPECT_EQ(count_of(f, "id=\"panel-"), 0u);
+    EXPECT_EQ(count_of(f, ">x (mm)</text>"), 1u);
+    EXPECT_EQ(count_of(f, ">y (mm)</text>"), 1u);
+    EXPECT_EQ(count_of(f, "z (mm)"), 0u);
+    EXPECT_EQ(count_of(f, "id=\"colourbar\""), 1u);
+  };
+  for (auto& v : y.s.v) v[2] = 0;
+  write_plots(dir.string(), y.path, y.cfg, y.res, y.s);
+  const std::string flat = slurp(dir / "path_feed.svg");
+  one_plot(flat);
+  EXPECT_NE(flat.find("projection on x-y"), std::string::npos);
+  y.path = synth(1, 20, false).path;  // 2 axes
+  ASSERT_EQ(y.path.dim(), 2);
+  write_plots(dir.string(), y.path, y.cfg, y.res, y.s);
+  const std::string two = slurp(dir / "path_feed.svg");
+  one_plot(two);
+  EXPECT_EQ(two.find("projection on x-y"), std::string::npos);
+}
+
+// The worst case for size in three projections: 1,000,000 samples on a helix
+// of 300 turns whose speed jumps at random every tick; each panel keeps its
+// share of the points, the file stays under 2 MB.
+TEST(Plots, SizeBoundedOnLongNoisyHelix) {
+  const size_t n = 1000000;
+  const fs::path dir = fresh_dir("long_helix");
+  Synth y = synth(n, 20, false);
+  y.path = path_3d(dir);
+  const double lsb = std::ldexp(1.0, -32), h = y.cfg.machine.period;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> U(0.05, 1.2);
+  double phi = 0;
+  for (size_t k = 0; k < n; ++k) {
+    phi += U(rng) * y.cfg.limits.feed * h / 20;
+    y.s.v[k] = {std::llround(20 * std::cos(phi) / lsb), std::llround(20 * std::sin(phi) / lsb),
+                std::llround(-phi * 0.01 / lsb)};
+  }
+  write_plots(dir.string(), y.path, y.cfg, y.res, y.s);
+  const auto size = fs::file_size(dir / "path_feed.svg");
+  std::printf("1e6 noisy helix ticks: path_feed.svg %zu bytes\n", static_cast<size_t>(size));
+  EXPECT_LT(size, 2u << 20);
+  const std::string svg = slurp(dir / "path_feed.svg");
+  EXPECT_EQ(xml_problem(svg), "");
+  EXPECT_EQ(count_of(svg, "id=\"panel-"), 3u);
 }
