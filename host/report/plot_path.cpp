@@ -244,7 +244,9 @@ void draw_ends(std::ostringstream& o, const Feed& F, const View& v) {
     << "\" width=\"7\" height=\"7\" fill=\"#d73027\"/>\n";
   auto label = [&](const std::array<double, 2>& at, const std::string& s) {
     const bool right_side = at[0] < v.left + v.w() - 90;
-    o << text(at[0] + (right_side ? 11 : -11), at[1] - 9, s, right_side ? "" : " text-anchor=\"end\"");
+    // in a titled panel, a label that would reach the title row goes under its mark
+    const bool under = !v.title.empty() && at[1] - 20 < v.top;
+    o << text(at[0] + (right_side ? 11 : -11), at[1] + (under ? 18 : -9), s, right_side ? "" : " text-anchor=\"end\"");
   };
   if (std::hypot(s1[0] - s0[0], s1[1] - s0[1]) < 10) {
     double gap = 0;
