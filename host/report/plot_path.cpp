@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // path_feed.svg (plot_svg.hpp, path_svg): the path of the core's output
 // samples at equal scale, axes in units, coloured by the output feed (chord
 // speed of consecutive samples) on a labelled colour bar from 0 to the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SVG building blocks shared by the plots (plots.cpp, plot_path.cpp): number
 // formatting, ticks, the colour map, text, and compact path data.
 #pragma once
