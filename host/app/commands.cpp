@@ -70,7 +70,7 @@ struct Loaded {
 
 Loaded load(const std::string& file, const std::string& format, const job::JobConfig& cfg) {
   const input::FileKind kind = input::file_kind(file, format);
-  if (!input::is_toolpath(kind)) return {input::load_path(file), cfg};
+  if (!input::is_toolpath(kind)) return {input::load_path(file), cfg, {}};
   const input::Toolpath tp = input::read_toolpath(file, kind);
   for (const auto& n : tp.notes) std::fprintf(stderr, "trajcore: note: %s\n", n.c_str());
   job::ToolpathPlan tpp = job::toolpath_plan(tp, cfg);
