@@ -227,7 +227,9 @@ void check_path(const Path& p, const Played& got, bool strict_latency) {
     ASSERT_FALSE(got.underrun[k]) << "tick " << k << " found no segment (lost at a switch?)";
     ASSERT_EQ(got.samples[k], p.expect[k]) << "sample " << k;
     ASSERT_EQ(got.done[k], p.done[k]) << "seg_done at " << k;
-    if (strict_latency) ASSERT_EQ(got.cycle[k], got.tick_cycle[k] + 2) << "tick " << k << " late";
+    if (strict_latency) {
+      ASSERT_EQ(got.cycle[k], got.tick_cycle[k] + 2) << "tick " << k << " late";
+    }
   }
   // after the last segment: underrun, output holds (FD: last sample; BCU: its end value)
   const Piece& last = p.pieces.back();
