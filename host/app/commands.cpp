@@ -3,10 +3,12 @@
 
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <set>
 #include <vector>
 
 #include "input/jsonl_source.hpp"
@@ -19,6 +21,7 @@
 #include "sim/sim.hpp"
 #include "stream/segment_stream.hpp"
 #include "util/atomic_file.hpp"
+#include "util/format.hpp"
 
 namespace traj::app {
 namespace {
@@ -26,9 +29,38 @@ namespace {
 namespace fs = std::filesystem;
 using plan::PlanError;
 
+// Progress on stderr: on a terminal one updating line; otherwise (a log, CI)
+// a line the first time a stage is seen, else at most one every 5 s, so a
+// repair loop that plans many times, or a stream of a million curves, does not
+// fill the log.
+bool stderr_is_tty() {
+  static const bool tty = ::isatty(2);
+  return tty;
+}
+
+void show_progress(const std::string& stage, const std::string& detail) {
+  if (stderr_is_tty()) {
+    std::fprintf(stderr, "\r[%s] %s   ", stage.c_str(), detail.c_str());
+    return;
+  }
+  using Clock = std::chrono::steady_clock;
+  static std::set<std::string> seen;
+  static Clock::time_point last_time;
+  const auto now = Clock::now();
+  const bool first = seen.insert(stage).second;
+  if (!first && now - last_time < std::chrono::seconds(5)) return;
+  std::fprintf(stderr, "[%s] %s\n", stage.c_str(), detail.c_str());
+  last_time = now;
+}
+
+// Ends the updating line on a terminal.
+void end_progress() {
+  if (stderr_is_tty()) std::fprintf(stderr, "\n");
+}
+
 void progress(const std::string& stage, double f) {
-  std::fprintf(stderr, "\r[%s] %3.0f%%   ", stage.c_str(), 100 * f);
-  if (stage == "done") std::fprintf(stderr, "\n");
+  show_progress(stage, util::fmt("%3.0f%%", 100 * f));
+  if (stage == "done") end_progress();
 }
 
 void write_csv(const std::string& path, const stream::Header& h, const report::Samples& s) {
@@ -110,13 +142,13 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
   try {
     st = job::run_streaming(
         *src, a.cfg, so, [&](const fd::Compiled& c, const plan::TimeSegment&) { w.add({c.ticks, c.regs}); },
-        [](const std::string&, double curves) { std::fprintf(stderr, "\r[stream] %.0f curves   ", curves); });
+        [](const std::string&, double curves) { show_progress("stream", util::fmt("%.0f curves", curves)); });
   } catch (...) {
-    std::fprintf(stderr, "\n");  // end the progress line; the writer removes its temporary file
+    end_progress();  // the writer removes its temporary file
     throw;
   }
   w.finish();
-  std::fprintf(stderr, "\n");
+  end_progress();
   std::printf("%s: %zu curves in %zu windows, %zu segments, %lld ticks (%.3f s of motion) -> %s\n"
               "host time %.3f s (%.0fx real time), first segment after %.1f ms\n",
               a.raster ? "raster" : a.input.c_str(), st.curves, st.windows, st.segments, st.ticks, st.motion_time,
@@ -202,7 +234,7 @@ int run_command(const RunArgs& a) {
   std::printf("%s: %zu segments, %zu ticks (%.3f s of motion)\n", a.input.c_str(), res.segments.size(),
               res.ticks.size(), res.plan.duration());
   const auto sr = sim::simulate(res.header, records, 0, [](double f) { progress("sim", f); });
-  std::fprintf(stderr, "\n");
+  end_progress();
   write_csv(stage.dir + "/samples.csv", res.header, sr.samples);
   const auto rep = report::make_report(path, cfg, res, sr.samples);
   report::write_plots(stage.dir, path, cfg, res, sr.samples);
@@ -228,6 +260,7 @@ int sim_command(const SimArgs& a) {
     return 1;
   }
   const auto sr = sim::simulate(rd.header, rd.records, a.tick_gap, [](double f) { progress("sim", f); });
+  end_progress();
   if (sr.engine == "traj_core") {
     // version 2: both engines; every sample also against the exact prediction from the records
     const bool ok = sr.mismatches == 0 && sr.prediction_mismatches == 0 && !sr.tick_err && sr.underruns == 0;
