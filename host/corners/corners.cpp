@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 
 #include "geometry/curve.hpp"
@@ -14,14 +15,15 @@ using Vec = Eigen::VectorXd;
 using Kind = input::Move::Kind;
 
 // A piece of the toolpath between two joins: one straight segment of a degree-1 move, or a whole
-// curved move (kept as it is).
+// curved move (cut only where a corner next to it is blended).
 struct Element {
   size_t move = 0;
   bool segment = false;
-  Vec a, b;               // segment ends (segments only)
-  double length = 0;      // segments only
+  Vec a, b;               // ends
+  double length = 0;      // arc length
   Vec t_start, t_end;     // unit tangents at the ends
   bool last_of_move = false;
+  std::shared_ptr<const geo::Curve> curve;  // curved moves only
 };
 
 enum class JoinKind { kPass, kStop, kBlend };
@@ -29,6 +31,11 @@ struct Join {
   JoinKind kind = JoinKind::kPass;
   double turn = 0;
   double d = 0;
+  // A leg is curved: where each curved leg is cut (u_in on the arriving leg, u_out on the leaving one)
+  // and the blend's five control points (rows).
+  bool curved = false;
+  double u_in = 0, u_out = 0;
+  Eigen::MatrixXd ctrl;
 };
 
 // Turning angle between unit tangents, accurate near 0 and near pi.
@@ -39,6 +46,125 @@ double turning_angle(const Vec& t_in, const Vec& t_out) {
 Vec unit_tangent(const geo::Curve& c, double u) {
   const Eigen::MatrixXd e = c.eval(u, 1);
   return e.col(1).normalized();
+}
+
+double speed(const geo::Curve& c, double u) { return c.eval(u, 1).col(1).norm(); }
+
+// Arc length of c on [u0, u1]: 5-point Gauss-Legendre on 4 sub-intervals of each knot span (the
+// speed is smooth inside a span; rational arcs may change speed at a double knot).
+double arc_length(const geo::Curve& c, double u0, double u1) {
+  static const double x[5] = {0, -0.5384693101056831, 0.5384693101056831, -0.9061798459386640, 0.9061798459386640};
+  static const double w[5] = {0.5688888888888889, 0.4786286704993665, 0.4786286704993665, 0.2369268850561891,
+                              0.2369268850561891};
+  double total = 0;
+  for (const geo::BezierPiece& piece : c.bezier()) {
+    const double a = std::max(u0, piece.u0), b = std::min(u1, piece.u1);
+    if (!(b > a)) continue;
+    const int n = 4;
+    const double h = (b - a) / n;
+    for (int i = 0; i < n; ++i) {
+      const double mid = a + (i + 0.5) * h;
+      for (int k = 0; k < 5; ++k) total += 0.5 * h * w[k] * speed(c, mid + 0.5 * h * x[k]);
+    }
+  }
+  return total;
+}
+
+// Parameter at arc length s from the curve's end (from_end) or its start: safeguarded Newton on the
+// arc length, s strictly inside (0, length).
+double param_at_length(const geo::Curve& c, double s, bool from_end) {
+  double lo = c.u_begin(), hi = c.u_end();
+  const double total = arc_length(c, lo, hi);
+  // g(u): arc length from the start to u minus the target, increasing in u.
+  const double target = from_end ? total - s : s;
+  double u = lo + (hi - lo) * target / total;
+  for (int it = 0; it < 100; ++it) {
+    const double g = arc_length(c, c.u_begin(), u) - target;
+    if (std::abs(g) <= 1e-13 * total) break;
+    (g > 0 ? hi : lo) = u;
+    const double v = speed(c, u);
+    const double next = v > 0 ? u - g / v : 0.5 * (lo + hi);
+    u = (next > lo && next < hi) ? next : 0.5 * (lo + hi);
+    if (hi - lo <= 1e-15 * (c.u_end() - c.u_begin())) break;
+  }
+  return u;
+}
+
+// Largest curvature of c on [u0, u1], sampled at 17 points (exact for a circular arc, whose curvature
+// is constant; an estimate for other curves).
+double max_curvature(const geo::Curve& c, double u0, double u1) {
+  double k = 0;
+  for (int i = 0; i <= 16; ++i) {
+    const Eigen::MatrixXd e = c.eval(u0 + (u1 - u0) * i / 16, 2);
+    const Vec d1 = e.col(1), d2 = e.col(2);
+    const double a = d1.squaredNorm();
+    if (a > 0) k = std::max(k, (d2 - (d2.dot(d1) / a) * d1).norm() / a);
+  }
+  return k;
+}
+
+// One side of a blend at corner v with spacing d: its end point and inner control point, where a
+// curved leg is cut (u), and how far these two points lie from those of the line-line blend on the
+// tangent t at v (shift).
+struct LegCut {
+  Vec end, inner;
+  double u = 0, shift = 0;
+};
+LegCut cut_leg(const Element& e, bool arriving, const Vec& v, const Vec& t, double d) {
+  const double sign = arriving ? -1 : 1;
+  LegCut cut;
+  cut.end = v + sign * 2 * d * t;
+  cut.inner = v + sign * d * t;
+  if (e.segment) return cut;
+  const geo::Curve& c = *e.curve;
+  cut.u = param_at_length(c, 2 * d, arriving);
+  const Vec a = c.point(cut.u);
+  const Vec inner = a - sign * d * unit_tangent(c, cut.u);
+  cut.shift = std::max((a - cut.end).norm(), (inner - cut.inner).norm());
+  cut.end = a;
+  cut.inner = inner;
+  return cut;
+}
+
+// The blend at a corner with a curved leg (README.md, "Curved legs"): each leg loses arc length 2d;
+// a curved leg's blend control points are its cut point and the point d along its tangent there. The
+// blend lies within (d/2) sin(turn/2) + shift + 2 kappa d^2 of the programmed path (kappa: the
+// largest curvature on the cut pieces); d is the largest found within tol and the share of each leg.
+struct CurvedFit {
+  bool ok = false, shortened = false;
+  double d = 0, bound = 0;
+  LegCut in, out;
+};
+CurvedFit fit_curved(const Element& l, const Element& r, double turn, double tol, const BlendOptions& o) {
+  CurvedFit f;
+  const Vec& v = l.b;
+  // A curved leg keeps a little of its length between two cuts (split_at needs u strictly inside).
+  auto cap_of = [&](const Element& e) { return 0.5 * o.share * e.length * (e.segment ? 1 : 0.999); };
+  const double cap = std::min(cap_of(l), cap_of(r));
+  if (!(cap > 0)) return f;
+  auto piece_curvature = [&](const Element& e, bool arriving) {
+    if (e.segment) return 0.0;
+    const double u = param_at_length(*e.curve, 2 * cap, arriving);
+    return arriving ? max_curvature(*e.curve, u, e.curve->u_end()) : max_curvature(*e.curve, e.curve->u_begin(), u);
+  };
+  // The cut pieces for any d <= cap lie inside those for cap: one curvature bound serves all.
+  const double kappa = std::max(piece_curvature(l, true), piece_curvature(r, false));
+  const double s = std::sin(0.5 * turn);
+  // d with (d/2) s + 4 kappa d^2 = tol (the shift estimated by its leading term 2 kappa d^2).
+  const double d_tol = kappa > 0 ? (-(0.5 * s) + std::sqrt(0.25 * s * s + 16 * kappa * tol)) / (8 * kappa)
+                                 : blend_spacing_for(tol, turn);
+  f.d = std::min(cap, d_tol);
+  f.shortened = cap < d_tol;
+  for (int it = 0; it < 200 && f.d > 0; ++it, f.d *= 0.9) {
+    f.in = cut_leg(l, true, v, l.t_end, f.d);
+    f.out = cut_leg(r, false, v, r.t_start, f.d);
+    f.bound = blend_deviation(f.d, turn) + std::max(f.in.shift, f.out.shift) + 2 * kappa * f.d * f.d;
+    if (f.bound <= tol) {
+      f.ok = true;
+      return f;
+    }
+  }
+  return f;
 }
 
 void add_move_elements(const input::Move& m, size_t index, std::vector<Element>& out) {
@@ -58,11 +184,15 @@ void add_move_elements(const input::Move& m, size_t index, std::vector<Element>&
       out.push_back(std::move(e));
     }
   } else {
-    const geo::Curve c(spline, m.where);
+    auto c = std::make_shared<const geo::Curve>(spline, m.where);
     Element e;
     e.move = index;
-    e.t_start = unit_tangent(c, c.u_begin());
-    e.t_end = unit_tangent(c, c.u_end());
+    e.a = c->point(c->u_begin());
+    e.b = c->point(c->u_end());
+    e.length = arc_length(*c, c->u_begin(), c->u_end());
+    e.t_start = unit_tangent(*c, c->u_begin());
+    e.t_end = unit_tangent(*c, c->u_end());
+    e.curve = std::move(c);
     out.push_back(std::move(e));
   }
   if (out.size() > first) out.back().last_of_move = true;
@@ -88,7 +218,7 @@ Join classify(const input::Toolpath& tp, const Element& l, const Element& r, con
     ++res.joins_passed;
     return j;
   }
-  if (!l.segment || !r.segment) return stop(StopReason::kCurvedMove);
+  if ((!l.segment || !r.segment) && !o.blend_curved) return stop(StopReason::kCurvedMove);
   if (j.turn > o.max_turn) return stop(StopReason::kReversal);
   j.kind = JoinKind::kBlend;
   return j;
@@ -247,16 +377,35 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
     const input::Move& mr = tp.moves[el[k + 1].move];
     const double tol = std::min(move_tol(ml, default_tol), move_tol(mr, default_tol));
     if (!(tol > 0)) throw std::invalid_argument(ml.where + ": tolerance must be positive");
-    const double d_tol = blend_spacing_for(tol, j.turn);
-    const double d_leg = 0.5 * o.share * std::min(el[k].length, el[k + 1].length);
-    j.d = std::min(d_tol, d_leg);
     Blend b;
+    if (el[k].segment && el[k + 1].segment) {
+      const double d_tol = blend_spacing_for(tol, j.turn);
+      const double d_leg = 0.5 * o.share * std::min(el[k].length, el[k + 1].length);
+      j.d = std::min(d_tol, d_leg);
+      b.deviation = blend_deviation(j.d, j.turn);
+      b.shortened = d_leg < d_tol;
+    } else {
+      const CurvedFit f = fit_curved(el[k], el[k + 1], j.turn, tol, o);
+      if (!f.ok) {
+        j.kind = JoinKind::kStop;
+        res.stops.push_back({el[k].move, ml.where, StopReason::kCurvedMove, j.turn});
+        continue;
+      }
+      j.d = f.d;
+      j.curved = true;
+      j.u_in = f.in.u;
+      j.u_out = f.out.u;
+      j.ctrl.resize(5, f.in.end.size());
+      j.ctrl << f.in.end.transpose(), f.in.inner.transpose(), el[k].b.transpose(), f.out.inner.transpose(),
+          f.out.end.transpose();
+      b.deviation = f.bound;
+      b.shortened = f.shortened;
+      b.curved = true;
+    }
     b.move = el[k].move;
     b.turn = j.turn;
     b.d = j.d;
-    b.deviation = blend_deviation(j.d, j.turn);
     b.tol = tol;
-    b.shortened = d_leg < d_tol;
     b.peak_curvature = blend_peak_curvature(j.d, j.turn);
     blend_of[k] = res.blends.size();
     res.blends.push_back(b);
@@ -267,7 +416,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
   Vec last_end;
   // A segment between two blended joins that the two blends use up.
   auto used_up = [&](size_t seg) {
-    return seg > 0 && seg < joins.size() && joins[seg - 1].kind == JoinKind::kBlend &&
+    return seg > 0 && seg < joins.size() && el[seg].segment && joins[seg - 1].kind == JoinKind::kBlend &&
            joins[seg].kind == JoinKind::kBlend && el[seg].length - 2 * joins[seg - 1].d - 2 * joins[seg].d < o.min_line;
   };
   // Vertices from join k on that can share one curve: consecutive blended joins with used-up segments
@@ -310,18 +459,37 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
     last_end = rs.ctrl.row(rs.n_ctrl() - 1).transpose();
     return true;
   };
+  // The blend at join k, starting where the chain ends.
+  auto emit_blend = [&](size_t k) {
+    const Element& l = el[k];
+    const Element& r = el[k + 1];
+    geo::BSpline bl = corner_blend(l.b, l.t_end, r.t_start, joins[k].d);
+    if (joins[k].curved) bl.ctrl = joins[k].ctrl;
+    bl.ctrl.row(0) = last_end.transpose();
+    const input::Move& ml = tp.moves[l.move];
+    const input::Move& mr = tp.moves[r.move];
+    res.curves.push_back({bl, blend_where(ml, mr), std::min(ml.feed, mr.feed), Kind::kFeed, false, true});
+    last_end = bl.ctrl.row(4).transpose();
+  };
   for (size_t k = 0; k < el.size(); ++k) {
     const Element& e = el[k];
     const input::Move& m = tp.moves[e.move];
     const bool stop_here = e.last_of_move && m.exact_stop;
-    if (!e.segment) {
-      res.curves.push_back({geo::clamp(m.curve), m.where, m.feed, m.kind, stop_here, false});
-      const auto& c = res.curves.back().curve;
-      last_end = c.ctrl.row(c.n_ctrl() - 1).transpose();
-      continue;
-    }
     const bool blend_before = k > 0 && joins[k - 1].kind == JoinKind::kBlend;
     const bool blend_after = k < joins.size() && joins[k].kind == JoinKind::kBlend;
+    if (!e.segment) {
+      // Cut at the blends: the end first (u_in > u_out), so u_out stays inside the first piece.
+      geo::BSpline s = geo::clamp(m.curve);
+      if (blend_after) s = geo::split_at(s, joins[k].u_in).first;
+      if (blend_before) {
+        s = geo::split_at(s, joins[k - 1].u_out).second;
+        s.ctrl.row(0) = last_end.transpose();
+      }
+      res.curves.push_back({s, m.where, m.feed, m.kind, stop_here, false});
+      last_end = s.ctrl.row(s.n_ctrl() - 1).transpose();
+      if (blend_after) emit_blend(k);
+      continue;
+    }
     const double cut0 = blend_before ? 2 * joins[k - 1].d : 0;
     const double cut1 = blend_after ? 2 * joins[k].d : 0;
     const Vec a = blend_before ? last_end : Vec(e.a);
@@ -339,14 +507,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
         continue;
       }
     }
-    if (blend_after) {
-      const Element& r = el[k + 1];
-      geo::BSpline bl = corner_blend(e.b, e.t_end, r.t_start, joins[k].d);
-      bl.ctrl.row(0) = last_end.transpose();
-      const input::Move& mr = tp.moves[r.move];
-      res.curves.push_back({bl, blend_where(m, mr), std::min(m.feed, mr.feed), Kind::kFeed, false, true});
-      last_end = bl.ctrl.row(4).transpose();
-    }
+    if (blend_after) emit_blend(k);
   }
   for (const Blend& b : res.blends) res.max_deviation = std::max(res.max_deviation, b.deviation);
   return res;

@@ -34,6 +34,11 @@ struct BlendOptions {
   // that measures above the tolerance keeps its separate blends.
   bool merge_runs = true;
   int run_samples = 32;       // samples per knot span for a run's deviation check
+  // Corners next to a curved move (arc, helix, spline) are blended too (README.md, "Curved legs"):
+  // the curved leg is cut at arc length 2d from the corner and the blend is built on its tangent there,
+  // with the leg's departure from its tangent line in the deviation budget. false: left as stops
+  // (StopReason::kCurvedMove).
+  bool blend_curved = true;
 };
 
 // One curve of the output chain, with what it inherits from its move.
@@ -67,6 +72,9 @@ struct Blend {
   bool shortened = false;   // d limited by a leg's share: deviation < tol
   double peak_curvature = 0;  // of the separate blend (not of a run)
   bool in_run = false;      // part of a merged run: deviation is the measured distance of the vertex to the run
+  // A leg is curved: deviation is the bound (d/2) sin(turn/2) + shift + 2 kappa d^2 (README.md,
+  // "Curved legs"), peak_curvature that of the line-line blend at the same corner (an estimate).
+  bool curved = false;
 };
 
 // A run of corners merged into one curve.
