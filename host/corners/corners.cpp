@@ -103,12 +103,38 @@ double max_curvature(const geo::Curve& c, double u0, double u1) {
   return k;
 }
 
-// One side of a blend at corner v with spacing d: its end point and inner control point, where a
-// curved leg is cut (u), and how far these two points lie from those of the line-line blend on the
-// tangent t at v (shift).
+double dist_to_segment(const Vec& p, const Vec& a, const Vec& b) {
+  const Vec ab = b - a;
+  const double L2 = ab.squaredNorm();
+  const double t = L2 > 0 ? std::clamp((p - a).dot(ab) / L2, 0.0, 1.0) : 0.0;
+  return (p - (a + t * ab)).norm();
+}
+
+// Golden-section minimum of f on [a, b] (f unimodal there), to 3e-13 of the interval.
+template <class F>
+double golden_min(F f, double a, double b) {
+  const double g = 0.5 * (std::sqrt(5.0) - 1);
+  double x1 = b - g * (b - a), x2 = a + g * (b - a), f1 = f(x1), f2 = f(x2);
+  for (int it = 0; it < 60; ++it) {  // 0.618^60 = 3e-13 of the interval
+    if (f1 < f2) {
+      b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = f(x1);
+    } else {
+      a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = f(x2);
+    }
+  }
+  return std::min({f1, f2, f(0.5 * (a + b))});
+}
+
+// One side of a blend at corner v with spacing d: its end point and inner control point, and where a
+// curved leg is cut (u). A segment gives the line-line blend's points v -/+ 2d t and v -/+ d t. A
+// curved leg is cut at arc length 2d from v (point a, unit tangent t_a, curvature kappa_a); the inner
+// point is a + e t_a. The blend's curvature at a is h / (3 e^2), h the distance of v (the blend's
+// middle control point) from the tangent line at a, so e = sqrt(h / (3 kappa_a)) makes the join G2
+// where the curve's normal at a points towards v (always for a circular arc); elsewhere e = d (G1).
 struct LegCut {
   Vec end, inner;
-  double u = 0, shift = 0;
+  double u = 0;
+  bool g2 = true;
 };
 LegCut cut_leg(const Element& e, bool arriving, const Vec& v, const Vec& t, double d) {
   const double sign = arriving ? -1 : 1;
@@ -118,22 +144,86 @@ LegCut cut_leg(const Element& e, bool arriving, const Vec& v, const Vec& t, doub
   if (e.segment) return cut;
   const geo::Curve& c = *e.curve;
   cut.u = param_at_length(c, 2 * d, arriving);
-  const Vec a = c.point(cut.u);
-  const Vec inner = a - sign * d * unit_tangent(c, cut.u);
-  cut.shift = std::max((a - cut.end).norm(), (inner - cut.inner).norm());
+  const Eigen::MatrixXd ev = c.eval(cut.u, 2);
+  const Vec a = ev.col(0), t_a = ev.col(1).normalized();
+  const Vec d2 = ev.col(2);
+  const Vec curv = (d2 - d2.dot(t_a) * t_a) / ev.col(1).squaredNorm();  // curvature vector at a
+  const Vec off = (v - a) - (v - a).dot(t_a) * t_a;                     // v from the tangent line at a
+  const double kappa = curv.norm(), h = off.norm();
+  double step = d;
+  cut.g2 = false;
+  if (kappa > 0 && h > 0 && curv.dot(off) >= (1 - 1e-9) * kappa * h) {
+    const double e_g2 = std::sqrt(h / (3 * kappa));
+    if (e_g2 > 0.25 * d && e_g2 < 1.5 * d) step = e_g2, cut.g2 = true;
+  }
   cut.end = a;
-  cut.inner = inner;
+  cut.inner = a - sign * step * t_a;
   return cut;
 }
 
-// The blend at a corner with a curved leg (README.md, "Curved legs"): each leg loses arc length 2d;
-// a curved leg's blend control points are its cut point and the point d along its tangent there. The
-// blend lies within (d/2) sin(turn/2) + shift + 2 kappa d^2 of the programmed path (kappa: the
-// largest curvature on the cut pieces); d is the largest found within tol and the share of each leg.
+// A cut-off piece of the programmed path next to a corner: a segment [a, b] or a curve on [u0, u1].
+struct Piece {
+  const geo::Curve* curve = nullptr;
+  Vec a, b;
+  double u0 = 0, u1 = 0;
+  Vec at(double s) const { return curve ? Vec(curve->point(u0 + (u1 - u0) * s)) : Vec(a + s * (b - a)); }
+};
+
+// Distance of p to c(u), u in [0, 1] of f's parameter: 16 samples, then golden section around the best.
+template <class F>
+double dist_sampled(const Vec& p, const F& f) {
+  const int n = 16;
+  int arg = 0;
+  double best = INFINITY;
+  for (int i = 0; i <= n; ++i) {
+    const double dd = (f(double(i) / n) - p).norm();
+    if (dd < best) best = dd, arg = i;
+  }
+  return std::min(best, golden_min([&](double s) { return (f(s) - p).norm(); }, std::max(0, arg - 1) / double(n),
+                                   std::min(n, arg + 1) / double(n)));
+}
+double dist_to_piece(const Vec& p, const Piece& q) {
+  if (!q.curve) return dist_to_segment(p, q.a, q.b);
+  return dist_sampled(p, [&](double s) { return q.at(s); });
+}
+
+// Measured deviation of a blend from the two pieces it replaces: the larger of the blend's largest
+// distance from them (sampled, then refined by golden section at the worst sample) and the largest
+// distance of their points (the corner and samples along each) from the blend.
+double curved_blend_deviation(const geo::BSpline& blend, const Piece& in, const Piece& out, int samples) {
+  const geo::Curve c(blend, "corner blend");
+  auto off = [&](double u) {
+    const Vec p = c.point(u);
+    return std::min(dist_to_piece(p, in), dist_to_piece(p, out));
+  };
+  int arg = 0;
+  double worst = -1;
+  for (int i = 0; i <= samples; ++i) {
+    const double dd = off(double(i) / samples);
+    if (dd > worst) worst = dd, arg = i;
+  }
+  worst = std::max(worst, -golden_min([&](double u) { return -off(u); }, std::max(0, arg - 1) / double(samples),
+                                      std::min(samples, arg + 1) / double(samples)));
+  auto to_blend = [&](const Vec& p) {
+    return dist_sampled(p, [&](double u) { return Vec(c.point(u)); });
+  };
+  for (int i = 1; i <= 8; ++i) {
+    worst = std::max(worst, to_blend(in.at(i / 8.0)));
+    worst = std::max(worst, to_blend(out.at((i - 1) / 8.0)));
+  }
+  return worst;
+}
+
+// The blend at a corner with a curved leg (README.md, "Curved legs"): each leg loses arc length 2d,
+// a curved leg's side of the blend is built on its tangent at the cut (LegCut). d starts from
+// (d/2) sin(turn/2) + 4 kappa d^2 = tol (kappa: the largest curvature on the longest cut pieces; the
+// leg departs from its tangent at the corner by <= kappa s^2 / 2 over arc length s), within the share
+// of each leg, and shrinks by 10 % until the measured deviation (curved_blend_deviation) is within tol.
 struct CurvedFit {
   bool ok = false, shortened = false;
-  double d = 0, bound = 0;
+  double d = 0, deviation = 0;
   LegCut in, out;
+  geo::BSpline blend;
 };
 CurvedFit fit_curved(const Element& l, const Element& r, double turn, double tol, const BlendOptions& o) {
   CurvedFit f;
@@ -147,10 +237,8 @@ CurvedFit fit_curved(const Element& l, const Element& r, double turn, double tol
     const double u = param_at_length(*e.curve, 2 * cap, arriving);
     return arriving ? max_curvature(*e.curve, u, e.curve->u_end()) : max_curvature(*e.curve, e.curve->u_begin(), u);
   };
-  // The cut pieces for any d <= cap lie inside those for cap: one curvature bound serves all.
   const double kappa = std::max(piece_curvature(l, true), piece_curvature(r, false));
   const double s = std::sin(0.5 * turn);
-  // d with (d/2) s + 4 kappa d^2 = tol (the shift estimated by its leading term 2 kappa d^2).
   const double d_tol = kappa > 0 ? (-(0.5 * s) + std::sqrt(0.25 * s * s + 16 * kappa * tol)) / (8 * kappa)
                                  : blend_spacing_for(tol, turn);
   f.d = std::min(cap, d_tol);
@@ -158,8 +246,18 @@ CurvedFit fit_curved(const Element& l, const Element& r, double turn, double tol
   for (int it = 0; it < 200 && f.d > 0; ++it, f.d *= 0.9) {
     f.in = cut_leg(l, true, v, l.t_end, f.d);
     f.out = cut_leg(r, false, v, r.t_start, f.d);
-    f.bound = blend_deviation(f.d, turn) + std::max(f.in.shift, f.out.shift) + 2 * kappa * f.d * f.d;
-    if (f.bound <= tol) {
+    f.blend = corner_blend(v, l.t_end, r.t_start, f.d);
+    f.blend.ctrl.row(0) = f.in.end.transpose();
+    f.blend.ctrl.row(1) = f.in.inner.transpose();
+    f.blend.ctrl.row(3) = f.out.inner.transpose();
+    f.blend.ctrl.row(4) = f.out.end.transpose();
+    Piece in, out;
+    if (l.segment) in.a = f.in.end, in.b = v;
+    else in.curve = l.curve.get(), in.u0 = f.in.u, in.u1 = l.curve->u_end();
+    if (r.segment) out.a = v, out.b = f.out.end;
+    else out.curve = r.curve.get(), out.u0 = r.curve->u_begin(), out.u1 = f.out.u;
+    f.deviation = curved_blend_deviation(f.blend, in, out, 2 * o.run_samples);
+    if (f.deviation <= tol) {
       f.ok = true;
       return f;
     }
@@ -226,28 +324,6 @@ Join classify(const input::Toolpath& tp, const Element& l, const Element& r, con
 
 std::string blend_where(const input::Move& l, const input::Move& r, const std::string& what = "corner blend") {
   return (l.where == r.where ? l.where : l.where + " / " + r.where) + ": " + what;
-}
-
-double dist_to_segment(const Vec& p, const Vec& a, const Vec& b) {
-  const Vec ab = b - a;
-  const double L2 = ab.squaredNorm();
-  const double t = L2 > 0 ? std::clamp((p - a).dot(ab) / L2, 0.0, 1.0) : 0.0;
-  return (p - (a + t * ab)).norm();
-}
-
-// Golden-section minimum of f on [a, b] (f unimodal there), to 3e-13 of the interval.
-template <class F>
-double golden_min(F f, double a, double b) {
-  const double g = 0.5 * (std::sqrt(5.0) - 1);
-  double x1 = b - g * (b - a), x2 = a + g * (b - a), f1 = f(x1), f2 = f(x2);
-  for (int it = 0; it < 60; ++it) {  // 0.618^60 = 3e-13 of the interval
-    if (f1 < f2) {
-      b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = f(x1);
-    } else {
-      a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = f(x2);
-    }
-  }
-  return std::min({f1, f2, f(0.5 * (a + b))});
 }
 
 // Measured deviation of a run's curve from its control polygon (which lies on the programmed
@@ -395,10 +471,9 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       j.curved = true;
       j.u_in = f.in.u;
       j.u_out = f.out.u;
-      j.ctrl.resize(5, f.in.end.size());
-      j.ctrl << f.in.end.transpose(), f.in.inner.transpose(), el[k].b.transpose(), f.out.inner.transpose(),
-          f.out.end.transpose();
-      b.deviation = f.bound;
+      j.ctrl = f.blend.ctrl;
+      b.deviation = f.deviation;
+      b.g2 = f.in.g2 && f.out.g2;
       b.shortened = f.shortened;
       b.curved = true;
     }

@@ -72,9 +72,11 @@ struct Blend {
   bool shortened = false;   // d limited by a leg's share: deviation < tol
   double peak_curvature = 0;  // of the separate blend (not of a run)
   bool in_run = false;      // part of a merged run: deviation is the measured distance of the vertex to the run
-  // A leg is curved: deviation is the bound (d/2) sin(turn/2) + shift + 2 kappa d^2 (README.md,
-  // "Curved legs"), peak_curvature that of the line-line blend at the same corner (an estimate).
+  // A leg is curved (README.md, "Curved legs"): deviation is measured (sampled, then refined) against
+  // the pieces the blend replaces; peak_curvature is that of the line-line blend at the same corner
+  // (an estimate). g2: curvature continuous at both joins (else G1 with a curvature step at a curved leg).
   bool curved = false;
+  bool g2 = true;
 };
 
 // A run of corners merged into one curve.

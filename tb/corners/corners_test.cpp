@@ -5,6 +5,7 @@
 // derivatives.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -630,8 +631,10 @@ TEST(CurvedCorner, LineArcWithinToleranceAndTangentContinuous) {
             EXPECT_LE(r.blends[0].deviation, tol * (1 + 1e-12)) << what;
             const double w = check_curved_chain(r, dist, v, tol, what);
             worst_ratio = std::max(worst_ratio, w / tol);
-            // G2 with the line: curvature 0 at the blend's line end.
+            // G2 with the line: curvature 0 at the blend's line end; with the arc: 1/R at its arc end.
             EXPECT_LE(blend_end_curvature(r, line_first), 1e-9) << what;
+            EXPECT_TRUE(r.blends[0].g2) << what;
+            EXPECT_NEAR(blend_end_curvature(r, !line_first), 1 / R, 1e-6 / R) << what;
             ++cases;
           }
   std::printf("line-arc corners: %d cases, largest measured distance / tol = %.3f\n", cases, worst_ratio);
@@ -660,6 +663,9 @@ TEST(CurvedCorner, ArcArcWithinToleranceAndTangentContinuous) {
             ASSERT_EQ(r.curves.size(), 3u) << what;
             EXPECT_LE(r.blends[0].deviation, tol * (1 + 1e-12)) << what;
             worst_ratio = std::max(worst_ratio, check_curved_chain(r, dist, v, tol, what) / tol);
+            EXPECT_TRUE(r.blends[0].g2) << what;
+            EXPECT_NEAR(blend_end_curvature(r, true), 1 / R1, 1e-6 / R1) << what;
+            EXPECT_NEAR(blend_end_curvature(r, false), 1 / R2, 1e-6 / R2) << what;
             ++cases;
           }
   std::printf("arc-arc corners: %d cases, largest measured distance / tol = %.3f\n", cases, worst_ratio);
@@ -737,6 +743,24 @@ TEST(CurvedCorner, ArcSpiralNgc) {
   std::printf("arcspiral.ngc at tol %.3f: %d corners blended, %zu stops, largest blend deviation (bound) %.4f mm, "
               "largest measured distance %.4f mm\n", tol, r.corners_blended, r.stops.size(), r.max_deviation, worst);
   EXPECT_LE(worst, tol * (1 + 1e-3));
+}
+
+// LinuxCNC's 3dtest.ngc (if installed): full circles in the three planes between rapids, lettering in
+// G1. No corner is left as a stop for a curved move; the stops that remain are rapids and exact stops.
+TEST(CurvedCorner, ThreeDTestNgcStops) {
+  const std::string file = "/usr/share/linuxcnc/ncfiles/3dtest.ngc";
+  if (!std::ifstream(file)) GTEST_SKIP() << file << " not installed";
+  const Toolpath tp = traj::input::read_gcode(file);
+  const BlendResult r = traj::corners::blend_corners(tp, 0.025);
+  int by[4] = {0, 0, 0, 0};
+  for (const auto& s : r.stops) ++by[static_cast<int>(s.reason)];
+  std::printf("3dtest.ngc at tol 0.025: %d corners blended (%d next to an arc); stops: %d rapid, %d exact stop, "
+              "%d reversal, %d curved move\n", r.corners_blended,
+              int(std::count_if(r.blends.begin(), r.blends.end(), [](const auto& b) { return b.curved; })),
+              by[int(StopReason::kRapid)], by[int(StopReason::kExactStop)], by[int(StopReason::kReversal)],
+              by[int(StopReason::kCurvedMove)]);
+  EXPECT_EQ(by[int(StopReason::kCurvedMove)], 0);
+  EXPECT_LE(r.max_deviation, 0.025);
 }
 
 }  // namespace
