@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // Corner blending: the feed moves of a toolpath turned into a curvature-continuous (G2) chain of
-// curves within the path tolerance (README.md: method, formulas, limits).
+// curves within the path tolerance (README.md: method, formulas, limits). Corners next to a curved
+// move are blended with the same five-point form built on the curved leg's tangent at a cut
+// (README.md, "Curved legs").
 //
 // At each corner where two straight feed segments meet with a tangent break, a piece of length 2d of
 // each segment is replaced by a symmetric cubic B-spline of five control points
@@ -110,9 +112,9 @@ geo::BSpline corner_blend(const Eigen::VectorXd& v, const Eigen::VectorXd& t_in,
 geo::BSpline run_spline(const std::vector<Eigen::VectorXd>& v, const Eigen::VectorXd& t_in, double d_first,
                         const Eigen::VectorXd& t_out, double d_last);
 
-// Blend every corner between two straight feed segments (degree-1 moves, each split at its vertices:
-// a degree-1 curve of many points is a polyline). Rapids, curved moves and their joins pass through
-// unchanged. default_tol applies where a move's tolerance is < 0. Throws std::invalid_argument on a
+// Blend every corner between two feed moves (degree-1 moves are split at their vertices: a degree-1
+// curve of many points is a polyline; curved moves are cut where a corner next to them is blended).
+// Rapids and their joins pass through unchanged. default_tol applies where a move's tolerance is < 0. Throws std::invalid_argument on a
 // non-positive tolerance or share outside (0, 1].
 BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const BlendOptions& o = {});
 
