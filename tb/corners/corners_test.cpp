@@ -563,9 +563,16 @@ Vec unit_tangent_ref(const ref::Spline& s, double u) { return eval_ref(s, u).d1.
 
 // The chain against the programmed path (dist: distance of a point to it, computed from the exact
 // line and arcs): every output curve within tol (dense sampling), consecutive curves meet, unit
-// tangents equal at every join, the corner v within tol of the blend. Returns the largest distance.
+// tangents equal at every join, each corner within tol of a blend. Returns the largest distance.
 template <class Dist>
-double check_curved_chain(const BlendResult& r, const Dist& dist, const Vec& v, double tol, const std::string& what) {
+double check_curved_chain(const BlendResult& r, const Dist& dist, const std::vector<Vec>& corners, double tol,
+                          const std::string& what) {
+  for (const Vec& v : corners) {
+    double nearest = INFINITY;
+    for (const auto& c : r.curves)
+      if (c.blend) nearest = std::min(nearest, dist_point_to_curve(to_ref(c.curve), v));
+    EXPECT_LE(nearest, tol * (1 + 1e-9)) << what;
+  }
   double worst = 0;
   for (size_t i = 0; i < r.curves.size(); ++i) {
     const geo::BSpline& b = r.curves[i].curve;
@@ -573,9 +580,6 @@ double check_curved_chain(const BlendResult& r, const Dist& dist, const Vec& v, 
     const double u0 = b.knots[b.degree], u1 = b.knots[b.n_ctrl()];
     const int n = r.curves[i].blend ? 2000 : 400;
     for (int k = 0; k <= n; ++k) worst = std::max(worst, dist(eval_ref(s, u0 + (u1 - u0) * k / n).c));
-    if (r.curves[i].blend) {
-      EXPECT_LE(dist_point_to_curve(s, v), tol * (1 + 1e-9)) << what;
-    }
     if (i + 1 == r.curves.size()) break;
     const geo::BSpline& nb = r.curves[i + 1].curve;
     const ref::Spline ns = to_ref(nb);
@@ -630,7 +634,7 @@ TEST(CurvedCorner, LineArcWithinToleranceAndTangentContinuous) {
             EXPECT_TRUE(r.blends[0].curved);
             EXPECT_NEAR(r.blends[0].turn, turn, 1e-9) << what;
             EXPECT_LE(r.blends[0].deviation, tol * (1 + 1e-12)) << what;
-            const double w = check_curved_chain(r, dist, v, tol, what);
+            const double w = check_curved_chain(r, dist, {v}, tol, what);
             worst_ratio = std::max(worst_ratio, w / tol);
             // G2 with the line: curvature 0 at the blend's line end; with the arc: 1/R at its arc end.
             EXPECT_LE(blend_end_curvature(r, line_first), 1e-9) << what;
@@ -663,7 +667,7 @@ TEST(CurvedCorner, ArcArcWithinToleranceAndTangentContinuous) {
             ASSERT_EQ(r.corners_blended, 1) << what;
             ASSERT_EQ(r.curves.size(), 3u) << what;
             EXPECT_LE(r.blends[0].deviation, tol * (1 + 1e-12)) << what;
-            worst_ratio = std::max(worst_ratio, check_curved_chain(r, dist, v, tol, what) / tol);
+            worst_ratio = std::max(worst_ratio, check_curved_chain(r, dist, {v}, tol, what) / tol);
             EXPECT_TRUE(r.blends[0].g2) << what;
             EXPECT_NEAR(blend_end_curvature(r, true), 1 / R1, 1e-6 / R1) << what;
             EXPECT_NEAR(blend_end_curvature(r, false), 1 / R2, 1e-6 / R2) << what;
@@ -687,6 +691,40 @@ TEST(CurvedCorner, TangentJoinsPassedAndReversalsStopped) {
   EXPECT_EQ(r.corners_blended, 0);
   ASSERT_EQ(r.stops.size(), 1u);
   EXPECT_EQ(r.stops[0].reason, StopReason::kReversal);
+}
+
+// A line into a non-planar cubic (a 3-D curve: the blend's middle point is off the cubic's
+// osculating plane, so that join is G1) and out of it into a line: within tol, continuous, tangent.
+TEST(CurvedCorner, LineSpaceCubicLine) {
+  Eigen::MatrixXd P(4, 3);
+  P << 0, 0, 0, 1, 1, 0.3, 2, 0.2, 1.2, 3, 1.5, 1.0;
+  Toolpath tp;
+  tp.axes = 3;
+  Vec o(3), e(3), f(3);
+  o << -4, 0, 0;
+  e = P.row(3).transpose();
+  f << 3, 1.5, -3;
+  Move cubic;
+  cubic.curve = geo::make_bezier(P);
+  cubic.feed = 100;
+  cubic.where = "cubic";
+  tp.moves = {line_move(o, Vec(P.row(0).transpose()), "in"), cubic, line_move(e, f, "out")};
+  // The programmed path by the reference: the cubic as a 20000-point polyline (chord error < 1e-8 mm).
+  std::vector<Vec> cub;
+  const ref::Spline rc = to_ref(geo::clamp(cubic.curve));
+  for (int k = 0; k <= 20000; ++k) cub.push_back(eval_ref(rc, k / 20000.0).c);
+  auto dist = [&](const Vec& p) {
+    return std::min({dist_to_segment(p, o, cub.front()), dist_to_polyline(p, cub), dist_to_segment(p, e, f)});
+  };
+  for (double tol : {0.002, 0.02}) {
+    const BlendResult r = traj::corners::blend_corners(tp, tol);
+    ASSERT_EQ(r.corners_blended, 2);
+    ASSERT_EQ(r.curves.size(), 5u);
+    const double w = check_curved_chain(r, dist, {Vec(P.row(0).transpose()), e}, tol,
+                                      "space cubic, tol " + std::to_string(tol));
+    std::printf("line - space cubic - line, tol %.3f: deviations %.4f %.4f (measured), g2 %d %d, largest distance %.4f\n",
+                tol, r.blends[0].deviation, r.blends[1].deviation, int(r.blends[0].g2), int(r.blends[1].g2), w);
+  }
 }
 
 // (g) LinuxCNC's arcspiral.ngc (1000 arcs of slowly shrinking radius, if installed): its arc-arc
