@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 
 #include "geometry/curve.hpp"
@@ -14,14 +15,15 @@ using Vec = Eigen::VectorXd;
 using Kind = input::Move::Kind;
 
 // A piece of the toolpath between two joins: one straight segment of a degree-1 move, or a whole
-// curved move (kept as it is).
+// curved move (cut only where a corner next to it is blended).
 struct Element {
   size_t move = 0;
   bool segment = false;
-  Vec a, b;               // segment ends (segments only)
-  double length = 0;      // segments only
+  Vec a, b;               // ends
+  double length = 0;      // arc length
   Vec t_start, t_end;     // unit tangents at the ends
   bool last_of_move = false;
+  std::shared_ptr<const geo::Curve> curve;  // curved moves only
 };
 
 enum class JoinKind { kPass, kStop, kBlend };
@@ -29,6 +31,11 @@ struct Join {
   JoinKind kind = JoinKind::kPass;
   double turn = 0;
   double d = 0;
+  // A leg is curved: where each curved leg is cut (u_in on the arriving leg, u_out on the leaving one)
+  // and the blend's five control points (rows).
+  bool curved = false;
+  double u_in = 0, u_out = 0;
+  Eigen::MatrixXd ctrl;
 };
 
 // Turning angle between unit tangents, accurate near 0 and near pi.
@@ -39,6 +46,223 @@ double turning_angle(const Vec& t_in, const Vec& t_out) {
 Vec unit_tangent(const geo::Curve& c, double u) {
   const Eigen::MatrixXd e = c.eval(u, 1);
   return e.col(1).normalized();
+}
+
+double speed(const geo::Curve& c, double u) { return c.eval(u, 1).col(1).norm(); }
+
+// Arc length of c on [u0, u1]: 5-point Gauss-Legendre on 4 sub-intervals of each knot span (the
+// speed is smooth inside a span; rational arcs may change speed at a double knot).
+double arc_length(const geo::Curve& c, double u0, double u1) {
+  static const double x[5] = {0, -0.5384693101056831, 0.5384693101056831, -0.9061798459386640, 0.9061798459386640};
+  static const double w[5] = {0.5688888888888889, 0.4786286704993665, 0.4786286704993665, 0.2369268850561891,
+                              0.2369268850561891};
+  double total = 0;
+  for (const geo::BezierPiece& piece : c.bezier()) {
+    const double a = std::max(u0, piece.u0), b = std::min(u1, piece.u1);
+    if (!(b > a)) continue;
+    const int n = 4;
+    const double h = (b - a) / n;
+    for (int i = 0; i < n; ++i) {
+      const double mid = a + (i + 0.5) * h;
+      for (int k = 0; k < 5; ++k) total += 0.5 * h * w[k] * speed(c, mid + 0.5 * h * x[k]);
+    }
+  }
+  return total;
+}
+
+// Parameter at arc length s from the curve's end (from_end) or its start: safeguarded Newton on the
+// arc length, s strictly inside (0, length).
+double param_at_length(const geo::Curve& c, double s, bool from_end) {
+  double lo = c.u_begin(), hi = c.u_end();
+  const double total = arc_length(c, lo, hi);
+  // g(u): arc length from the start to u minus the target, increasing in u.
+  const double target = from_end ? total - s : s;
+  double u = lo + (hi - lo) * target / total;
+  for (int it = 0; it < 100; ++it) {
+    const double g = arc_length(c, c.u_begin(), u) - target;
+    if (std::abs(g) <= 1e-13 * total) break;
+    (g > 0 ? hi : lo) = u;
+    const double v = speed(c, u);
+    const double next = v > 0 ? u - g / v : 0.5 * (lo + hi);
+    u = (next > lo && next < hi) ? next : 0.5 * (lo + hi);
+    if (hi - lo <= 1e-15 * (c.u_end() - c.u_begin())) break;
+  }
+  return u;
+}
+
+// Largest curvature of c on [u0, u1], sampled at 17 points (exact for a circular arc, whose curvature
+// is constant; an estimate for other curves).
+double max_curvature(const geo::Curve& c, double u0, double u1) {
+  double k = 0;
+  for (int i = 0; i <= 16; ++i) {
+    const Eigen::MatrixXd e = c.eval(u0 + (u1 - u0) * i / 16, 2);
+    const Vec d1 = e.col(1), d2 = e.col(2);
+    const double a = d1.squaredNorm();
+    if (a > 0) k = std::max(k, (d2 - (d2.dot(d1) / a) * d1).norm() / a);
+  }
+  return k;
+}
+
+double dist_to_segment(const Vec& p, const Vec& a, const Vec& b) {
+  const Vec ab = b - a;
+  const double L2 = ab.squaredNorm();
+  const double t = L2 > 0 ? std::clamp((p - a).dot(ab) / L2, 0.0, 1.0) : 0.0;
+  return (p - (a + t * ab)).norm();
+}
+
+// Golden-section minimum of f on [a, b] (f unimodal there), to 3e-13 of the interval.
+template <class F>
+double golden_min(F f, double a, double b) {
+  const double g = 0.5 * (std::sqrt(5.0) - 1);
+  double x1 = b - g * (b - a), x2 = a + g * (b - a), f1 = f(x1), f2 = f(x2);
+  for (int it = 0; it < 60; ++it) {  // 0.618^60 = 3e-13 of the interval
+    if (f1 < f2) {
+      b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = f(x1);
+    } else {
+      a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = f(x2);
+    }
+  }
+  return std::min({f1, f2, f(0.5 * (a + b))});
+}
+
+// One side of a blend at corner v with spacing d: its end point and inner control point, and where a
+// curved leg is cut (u). A segment gives the line-line blend's points v -/+ 2d t and v -/+ d t. A
+// curved leg is cut at arc length 2d from v (point a, unit tangent t_a, curvature kappa_a); the inner
+// point is a + e t_a. The blend's curvature at a is h / (3 e^2), h the distance of v (the blend's
+// middle control point) from the tangent line at a, so e = sqrt(h / (3 kappa_a)) makes the join G2
+// where the curve's normal at a points towards v (always for a circular arc); elsewhere e = d (G1).
+struct LegCut {
+  Vec end, inner;
+  double u = 0;
+  bool g2 = true;
+};
+LegCut cut_leg(const Element& e, bool arriving, const Vec& v, const Vec& t, double d) {
+  const double sign = arriving ? -1 : 1;
+  LegCut cut;
+  cut.end = v + sign * 2 * d * t;
+  cut.inner = v + sign * d * t;
+  if (e.segment) return cut;
+  const geo::Curve& c = *e.curve;
+  cut.u = param_at_length(c, 2 * d, arriving);
+  const Eigen::MatrixXd ev = c.eval(cut.u, 2);
+  const Vec a = ev.col(0), t_a = ev.col(1).normalized();
+  const Vec d2 = ev.col(2);
+  const Vec curv = (d2 - d2.dot(t_a) * t_a) / ev.col(1).squaredNorm();  // curvature vector at a
+  const Vec off = (v - a) - (v - a).dot(t_a) * t_a;                     // v from the tangent line at a
+  const double kappa = curv.norm(), h = off.norm();
+  double step = d;
+  cut.g2 = false;
+  if (kappa > 0 && h > 0 && curv.dot(off) >= (1 - 1e-9) * kappa * h) {
+    const double e_g2 = std::sqrt(h / (3 * kappa));
+    if (e_g2 > 0.25 * d && e_g2 < 1.5 * d) step = e_g2, cut.g2 = true;
+  }
+  cut.end = a;
+  cut.inner = a - sign * step * t_a;
+  return cut;
+}
+
+// A cut-off piece of the programmed path next to a corner: a segment [a, b] or a curve on [u0, u1].
+struct Piece {
+  const geo::Curve* curve = nullptr;
+  Vec a, b;
+  double u0 = 0, u1 = 0;
+  Vec at(double s) const { return curve ? Vec(curve->point(u0 + (u1 - u0) * s)) : Vec(a + s * (b - a)); }
+};
+
+// Distance of p to c(u), u in [0, 1] of f's parameter: 16 samples, then golden section around the best.
+template <class F>
+double dist_sampled(const Vec& p, const F& f) {
+  const int n = 16;
+  int arg = 0;
+  double best = INFINITY;
+  for (int i = 0; i <= n; ++i) {
+    const double dd = (f(double(i) / n) - p).norm();
+    if (dd < best) best = dd, arg = i;
+  }
+  return std::min(best, golden_min([&](double s) { return (f(s) - p).norm(); }, std::max(0, arg - 1) / double(n),
+                                   std::min(n, arg + 1) / double(n)));
+}
+double dist_to_piece(const Vec& p, const Piece& q) {
+  if (!q.curve) return dist_to_segment(p, q.a, q.b);
+  return dist_sampled(p, [&](double s) { return q.at(s); });
+}
+
+// Measured deviation of a blend from the two pieces it replaces: the larger of the blend's largest
+// distance from them (sampled, then refined by golden section at the worst sample) and the largest
+// distance of their points (the corner and samples along each) from the blend.
+double curved_blend_deviation(const geo::BSpline& blend, const Piece& in, const Piece& out, int samples) {
+  const geo::Curve c(blend, "corner blend");
+  auto off = [&](double u) {
+    const Vec p = c.point(u);
+    return std::min(dist_to_piece(p, in), dist_to_piece(p, out));
+  };
+  int arg = 0;
+  double worst = -1;
+  for (int i = 0; i <= samples; ++i) {
+    const double dd = off(double(i) / samples);
+    if (dd > worst) worst = dd, arg = i;
+  }
+  worst = std::max(worst, -golden_min([&](double u) { return -off(u); }, std::max(0, arg - 1) / double(samples),
+                                      std::min(samples, arg + 1) / double(samples)));
+  auto to_blend = [&](const Vec& p) {
+    return dist_sampled(p, [&](double u) { return Vec(c.point(u)); });
+  };
+  for (int i = 1; i <= 8; ++i) {
+    worst = std::max(worst, to_blend(in.at(i / 8.0)));
+    worst = std::max(worst, to_blend(out.at((i - 1) / 8.0)));
+  }
+  return worst;
+}
+
+// The blend at a corner with a curved leg (README.md, "Curved legs"): each leg loses arc length 2d,
+// a curved leg's side of the blend is built on its tangent at the cut (LegCut). d starts from
+// (d/2) sin(turn/2) + 4 kappa d^2 = tol (kappa: the largest curvature on the longest cut pieces; the
+// leg departs from its tangent at the corner by <= kappa s^2 / 2 over arc length s), within the share
+// of each leg, and shrinks by 10 % until the measured deviation (curved_blend_deviation) is within tol.
+struct CurvedFit {
+  bool ok = false, shortened = false;
+  double d = 0, deviation = 0;
+  LegCut in, out;
+  geo::BSpline blend;
+};
+CurvedFit fit_curved(const Element& l, const Element& r, double turn, double tol, const BlendOptions& o) {
+  CurvedFit f;
+  const Vec& v = l.b;
+  // A curved leg keeps a little of its length between two cuts (split_at needs u strictly inside).
+  auto cap_of = [&](const Element& e) { return 0.5 * o.share * e.length * (e.segment ? 1 : 0.999); };
+  const double cap = std::min(cap_of(l), cap_of(r));
+  if (!(cap > 0)) return f;
+  auto piece_curvature = [&](const Element& e, bool arriving) {
+    if (e.segment) return 0.0;
+    const double u = param_at_length(*e.curve, 2 * cap, arriving);
+    return arriving ? max_curvature(*e.curve, u, e.curve->u_end()) : max_curvature(*e.curve, e.curve->u_begin(), u);
+  };
+  const double kappa = std::max(piece_curvature(l, true), piece_curvature(r, false));
+  const double s = std::sin(0.5 * turn);
+  const double d_tol = kappa > 0 ? (-(0.5 * s) + std::sqrt(0.25 * s * s + 16 * kappa * tol)) / (8 * kappa)
+                                 : blend_spacing_for(tol, turn);
+  f.d = std::min(cap, d_tol);
+  f.shortened = cap < d_tol;
+  for (int it = 0; it < 200 && f.d > 0; ++it, f.d *= 0.9) {
+    f.in = cut_leg(l, true, v, l.t_end, f.d);
+    f.out = cut_leg(r, false, v, r.t_start, f.d);
+    f.blend = corner_blend(v, l.t_end, r.t_start, f.d);
+    f.blend.ctrl.row(0) = f.in.end.transpose();
+    f.blend.ctrl.row(1) = f.in.inner.transpose();
+    f.blend.ctrl.row(3) = f.out.inner.transpose();
+    f.blend.ctrl.row(4) = f.out.end.transpose();
+    Piece in, out;
+    if (l.segment) in.a = f.in.end, in.b = v;
+    else in.curve = l.curve.get(), in.u0 = f.in.u, in.u1 = l.curve->u_end();
+    if (r.segment) out.a = v, out.b = f.out.end;
+    else out.curve = r.curve.get(), out.u0 = r.curve->u_begin(), out.u1 = f.out.u;
+    f.deviation = curved_blend_deviation(f.blend, in, out, 2 * o.run_samples);
+    if (f.deviation <= tol) {
+      f.ok = true;
+      return f;
+    }
+  }
+  return f;
 }
 
 void add_move_elements(const input::Move& m, size_t index, std::vector<Element>& out) {
@@ -58,11 +282,15 @@ void add_move_elements(const input::Move& m, size_t index, std::vector<Element>&
       out.push_back(std::move(e));
     }
   } else {
-    const geo::Curve c(spline, m.where);
+    auto c = std::make_shared<const geo::Curve>(spline, m.where);
     Element e;
     e.move = index;
-    e.t_start = unit_tangent(c, c.u_begin());
-    e.t_end = unit_tangent(c, c.u_end());
+    e.a = c->point(c->u_begin());
+    e.b = c->point(c->u_end());
+    e.length = arc_length(*c, c->u_begin(), c->u_end());
+    e.t_start = unit_tangent(*c, c->u_begin());
+    e.t_end = unit_tangent(*c, c->u_end());
+    e.curve = std::move(c);
     out.push_back(std::move(e));
   }
   if (out.size() > first) out.back().last_of_move = true;
@@ -88,7 +316,7 @@ Join classify(const input::Toolpath& tp, const Element& l, const Element& r, con
     ++res.joins_passed;
     return j;
   }
-  if (!l.segment || !r.segment) return stop(StopReason::kCurvedMove);
+  if ((!l.segment || !r.segment) && !o.blend_curved) return stop(StopReason::kCurvedMove);
   if (j.turn > o.max_turn) return stop(StopReason::kReversal);
   j.kind = JoinKind::kBlend;
   return j;
@@ -96,28 +324,6 @@ Join classify(const input::Toolpath& tp, const Element& l, const Element& r, con
 
 std::string blend_where(const input::Move& l, const input::Move& r, const std::string& what = "corner blend") {
   return (l.where == r.where ? l.where : l.where + " / " + r.where) + ": " + what;
-}
-
-double dist_to_segment(const Vec& p, const Vec& a, const Vec& b) {
-  const Vec ab = b - a;
-  const double L2 = ab.squaredNorm();
-  const double t = L2 > 0 ? std::clamp((p - a).dot(ab) / L2, 0.0, 1.0) : 0.0;
-  return (p - (a + t * ab)).norm();
-}
-
-// Golden-section minimum of f on [a, b] (f unimodal there), to 3e-13 of the interval.
-template <class F>
-double golden_min(F f, double a, double b) {
-  const double g = 0.5 * (std::sqrt(5.0) - 1);
-  double x1 = b - g * (b - a), x2 = a + g * (b - a), f1 = f(x1), f2 = f(x2);
-  for (int it = 0; it < 60; ++it) {  // 0.618^60 = 3e-13 of the interval
-    if (f1 < f2) {
-      b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = f(x1);
-    } else {
-      a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = f(x2);
-    }
-  }
-  return std::min({f1, f2, f(0.5 * (a + b))});
 }
 
 // Measured deviation of a run's curve from its control polygon (which lies on the programmed
@@ -247,16 +453,34 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
     const input::Move& mr = tp.moves[el[k + 1].move];
     const double tol = std::min(move_tol(ml, default_tol), move_tol(mr, default_tol));
     if (!(tol > 0)) throw std::invalid_argument(ml.where + ": tolerance must be positive");
-    const double d_tol = blend_spacing_for(tol, j.turn);
-    const double d_leg = 0.5 * o.share * std::min(el[k].length, el[k + 1].length);
-    j.d = std::min(d_tol, d_leg);
     Blend b;
+    if (el[k].segment && el[k + 1].segment) {
+      const double d_tol = blend_spacing_for(tol, j.turn);
+      const double d_leg = 0.5 * o.share * std::min(el[k].length, el[k + 1].length);
+      j.d = std::min(d_tol, d_leg);
+      b.deviation = blend_deviation(j.d, j.turn);
+      b.shortened = d_leg < d_tol;
+    } else {
+      const CurvedFit f = fit_curved(el[k], el[k + 1], j.turn, tol, o);
+      if (!f.ok) {
+        j.kind = JoinKind::kStop;
+        res.stops.push_back({el[k].move, ml.where, StopReason::kCurvedMove, j.turn});
+        continue;
+      }
+      j.d = f.d;
+      j.curved = true;
+      j.u_in = f.in.u;
+      j.u_out = f.out.u;
+      j.ctrl = f.blend.ctrl;
+      b.deviation = f.deviation;
+      b.g2 = f.in.g2 && f.out.g2;
+      b.shortened = f.shortened;
+      b.curved = true;
+    }
     b.move = el[k].move;
     b.turn = j.turn;
     b.d = j.d;
-    b.deviation = blend_deviation(j.d, j.turn);
     b.tol = tol;
-    b.shortened = d_leg < d_tol;
     b.peak_curvature = blend_peak_curvature(j.d, j.turn);
     blend_of[k] = res.blends.size();
     res.blends.push_back(b);
@@ -267,7 +491,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
   Vec last_end;
   // A segment between two blended joins that the two blends use up.
   auto used_up = [&](size_t seg) {
-    return seg > 0 && seg < joins.size() && joins[seg - 1].kind == JoinKind::kBlend &&
+    return seg > 0 && seg < joins.size() && el[seg].segment && joins[seg - 1].kind == JoinKind::kBlend &&
            joins[seg].kind == JoinKind::kBlend && el[seg].length - 2 * joins[seg - 1].d - 2 * joins[seg].d < o.min_line;
   };
   // Vertices from join k on that can share one curve: consecutive blended joins with used-up segments
@@ -310,18 +534,37 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
     last_end = rs.ctrl.row(rs.n_ctrl() - 1).transpose();
     return true;
   };
+  // The blend at join k, starting where the chain ends.
+  auto emit_blend = [&](size_t k) {
+    const Element& l = el[k];
+    const Element& r = el[k + 1];
+    geo::BSpline bl = corner_blend(l.b, l.t_end, r.t_start, joins[k].d);
+    if (joins[k].curved) bl.ctrl = joins[k].ctrl;
+    bl.ctrl.row(0) = last_end.transpose();
+    const input::Move& ml = tp.moves[l.move];
+    const input::Move& mr = tp.moves[r.move];
+    res.curves.push_back({bl, blend_where(ml, mr), std::min(ml.feed, mr.feed), Kind::kFeed, false, true});
+    last_end = bl.ctrl.row(4).transpose();
+  };
   for (size_t k = 0; k < el.size(); ++k) {
     const Element& e = el[k];
     const input::Move& m = tp.moves[e.move];
     const bool stop_here = e.last_of_move && m.exact_stop;
-    if (!e.segment) {
-      res.curves.push_back({geo::clamp(m.curve), m.where, m.feed, m.kind, stop_here, false});
-      const auto& c = res.curves.back().curve;
-      last_end = c.ctrl.row(c.n_ctrl() - 1).transpose();
-      continue;
-    }
     const bool blend_before = k > 0 && joins[k - 1].kind == JoinKind::kBlend;
     const bool blend_after = k < joins.size() && joins[k].kind == JoinKind::kBlend;
+    if (!e.segment) {
+      // Cut at the blends: the end first (u_in > u_out), so u_out stays inside the first piece.
+      geo::BSpline s = geo::clamp(m.curve);
+      if (blend_after) s = geo::split_at(s, joins[k].u_in).first;
+      if (blend_before) {
+        s = geo::split_at(s, joins[k - 1].u_out).second;
+        s.ctrl.row(0) = last_end.transpose();
+      }
+      res.curves.push_back({s, m.where, m.feed, m.kind, stop_here, false});
+      last_end = s.ctrl.row(s.n_ctrl() - 1).transpose();
+      if (blend_after) emit_blend(k);
+      continue;
+    }
     const double cut0 = blend_before ? 2 * joins[k - 1].d : 0;
     const double cut1 = blend_after ? 2 * joins[k].d : 0;
     const Vec a = blend_before ? last_end : Vec(e.a);
@@ -339,14 +582,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
         continue;
       }
     }
-    if (blend_after) {
-      const Element& r = el[k + 1];
-      geo::BSpline bl = corner_blend(e.b, e.t_end, r.t_start, joins[k].d);
-      bl.ctrl.row(0) = last_end.transpose();
-      const input::Move& mr = tp.moves[r.move];
-      res.curves.push_back({bl, blend_where(m, mr), std::min(m.feed, mr.feed), Kind::kFeed, false, true});
-      last_end = bl.ctrl.row(4).transpose();
-    }
+    if (blend_after) emit_blend(k);
   }
   for (const Blend& b : res.blends) res.max_deviation = std::max(res.max_deviation, b.deviation);
   return res;

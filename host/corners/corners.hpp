@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // Corner blending: the feed moves of a toolpath turned into a curvature-continuous (G2) chain of
-// curves within the path tolerance (README.md: method, formulas, limits).
+// curves within the path tolerance (README.md: method, formulas, limits). Corners next to a curved
+// move are blended with the same five-point form built on the curved leg's tangent at a cut
+// (README.md, "Curved legs").
 //
 // At each corner where two straight feed segments meet with a tangent break, a piece of length 2d of
 // each segment is replaced by a symmetric cubic B-spline of five control points
@@ -34,6 +36,11 @@ struct BlendOptions {
   // that measures above the tolerance keeps its separate blends.
   bool merge_runs = true;
   int run_samples = 32;       // samples per knot span for a run's deviation check
+  // Corners next to a curved move (arc, helix, spline) are blended too (README.md, "Curved legs"):
+  // the curved leg is cut at arc length 2d from the corner and the blend is built on its tangent there,
+  // with the leg's departure from its tangent line in the deviation budget. false: left as stops
+  // (StopReason::kCurvedMove).
+  bool blend_curved = true;
 };
 
 // One curve of the output chain, with what it inherits from its move.
@@ -67,6 +74,11 @@ struct Blend {
   bool shortened = false;   // d limited by a leg's share: deviation < tol
   double peak_curvature = 0;  // of the separate blend (not of a run)
   bool in_run = false;      // part of a merged run: deviation is the measured distance of the vertex to the run
+  // A leg is curved (README.md, "Curved legs"): deviation is measured (sampled, then refined) against
+  // the pieces the blend replaces; peak_curvature is that of the line-line blend at the same corner
+  // (an estimate). g2: curvature continuous at both joins (else G1 with a curvature step at a curved leg).
+  bool curved = false;
+  bool g2 = true;
 };
 
 // A run of corners merged into one curve.
@@ -100,9 +112,9 @@ geo::BSpline corner_blend(const Eigen::VectorXd& v, const Eigen::VectorXd& t_in,
 geo::BSpline run_spline(const std::vector<Eigen::VectorXd>& v, const Eigen::VectorXd& t_in, double d_first,
                         const Eigen::VectorXd& t_out, double d_last);
 
-// Blend every corner between two straight feed segments (degree-1 moves, each split at its vertices:
-// a degree-1 curve of many points is a polyline). Rapids, curved moves and their joins pass through
-// unchanged. default_tol applies where a move's tolerance is < 0. Throws std::invalid_argument on a
+// Blend every corner between two feed moves (degree-1 moves are split at their vertices: a degree-1
+// curve of many points is a polyline; curved moves are cut where a corner next to them is blended).
+// Rapids and their joins pass through unchanged. default_tol applies where a move's tolerance is < 0. Throws std::invalid_argument on a
 // non-positive tolerance or share outside (0, 1].
 BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const BlendOptions& o = {});
 

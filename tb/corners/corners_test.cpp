@@ -5,11 +5,15 @@
 // derivatives.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <random>
 
 #include "corners/corners.hpp"
+#include "input/gcode.hpp"
 #include "planner/planner.hpp"
 #include "ref_deboor.hpp"
 
@@ -55,6 +59,7 @@ ref::Spline to_ref(const geo::BSpline& b) {
     for (int d = 0; d < b.dim(); ++d) p.push_back(b.ctrl(i, d));
     r.P.push_back(p);
   }
+  for (int i = 0; i < b.weights.size(); ++i) r.W.push_back(b.weights[i]);
   return r;
 }
 
@@ -248,7 +253,9 @@ TEST(CornerBlend, StopsAndPassedJoins) {
     arc.feed = 100;
     arc.where = "arc";
     tp.moves.push_back(arc);
-    const BlendResult r = traj::corners::blend_corners(tp, 0.01);
+    BlendOptions lines_only;
+    lines_only.blend_curved = false;
+    const BlendResult r = traj::corners::blend_corners(tp, 0.01, lines_only);
     EXPECT_EQ(r.corners_blended, 0);
     ASSERT_EQ(r.stops.size(), 1u);
     EXPECT_EQ(r.stops[0].reason, StopReason::kCurvedMove);
@@ -497,6 +504,304 @@ TEST(CornerBlend, ChainPlansThroughThePlanner) {
   EXPECT_EQ(p.size(), r.curves.size());
   const plan::Plan pl = plan::plan_path(p, circle_limits(), plan::PlanOptions{});
   EXPECT_GT(pl.duration(), 0);
+}
+
+}  // namespace
+
+namespace {
+
+// A circular arc of the programmed path: centre, radius, start angle, signed sweep (> 0: counter-clockwise).
+struct Arc {
+  Vec c;
+  double r = 0, a0 = 0, sweep = 0;
+};
+Vec arc_at(const Arc& a, double angle) { return a.c + a.r * v2(std::cos(angle), std::sin(angle)); }
+
+// Distance of p to the arc: to the circle where p's angle lies inside the sweep, else to the nearer end.
+double dist_to_arc(const Vec& p, const Arc& a) {
+  const Vec q = p - a.c;
+  double rel = (a.sweep > 0 ? 1 : -1) * (std::atan2(q[1], q[0]) - a.a0);
+  rel = std::fmod(std::fmod(rel, 2 * kPi) + 2 * kPi, 2 * kPi);
+  if (rel <= std::abs(a.sweep)) return std::abs(q.norm() - a.r);
+  return std::min((p - arc_at(a, a.a0)).norm(), (p - arc_at(a, a.a0 + a.sweep)).norm());
+}
+
+// The arc leaving p in direction phi with radius r, turning by `sweep` (> 0: to the left).
+Arc arc_leaving(const Vec& p, double phi, double r, double sweep) {
+  const double side = sweep > 0 ? 1 : -1;
+  Arc a;
+  a.c = p + side * r * v2(-std::sin(phi), std::cos(phi));
+  a.r = r;
+  a.a0 = std::atan2(p[1] - a.c[1], p[0] - a.c[0]);
+  a.sweep = sweep;
+  return a;
+}
+// The arc arriving at p in direction phi with radius r, having turned by `sweep`.
+Arc arc_arriving(const Vec& p, double phi, double r, double sweep) {
+  Arc back = arc_leaving(p, phi + kPi, r, -sweep);  // the same arc run backwards
+  Arc a = back;
+  a.a0 = back.a0 + back.sweep;
+  a.sweep = -back.sweep;
+  return a;
+}
+Move arc_move(const Arc& a, const std::string& where) {
+  Move m;
+  m.curve = geo::make_arc(Eigen::Vector2d(a.c[0], a.c[1]), a.r, a.a0, a.a0 + a.sweep);
+  m.feed = 100;
+  m.where = where;
+  return m;
+}
+Move line_move(const Vec& a, const Vec& b, const std::string& where) {
+  Move m;
+  m.curve = geo::make_line(a, b);
+  m.feed = 100;
+  m.where = where;
+  return m;
+}
+
+Vec unit_tangent_ref(const ref::Spline& s, double u) { return eval_ref(s, u).d1.normalized(); }
+
+// The chain against the programmed path (dist: distance of a point to it, computed from the exact
+// line and arcs): every output curve within tol (dense sampling), consecutive curves meet, unit
+// tangents equal at every join, each corner within tol of a blend. Returns the largest distance.
+template <class Dist>
+double check_curved_chain(const BlendResult& r, const Dist& dist, const std::vector<Vec>& corners, double tol,
+                          const std::string& what) {
+  for (const Vec& v : corners) {
+    double nearest = INFINITY;
+    for (const auto& c : r.curves)
+      if (c.blend) nearest = std::min(nearest, dist_point_to_curve(to_ref(c.curve), v));
+    EXPECT_LE(nearest, tol * (1 + 1e-9)) << what;
+  }
+  double worst = 0;
+  for (size_t i = 0; i < r.curves.size(); ++i) {
+    const geo::BSpline& b = r.curves[i].curve;
+    const ref::Spline s = to_ref(b);
+    const double u0 = b.knots[b.degree], u1 = b.knots[b.n_ctrl()];
+    const int n = r.curves[i].blend ? 2000 : 400;
+    for (int k = 0; k <= n; ++k) worst = std::max(worst, dist(eval_ref(s, u0 + (u1 - u0) * k / n).c));
+    if (i + 1 == r.curves.size()) break;
+    const geo::BSpline& nb = r.curves[i + 1].curve;
+    const ref::Spline ns = to_ref(nb);
+    const double n0 = nb.knots[nb.degree];
+    EXPECT_LE((eval_ref(s, u1).c - eval_ref(ns, n0).c).norm(), 1e-12) << what << " join " << i;
+    EXPECT_LE((unit_tangent_ref(s, u1) - unit_tangent_ref(ns, n0)).norm(), 1e-9) << what << " join " << i;
+  }
+  EXPECT_LE(worst, tol * (1 + 1e-9)) << what;
+  return worst;
+}
+
+// Curvature of the blend at its line side: 0 (G2 with the line).
+double blend_end_curvature(const BlendResult& r, bool at_start) {
+  for (const auto& c : r.curves)
+    if (c.blend) return curvature_ref(eval_ref(to_ref(c.curve), at_start ? 0.0 : 1.0));
+  return -1;
+}
+
+// (e) Line-arc and arc-line corners: turns from 5 to 178 degrees, radii 0.5 to 20 mm, the arc
+// bending with the turn or against it, two tolerances.
+TEST(CurvedCorner, LineArcWithinToleranceAndTangentContinuous) {
+  int cases = 0;
+  double worst_ratio = 0;
+  for (double deg : {5.0, 30.0, 90.0, 150.0, 178.0})
+    for (double R : {0.5, 2.0, 20.0})
+      for (double bend : {1.0, -1.0})
+        for (double tol : {0.01, 0.05})
+          for (bool line_first : {true, false}) {
+            const double turn = deg * kPi / 180, sweep = bend * kPi / 2;
+            const Vec v = v2(0, 0);
+            Toolpath tp;
+            tp.axes = 2;
+            Vec a, b;
+            Arc arc;
+            if (line_first) {
+              a = v2(-5, 0), b = v;
+              arc = arc_leaving(v, turn, R, sweep);
+              tp.moves = {line_move(a, b, "line"), arc_move(arc, "arc")};
+            } else {
+              arc = arc_arriving(v, kPi - turn, R, sweep);  // arrives heading pi - turn, leaves heading pi
+              a = v, b = v2(-5, 0);
+              tp.moves = {arc_move(arc, "arc"), line_move(a, b, "line")};
+            }
+            auto dist = [&](const Vec& p) { return std::min(dist_to_segment(p, a, b), dist_to_arc(p, arc)); };
+            const std::string what = "turn " + std::to_string(deg) + " R " + std::to_string(R) + " bend " +
+                                     std::to_string(bend) + " tol " + std::to_string(tol) +
+                                     (line_first ? " line-arc" : " arc-line");
+            const BlendResult r = traj::corners::blend_corners(tp, tol);
+            ASSERT_EQ(r.corners_blended, 1) << what;
+            EXPECT_TRUE(r.stops.empty()) << what;
+            ASSERT_EQ(r.curves.size(), 3u) << what;
+            EXPECT_TRUE(r.blends[0].curved);
+            EXPECT_NEAR(r.blends[0].turn, turn, 1e-9) << what;
+            EXPECT_LE(r.blends[0].deviation, tol * (1 + 1e-12)) << what;
+            const double w = check_curved_chain(r, dist, {v}, tol, what);
+            worst_ratio = std::max(worst_ratio, w / tol);
+            // G2 with the line: curvature 0 at the blend's line end; with the arc: 1/R at its arc end.
+            EXPECT_LE(blend_end_curvature(r, line_first), 1e-9) << what;
+            EXPECT_TRUE(r.blends[0].g2) << what;
+            EXPECT_NEAR(blend_end_curvature(r, !line_first), 1 / R, 1e-6 / R) << what;
+            ++cases;
+          }
+  std::printf("line-arc corners: %d cases, largest measured distance / tol = %.3f\n", cases, worst_ratio);
+}
+
+// (f) Arc-arc corners: both legs curved, radii 0.5 to 20 mm, each bending either way.
+TEST(CurvedCorner, ArcArcWithinToleranceAndTangentContinuous) {
+  int cases = 0;
+  double worst_ratio = 0;
+  for (double deg : {3.0, 45.0, 120.0, 175.0})
+    for (double R1 : {0.5, 5.0})
+      for (double R2 : {1.0, 20.0})
+        for (double b1 : {1.0, -1.0})
+          for (double b2 : {1.0, -1.0}) {
+            const double turn = deg * kPi / 180, tol = 0.02;
+            const Vec v = v2(0, 0);
+            const Arc in = arc_arriving(v, 0, R1, b1 * kPi / 3), out = arc_leaving(v, turn, R2, b2 * kPi / 3);
+            Toolpath tp;
+            tp.axes = 2;
+            tp.moves = {arc_move(in, "in"), arc_move(out, "out")};
+            auto dist = [&](const Vec& p) { return std::min(dist_to_arc(p, in), dist_to_arc(p, out)); };
+            const std::string what = "turn " + std::to_string(deg) + " R " + std::to_string(R1) + "/" +
+                                     std::to_string(R2) + " bends " + std::to_string(b1) + "/" + std::to_string(b2);
+            const BlendResult r = traj::corners::blend_corners(tp, tol);
+            ASSERT_EQ(r.corners_blended, 1) << what;
+            ASSERT_EQ(r.curves.size(), 3u) << what;
+            EXPECT_LE(r.blends[0].deviation, tol * (1 + 1e-12)) << what;
+            worst_ratio = std::max(worst_ratio, check_curved_chain(r, dist, {v}, tol, what) / tol);
+            EXPECT_TRUE(r.blends[0].g2) << what;
+            EXPECT_NEAR(blend_end_curvature(r, true), 1 / R1, 1e-6 / R1) << what;
+            EXPECT_NEAR(blend_end_curvature(r, false), 1 / R2, 1e-6 / R2) << what;
+            ++cases;
+          }
+  std::printf("arc-arc corners: %d cases, largest measured distance / tol = %.3f\n", cases, worst_ratio);
+}
+
+// Tangent joins with an arc are passed; reversals next to an arc stay stops.
+TEST(CurvedCorner, TangentJoinsPassedAndReversalsStopped) {
+  const Vec v = v2(0, 0);
+  Toolpath tp;
+  tp.axes = 2;
+  tp.moves = {line_move(v2(-1, 0), v, "line"), arc_move(arc_leaving(v, 0, 1, kPi / 2), "arc")};
+  BlendResult r = traj::corners::blend_corners(tp, 0.01);
+  EXPECT_EQ(r.corners_blended, 0);
+  EXPECT_EQ(r.joins_passed, 1);
+  EXPECT_TRUE(r.stops.empty());
+  tp.moves[1] = arc_move(arc_leaving(v, kPi - 0.5 * kPi / 180, 1, kPi / 2), "arc");  // 179.5 degrees
+  r = traj::corners::blend_corners(tp, 0.01);
+  EXPECT_EQ(r.corners_blended, 0);
+  ASSERT_EQ(r.stops.size(), 1u);
+  EXPECT_EQ(r.stops[0].reason, StopReason::kReversal);
+}
+
+// A line into a non-planar cubic (a 3-D curve: the blend's middle point is off the cubic's
+// osculating plane, so that join is G1) and out of it into a line: within tol, continuous, tangent.
+TEST(CurvedCorner, LineSpaceCubicLine) {
+  Eigen::MatrixXd P(4, 3);
+  P << 0, 0, 0, 1, 1, 0.3, 2, 0.2, 1.2, 3, 1.5, 1.0;
+  Toolpath tp;
+  tp.axes = 3;
+  Vec o(3), e(3), f(3);
+  o << -4, 0, 0;
+  e = P.row(3).transpose();
+  f << 3, 1.5, -3;
+  Move cubic;
+  cubic.curve = geo::make_bezier(P);
+  cubic.feed = 100;
+  cubic.where = "cubic";
+  tp.moves = {line_move(o, Vec(P.row(0).transpose()), "in"), cubic, line_move(e, f, "out")};
+  // The programmed path by the reference: the cubic as a 20000-point polyline (chord error < 1e-8 mm).
+  std::vector<Vec> cub;
+  const ref::Spline rc = to_ref(geo::clamp(cubic.curve));
+  for (int k = 0; k <= 20000; ++k) cub.push_back(eval_ref(rc, k / 20000.0).c);
+  auto dist = [&](const Vec& p) {
+    return std::min({dist_to_segment(p, o, cub.front()), dist_to_polyline(p, cub), dist_to_segment(p, e, f)});
+  };
+  for (double tol : {0.002, 0.02}) {
+    const BlendResult r = traj::corners::blend_corners(tp, tol);
+    ASSERT_EQ(r.corners_blended, 2);
+    ASSERT_EQ(r.curves.size(), 5u);
+    const double w = check_curved_chain(r, dist, {Vec(P.row(0).transpose()), e}, tol,
+                                      "space cubic, tol " + std::to_string(tol));
+    std::printf("line - space cubic - line, tol %.3f: deviations %.4f %.4f (measured), g2 %d %d, largest distance %.4f\n",
+                tol, r.blends[0].deviation, r.blends[1].deviation, int(r.blends[0].g2), int(r.blends[1].g2), w);
+  }
+}
+
+// (g) LinuxCNC's arcspiral.ngc (1000 arcs of slowly shrinking radius, if installed): its arc-arc
+// corners are blended and every output curve lies within tol of the programmed moves (distance to
+// each move by a 2000-point polyline of its reference evaluation, chord error < 1e-7 mm here).
+TEST(CurvedCorner, ArcSpiralNgc) {
+  const std::string file = "/usr/share/linuxcnc/ncfiles/arcspiral.ngc";
+  if (!std::ifstream(file)) GTEST_SKIP() << file << " not installed";
+  const Toolpath tp = traj::input::read_gcode(file);
+  const double tol = 0.025;
+  const auto t0 = std::chrono::steady_clock::now();
+  const BlendResult r = traj::corners::blend_corners(tp, tol);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  int curved_stops = 0;
+  for (const auto& s : r.stops) curved_stops += s.reason == StopReason::kCurvedMove;
+  EXPECT_EQ(curved_stops, 0);
+  EXPECT_GE(r.corners_blended, 990);
+  EXPECT_LE(r.max_deviation, tol);
+  // Each programmed feed move as a dense polyline with its bounding box.
+  struct Poly {
+    std::vector<Vec> pts;
+    Vec lo, hi;
+  };
+  std::vector<Poly> polys;
+  for (const Move& m : tp.moves) {
+    if (m.kind == Move::Kind::kRapid) continue;
+    const geo::BSpline b = geo::clamp(m.curve);
+    const ref::Spline s = to_ref(b);
+    Poly p;
+    const double u0 = b.knots[b.degree], u1 = b.knots[b.n_ctrl()];
+    const int n = b.degree == 1 ? b.n_ctrl() - 1 : 2000;
+    for (int k = 0; k <= n; ++k) p.pts.push_back(b.degree == 1 ? Vec(b.ctrl.row(k).transpose()) : eval_ref(s, u0 + (u1 - u0) * k / n).c);
+    p.lo = p.hi = p.pts[0];
+    for (const Vec& q : p.pts) p.lo = p.lo.cwiseMin(q), p.hi = p.hi.cwiseMax(q);
+    polys.push_back(std::move(p));
+  }
+  auto dist = [&](const Vec& q) {
+    double best = INFINITY;
+    for (const Poly& p : polys) {
+      if (((q - p.lo).array() < -tol).any() || ((q - p.hi).array() > tol).any()) continue;
+      best = std::min(best, dist_to_polyline(q, p.pts));
+    }
+    return best;
+  };
+  double worst = 0;
+  for (size_t i = 0; i < r.curves.size(); ++i) {
+    const auto& c = r.curves[i];
+    if (c.kind == Move::Kind::kRapid) continue;
+    const ref::Spline s = to_ref(c.curve);
+    const double u0 = c.curve.knots[c.curve.degree], u1 = c.curve.knots[c.curve.n_ctrl()];
+    for (int k = 0; k <= 20; ++k) worst = std::max(worst, dist(eval_ref(s, u0 + (u1 - u0) * k / 20).c));
+    if (i + 1 < r.curves.size()) {
+      const auto& nb = r.curves[i + 1].curve;
+      EXPECT_LE((eval_ref(s, u1).c - nb.ctrl.row(0).transpose()).norm(), 1e-9);
+    }
+  }
+  std::printf("arcspiral.ngc at tol %.3f: %d corners blended in %.3f s, %zu stops, largest blend deviation %.4f mm, "
+              "largest measured distance %.4f mm\n", tol, r.corners_blended, secs, r.stops.size(), r.max_deviation, worst);
+  EXPECT_LE(worst, tol * (1 + 1e-3));
+}
+
+// LinuxCNC's 3dtest.ngc (if installed): full circles in the three planes between rapids, lettering in
+// G1. No corner is left as a stop for a curved move; the stops that remain are rapids and exact stops.
+TEST(CurvedCorner, ThreeDTestNgcStops) {
+  const std::string file = "/usr/share/linuxcnc/ncfiles/3dtest.ngc";
+  if (!std::ifstream(file)) GTEST_SKIP() << file << " not installed";
+  const Toolpath tp = traj::input::read_gcode(file);
+  const BlendResult r = traj::corners::blend_corners(tp, 0.025);
+  int by[4] = {0, 0, 0, 0};
+  for (const auto& s : r.stops) ++by[static_cast<int>(s.reason)];
+  std::printf("3dtest.ngc at tol 0.025: %d corners blended (%d next to an arc); stops: %d rapid, %d exact stop, "
+              "%d reversal, %d curved move\n", r.corners_blended,
+              int(std::count_if(r.blends.begin(), r.blends.end(), [](const auto& b) { return b.curved; })),
+              by[int(StopReason::kRapid)], by[int(StopReason::kExactStop)], by[int(StopReason::kReversal)],
+              by[int(StopReason::kCurvedMove)]);
+  EXPECT_EQ(by[int(StopReason::kCurvedMove)], 0);
+  EXPECT_LE(r.max_deviation, 0.025);
 }
 
 }  // namespace
