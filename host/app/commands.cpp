@@ -262,7 +262,7 @@ int sim_command(const SimArgs& a) {
   const auto sr = sim::simulate(rd.header, rd.records, a.tick_gap, [](double f) { progress("sim", f); });
   end_progress();
   if (sr.engine == "traj_core") {
-    // version 2: both engines; every sample also against the exact prediction from the records
+    // a BCU format: both engines; every sample also against the exact prediction from the records
     const bool ok = sr.mismatches == 0 && sr.prediction_mismatches == 0 && !sr.tick_err && sr.underruns == 0;
     if (ok) write_csv(a.csv, rd.header, sr.samples);
     std::printf("%s: %zu segments (%llu FD, %llu BCU, %llu kind switches), %zu samples, %llu cycles on traj_core "
