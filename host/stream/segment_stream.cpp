@@ -9,12 +9,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <sstream>
 
 namespace traj::stream {
+
+static_assert(kMaxTicks == fd::Format{}.max_ticks, "the stream's K bound is the FD compiler's longest segment");
+
 namespace {
 
 uint32_t crc(const uint8_t* p, size_t n) {
