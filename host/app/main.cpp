@@ -7,6 +7,8 @@
 //   trajcore demo                              the built-in circle demo (cubic engine)
 //   trajcore demo --engine bcu|mixed           the circle through traj_core (BCU / FD+BCU segments)
 //   trajcore spline <points.json> -o out.trj   [BCU]'s C1 spline through points -> BCU segment stream
+//   trajcore upload <stream.trj|-> --port P    segment stream -> board (serial, pty, tcp)
+//   trajcore board --loopback                  the loopback board on a pty or TCP port (fault injection)
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
@@ -14,6 +16,7 @@
 
 #include "commands.hpp"
 #include "demo.hpp"
+#include "link_cmds.hpp"
 
 namespace fd = traj::fd;
 
@@ -146,6 +149,9 @@ int main(int argc, char** argv) {
   rn->add_option("--out-dir", ra.out_dir, "where to write plan.trj, samples.csv, report.txt, *.svg")->capture_default_str();
   add_limits(rn, ra.cfg, v_axis, a_axis, j_axis);
 
+  traj::app::LinkCommands lc;
+  traj::app::add_link_commands(app, lc);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -168,6 +174,8 @@ int main(int argc, char** argv) {
       return traj::app::run_command(ra);
     }
     if (*sm) return traj::app::sim_command(sa);
+    if (*lc.upload) return traj::app::upload_command(lc.up);
+    if (*lc.board) return traj::app::board_command(lc.bd);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "trajcore: error: %s\n", e.what());
     return 1;

@@ -22,8 +22,8 @@ struct BoardFormat {
 
 struct BoardOptions {
   BoardFormat format;
-  size_t fifo_segments = 64;     // FIFO capacity in whole segments
-  double clock_hz = 12e6;        // core clock: tick period in clocks -> seconds
+  size_t fifo_segments = 256;    // FIFO capacity in whole segments
+  double clock_hz = kDefaultBoardClockHz;  // core clock: tick period in clocks -> seconds
   uint32_t min_tick_clocks = 64; // shortest tick period the build honours
   // Playback speed as a multiple of real time (tick period from CONFIG);
   // 0: unpaced (a full FIFO plays its older half at once, END plays the rest;

@@ -64,9 +64,16 @@ class FaultyTransport : public Transport {
   ByteMangler in_, out_;
 };
 
-// Serves the board on `t` until `stop` is set or the other end closes (a
-// closed transport returns normally). Resets the board mid-job if asked.
-void serve(Transport& t, LoopbackBoard& board, const std::atomic<bool>& stop, const FaultOptions& f);
+struct ServeStats {
+  uint64_t corrupted = 0, dropped = 0, duplicated = 0, resets = 0;
+};
+
+// Serves the board on `t` until `stop` is set, the other end closes (a closed
+// transport returns normally), or, with end_idle_s > 0, the job's end was
+// reached and the tool has been silent for end_idle_s. Resets the board
+// mid-job if asked (once per FaultOptions, counted in `stats`).
+void serve(Transport& t, LoopbackBoard& board, const std::atomic<bool>& stop, const FaultOptions& f,
+           ServeStats& stats, double end_idle_s = 0);
 
 double now_ms();
 

@@ -53,6 +53,10 @@ uint32_t crc32(const uint8_t* p, size_t n) {
   return static_cast<uint32_t>(::crc32(::crc32(0L, Z_NULL, 0), p, static_cast<uInt>(n)));
 }
 
+uint32_t crc32_update(uint32_t crc, const uint8_t* p, size_t n) {
+  return static_cast<uint32_t>(::crc32(crc, p, static_cast<uInt>(n)));
+}
+
 Bytes encode_frame(const Frame& f) {
   if (f.payload.size() > kMaxPayload) throw LinkError("frame payload of " + std::to_string(f.payload.size()) + " bytes");
   Bytes body;

@@ -21,6 +21,8 @@ class LinkError : public std::runtime_error {
 constexpr uint8_t kFlag = 0x7E, kEscape = 0x7D, kEscapeXor = 0x20;
 constexpr size_t kMaxPayload = 2048;
 constexpr size_t kHeaderBytes = 8, kCrcBytes = 4;
+// The board top's core clock (tick period in clocks); a build at another clock passes --clock-hz.
+constexpr double kDefaultBoardClockHz = 48e6;
 
 enum class Type : uint8_t {
   kReset = 0x01,
@@ -125,6 +127,8 @@ inline uint16_t get_u16(const uint8_t* p) { return uint16_t(p[0] | p[1] << 8); }
 void put_u16(Bytes& b, uint16_t v);
 void put_u32(Bytes& b, uint32_t v);
 uint32_t crc32(const uint8_t* p, size_t n);
+// Continues a CRC-32 over more bytes (crc32_update(0, ...) == crc32(...)).
+uint32_t crc32_update(uint32_t crc, const uint8_t* p, size_t n);
 
 // Sequence arithmetic modulo 2^32: a - b as a signed distance.
 inline int32_t seq_diff(uint32_t a, uint32_t b) { return static_cast<int32_t>(a - b); }

@@ -207,7 +207,13 @@ class Uploader {
   bool fill_window(uint32_t upto) {
     while (seq_diff(upto, base_ + uint32_t(window_.size())) > 0) {
       Bytes rec;
-      if (!src_.next(rec)) {
+      bool more = false;
+      try {
+        more = src_.next(rec);
+      } catch (const LinkError& e) {
+        stream_failed(e.what());
+      }
+      if (!more) {
         prog_.stream_done = true;
         return false;
       }
@@ -242,6 +248,22 @@ class Uploader {
     fail("interrupted: STOP sent and acknowledged; the board stops at the end of the segment it plays (" +
          std::to_string(prog_.status.segments_played) + " of " + std::to_string(base_) +
          " stored segments started); `--resume` continues the job");
+  }
+
+  // The stream broke off (damaged, or its writer died, e.g. on Ctrl-C): stop
+  // the board at a segment end rather than let it underrun.
+  [[noreturn]] void stream_failed(const std::string& why) {
+    check_interrupt();
+    if (tracking_) {
+      watching_ = tracking_ = false;
+      try {
+        command(Type::kStop, 0);
+      } catch (const LinkError&) {
+        fail(why + "; STOP could not be sent: the board stops when its FIFO runs empty");
+      }
+      fail(why + "; STOP sent: the board stops at the end of the segment it plays");
+    }
+    throw UploadError(why);
   }
 
   // Waits for answers; on a silent link re-sends from base_ and asks for STATUS.

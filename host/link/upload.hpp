@@ -16,9 +16,6 @@
 
 namespace traj::link {
 
-// The board top's core clock; a build at another clock passes --clock-hz.
-constexpr double kDefaultBoardClockHz = 48e6;
-
 struct UploadOptions {
   double clock_hz = kDefaultBoardClockHz;
   std::vector<int> step_shift;     // per axis (one value: every axis); empty: 0
