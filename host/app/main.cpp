@@ -115,7 +115,7 @@ int main(int argc, char** argv) {
   pl->add_option("path", pa.input,
                  "G-code (.ngc .nc .gcode .tap), SVG, DXF, curve or path JSON (the butterfly format, or "
                  "{\"curves\": [...]}), or a JSON Lines path (*.jsonl: one curve object per line, read as a stream)");
-  pl->add_option("-o,--output", pa.output, "segment stream to write")->capture_default_str();
+  pl->add_option("-o,--output", pa.output, "segment stream to write (- : standard output, e.g. piped into `trajcore upload -`)")->capture_default_str();
   auto* window_opt = pl->add_option(
       "--window", pa.window,
       "stream in bounded memory: plan a look-ahead window of this many curves, commit three quarters of it "

@@ -1,10 +1,11 @@
-// Reads a segment stream (a file, or "-" for standard input) record by record
-// in bounded memory, as opaque bytes for the link: the header is checked by
-// the stream reader; each FD record's CRC, type and sequence number (u32 at
-// offset 8, stream version 3) are checked here before it is sent.
+// A segment stream (a file, or "-" for standard input) read record by record
+// in bounded memory for the link: the stream's own reader checks everything
+// (header, CRC, sequence numbers, K, continuity), and each accepted record's
+// exact bytes are what a SEGMENT frame carries.
 #pragma once
 #include <cstdint>
-#include <cstdio>
+#include <fstream>
+#include <memory>
 #include <string>
 
 #include "link/frame.hpp"
@@ -16,27 +17,19 @@ class RecordSource {
  public:
   // Opens and reads the header; throws LinkError naming the file and what is wrong.
   explicit RecordSource(const std::string& path);
-  ~RecordSource();
-  RecordSource(const RecordSource&) = delete;
-  RecordSource& operator=(const RecordSource&) = delete;
 
-  const stream::Header& header() const { return header_; }
+  const stream::Header& header() const { return reader_->header(); }
   size_t record_bytes() const { return record_bytes_; }
-  // The next record's bytes; false after the end record (its count checked).
-  // Throws LinkError naming the byte and the segment of a damaged record.
+  // The next FD record's bytes; false after the end record. Throws LinkError
+  // (the reader's message: byte and segment) for a damaged or refused record.
   bool next(Bytes& rec);
-  uint64_t records() const { return count_; }
-  bool at_end() const { return ended_; }
+  uint64_t records() const { return reader_->records(); }
 
  private:
-  bool read_exact(uint8_t* p, size_t n);
-  [[noreturn]] void fail(const std::string& what) const;
-  std::string name_;
-  FILE* f_ = nullptr;
-  bool own_ = false, ended_ = false;
-  stream::Header header_;
+  std::ifstream file_;
+  std::unique_ptr<stream::StreamReader> reader_;
+  stream::Record rec_;
   size_t record_bytes_ = 0;
-  uint64_t offset_ = 0, count_ = 0;
 };
 
 }  // namespace traj::link

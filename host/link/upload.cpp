@@ -97,10 +97,11 @@ class Uploader {
       fail("the board's next_seq went back from " + std::to_string(base_) + " to " + std::to_string(n) +
            ": the board was reset mid-job and lost its FIFO and position; it holds still. Re-home the machine and "
            "run the job again");
-    if (seq_diff(n, send_next_) > 0) fail("the board acknowledged segment " + std::to_string(n - 1) + ", never sent");
+    if (seq_diff(n, sent_end_) > 0) fail("the board acknowledged segment " + std::to_string(n - 1) + ", never sent");
     if (d > 0) {
       window_.erase(window_.begin(), window_.begin() + d);
       base_ = n;
+      if (seq_diff(n, send_next_) > 0) send_next_ = n;  // sent before a go-back, and stored
       retries_at_base_ = 0;
       prog_.acked = base_;
       stale_naks_ = 0;
@@ -231,6 +232,7 @@ class Uploader {
       if (!fill_window(send_next_ + 1)) break;
       port_.write(encode_frame(Type::kSegment, send_next_, window_[send_next_ - base_]));
       ++send_next_;
+      if (seq_diff(send_next_, sent_end_) > 0) sent_end_ = send_next_;
       sent = true;
     }
     return sent;
@@ -302,7 +304,7 @@ class Uploader {
            std::to_string(s.fifo_level) + ")");
     command(Type::kConfig, 0, encode_config(make_config()));
     underruns_at_start_ = s.underruns;
-    base_ = send_next_ = 0;
+    base_ = send_next_ = sent_end_ = 0;
     allowed_end_ = s.credits;
     tracking_ = true;
     prefill();
@@ -318,7 +320,7 @@ class Uploader {
         fail("--resume: the board expects segment " + std::to_string(s.next_seq) + " but the stream has " +
              std::to_string(src_.records()) + " (another job?)");
     prog_.read = src_.records();
-    base_ = send_next_ = s.next_seq;
+    base_ = send_next_ = sent_end_ = s.next_seq;
     allowed_end_ = s.next_seq + s.credits;
     prog_.acked = base_;
     underruns_at_start_ = s.underruns;
@@ -436,7 +438,7 @@ class Uploader {
   FrameDecoder dec_;
   std::vector<FrameDecoder::Event> events_;
   std::deque<Bytes> window_;  // records base_ .. base_ + size - 1
-  uint32_t base_ = 0, send_next_ = 0, allowed_end_ = 0, rewound_to_ = 0, stale_naks_ = 0;
+  uint32_t base_ = 0, send_next_ = 0, sent_end_ = 0, allowed_end_ = 0, rewound_to_ = 0, stale_naks_ = 0;
   uint64_t first_seq_ = 0, statuses_ = 0;
   uint32_t underruns_at_start_ = 0;
   int retries_at_base_ = 0, silent_ = 0, bad_content_ = 0;
