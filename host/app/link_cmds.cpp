@@ -123,6 +123,7 @@ void add_board(CLI::App& app, LinkCommands& lc) {
       ->check(CLI::IsMember({"board", "host", "both"}))
       ->capture_default_str();
   c->add_option("--reset-after", f.reset_after, "fault: reset the board once it has stored this many segments");
+  c->add_option("--cut-after", f.cut_after, "fault: the link goes dead once the board has stored this many segments");
   c->add_option("--seed", f.seed, "fault random seed")->capture_default_str();
   c->add_flag("--once", a.once, "exit after one job's end (and the tool's last request)");
   c->add_option("--played", a.played, "write the bytes of every record the board plays to this file");

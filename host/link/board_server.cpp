@@ -89,7 +89,8 @@ void serve(Transport& t, LoopbackBoard& board, const std::atomic<bool>& stop, co
     while (!stop.load()) {
       const size_t n = port.read(buf, sizeof buf, 1);
       out.clear();
-      if (n) {
+      const bool cut = f.cut_after && board.stored_total() >= f.cut_after;
+      if (n && !cut) {
         board.receive(buf, n, out);
         last_rx = now_ms();
       }
@@ -99,7 +100,7 @@ void serve(Transport& t, LoopbackBoard& board, const std::atomic<bool>& stop, co
       }
       if (end_idle_s > 0 && board.end_reached() && now_ms() - last_rx > end_idle_s * 1e3) break;
       board.advance(now_ms() * 1e-3, out);
-      if (!out.empty()) port.write(out);
+      if (!out.empty() && !cut) port.write(out);
     }
   } catch (const LinkError&) {
     // the tool closed its end: the board keeps its state for the next one

@@ -20,6 +20,7 @@ struct FaultOptions {
   double delay_ms = 0;       // every byte arrives this late
   bool to_board = true, to_host = true;  // which directions the faults hit
   uint64_t reset_after = 0;  // a board reset once this many segments were stored (0: none)
+  uint64_t cut_after = 0;    // the link goes dead (every byte lost) once this many were stored (0: never)
   uint64_t seed = 1;
   bool any_bytes() const { return corrupt > 0 || drop > 0 || dup_frames > 0 || delay_ms > 0; }
 };

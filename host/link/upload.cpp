@@ -244,7 +244,8 @@ class Uploader {
     if (!o_.interrupted || !o_.interrupted->load()) return;
     watching_ = false;
     tracking_ = false;
-    const auto t = Clock::now();  // the answers to frames in flight first: STOP's ACK must be its own
+    send(Type::kStop, 0);  // at once; then again once the answers in flight are in, so its ACK is its own
+    const auto t = Clock::now();
     while (since(t) * 1e3 < answer_timeout_ms()) pump(5);
     command(Type::kStop, 0);
     fail("interrupted: STOP sent and acknowledged; the board stops at the end of the segment it plays (" +
@@ -287,11 +288,9 @@ class Uploader {
     last_answer_time = Clock::now();
   }
 
-  void report(bool force = false) {
-    if (!cb_) return;
-    if (!force && since(last_report_) < 0.05) return;
-    last_report_ = Clock::now();
-    cb_(prog_);
+  // Every turn of the loops (the caller throttles what it shows).
+  void report() {
+    if (cb_) cb_(prog_);
   }
 
   // ---- phases ---------------------------------------------------------
@@ -423,7 +422,7 @@ class Uploader {
       const auto wait = Clock::now();
       while (since(wait) < 0.1) pump(5);  // periodic STATUS frames keep the progress current
     }
-    report(true);
+    report();
   }
 
   struct Answer {
@@ -445,7 +444,6 @@ class Uploader {
   bool tracking_ = false, watching_ = false, answered_ = false;
   std::optional<Answer> last_answer_;
   UploadProgress prog_;
-  Clock::time_point last_report_{};
 };
 
 }  // namespace
