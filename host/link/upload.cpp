@@ -21,6 +21,7 @@ class Uploader {
 
   UploadResult run() {
     const auto t0 = Clock::now();
+    drain_input();
     const Status s = query_status();
     if (o_.resume && !(s.next_seq == 0 && s.segments_played == 0)) {
       continue_job(s);
@@ -152,10 +153,19 @@ class Uploader {
     if (s.flags & status_flag::kTickError) fail("the board reports a tick error (ticks faster than the engine)");
     if ((s.flags & status_flag::kUnderrunHalt) || s.underruns != underruns_at_start_)
       fail("the board underran after " + std::to_string(s.segments_played) + " segments played (FIFO empty before "
-           "the job's end: the host or the link was too slow); it holds position and waits: run again with --resume");
+           "the job's end: the host or the link was too slow; " + std::to_string(s.underruns) + " underruns, " +
+           std::to_string(s.next_seq) + " stored); it holds position and waits: run again with --resume");
     if (!(s.flags & (status_flag::kPlaying | status_flag::kEndReached)))
       fail("the board stopped playing after " + std::to_string(s.segments_played) + " segments (reset, or stopped by "
            "another host?); it holds still");
+  }
+
+  // Bytes the board sent before this tool opened the port (periodic STATUS
+  // queued in the port's buffer) describe the past: discarded.
+  void drain_input() {
+    uint8_t buf[4096];
+    for (int i = 0; i < 1000 && port_.read(buf, sizeof buf, 10) > 0; ++i) {
+    }
   }
 
   Status query_status() {

@@ -261,8 +261,8 @@ TEST(Upload, InterruptThenResumePlaysEveryRecordOnce) {
 // --resume refills, RESUMEs and finishes: every record played once.
 TEST(Upload, KilledToolThenResumeAfterUnderrun) {
   const auto& path = raster_stream(40);
-  BoardOptions bo = fast_board();
-  bo.speed = 200;  // paced: the board runs dry while no tool feeds it
+  BoardOptions bo = fast_board(64);
+  bo.speed = 50;  // paced: the board runs dry while no tool feeds it (64 segments: ~40 ms)
   Rig rig(bo, {});
   {
     // a tool that stores 60 records and starts the board, then vanishes
