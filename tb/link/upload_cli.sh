@@ -10,14 +10,18 @@ rm -rf "$dir" && mkdir -p "$dir" && cd "$dir"
 "$T" plan --raster 2000 -o plan.trj > plan.txt
 tail -c +65 plan.trj | head -c -16 > records.bin
 
+board=
+trap '[ -n "$board" ] && kill "$board" 2>/dev/null; true' EXIT
 run() {  # run NAME BOARD-OPTIONS...
   local name=$1
   shift
   "$T" board --loopback --speed 0 --once --played "$name.played" "$@" > "$name.port" 2> "$name.board" &
-  local board=$!
+  board=$!
   for _ in $(seq 50); do [ -s "$name.port" ] && break; sleep 0.1; done
-  "$T" plan --raster 2000 -o - 2> "$name.plan" | "$T" upload - --port "$(cat "$name.port")" > "$name.upload" 2> "$name.err"
+  "$T" plan --raster 2000 -o - 2> "$name.plan" | "$T" upload - --port "$(cat "$name.port")" > "$name.upload" 2> "$name.err" ||
+    { cat "$name.plan" "$name.err"; exit 1; }
   wait "$board"
+  board=
   cat "$name.upload" "$name.board"
   cmp records.bin "$name.played"
   echo "$name: the board played the $(($(stat -c %s records.bin) / 232)) records of the stream, byte for byte"
