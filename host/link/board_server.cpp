@@ -71,7 +71,7 @@ size_t FaultyTransport::read(uint8_t* p, size_t n, int timeout_ms) {
   return in_.pop(p, n, now_ms());
 }
 
-void serve(Transport& t, LoopbackBoard& board, const std::atomic<bool>& stop, const FaultOptions& f,
+void serve(Transport& t, Board& board, const std::atomic<bool>& stop, const FaultOptions& f,
            ServeStats& stats, double end_idle_s) {
   std::unique_ptr<FaultyTransport> faulty;
   if (f.any_bytes()) faulty = std::make_unique<FaultyTransport>(t, f);

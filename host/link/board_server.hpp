@@ -73,7 +73,7 @@ struct ServeStats {
 // transport returns normally), or, with end_idle_s > 0, the job's end was
 // reached and the tool has been silent for end_idle_s. Resets the board
 // mid-job if asked (once per FaultOptions, counted in `stats`).
-void serve(Transport& t, LoopbackBoard& board, const std::atomic<bool>& stop, const FaultOptions& f,
+void serve(Transport& t, Board& board, const std::atomic<bool>& stop, const FaultOptions& f,
            ServeStats& stats, double end_idle_s = 0);
 
 double now_ms();
