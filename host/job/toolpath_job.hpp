@@ -31,7 +31,7 @@ namespace traj::job {
 struct ToolpathOptions {
   double rapid = 0;   // mm/s; 0: the smallest per-axis velocity limit
   bool blend = true;  // blend the corners between feed moves (host/corners)
-  double blend_share = 0.8;  // share of the tolerance for the blends; the fit gets the rest
+  double blend_share = 0.9;  // share of the tolerance for the blends; the fit gets the rest
 };
 
 struct ToolpathPlan {

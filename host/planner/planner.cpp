@@ -283,7 +283,7 @@ double corner_speed(const double* T1, const double* T2, int d, const Limits& L, 
 // steps by |dK_a| v^2 within one tick, so the jerk over that tick is about
 // |dK_a| v^2 / h (times ~1.9 for the quintic that smooths it):
 // v <= sqrt(g1 j_axis h / (2 |dK_a|)). feed if the curve is C2 there.
-double knot_speed_bound(const Path& p, size_t ci, int sp, const Limits& L, const PlanOptions& o, double J_t) {
+double knot_speed_bound(const Path& p, size_t ci, int sp, const Limits& L, const PlanOptions& o) {
   const geo::Curve& c = p.curve(ci);
   const int d = c.dim();
   const double u = c.spans()[sp].u0;
@@ -339,7 +339,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
     std::vector<std::pair<double, double>> knot_bound;  // (s, speed bound)
     for (size_t sp = 1; sp < c.spans().size(); ++sp) {
       const double uk = c.spans()[sp].u0;
-      const double sb = knot_speed_bound(p, ci, static_cast<int>(sp), L, o, J_t);
+      const double sb = knot_speed_bound(p, ci, static_cast<int>(sp), L, o);
       if (sb < L.feed) {
         knot_bound.push_back({al.s(uk), sb});
         must.push_back(al.s(uk));
