@@ -205,8 +205,15 @@ double speed_limit(const Frame& f, const Limits& L, const PlanOptions& o, double
   // leaves the profile a useful acceleration (a jerk-bound turn at 0.9 of
   // its top speed leaves 27 % of the jerk for the coupling).
   const double A_f = o.a_local_floor * A_t;
-  const double v = std::max(speed_with(f, L, o, 0.5 * A_t, J_t, dim), o.speed_share * speed_with(f, L, o, A_f, J_t, dim));
-  *A_loc = std::clamp(accel_at(f, L, o, v, A_t, J_t, dim), A_f, A_t);
+  const double v_top = speed_with(f, L, o, A_f, J_t, dim);
+  const double A_top = accel_at(f, L, o, v_top, A_t, J_t, dim);
+  // where the top speed still leaves A_t/2, it is also the speed that leaves A_t/2
+  double v = v_top, A = A_top;
+  if (A_top < 0.5 * A_t) {
+    v = std::max(speed_with(f, L, o, 0.5 * A_t, J_t, dim), o.speed_share * v_top);
+    A = accel_at(f, L, o, v, A_t, J_t, dim);
+  }
+  *A_loc = std::clamp(A, A_f, A_t);
   return v;
 }
 
