@@ -39,10 +39,10 @@ struct BlendOptions {
   double kink = 1e-6;         // turning angle (rad) up to which a join is passed as it is (the planner's corner_tol)
   double max_turn = 3.12413936106985;  // turning angle (rad, 179 degrees) above which the corner is an exact stop
   double min_line = 1e-6;     // mm: a segment remnant shorter than this is dropped (the blends meet directly)
-  // Runs of corners whose blends meet (every segment between them used up: short segments) become one
-  // cubic B-spline whose control points are the run's vertices, entered and left like a single blend
-  // (README.md, "Runs"). Its deviation is measured (sampled, then refined), not closed-form; a run
-  // that measures above the tolerance keeps its separate blends.
+  // Runs of consecutive line-line corners at smooth vertices (each near the chord of its neighbours)
+  // become one cubic B-spline over the run's vertices (run_spline), entered and left like a single
+  // blend (README.md, "Runs"). Its deviation is measured (sampled, then refined), not closed-form; a
+  // run that measures above the tolerance is halved until one passes.
   bool merge_runs = true;
   int run_samples = 32;       // samples per knot span for a run's deviation check
   RunShape run_shape;
