@@ -464,20 +464,7 @@ geo::BSpline run_spline(const std::vector<Vec>& v, const Vec& t_in, double d_fir
   b.ctrl.row(n - 1) = (v[m - 1] + 2 * d_last * t_out).transpose();
   b.knots.resize(n + 4);
   for (int i = 0; i < 4; ++i) b.knots[i] = 0, b.knots[n + i] = 1;
-  // knot spans: entry, one per polygon edge between vertices, exit
-  std::vector<double> span(m + 1, 1.0);
-  if (shape.chord_knots) {
-    span[0] = 2 * d_first;
-    span[m] = 2 * d_last;
-    for (int i = 1; i < m; ++i) span[i] = (v[i] - v[i - 1]).norm();
-  }
-  double total = 0;
-  for (double x : span) total += x;
-  double acc = 0;
-  for (int i = 1; i <= m; ++i) {
-    acc += span[i - 1];
-    b.knots[3 + i] = acc / total;
-  }
+  for (int i = 1; i <= m; ++i) b.knots[3 + i] = double(i) / (m + 1);
   b.name = m == 1 ? "corner blend" : "corner run";
   // Pull the inner control points towards their vertices: the curve at a vertex's Greville abscissa
   // moves the same share of its gap towards the vertex (the first and last vertex stay on the legs'

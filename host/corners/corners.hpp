@@ -27,7 +27,6 @@ namespace traj::corners {
 
 // Shape of a run's curve (run_spline).
 struct RunShape {
-  bool chord_knots = true;  // knot spans as long as the polygon's edges (else uniform)
   // Share of its gap by which each inner vertex's control point moves towards the vertex: the curve
   // then passes between the vertices and the edges (on a regular polygon, 5/8 leaves 1/16 of the
   // vertex's second difference to either side instead of 1/6 inside).
@@ -121,9 +120,8 @@ geo::BSpline corner_blend(const Eigen::VectorXd& v, const Eigen::VectorXd& t_in,
 // One cubic B-spline over a run of vertices v[0..m-1] (m >= 1), entered from direction t_in with
 // spacing d_first and left along t_out with spacing d_last: control points
 //   v0 - 2 d_first t_in, v0 - d_first t_in, v0, ..., v_{m-1}, v_{m-1} + d_last t_out, v_{m-1} + 2 d_last t_out,
-// clamped knots with m interior knots (uniform, or spans as long as the polygon's edges, the entry
-// and exit spans 2 d_first and 2 d_last), the inner vertices' control points pulled as RunShape
-// says. m = 1 with d_first = d_last is corner_blend.
+// clamped knots with the m interior knots uniform, the inner vertices' control points pulled as
+// RunShape says. m = 1 with d_first = d_last is corner_blend.
 geo::BSpline run_spline(const std::vector<Eigen::VectorXd>& v, const Eigen::VectorXd& t_in, double d_first,
                         const Eigen::VectorXd& t_out, double d_last, const RunShape& shape = {});
 
