@@ -123,10 +123,10 @@ Loaded load(const std::string& file, const std::string& format, const job::JobCo
   std::snprintf(b, sizeof b,
                 "Toolpath\n  moves                %zu programmed; %zu feed and %zu rapid curves after blending, %zu exact "
                 "stops\n"
-                "  corners              %d blended (largest blend deviation %.4g mm, within half the tolerance), "
+                "  corners              %d blended (largest blend deviation %.4g mm, within %g %% of the tolerance), "
                 "%zu kept as stops\n",
                 tp.moves.size(), tpp.feed_moves, tpp.rapids, tpp.stops, tpp.corners_blended, tpp.blend_deviation,
-                tpp.corner_stops);
+                100 * job::ToolpathOptions{}.blend_share, tpp.corner_stops);
   return {std::move(tpp.path), std::move(tpp.cfg), b};
 }
 

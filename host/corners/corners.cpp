@@ -22,6 +22,7 @@ struct Element {
   Vec a, b;               // ends
   double length = 0;      // arc length
   Vec t_start, t_end;     // unit tangents at the ends
+  Vec k_start, k_end;     // curvature vectors at the ends (zero on a segment)
   bool last_of_move = false;
   std::shared_ptr<const geo::Curve> curve;  // curved moves only
 };
@@ -49,6 +50,13 @@ Vec unit_tangent(const geo::Curve& c, double u) {
 }
 
 double speed(const geo::Curve& c, double u) { return c.eval(u, 1).col(1).norm(); }
+
+Vec curvature_vector(const geo::Curve& c, double u) {
+  const Eigen::MatrixXd e = c.eval(u, 2);
+  const Vec d1 = e.col(1), d2 = e.col(2);
+  const double a = d1.squaredNorm();
+  return a > 0 ? Vec((d2 - (d2.dot(d1) / a) * d1) / a) : Vec::Zero(d1.size());
+}
 
 // Arc length of c on [u0, u1]: 5-point Gauss-Legendre on 4 sub-intervals of each knot span (the
 // speed is smooth inside a span; rational arcs may change speed at a double knot).
@@ -241,27 +249,40 @@ CurvedFit fit_curved(const Element& l, const Element& r, double turn, double tol
   const double s = std::sin(0.5 * turn);
   const double d_tol = kappa > 0 ? (-(0.5 * s) + std::sqrt(0.25 * s * s + 16 * kappa * tol)) / (8 * kappa)
                                  : blend_spacing_for(tol, turn);
-  f.d = std::min(cap, d_tol);
-  f.shortened = cap < d_tol;
-  for (int it = 0; it < 200 && f.d > 0; ++it, f.d *= 0.9) {
-    f.in = cut_leg(l, true, v, l.t_end, f.d);
-    f.out = cut_leg(r, false, v, r.t_start, f.d);
-    f.blend = corner_blend(v, l.t_end, r.t_start, f.d);
-    f.blend.ctrl.row(0) = f.in.end.transpose();
-    f.blend.ctrl.row(1) = f.in.inner.transpose();
-    f.blend.ctrl.row(3) = f.out.inner.transpose();
-    f.blend.ctrl.row(4) = f.out.end.transpose();
+  // the blend at spacing d, measured
+  auto at = [&](double d) {
+    CurvedFit g;
+    g.d = d;
+    g.shortened = d >= cap;
+    g.in = cut_leg(l, true, v, l.t_end, d);
+    g.out = cut_leg(r, false, v, r.t_start, d);
+    g.blend = corner_blend(v, l.t_end, r.t_start, d);
+    g.blend.ctrl.row(0) = g.in.end.transpose();
+    g.blend.ctrl.row(1) = g.in.inner.transpose();
+    g.blend.ctrl.row(3) = g.out.inner.transpose();
+    g.blend.ctrl.row(4) = g.out.end.transpose();
     Piece in, out;
-    if (l.segment) in.a = f.in.end, in.b = v;
-    else in.curve = l.curve.get(), in.u0 = f.in.u, in.u1 = l.curve->u_end();
-    if (r.segment) out.a = v, out.b = f.out.end;
-    else out.curve = r.curve.get(), out.u0 = r.curve->u_begin(), out.u1 = f.out.u;
-    f.deviation = curved_blend_deviation(f.blend, in, out, 2 * o.run_samples);
-    if (f.deviation <= tol) {
-      f.ok = true;
-      return f;
+    if (l.segment) in.a = g.in.end, in.b = v;
+    else in.curve = l.curve.get(), in.u0 = g.in.u, in.u1 = l.curve->u_end();
+    if (r.segment) out.a = v, out.b = g.out.end;
+    else out.curve = r.curve.get(), out.u0 = r.curve->u_begin(), out.u1 = g.out.u;
+    g.deviation = curved_blend_deviation(g.blend, in, out, 2 * o.run_samples);
+    g.ok = g.deviation <= tol;
+    return g;
+  };
+  double d = std::min(cap, d_tol);
+  for (int it = 0; it < 200 && d > 0 && !f.ok; ++it, d *= 0.9) f = at(d);
+  if (!f.ok) return f;
+  f.shortened = f.d >= cap || cap < d_tol;
+  // At a tangent join (a curvature step) the starting d is far inside the tolerance (the turn costs
+  // nothing): a longer blend ramps the curvature more gently, so d grows by 20 % while it measures
+  // within tol and the legs allow.
+  if (turn <= o.kink)
+    for (int it = 0; it < 20 && !f.shortened; ++it) {
+      const CurvedFit g = at(std::min(cap, 1.2 * f.d));
+      if (!g.ok) break;
+      f = g;
     }
-  }
   return f;
 }
 
@@ -279,6 +300,7 @@ void add_move_elements(const input::Move& m, size_t index, std::vector<Element>&
       e.length = (e.b - e.a).norm();
       if (!(e.length > 0)) continue;
       e.t_start = e.t_end = (e.b - e.a) / e.length;
+      e.k_start = e.k_end = Vec::Zero(e.a.size());
       out.push_back(std::move(e));
     }
   } else {
@@ -290,6 +312,8 @@ void add_move_elements(const input::Move& m, size_t index, std::vector<Element>&
     e.length = arc_length(*c, c->u_begin(), c->u_end());
     e.t_start = unit_tangent(*c, c->u_begin());
     e.t_end = unit_tangent(*c, c->u_end());
+    e.k_start = curvature_vector(*c, c->u_begin());
+    e.k_end = curvature_vector(*c, c->u_end());
     e.curve = std::move(c);
     out.push_back(std::move(e));
   }
@@ -299,6 +323,9 @@ void add_move_elements(const input::Move& m, size_t index, std::vector<Element>&
 double move_tol(const input::Move& m, double default_tol) { return m.tolerance < 0 ? default_tol : m.tolerance; }
 
 // What happens at the join between elements k and k+1 (d left 0 for blends; set later).
+// Largest height of a vertex above the chord of its neighbours, in tolerances, for it to join a run.
+constexpr double kRunHeight = 7;
+
 Join classify(const input::Toolpath& tp, const Element& l, const Element& r, const BlendOptions& o,
               BlendResult& res) {
   Join j;
@@ -313,7 +340,14 @@ Join classify(const input::Toolpath& tp, const Element& l, const Element& r, con
   if (l.last_of_move && ml.exact_stop) return stop(StopReason::kExactStop);
   if (ml.kind == Kind::kRapid || mr.kind == Kind::kRapid) return stop(StopReason::kRapid);
   if (j.turn <= o.kink) {
-    ++res.joins_passed;
+    // tangent, but the curvature steps (a line meeting an arc): blended like a corner, so that the
+    // curvature ramps instead of stepping within one tick
+    const bool step = (!l.segment || !r.segment) && (l.k_end - r.k_start).norm() > o.curvature_step;
+    if (!(step && o.blend_curved && !(ml.kind == Kind::kRapid || mr.kind == Kind::kRapid))) {
+      ++res.joins_passed;
+      return j;
+    }
+    j.kind = JoinKind::kBlend;
     return j;
   }
   if ((!l.segment || !r.segment) && !o.blend_curved) return stop(StopReason::kCurvedMove);
@@ -326,20 +360,22 @@ std::string blend_where(const input::Move& l, const input::Move& r, const std::s
   return (l.where == r.where ? l.where : l.where + " / " + r.where) + ": " + what;
 }
 
-// Measured deviation of a run's curve from its control polygon (which lies on the programmed
-// polyline): the larger of (1) the largest distance of a curve point from the polygon, sampled
-// `samples` times per knot span and refined by golden section at the worst sample, and (2) the
-// distance of each vertex (control points 2..n-3) to the curve, searched near its knot the same way.
-double run_deviation(const geo::BSpline& s, int samples) {
+// Measured deviation of a run's curve from the programmed polygon `poly` (one point per control point
+// of s: the entry and exit points on the legs and the vertices): the larger of (1) the largest
+// distance of a curve point from the polygon, sampled `samples` times per knot span and refined by
+// golden section at the worst sample, and (2) the distance of each vertex and each edge midpoint to
+// the curve, searched near its Greville abscissa the same way.
+double run_deviation(const geo::BSpline& s, const std::vector<Vec>& poly, int samples) {
   const geo::Curve c(s, "run");
   const int n = s.n_ctrl();
   const int spans = n - 3;
-  auto row = [&](int i) -> Vec { return s.ctrl.row(i).transpose(); };
-  // The curve on knot span j lies in the hull of control points j..j+3: the polygon edges j-1..j+3 near it.
+  // The curve on knot span j lies in the hull of control points j..j+3, each near its polygon point:
+  // the polygon edges j-2..j+4 around it.
   auto dist_poly = [&](double u, int j) {
     const Vec p = c.point(u);
     double best = INFINITY;
-    for (int e = std::max(0, j - 1); e <= std::min(n - 2, j + 3); ++e) best = std::min(best, dist_to_segment(p, row(e), row(e + 1)));
+    for (int e = std::max(0, j - 2); e <= std::min(n - 2, j + 4); ++e)
+      best = std::min(best, dist_to_segment(p, poly[e], poly[e + 1]));
     return best;
   };
   double worst = 0;
@@ -355,10 +391,10 @@ double run_deviation(const geo::BSpline& s, int samples) {
     const double ua = u0 + h * std::max(0, arg - 1), ub = u0 + h * std::min(samples, arg + 1);
     worst = std::max({worst, w, -golden_min([&](double u) { return -dist_poly(u, j); }, ua, ub)});
   }
-  // Points of the programmed polyline: each vertex (control points 2..n-3) and the midpoint of each
-  // polygon edge between two vertices, against the curve between the Greville abscissae of the
-  // neighbouring control points (a B-spline is nearest its control point i about its Greville
-  // abscissa xi_i = (t_{i+1} + t_{i+2} + t_{i+3}) / 3, also next to the clamped ends).
+  // Points of the programmed polyline: each vertex (points 2..n-3) and the midpoint of each edge
+  // between two vertices, against the curve between the Greville abscissae of the neighbouring
+  // control points (a B-spline is nearest its control point i about its Greville abscissa
+  // xi_i = (t_{i+1} + t_{i+2} + t_{i+3}) / 3, also next to the clamped ends).
   auto greville = [&](int i) { return (s.knots[i + 1] + s.knots[i + 2] + s.knots[i + 3]) / 3; };
   auto dist_curve = [&](const Vec& p, double ua, double ub) {
     double best = INFINITY, arg = ua;
@@ -372,8 +408,8 @@ double run_deviation(const geo::BSpline& s, int samples) {
                                      std::min(ub, arg + h)));
   };
   for (int i = 2; i <= n - 3; ++i) {
-    worst = std::max(worst, dist_curve(row(i), greville(i - 1), greville(i + 1)));
-    if (i < n - 3) worst = std::max(worst, dist_curve(0.5 * (row(i) + row(i + 1)), greville(i - 1), greville(i + 2)));
+    worst = std::max(worst, dist_curve(poly[i], greville(i - 1), greville(i + 1)));
+    if (i < n - 3) worst = std::max(worst, dist_curve(0.5 * (poly[i] + poly[i + 1]), greville(i - 1), greville(i + 2)));
   }
   return worst;
 }
@@ -415,7 +451,7 @@ geo::BSpline corner_blend(const Vec& v, const Vec& t_in, const Vec& t_out, doubl
 }
 
 geo::BSpline run_spline(const std::vector<Vec>& v, const Vec& t_in, double d_first, const Vec& t_out,
-                        double d_last) {
+                        double d_last, const RunShape& shape) {
   const int m = static_cast<int>(v.size());
   const int n = m + 4;
   geo::BSpline b;
@@ -430,6 +466,19 @@ geo::BSpline run_spline(const std::vector<Vec>& v, const Vec& t_in, double d_fir
   for (int i = 0; i < 4; ++i) b.knots[i] = 0, b.knots[n + i] = 1;
   for (int i = 1; i <= m; ++i) b.knots[3 + i] = double(i) / (m + 1);
   b.name = m == 1 ? "corner blend" : "corner run";
+  // Pull the inner control points towards their vertices: the curve at a vertex's Greville abscissa
+  // moves the same share of its gap towards the vertex (the first and last vertex stay on the legs'
+  // lines, which keeps the joins G2 with curvature 0).
+  if (shape.pull > 0 && m > 2) {
+    const geo::Curve c0(b, "run");
+    std::vector<Vec> gap(m);
+    for (int i = 1; i + 1 < m; ++i) {
+      const int k = 2 + i;
+      const double xi = (b.knots[k + 1] + b.knots[k + 2] + b.knots[k + 3]) / 3;
+      gap[i] = v[i] - Vec(c0.point(xi));
+    }
+    for (int i = 1; i + 1 < m; ++i) b.ctrl.row(2 + i) += shape.pull * gap[i].transpose();
+  }
   return b;
 }
 
@@ -489,22 +538,21 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
 
   // Emit: each segment trimmed by 2d at a blended end, each blend starting where the chain ends.
   Vec last_end;
-  // A segment between two blended joins that the two blends use up.
-  auto used_up = [&](size_t seg) {
+  // A segment between two blended line-line joins.
+  auto between_blends = [&](size_t seg) {
     return seg > 0 && seg < joins.size() && el[seg].segment && joins[seg - 1].kind == JoinKind::kBlend &&
-           joins[seg].kind == JoinKind::kBlend && el[seg].length - 2 * joins[seg - 1].d - 2 * joins[seg].d < o.min_line;
+           joins[seg].kind == JoinKind::kBlend && !joins[seg - 1].curved && !joins[seg].curved;
   };
-  // Vertices from join k on that can share one curve: consecutive blended joins with used-up segments
-  // between them, each vertex's second difference (a uniform cubic B-spline's knot point lies
-  // |V_{i-1} - 2 V_i + V_{i+1}| / 6 from V_i) within half its tolerance.
+  // Vertices from join k on that can share one curve: consecutive blended joins, each vertex within
+  // kRunHeight tolerances of the chord of its two neighbours (on a regular polygon the pulled run's
+  // curve passes 1/8 of that height from the vertex; the run is measured before it is taken).
   auto run_length = [&](size_t k) {
     auto smooth_enough = [&](size_t kk) {
       if (kk + 1 >= el.size() || !el[kk].segment || !el[kk + 1].segment) return false;
-      const Vec dd = el[kk].a - 2 * el[kk].b + el[kk + 1].b;
-      return dd.norm() / 6 <= 0.5 * res.blends[blend_of[kk]].tol;
+      return dist_to_segment(el[kk].b, el[kk].a, el[kk + 1].b) <= kRunHeight * res.blends[blend_of[kk]].tol;
     };
     size_t m = 1;
-    while (k + m < joins.size() && used_up(k + m) && smooth_enough(k + m - 1) && smooth_enough(k + m)) ++m;
+    while (k + m < joins.size() && between_blends(k + m) && smooth_enough(k + m - 1) && smooth_enough(k + m)) ++m;
     return m;
   };
   // Emit joins k .. k+m-1 as one curve, if it measures within tolerance.
@@ -517,9 +565,13 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       feed = std::min(feed, tp.moves[el[k + i].move].feed);
     }
     feed = std::min(feed, tp.moves[el[k + m].move].feed);
-    geo::BSpline rs = run_spline(v, el[k].t_end, joins[k].d, el[k + m].t_start, joins[k + m - 1].d);
+    geo::BSpline rs = run_spline(v, el[k].t_end, joins[k].d, el[k + m].t_start, joins[k + m - 1].d, o.run_shape);
     rs.ctrl.row(0) = last_end.transpose();
-    const double dev = run_deviation(rs, o.run_samples);
+    std::vector<Vec> poly{last_end, v[0] - joins[k].d * el[k].t_end};
+    poly.insert(poly.end(), v.begin(), v.end());
+    poly.push_back(v[m - 1] + joins[k + m - 1].d * el[k + m].t_start);
+    poly.push_back(v[m - 1] + 2 * joins[k + m - 1].d * el[k + m].t_start);
+    const double dev = run_deviation(rs, poly, o.run_samples);
     if (!(dev <= tol)) return false;
     Run run{blend_of[k], m, dev};
     for (size_t i = 0; i < m; ++i) {
@@ -576,9 +628,11 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       last_end = a;  // the remnant is dropped: the next blend starts here, on the same segment line
     }
     if (blend_after && o.merge_runs) {
-      const size_t m = run_length(k);
-      if (m >= 2 && emit_run(k, m)) {
-        k += m - 1;  // segments k+1 .. k+m-1 are used up; segment k+m starts at the run's end
+      // the longest run from here that measures within the tolerance (halved until one does)
+      size_t m = run_length(k);
+      while (m >= 2 && !emit_run(k, m)) m /= 2;
+      if (m >= 2) {
+        k += m - 1;  // segments k+1 .. k+m-1 are replaced; segment k+m starts at the run's end
         continue;
       }
     }

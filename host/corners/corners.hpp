@@ -25,22 +25,34 @@
 
 namespace traj::corners {
 
+// Shape of a run's curve (run_spline).
+struct RunShape {
+  // Share of its gap by which each inner vertex's control point moves towards the vertex: the curve
+  // then passes between the vertices and the edges (on a regular polygon, 5/8 leaves 1/16 of the
+  // vertex's second difference to either side instead of 1/6 inside).
+  double pull = 0.625;
+};
+
 struct BlendOptions {
   double share = 0.5;         // largest share of a segment one blend may take (from each leg): no overlaps
   double kink = 1e-6;         // turning angle (rad) up to which a join is passed as it is (the planner's corner_tol)
   double max_turn = 3.12413936106985;  // turning angle (rad, 179 degrees) above which the corner is an exact stop
   double min_line = 1e-6;     // mm: a segment remnant shorter than this is dropped (the blends meet directly)
-  // Runs of corners whose blends meet (every segment between them used up: short segments) become one
-  // cubic B-spline whose control points are the run's vertices, entered and left like a single blend
-  // (README.md, "Runs"). Its deviation is measured (sampled, then refined), not closed-form; a run
-  // that measures above the tolerance keeps its separate blends.
+  // Runs of consecutive line-line corners at smooth vertices (each near the chord of its neighbours)
+  // become one cubic B-spline over the run's vertices (run_spline), entered and left like a single
+  // blend (README.md, "Runs"). Its deviation is measured (sampled, then refined), not closed-form; a
+  // run that measures above the tolerance is halved until one passes.
   bool merge_runs = true;
   int run_samples = 32;       // samples per knot span for a run's deviation check
+  RunShape run_shape;
   // Corners next to a curved move (arc, helix, spline) are blended too (README.md, "Curved legs"):
   // the curved leg is cut at arc length 2d from the corner and the blend is built on its tangent there,
   // with the leg's departure from its tangent line in the deviation budget. false: left as stops
   // (StopReason::kCurvedMove).
   bool blend_curved = true;
+  // A tangent join (turn <= kink) next to a curved move whose curvature vector steps by more than this
+  // (1/mm) is blended too (README.md, "Curvature steps").
+  double curvature_step = 1e-6;
 };
 
 // One curve of the output chain, with what it inherits from its move.
@@ -108,9 +120,10 @@ geo::BSpline corner_blend(const Eigen::VectorXd& v, const Eigen::VectorXd& t_in,
 // One cubic B-spline over a run of vertices v[0..m-1] (m >= 1), entered from direction t_in with
 // spacing d_first and left along t_out with spacing d_last: control points
 //   v0 - 2 d_first t_in, v0 - d_first t_in, v0, ..., v_{m-1}, v_{m-1} + d_last t_out, v_{m-1} + 2 d_last t_out,
-// clamped knots with the m interior knots uniform. m = 1 with d_first = d_last is corner_blend.
+// clamped knots with the m interior knots uniform, the inner vertices' control points pulled as
+// RunShape says. m = 1 with d_first = d_last is corner_blend.
 geo::BSpline run_spline(const std::vector<Eigen::VectorXd>& v, const Eigen::VectorXd& t_in, double d_first,
-                        const Eigen::VectorXd& t_out, double d_last);
+                        const Eigen::VectorXd& t_out, double d_last, const RunShape& shape = {});
 
 // Blend every corner between two feed moves (degree-1 moves are split at their vertices: a degree-1
 // curve of many points is a polyline; curved moves are cut where a corner next to them is blended).

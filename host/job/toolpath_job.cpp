@@ -13,12 +13,12 @@ using plan::PlanError;
 
 namespace {
 
-// The toolpath with its corners blended within half of each move's tolerance.
-input::Toolpath blended(const input::Toolpath& tp, double tol, ToolpathPlan& r) {
-  input::Toolpath half = tp;
-  for (auto& m : half.moves)
-    if (m.tolerance >= 0) m.tolerance /= 2;
-  const corners::BlendResult b = corners::blend_corners(half, tol / 2);
+// The toolpath with its corners blended within `share` of each move's tolerance.
+input::Toolpath blended(const input::Toolpath& tp, double tol, double share, ToolpathPlan& r) {
+  input::Toolpath part = tp;
+  for (auto& m : part.moves)
+    if (m.tolerance >= 0) m.tolerance *= share;
+  const corners::BlendResult b = corners::blend_corners(part, tol * share);
   r.corners_blended = b.corners_blended;
   r.blend_deviation = b.max_deviation;
   r.corner_stops = b.stops.size();
@@ -31,8 +31,9 @@ ToolpathPlan toolpath_plan(const input::Toolpath& original, const JobConfig& cfg
   if (original.moves.empty()) throw PlanError("the toolpath has no moves");
   ToolpathPlan r;
   r.cfg = cfg;
-  const input::Toolpath tp = o.blend ? blended(original, cfg.limits.tol, r) : original;
-  if (o.blend) r.cfg.limits.tol = cfg.limits.tol / 2;
+  if (!(o.blend_share > 0 && o.blend_share < 1)) throw PlanError("blend share must be in (0, 1)");
+  const input::Toolpath tp = o.blend ? blended(original, cfg.limits.tol, o.blend_share, r) : original;
+  if (o.blend) r.cfg.limits.tol = cfg.limits.tol * (1 - o.blend_share);
   double v_axis_min = cfg.limits.v_axis[0];
   for (int a = 1; a < tp.axes && a < plan::kMaxAxes; ++a) v_axis_min = std::min(v_axis_min, cfg.limits.v_axis[a]);
   const double rapid = o.rapid > 0 ? o.rapid : v_axis_min;

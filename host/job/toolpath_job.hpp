@@ -12,11 +12,13 @@
 // The planner's own speed limit (Limits::feed) becomes the largest of these
 // speeds, so the caps, not it, set the speed of each move.
 //
-// Corners between straight feed moves are blended (ToolpathOptions::blend,
-// host/corners: curvature-continuous transitions) within half of the path
-// tolerance (the move's G64 P, else the job's --tol), and the fit gets the
-// other half of --tol, so the output stays within the tolerance of the
-// programmed toolpath.
+// Corners between feed moves are blended (ToolpathOptions::blend,
+// host/corners: curvature-continuous transitions) within blend_share of the
+// path tolerance (the move's G64 P, else the job's --tol), and the fit gets
+// the rest of --tol, so the output stays within the tolerance of the
+// programmed toolpath. The fit of quintic segments to the plan needs little
+// (a few % of the tolerance on the benchmark toolpaths), so the blends get
+// most of it: longer blends and runs, gentler curvature.
 #pragma once
 #include <cstddef>
 #include <vector>
@@ -28,7 +30,8 @@ namespace traj::job {
 
 struct ToolpathOptions {
   double rapid = 0;   // mm/s; 0: the smallest per-axis velocity limit
-  bool blend = true;  // blend the corners between straight feed moves (host/corners)
+  bool blend = true;  // blend the corners between feed moves (host/corners)
+  double blend_share = 0.9;  // share of the tolerance for the blends; the fit gets the rest
 };
 
 struct ToolpathPlan {

@@ -139,28 +139,81 @@ Frame frame_at(const Path& p, size_t ci, double u, double s, int span) {
   return f;
 }
 
-double speed_limit(const Frame& f, const Limits& L, const PlanOptions& o, double A_t, int dim, double* A_loc) {
+namespace {
+
+// Largest v >= 0 with p v^3 + q v <= r (p, q >= 0): the one real root of the
+// depressed cubic (Cardano), polished by Newton; infinity if p = q = 0.
+double cubic_speed(double p, double q, double r) {
+  if (!(r > 0)) return 0;
+  if (!(p > 0)) return q > 0 ? r / q : std::numeric_limits<double>::infinity();
+  const double P = q / p, R = r / p;
+  const double disc = std::sqrt(R * R / 4 + P * P * P / 27);
+  double v = std::cbrt(R / 2 + disc) + std::cbrt(R / 2 - disc);
+  for (int it = 0; it < 3; ++it) {
+    const double fp = 3 * v * v + P;
+    if (fp > 0) v -= (v * v * v + P * v - R) / fp;
+  }
+  v = std::max(v, 0.0);
+  while (v > 0 && p * v * v * v + q * v > r) v *= 1 - 1e-12;
+  return v;
+}
+
+}  // namespace
+
+namespace {
+
+// Largest speed at which the per-axis and centripetal sums hold with the
+// tangential acceleration A.
+double speed_with(const Frame& f, const Limits& L, const PlanOptions& o, double A, double J_t, int dim) {
   double v = L.feed;
   auto cap = [&](double x) {
     if (x >= 0 && x < v) v = x;
   };
-  // coupling: 3 |K_a| v a_t <= g2 j_axis and 3 kappa v a_t <= j_cen / 2, as v a_t <= C
-  double C = std::numeric_limits<double>::infinity();
   for (int a = 0; a < dim; ++a) {
-    if (std::fabs(f.T[a]) > 0) cap(L.v_axis[a] / std::fabs(f.T[a]));
-    if (std::fabs(f.K[a]) > 0) cap(std::sqrt((1 - o.beta) * L.a_axis[a] / std::fabs(f.K[a])));
-    if (std::fabs(f.Q[a]) > 0) cap(std::cbrt(o.g1 * L.j_axis[a] / std::fabs(f.Q[a])));
-    if (std::fabs(f.K[a]) > 0) C = std::min(C, o.g2 * L.j_axis[a] / (3 * std::fabs(f.K[a])));
+    const double T = std::fabs(f.T[a]), K = std::fabs(f.K[a]), Q = std::fabs(f.Q[a]);
+    const double ab = o.axis_a_share * L.a_axis[a], jb = o.axis_j_share * L.j_axis[a];
+    if (T > 0) cap(L.v_axis[a] / T);
+    if (K > 0) cap(std::sqrt(std::max(0.0, ab - T * A) / K));
+    cap(cubic_speed(Q, 3 * K * A, jb - T * J_t));
   }
-  if (f.kappa > 0) {
-    cap(std::sqrt(o.cen_a_share * L.a_cen / f.kappa));
-    C = std::min(C, 0.5 * L.j_cen / (3 * f.kappa));
-  }
-  if (f.q_norm > 0) cap(std::cbrt(0.5 * L.j_cen / f.q_norm));
+  if (f.kappa > 0) cap(std::sqrt(o.cen_a_share * L.a_cen / f.kappa));
+  cap(cubic_speed(f.q_norm, 3 * f.kappa * A, o.axis_j_share * L.j_cen));
+  return v;
+}
+
+// Largest tangential acceleration the sums leave at speed v (at most A_t).
+double accel_at(const Frame& f, const Limits& L, const PlanOptions& o, double v, double A_t, double J_t, int dim) {
   double A = A_t;
-  if (A_loc && std::isfinite(C) && v > 0) A = std::clamp(C / v, o.a_local_floor * A_t, A_t);
-  if (A_loc) *A_loc = A;
-  if (std::isfinite(C)) cap(C / A);
+  for (int a = 0; a < dim; ++a) {
+    const double T = std::fabs(f.T[a]), K = std::fabs(f.K[a]), Q = std::fabs(f.Q[a]);
+    const double ab = o.axis_a_share * L.a_axis[a], jb = o.axis_j_share * L.j_axis[a];
+    if (T > 0) A = std::min(A, (ab - K * v * v) / T);
+    if (K > 0 && v > 0) A = std::min(A, (jb - T * J_t - Q * v * v * v) / (3 * K * v));
+  }
+  if (f.kappa > 0 && v > 0) A = std::min(A, (o.axis_j_share * L.j_cen - f.q_norm * v * v * v) / (3 * f.kappa * v));
+  return A;
+}
+
+}  // namespace
+
+double speed_limit(const Frame& f, const Limits& L, const PlanOptions& o, double A_t, double J_t, int dim,
+                   double* A_loc) {
+  if (!A_loc) return speed_with(f, L, o, A_t, J_t, dim);
+  // The sums trade speed against tangential acceleration. The speed bound
+  // is the larger of: the speed that leaves half of A_t, and speed_share of
+  // the speed that leaves only the floor (a_local_floor A_t), which still
+  // leaves the profile a useful acceleration (a jerk-bound turn at 0.9 of
+  // its top speed leaves 27 % of the jerk for the coupling).
+  const double A_f = o.a_local_floor * A_t;
+  const double v_top = speed_with(f, L, o, A_f, J_t, dim);
+  const double A_top = accel_at(f, L, o, v_top, A_t, J_t, dim);
+  // where the top speed still leaves A_t/2, it is also the speed that leaves A_t/2
+  double v = v_top, A = A_top;
+  if (A_top < 0.5 * A_t) {
+    v = std::max(speed_with(f, L, o, 0.5 * A_t, J_t, dim), o.speed_share * v_top);
+    A = accel_at(f, L, o, v, A_t, J_t, dim);
+  }
+  *A_loc = std::clamp(A, A_f, A_t);
   return v;
 }
 
@@ -211,11 +264,12 @@ struct SpeedAtS {
 // acceleration steps by dk v^2 within a tick. A quintic Hermite that takes a
 // step da of the acceleration over one tick T has a jerk peak of 9 da / T
 // (the third derivative of the end-acceleration basis (t^3 - 2 t^4 + t^5)/2
-// peaks at 9, at t = 1), so 9 dk v^2 / h <= (g1 + g2) j_axis: the geometric
-// and coupling shares (at a station the tangential acceleration is zero),
-// leaving g3 for the tangential jerk.
+// peaks at 9, at t = 1), so 9 dk v^2 / h <= jump_j_share j_axis: at a station
+// the tangential acceleration is zero, the rest is left for the profile's
+// jerk there and for the one-tick fits around the step (a window's commit
+// may end next to it).
 double jump_speed(double dk, double j_axis, const PlanOptions& o) {
-  return std::sqrt((o.g1 + o.g2) * j_axis * o.period / (9 * dk));
+  return std::sqrt(o.jump_j_share * j_axis * o.period / (9 * dk));
 }
 
 double corner_speed(const double* T1, const double* T2, int d, const Limits& L, const PlanOptions& o) {
@@ -278,7 +332,7 @@ struct Grid {
   std::vector<char> corner;  // forced stop
 };
 
-Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t) {
+Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t, double J_t) {
   Grid g;
   const int d = p.dim();
   for (size_t ci = 0; ci < p.size(); ++ci) {
@@ -319,7 +373,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
     while (true) {
       const Frame f = frame_at(p, ci, u, s_off + s, tab.span_of(hint));
       double A_here = A_t;
-      double vl = speed_limit(f, L, o, A_t, d, &A_here);
+      double vl = speed_limit(f, L, o, A_t, J_t, d, &A_here);
       bool corner = false;
       if (s == 0) {
         if (ci == 0) {
@@ -336,7 +390,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
             corner = true;
           } else {
             double A_e = A_t;
-            vl = std::min(vl, speed_limit(e, L, o, A_t, d, &A_e));
+            vl = std::min(vl, speed_limit(e, L, o, A_t, J_t, d, &A_e));
             A_here = std::min(A_here, A_e);
             // curvature jump at the junction (G1, not G2): same bound as at a C1 knot
             double kscale = 0;
@@ -390,6 +444,10 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
   return g;
 }
 
+// A station is placed where the local tangential acceleration has changed by
+// this factor since the last one (stations_from).
+constexpr double kAStationRatio = 3;
+
 // Stations of the grid points lo..hi (both always stations): corners, forced
 // points, and local minima of v_lim; idx receives their grid indices.
 std::vector<Station> stations_from(const Grid& g, const std::vector<char>& forced, double feed, size_t lo, size_t hi,
@@ -399,11 +457,11 @@ std::vector<Station> stations_from(const Grid& g, const std::vector<char>& force
   double A_ref = 0;
   for (size_t i = lo; i <= hi; ++i) {
     bool take = i == lo || i == hi || g.corner[i] || forced[i];
-    // where the local tangential acceleration has changed by more than 4x
-    // since the last station: a block then does not slow all of its ramp to
+    // where the local tangential acceleration has changed by more than
+    // kAStationRatio since the last station: a block then does not slow all of its ramp to
     // the smallest A at its far end (with hysteresis: a slowly varying A
     // makes no stations)
-    if (!take && (g.A[i] < 0.25 * A_ref || g.A[i] > 4 * A_ref)) take = true;
+    if (!take && (g.A[i] < A_ref / kAStationRatio || g.A[i] > kAStationRatio * A_ref)) take = true;
     // a local minimum of v_lim, by more than rounding noise (1e-9 relative):
     // a plateau (constant curvature, straight line) makes no stations
     if (!take && g.vlim[i] < feed * (1 - 1e-9) && g.vlim[i] < g.vlim[i - 1] * (1 - 1e-9) &&
@@ -487,10 +545,12 @@ Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o) {
     jmin = std::min(jmin, L.j_axis[a]);
   }
   Plan plan;
-  plan.A_t = std::min(o.tan_a_share * L.a_tan, o.beta * amin);
-  plan.J_t = std::min(o.tan_j_share * L.j_tan, o.g3 * jmin);
+  // the tangential limits; the per-axis sums (speed_limit) take what each
+  // axis has left after the geometry, point by point
+  plan.A_t = o.tan_a_share * L.a_tan;
+  plan.J_t = o.tan_j_share * std::min(L.j_tan, jmin);
   plan.length = p.length();
-  Grid g = build_grid(p, L, o, plan.A_t);
+  Grid g = build_grid(p, L, o, plan.A_t, plan.J_t);
   plan.grid_points = static_cast<int>(g.s.size());
   const size_t n = g.s.size();
   std::vector<char> forced(n, 0);

@@ -5,24 +5,23 @@
 // velocity, acceleration or jerk, no tangential acceleration or jerk, no
 // centripetal acceleration or jerk exceeds its limit. How:
 //   * tangential a and j come from the S-curve profile (profile.hpp) with
-//     a_t <= A_t = min(a_tan, beta * min_axis a_axis) and j_t <= J_t;
+//     a_t <= A(s) <= A_t = tan_a_share a_tan and |j_t| <= J_t;
 //   * per axis, x' = T v, x'' = K v^2 + T a_t, x''' = Q v^3 + 3 K v a_t + T j_t
-//     (T = dC/ds, K = d2C/ds2, Q = d3C/ds3). The budget is split a priori:
+//     (T = dC/ds, K = d2C/ds2, Q = d3C/ds3). The limits of each axis bound
+//     the sums as they are, whatever the signs (no a-priori shares):
 //       |T_a| v <= v_axis,
-//       |K_a| v^2 <= (1-beta) a_axis          (|T_a| |a_t| <= beta a_axis),
-//       |Q_a| v^3 <= g1 j_axis, 3 |K_a| v A_t <= g2 j_axis, |j_t| <= g3 j_axis,
-//     g1 + g2 + g3 = 1, so the sum is within the limit whatever the signs;
-//   * centripetal: kappa v^2 <= a_cen; |Q| v^3 + 3 kappa v A_t <= j_cen.
-//   The coupling terms (3 K v a_t) are bounded with a local tangential
-//   acceleration A(s) <= A_t instead of A_t: where the curvature is high,
-//   reserving all of A_t would cap the speed at C / A_t (C = g2 j_axis /
-//   (3 |K_a|), 0.5 j_cen / (3 kappa)), which is 1.7 mm/s on a 0.5 mm arc at
-//   the default limits. A(s) = C / v_other (clamped to [a_local_floor A_t,
-//   A_t]), v_other being the bound from every other term, so the coupling no
-//   longer lowers the speed; every block of the profile then accelerates at
-//   most at the smallest A(s) inside it, and a station is placed wherever
-//   A(s) has changed 4x since the last one, so that a ramp on a nearly
-//   straight stretch does not take the small A(s) of a tight turn at its end.
+//       |K_a| v^2 + |T_a| A(s) <= a_axis,
+//       |Q_a| v^3 + 3 |K_a| v A(s) + |T_a| J_t <= j_axis;
+//   * centripetal: kappa v^2 <= a_cen; |Q| v^3 + 3 kappa v A(s) <= j_cen.
+//   The acceleration and jerk sums fill axis_a_share, axis_j_share of the
+//   limits (headroom for the grid and the fit). At each grid point the speed
+//   bound takes the sums with A(s) at its floor (a_local_floor A_t), and A(s)
+//   is what they leave at that speed (at most A_t): where the curvature is
+//   high the coupling costs acceleration, not speed. Every block of the
+//   profile then accelerates at most at the smallest A(s) inside it, and a
+//   station is placed wherever A(s) has changed 4x since the last one, so
+//   that a ramp on a nearly straight stretch does not take the small A(s) of
+//   a tight turn at its end.
 // These give a speed bound v_lim(s), evaluated on an arc-length grid that
 // contains every curvature extremum and is refined where the curvature is high;
 // stations are added until the profile is under v_lim at every grid point, and
@@ -74,14 +73,21 @@ struct SpeedCap {
 struct PlanOptions {
   double period = 1e-3;       // tick period h, s
   double corner_tol = 1e-6;   // tangent angle (rad) above which curves join with a stop
-  double beta = 0.5;          // share of a_axis for tangential acceleration
-  double g1 = 0.3, g2 = 0.2, g3 = 0.5;  // shares of j_axis (geometric, coupling, tangential)
   // Headroom for the fit: the quintic through a bang-bang jerk profile
   // overshoots its jerk (up to ~1.5x), its acceleration a little. The plan
   // uses these shares of a_tan, j_tan and a_cen; the fit then checks the full
   // limits at the samples (segments.hpp), so these only set how often a fit
   // must be split or the plan slowed.
   double tan_a_share = 0.95, tan_j_share = 0.6, cen_a_share = 0.95;
+  // Shares of each per-axis acceleration and jerk (and of j_cen) that the
+  // sums of speed_limit may fill: headroom for the grid and the fit.
+  double axis_a_share = 0.95, axis_j_share = 0.95;
+  // Share of j_axis a curvature jump may take in the tick that steps the
+  // acceleration (jump_speed in planner.cpp).
+  double jump_j_share = 0.5;
+  // Where the sums trade speed for tangential acceleration: the share of the
+  // top speed (the one that leaves only a_local_floor) taken (speed_limit).
+  double speed_share = 0.9;
   // Smallest local tangential acceleration, as a share of A_t (see the
   // header comment): below it the coupling lowers the speed instead.
   double a_local_floor = 0.05;
@@ -161,7 +167,7 @@ struct Plan {
 // Speed bound at a frame (see the header comment) with the coupling terms
 // bounded by a tangential acceleration A_t; with A_loc, the local tangential
 // acceleration chosen there is returned in *A_loc and used for the coupling.
-double speed_limit(const Frame& f, const Limits& L, const PlanOptions& o, double A_t, int dim,
+double speed_limit(const Frame& f, const Limits& L, const PlanOptions& o, double A_t, double J_t, int dim,
                    double* A_loc = nullptr);
 
 Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o);

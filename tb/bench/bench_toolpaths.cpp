@@ -82,14 +82,14 @@ struct Preparation {
   const char* name;
   const char* what;
   Prepare fn;
-  bool blend = false;  // job::ToolpathOptions::blend: corner blending within half the tolerance
+  bool blend = false;  // job::ToolpathOptions::blend: corner blending within blend_share of the tolerance
 };
 
 // The preparations --prepare can name; corner blending plugs in as one more entry.
 const std::vector<Preparation>& preparations() {
   static const std::vector<Preparation> list = {
       {"none", "identity: the toolpath as programmed", [](const input::Toolpath& tp, double) { return tp; }, false},
-      {"blend", "corners blended within half the tolerance (host/corners), the fit within the other half",
+      {"blend", "corners and curvature steps blended within 90 % of the tolerance (host/corners), the fit within the rest",
        [](const input::Toolpath& tp, double) { return tp; }, true},
   };
   return list;
