@@ -435,7 +435,7 @@ module traj_link_proto #(
   assign tx_last_byte = tx_idx_q == (tx_stat_q ? 8'(4 * CrcWordS + 3) : 8'(4 * CrcWordA + 3));
 
   // the body word tx_w_next of the frame being sent
-  logic [Axes-1:0][31:0] samp_lo, samp_hi;  // sample a sign-extended to 64 bits
+  logic [Axes*32-1:0] samp_lo, samp_hi;  // sample a sign-extended to 64 bits, halves
   for (genvar a = 0; a < Axes; a++) begin : g_samp
     logic [63:0] s64;
     if (OutWidth < 64) begin : g_ext
@@ -443,8 +443,8 @@ module traj_link_proto #(
     end else begin : g_full
       assign s64 = snap_q[a*OutWidth +: 64];
     end
-    assign samp_lo[a] = s64[31:0];
-    assign samp_hi[a] = s64[63:32];
+    assign samp_lo[a*32 +: 32] = s64[31:0];
+    assign samp_hi[a*32 +: 32] = s64[63:32];
   end
   logic [7:0] flags;
   assign flags = {2'b00, fifo_level_i == '0, cfg_en_q, tick_err_i, ended_q, halt_q, playing_q};
@@ -472,8 +472,8 @@ module traj_link_proto #(
         6'd10, 6'd11: word_next = '0;
         default: begin
           for (int a = 0; a < Axes; a++) begin
-            if (tx_w_next == 6'(12 + 2 * a)) word_next = samp_lo[a];
-            if (tx_w_next == 6'(13 + 2 * a)) word_next = samp_hi[a];
+            if (tx_w_next == 6'(12 + 2 * a)) word_next = samp_lo[a*32 +: 32];
+            if (tx_w_next == 6'(13 + 2 * a)) word_next = samp_hi[a*32 +: 32];
           end
         end
       endcase
