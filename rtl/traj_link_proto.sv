@@ -80,7 +80,7 @@ module traj_link_proto #(
   localparam int ChunkB    = ChunkWidth / 8;
   localparam int StatLen   = 40 + 8 * Axes;                  // STATUS payload
   localparam int CrcWordA  = 3;                              // ACK/NAK: last body word
-  localparam int CrcWordS  = 3 + StatLen / 4;                // STATUS: last body word
+  localparam int CrcWordS  = 2 + StatLen / 4;                // STATUS: last body word
   localparam logic [31:0] Residue = 32'hDEBB20E3;
 
   // frame types
