@@ -73,10 +73,11 @@ TEST(LinkCosim, FramesFaultsAndPlayback) {
 
   std::vector<Record> accepted;
   uint32_t seq = 1000;
-  // K = 30 ticks of 400 clocks: a segment plays longer than a frame takes to arrive
+  // K ticks of 400 clocks: a segment plays about twice as long as its frame takes to arrive
+  const uint32_t K = (kRecBytes + 20) * 10 * kDiv * 2 / 400 + 1;
   auto good = [&]() {
     Record r = random_record(rng, seq);
-    r.K = 30;
+    r.K = K;
     bench.send_record(r);
     const Answer a = bench.await_answer();
     EXPECT_EQ(a.type, 0x81);
@@ -167,8 +168,16 @@ TEST(LinkCosim, FramesFaultsAndPlayback) {
   EXPECT_ACK(bench.transact(0x03, 0), seq);
   EXPECT_EQ(bench.rtl().run_o, 1u);
   EXPECT_NAK(bench.transact(0x01, 5), 5, seq);
-  // keep feeding while playing, then let it run dry: an underrun halts it
-  for (int i = 0; i < 3; ++i) good();
+  // keep feeding while playing, honouring credits (polled by STATUS_REQ), then
+  // let it run dry: an underrun halts it
+  for (int i = 0; i < 3; ++i) {
+    for (int poll = 0; poll < 100; ++poll) {
+      const Answer st = bench.transact(0x06, 0);
+      ASSERT_EQ(st.type, 0x83);
+      if (get_le(st.payload, 28, 4) != 0) break;
+    }
+    good();
+  }
   uint64_t guard = 0;
   while (bench.rtl().run_o && guard++ < 4000000 && bench.ok()) bench.step();
   ASSERT_TRUE(bench.ok()) << bench.why();
