@@ -38,7 +38,7 @@ class SegFifo {
     const bool wr_take = in.wr && wr_cnt_q_ != SegWords && stored_q_ != kCap;
     const bool commit_ok = in.commit && wr_cnt_q_ == SegWords;
     const bool rewind = in.rollback || (in.commit && !commit_ok);
-    const bool start = !rd_busy_q_ && stored_q_ != 0 && in.release;
+    const bool start = !rd_busy_q_ && stored_q_ != 0 && in.release && !in.clear;
     const bool issue = (rd_busy_q_ || start) && rd_cnt_q_ != SegWords && !wr_pend_q_ &&
                        (!out_valid_q_ || in.tready);
     const bool last_issue = issue && rd_cnt_q_ == SegWords - 1;

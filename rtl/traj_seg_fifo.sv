@@ -18,8 +18,9 @@
 //   * rollback_i: the open slot's words are forgotten (the write pointer
 //     returns to the committed one). Nothing written since the last commit is
 //     ever read.
-//   * clear_i: stored segments not yet started are dropped; honoured only
-//     while no segment is streaming (busy_o low), ignored otherwise.
+//   * clear_i: stored segments not yet started are dropped, and none starts in
+//     that cycle; honoured only while no segment is streaming (busy_o low),
+//     ignored otherwise.
 // Read side (the engine): a segment starts when release_i is high, none is
 // streaming and one is stored; once started its SegWords words all leave on
 // m_axis (valid/ready, tvalid a flop, data held until taken) whatever
@@ -84,7 +85,7 @@ module traj_seg_fifo #(
   assign wr_take    = wr_i && (wr_cnt_q != CntW'(SegWords)) && (stored_q != 16'(Cap));
   assign commit_ok  = commit_i && (wr_cnt_q == CntW'(SegWords));
   assign rewind     = rollback_i || (commit_i && !commit_ok);
-  assign start      = !rd_busy_q && (stored_q != '0) && release_i;
+  assign start      = !rd_busy_q && (stored_q != '0) && release_i && !clear_i;
   assign issue      = (rd_busy_q || start) && (rd_cnt_q != CntW'(SegWords)) && !wr_pend_q
                     && (!out_valid_q || m_axis_tready);
   assign last_issue = issue && (rd_cnt_q == CntW'(SegWords - 1));
