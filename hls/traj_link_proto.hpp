@@ -97,6 +97,11 @@ class LinkProto {
 
     // Per-body flags and fields (datapath: set at the opening flag).
     const uint32_t crc_prev = crc_q_;
+    seq_eq_q_ = q.seq_q_ == q.next_seq_q_;
+    behind_q_ = ((q.seq_q_ - q.next_seq_q_) >> 31) != 0;
+    len_ok_q_ = q.idx_q_ == ((q.len_q_ + 12) & 0xFFF);
+    crc_ok_q_ = q.crc_q_ == kResidue;
+    cbad_end_q_ = c.cbad_end;
     if (c.is_flag) {
       bad_q_ = false;
       cbad_q_ = false;
@@ -174,13 +179,12 @@ class LinkProto {
       wen_q_ = false;
     } else if (c.dv) {
       if (idx_q_ == 8)
-        wen_q_ = is_seg() && !q.bad_q_ && q.len_q_ == kRecBytes && q.seq_q_ == next_seq_q_ &&
-                 in.fifo_credits != 0;
+        wen_q_ = is_seg() && !q.bad_q_ && q.len_q_ == kRecBytes && q.seq_eq_q_ && in.fifo_credits != 0;
       if (idx_q_ != 0xFFF) ++idx_q_;
     }
 
     // Link, playback, configuration, counters.
-    const bool stat_due = in.tick && cfg_stat_q_ != 0 && stat_cnt_q_ + 1 >= cfg_stat_q_;
+    const bool stat_due = in.tick && cfg_stat_q_ != 0 && stat_cnt_q_ == 0;
     const bool tx_take_ans = tx_state_q_ == kSIdle && ans_pend_q_;
     const bool tx_take_stat = tx_state_q_ == kSIdle && !ans_pend_q_ && stat_pend_q_;
     const bool playing = playing_q_, halt = halt_q_, stop = stop_q_;
@@ -226,8 +230,8 @@ class LinkProto {
     if (c.fend && !c.good) ++n_bad_q_;
     if (c.ooo) ++n_ooo_q_;
     if (in.rx_valid) ++n_bytes_q_;
-    if (c.do_config) stat_cnt_q_ = 0;
-    else if (in.tick && q.cfg_stat_q_ != 0) stat_cnt_q_ = stat_due ? 0 : stat_cnt_q_ + 1;
+    if (c.do_config) stat_cnt_q_ = q.sh_stat_q_ - 1;
+    else if (in.tick && q.cfg_stat_q_ != 0) stat_cnt_q_ = stat_due ? q.cfg_stat_q_ - 1 : stat_cnt_q_ - 1;
     ans_pend_q_ = c.answer || (ans_pend_q_ && !tx_take_ans);
     if (c.answer) ans_code_q_ = c.code;
     stat_pend_q_ = c.want_stat || stat_due || (stat_pend_q_ && !tx_take_stat);
@@ -266,7 +270,7 @@ class LinkProto {
     bool is_flag, is_esc, dv;
     uint8_t d;
     uint16_t p;
-    bool in_pay, overlong, wbyte, wdone, cbad_byte;
+    bool in_pay, overlong, wbyte, wdone, cbad_byte, cbad_end;
     uint64_t asm_d, wword;
     bool fend, good, store, answer, want_stat, ooo;
     bool do_reset, do_config, do_start, do_stop, do_resume, do_end;
@@ -321,11 +325,9 @@ class LinkProto {
 
     // verdict
     c.fend = c.is_flag && !hunt_q_ && idx_q_ != 0;
-    c.good = !bad_q_ && !esc_q_ && idx_q_ == ((len_q_ + 12) & 0xFFF) && crc_q_ == kResidue;
-    const uint32_t diff = seq_q_ - next_seq_q_;
-    const bool behind = (diff >> 31) != 0;
+    c.good = !bad_q_ && !esc_q_ && len_ok_q_ && crc_ok_q_;
     const bool playing_busy = playing_q_ || in.fifo_busy;
-    bool cbad_end;
+    bool& cbad_end = c.cbad_end;
     switch (type_q_) {
       case kSegment:
         cbad_end = len_q_ != kRecBytes || kz_q_;
@@ -340,7 +342,7 @@ class LinkProto {
     if (c.fend) {
       c.answer = true;
       if (!c.good) c.code = 1;
-      else if (cbad_q_ || cbad_end) c.code = 4;
+      else if (cbad_q_ || cbad_end_q_) c.code = 4;
       else {
         switch (type_q_) {
           case kReset:
@@ -357,15 +359,15 @@ class LinkProto {
             c.want_stat = true;
             break;
           case kSegment:
-            if (diff == 0) {
+            if (seq_eq_q_) {
               if (wen_q_) c.store = true; else c.code = 3;
-            } else if (!behind) {
+            } else if (!behind_q_) {
               c.code = 2;
               c.ooo = true;
             }
             break;
           default:
-            if (diff == 0) c.do_end = true;
+            if (seq_eq_q_) c.do_end = true;
             else {
               c.code = 2;
               c.ooo = true;
@@ -446,6 +448,7 @@ class LinkProto {
 
   // receive
   bool hunt_q_ = true, esc_q_ = false, bad_q_ = false, cbad_q_ = false, kz_q_ = false, wen_q_ = false;
+  bool seq_eq_q_ = false, behind_q_ = false, len_ok_q_ = false, crc_ok_q_ = false, cbad_end_q_ = false;
   uint16_t idx_q_ = 0, len_q_ = 0;
   uint8_t type_q_ = 0;
   uint32_t seq_q_ = 0, crc_q_ = 0;
