@@ -107,7 +107,9 @@ class StepGen {
       const bool turn = q.pg_q == kPgIdle && want_dir != q.dir_q;
       const uint64_t dm = mask(DueWidth);
       const uint64_t due_d =
-          (q.due_q + (up ? 1 : 0) - (down ? 1 : 0) - (can_emit ? (q.dir_q ? 1 : dm) : 0)) & dm;
+          (q.due_q + (q.up_q ? 1 : 0) - (q.down_q ? 1 : 0) - (can_emit ? (q.dir_q ? 1 : dm) : 0)) & dm;
+      n.up_q = up;
+      n.down_q = down;
       n.due_q = due_d;
       if (can_emit) {
         n.step_q = true;
@@ -150,6 +152,8 @@ class StepGen {
       const bool due_ovf = ((due_d >> (DueWidth - 1)) & 1) != ((due_d >> (DueWidth - 2)) & 1);
       err_in = err_in || too_fast || due_ovf;
       if (!in.rst_n) {
+        n.up_q = false;
+        n.down_q = false;
         n.due_q = 0;
         n.pg_q = kPgIdle;
         n.timer_q = 0;
@@ -247,10 +251,10 @@ class StepGen {
  private:
   enum { kPgIdle, kPgSetup, kPgHigh, kPgLow, kPgHold };
 
-  static constexpr int aw() {
-    int w = 1;
-    while ((1 << w) < Axes) ++w;
-    return w;
+  static constexpr int aw() {  // axis counter width: clog2(Axes), at least 1
+    for (int w = 1; w < 3; ++w)
+      if ((1 << w) >= Axes) return w;
+    return 3;
   }
   static bool neg(u128 v) { return ((v >> (RW - 1)) & 1) != 0; }
   static bool neg_due(uint64_t v) { return ((v >> (DueWidth - 1)) & 1) != 0; }
@@ -259,6 +263,7 @@ class StepGen {
     u128 qprev_q = 0, nd_q = 0;          // RW bits
     u128 d_q = 0, alt_q = 0, r_q = 0;    // RW bits, two's complement
     bool dpos_q = false;
+    bool up_q = false, down_q = false;   // the DDA's steps, one clock later
     uint64_t due_q = 0;                  // DueWidth bits, two's complement
     int pg_q = kPgIdle;
     uint32_t timer_q = 0;

@@ -37,7 +37,9 @@
 // other with no gap and a constant latency. The first sample after reset
 // only sets the position (no steps).
 //
-// Pulses. A signed per-axis count `due` collects the DDA's steps; the pulse
+// Pulses. A signed per-axis count `due` collects the DDA's steps (one clock
+// after the DDA: a register between the remainder's carry chain and the
+// count's); the pulse
 // generator emits them one at a time: step high for pulse_i clocks, low for
 // pulse_i clocks, then (unless the next step goes the same way at once) a
 // hold of setup_i - pulse_i more clocks; a direction change (only after the
@@ -220,6 +222,7 @@ module traj_step_gen #(
     logic [RW-1:0]        nd_q;      // next interval's D (shifts in during the pass)
     logic [RW-1:0]        d_q, alt_q, r_q;  // running interval: D, D -/+ T, remainder
     logic                 dpos_q;    // running interval's D >= 0
+    logic                 up_q, down_q;  // the DDA's steps, one clock later (timing)
     logic [DueWidth-1:0]  due_q;
     pg_e                  pg_q;
     logic [TimeWidth-1:0] timer_q;
@@ -244,7 +247,8 @@ module traj_step_gen #(
     assign up      = active_q && dpos_q && !sum_alt[RW-1];
     assign down    = active_q && !dpos_q && sum_d[RW-1];
     assign r_next  = !active_q ? r_q : ((up || down) ? sum_alt : sum_d);
-    assign alt_d   = nd_q[RW-1] ? nd_q + nt : nd_q - nt;
+    // D + T for D < 0, D - T otherwise: one adder (D + ~T + 1 subtracts)
+    assign alt_d   = nd_q + (nd_q[RW-1] ? nt : ~nt) + RW'(!nd_q[RW-1]);
 
     always_ff @(posedge clk_i) begin
       if (load) begin
@@ -265,18 +269,22 @@ module traj_step_gen #(
     assign can_emit = (due_q != '0) && (want_dir == dir_q)
                     && (pg_q == PgIdle || pg_q == PgHold || (pg_q == PgLow && timer_q == '0));
     assign turn     = (pg_q == PgIdle) && (want_dir != dir_q);
-    assign due_d    = due_q + DueWidth'(up) - DueWidth'(down)
+    assign due_d    = due_q + DueWidth'(up_q) - DueWidth'(down_q)
                     - (can_emit ? (dir_q ? DueWidth'(1) : '1) : '0);
 
     always_ff @(posedge clk_i) begin
       if (!rst_ni) begin
+        up_q    <= 1'b0;
+        down_q  <= 1'b0;
         due_q   <= '0;
         pg_q    <= PgIdle;
         timer_q <= '0;
         step_q  <= 1'b0;
         dir_q   <= 1'b1;
       end else begin
-        due_q <= due_d;
+        up_q   <= up;
+        down_q <= down;
+        due_q  <= due_d;
         if (can_emit) begin
           step_q  <= 1'b1;
           timer_q <= pulse_i - 1'b1;

@@ -63,7 +63,9 @@ for seed in $SEEDS; do
 done
 [ -n "$shipped" ] || { echo "bitstream.sh: no seed placed" >&2; exit 1; }
 icepack "$shipped" "$dist/$board.bin"
-if icetime -d "${device}" -P $package -p "$pcf" -c $mhz -t "$shipped" >"$out/icetime.log" 2>&1; then
+# icetime's pin-file reader takes no -nowarn
+sed 's/ -nowarn//' "$pcf" >"$out/icetime.pcf"
+if icetime -d "${device}" -P $package -p "$out/icetime.pcf" -c $mhz -t "$shipped" >"$out/icetime.log" 2>&1; then
   echo "icetime ($(basename "$shipped")): $(grep -E 'Total path delay' "$out/icetime.log" | tail -1)"
 else
   echo "icetime ($(basename "$shipped")): $(grep -E 'Total path delay|ERROR' "$out/icetime.log" | tail -1) (see $out/icetime.log)"
