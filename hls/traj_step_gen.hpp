@@ -23,7 +23,7 @@ class StepGen {
 
   static constexpr int F = FracBits;
   static constexpr int RW = PeriodWidth + F + 2;
-  static constexpr int kPrepClocks = Axes * RW + 1;  // sample -> next interval's D ready
+  static constexpr int kPrepClocks = Axes * RW + 2;  // sample -> next interval's D ready
 
   struct In {
     bool rst_n = true;
@@ -58,7 +58,7 @@ class StepGen {
     const uint32_t tmask = static_cast<uint32_t>(mask(TimeWidth));
     const uint32_t period = in.period & pmask;
     const uint32_t pulse = in.pulse & tmask, setup = in.setup & tmask;
-    const bool take = in.sample_valid && !prep_q_ && !nready_q_;
+    const bool take = in.sample_valid && !prep_q_ && !alt_q_st_ && !nready_q_;
     const bool load = nready_q_ && (!active_q_ || last_q_);
     const bool last_bit = bit_q_ == RW - 1;
     const bool last_axis = ax_q_ == Axes - 1;
@@ -91,9 +91,10 @@ class StepGen {
       const bool down = active_q_ && !q.dpos_q && neg(sum_d);
       const u128 r_next = !active_q_ ? q.r_q : ((up || down) ? sum_alt : sum_d);
       const u128 alt_d = neg(q.nd_q) ? wrap(q.nd_q + nt, RW) : wrap(q.nd_q - nt, RW);
+      if (alt_q_st_) n.nalt_q = alt_d;
       if (load) {
         n.d_q = q.nd_q;
-        n.alt_q = alt_d;
+        n.alt_q = q.nalt_q;
         n.r_q = reinit_q_ ? 0 : r_next;
         n.dpos_q = !neg(q.nd_q);
       } else {
@@ -148,7 +149,7 @@ class StepGen {
             break;
         }
       }
-      const bool too_fast = load && (neg(q.nd_q) ? neg(alt_d) : (!neg(alt_d) && alt_d != 0));
+      const bool too_fast = load && (neg(q.nd_q) ? neg(q.nalt_q) : (!neg(q.nalt_q) && q.nalt_q != 0));
       const bool due_ovf = ((due_d >> (DueWidth - 1)) & 1) != ((due_d >> (DueWidth - 2)) & 1);
       err_in = err_in || too_fast || due_ovf;
       if (!in.rst_n) {
@@ -163,7 +164,7 @@ class StepGen {
     }
 
     // shared control
-    bool prep_d = prep_q_, first_d = first_q_, reinit_d = reinit_q_, nready_d = nready_q_;
+    bool prep_d = prep_q_, first_d = first_q_, reinit_d = reinit_q_, alt_st_d = alt_q_st_, nready_d = nready_q_;
     int ax_d = ax_q_, bit_d = bit_q_;
     if (take) {
       prep_d = true;
@@ -179,9 +180,13 @@ class StepGen {
         if (last_axis) {
           prep_d = false;
           first_d = false;
-          nready_d = !first_q_;
+          alt_st_d = !first_q_;
         }
       }
+    }
+    if (alt_q_st_) {
+      alt_st_d = false;
+      nready_d = true;
     }
     bool active_d = active_q_, last_d = last_q_;
     uint32_t cnt_d = cnt_q_, cur_per_d = cur_per_q_;
@@ -223,6 +228,7 @@ class StepGen {
     borrow_q_ = borrow_dd;
     first_q_ = first_d;
     reinit_q_ = reinit_d;
+    alt_q_st_ = alt_st_d;
     nready_q_ = nready_d;
     nper_q_ = nper_d;
     cur_per_q_ = cur_per_d;
@@ -238,6 +244,7 @@ class StepGen {
       bit_q_ = 0;
       first_q_ = true;
       reinit_q_ = false;
+      alt_q_st_ = false;
       nready_q_ = false;
       active_q_ = false;
       last_q_ = false;
@@ -260,7 +267,7 @@ class StepGen {
   static bool neg_due(uint64_t v) { return ((v >> (DueWidth - 1)) & 1) != 0; }
 
   struct Axis {
-    u128 qprev_q = 0, nd_q = 0;          // RW bits
+    u128 qprev_q = 0, nd_q = 0, nalt_q = 0;  // RW bits
     u128 d_q = 0, alt_q = 0, r_q = 0;    // RW bits, two's complement
     bool dpos_q = false;
     bool up_q = false, down_q = false;   // the DDA's steps, one clock later
@@ -273,7 +280,7 @@ class StepGen {
   Axis ax_[Axes];
   bool prep_q_ = false;
   int ax_q_ = 0, bit_q_ = 0, j_q_ = 0;
-  bool borrow_q_ = false, first_q_ = true, reinit_q_ = false, nready_q_ = false;
+  bool borrow_q_ = false, first_q_ = true, reinit_q_ = false, alt_q_st_ = false, nready_q_ = false;
   uint32_t nper_q_ = 0, cur_per_q_ = 0;
   bool active_q_ = false, last_q_ = false;
   uint32_t cnt_q_ = 0;

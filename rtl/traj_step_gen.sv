@@ -27,7 +27,7 @@
 // exact modulo 2^RW because |D| <= T < 2^(RW-2).
 //
 // Preparation (one serial pass per sample, axis after axis, RW clocks per
-// axis: kPrepClocks = Axes * RW + 1): the bits of q, least significant
+// axis, and one clock for D -/+ T: kPrepClocks = Axes * RW + 2): the bits of q, least significant
 // first, are read from sample_i (bit shift - F + i, sign-extended; 0 below
 // bit 0) and subtracted bit-serially from the previous q, which rotates
 // through the same shift register. sample_i must hold for kPrepClocks after
@@ -104,7 +104,8 @@ module traj_step_gen #(
   logic                   borrow_q;
   logic                   first_q;    // no sample since reset: the next one sets the position
   logic                   reinit_q;   // this pass restarts from the step boundary
-  logic                   nready_q;   // the next interval's D is ready
+  logic                   alt_q_st;   // the pass has ended: D -/+ T is being registered
+  logic                   nready_q;   // the next interval's D and D -/+ T are ready
   logic [PeriodWidth-1:0] nper_q;     // its period
   logic [PeriodWidth-1:0] cur_per_q;  // period of the last interval loaded
   // DDA (shared interval counter)
@@ -115,26 +116,34 @@ module traj_step_gen #(
 
   logic take, load, last_bit, last_axis, sbit;
   logic [Axes-1:0] err_axis;
-  logic [RW-1:0]   nt;                // T of the next interval
+  logic [RW-1:0]   nt, nt_neg;        // T of the next interval, -T
   logic [5:0]      shift_next;        // shift of the axis the pass goes to next
   logic [AW-1:0]   ax_next;
 
-  assign take      = sample_valid_i && !prep_q && !nready_q;
+  assign take      = sample_valid_i && !prep_q && !alt_q_st && !nready_q;
   assign load      = nready_q && (!active_q || last_q);
   assign last_bit  = (bit_q == BW'(RW - 1));
   assign last_axis = (ax_q == AW'(Axes - 1));
   assign ax_next   = take ? '0 : ax_q + 1'b1;
   assign shift_next = shift_i[32'(ax_next)*6 +: 6];
   assign nt        = {2'b00, nper_q, {F{1'b0}}};
+  assign nt_neg    = -nt;
 
-  // the sample bit of q's bit bit_q of axis ax_q: sign-extended above, 0 below
-  logic [OutWidth-1:0] ax_sample;
-  assign ax_sample = sample_i[32'(ax_q)*OutWidth +: OutWidth];
-  logic j_neg, j_above;
+  // the sample bit of q's bit bit_q of axis ax_q: sign-extended above, 0
+  // below; one OutWidth:1 multiplexer per axis, then the axis (a variable
+  // part-select over all axes would be a barrel shifter)
+  logic                      j_neg, j_above;
+  logic [Axes-1:0]           sbit_axis;
+  logic [$clog2(OutWidth)-1:0] j_idx;
   assign j_neg   = j_q[JW-1];
   assign j_above = (32'(j_q) >= 32'(OutWidth));
-  assign sbit    = j_neg ? 1'b0
-                 : (j_above ? ax_sample[OutWidth-1] : ax_sample[j_q[$clog2(OutWidth)-1:0]]);
+  assign j_idx   = j_q[$clog2(OutWidth)-1:0];
+  for (genvar a = 0; a < Axes; a++) begin : g_sbit
+    logic [OutWidth-1:0] smp;
+    assign smp          = sample_i[a*OutWidth +: OutWidth];
+    assign sbit_axis[a] = j_neg ? 1'b0 : (j_above ? smp[OutWidth-1] : smp[j_idx]);
+  end
+  assign sbit = sbit_axis[ax_q];
 
   always_ff @(posedge clk_i) begin
     if (!rst_ni) begin
@@ -143,6 +152,7 @@ module traj_step_gen #(
       bit_q     <= '0;
       first_q   <= 1'b1;
       reinit_q  <= 1'b0;
+      alt_q_st  <= 1'b0;
       nready_q  <= 1'b0;
       active_q  <= 1'b0;
       last_q    <= 1'b0;
@@ -169,9 +179,13 @@ module traj_step_gen #(
           if (last_axis) begin
             prep_q   <= 1'b0;
             first_q  <= 1'b0;
-            nready_q <= !first_q;
+            alt_q_st <= !first_q;
           end
         end
+      end
+      if (alt_q_st) begin
+        alt_q_st <= 1'b0;
+        nready_q <= 1'b1;
       end
       if (load) begin
         nready_q  <= 1'b0;
@@ -220,6 +234,7 @@ module traj_step_gen #(
   for (genvar a = 0; a < Axes; a++) begin : g_axis
     logic [RW-1:0]        qprev_q;   // q of the previous sample (rotates during its pass)
     logic [RW-1:0]        nd_q;      // next interval's D (shifts in during the pass)
+    logic [RW-1:0]        nalt_q;    // next interval's D -/+ T
     logic [RW-1:0]        d_q, alt_q, r_q;  // running interval: D, D -/+ T, remainder
     logic                 dpos_q;    // running interval's D >= 0
     logic                 up_q, down_q;  // the DDA's steps, one clock later (timing)
@@ -247,13 +262,17 @@ module traj_step_gen #(
     assign up      = active_q && dpos_q && !sum_alt[RW-1];
     assign down    = active_q && !dpos_q && sum_d[RW-1];
     assign r_next  = !active_q ? r_q : ((up || down) ? sum_alt : sum_d);
-    // D + T for D < 0, D - T otherwise: one adder (D + ~T + 1 subtracts)
-    assign alt_d   = nd_q + (nd_q[RW-1] ? nt : ~nt) + RW'(!nd_q[RW-1]);
+    // D + T for D < 0, D - T otherwise: one adder per axis (-T is shared)
+    assign alt_d   = nd_q + (nd_q[RW-1] ? nt : nt_neg);
+
+    always_ff @(posedge clk_i) begin
+      if (alt_q_st) nalt_q <= alt_d;
+    end
 
     always_ff @(posedge clk_i) begin
       if (load) begin
         d_q    <= nd_q;
-        alt_q  <= alt_d;
+        alt_q  <= nalt_q;
         r_q    <= reinit_q ? '0 : r_next;
         dpos_q <= !nd_q[RW-1];
       end else begin
@@ -320,7 +339,7 @@ module traj_step_gen #(
     // errors: more than one step per clock, due overflow (flagged at
     // |due| >= 2^(DueWidth-2), before it can wrap: it moves by <= 2 per clock)
     logic too_fast;
-    assign too_fast    = load && (nd_q[RW-1] ? alt_d[RW-1] : (!alt_d[RW-1] && alt_d != '0));
+    assign too_fast    = load && (nd_q[RW-1] ? nalt_q[RW-1] : (!nalt_q[RW-1] && nalt_q != '0));
     assign err_axis[a] = too_fast || (due_d[DueWidth-1] != due_d[DueWidth-2]);
 
     assign step_o[a] = step_q;

@@ -22,7 +22,7 @@ SEEDS=${SEEDS:-"1 2 3 4 5"}
 # device, package, top, pin file, core clock (MHz, the top's ClkHz / PLL), Yosys options
 case $board in
   icebreaker) device=up5k package=sg48  top=traj_icebreaker_top pcf=icebreaker.pcf    mhz=36 synth_opts="-spram" ;;
-  hx8k)       device=hx8k package=ct256 top=traj_hx8k_top       pcf=hx8k_breakout.pcf mhz=72 synth_opts="" ;;
+  hx8k)       device=hx8k package=ct256 top=traj_hx8k_top       pcf=hx8k_breakout.pcf mhz=60 synth_opts="" ;;
   *) echo "bitstream.sh: unknown board '$board' (icebreaker or hx8k)" >&2; exit 1 ;;
 esac
 pcf=$root/constraints/$pcf
@@ -68,7 +68,7 @@ sed 's/ -nowarn//' "$pcf" >"$out/icetime.pcf"
 if icetime -d "${device}" -P $package -p "$out/icetime.pcf" -c $mhz -t "$shipped" >"$out/icetime.log" 2>&1; then
   echo "icetime ($(basename "$shipped")): $(grep -E 'Total path delay' "$out/icetime.log" | tail -1)"
 else
-  echo "icetime ($(basename "$shipped")): $(grep -E 'Total path delay|ERROR' "$out/icetime.log" | tail -1) (see $out/icetime.log)"
+  echo "icetime ($(basename "$shipped")) did not run: $(tail -1 "$out/icetime.log")"
 fi
 echo "bitstream: $dist/$board.bin"
 exit $status

@@ -2,7 +2,7 @@
 // constraints/hx8k_breakout.pcf.
 //
 //   12 MHz oscillator (ball J3) -> SB_PLL40_CORE -> ClkHz core clock
-//   (icepll -i 12 -o 72: DIVR 0, DIVF 47, DIVQ 3, FILTER_RANGE 1)
+//   (icepll -i 12 -o 60: DIVR 0, DIVF 79, DIVQ 4, FILTER_RANGE 1)
 //   reset: power-on, PLL lock, and an optional button to ground on header J2
 //   (the board has no user button; traj_reset_sync)
 //   UART to the FTDI FT2232H channel B: rx_i (2-flop synchroniser), tx_o
@@ -15,7 +15,7 @@
 `default_nettype none
 
 module traj_hx8k_top #(
-  parameter int ClkHz = 72_000_000,  // must match the PLL settings below
+  parameter int ClkHz = 60_000_000,  // must match the PLL settings below
   parameter int Baud  = 1_000_000
 ) (
   input  logic       clk_i,       // J3: 12 MHz oscillator
@@ -37,8 +37,8 @@ module traj_hx8k_top #(
   SB_PLL40_CORE #(
     .FEEDBACK_PATH("SIMPLE"),
     .DIVR(4'b0000),
-    .DIVF(7'b0101111),
-    .DIVQ(3'b011),
+    .DIVF(7'b1001111),
+    .DIVQ(3'b100),
     .FILTER_RANGE(3'b001)
   ) u_pll (
     .REFERENCECLK(clk_i),
