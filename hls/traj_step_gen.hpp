@@ -97,12 +97,13 @@ class StepGen {
         n.alt_q = q.nalt_q;
         n.r_q = reinit_q_ ? 0 : r_next;
         n.dpos_q = !neg(q.nd_q);
+        n.dnz_q = q.nd_q != 0;
       } else {
         n.r_q = r_next;
       }
       // pulses
       const bool due_nz = q.due_q != 0;
-      const bool want_dir = due_nz ? !neg_due(q.due_q) : ((active_q_ && q.d_q != 0) ? q.dpos_q : q.dir_q);
+      const bool want_dir = due_nz ? !neg_due(q.due_q) : ((active_q_ && q.dnz_q) ? q.dpos_q : q.dir_q);
       const bool can_emit = due_nz && want_dir == q.dir_q &&
                             (q.pg_q == kPgIdle || q.pg_q == kPgHold || (q.pg_q == kPgLow && q.timer_q == 0));
       const bool turn = q.pg_q == kPgIdle && want_dir != q.dir_q;
@@ -150,7 +151,7 @@ class StepGen {
         }
       }
       const bool too_fast = load && (neg(q.nd_q) ? neg(q.nalt_q) : (!neg(q.nalt_q) && q.nalt_q != 0));
-      const bool due_ovf = ((due_d >> (DueWidth - 1)) & 1) != ((due_d >> (DueWidth - 2)) & 1);
+      const bool due_ovf = ((q.due_q >> (DueWidth - 1)) & 1) != ((q.due_q >> (DueWidth - 2)) & 1);
       err_in = err_in || too_fast || due_ovf;
       if (!in.rst_n) {
         n.up_q = false;
@@ -269,7 +270,7 @@ class StepGen {
   struct Axis {
     u128 qprev_q = 0, nd_q = 0, nalt_q = 0;  // RW bits
     u128 d_q = 0, alt_q = 0, r_q = 0;    // RW bits, two's complement
-    bool dpos_q = false;
+    bool dpos_q = false, dnz_q = false;
     bool up_q = false, down_q = false;   // the DDA's steps, one clock later
     uint64_t due_q = 0;                  // DueWidth bits, two's complement
     int pg_q = kPgIdle;

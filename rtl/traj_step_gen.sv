@@ -237,6 +237,7 @@ module traj_step_gen #(
     logic [RW-1:0]        nalt_q;    // next interval's D -/+ T
     logic [RW-1:0]        d_q, alt_q, r_q;  // running interval: D, D -/+ T, remainder
     logic                 dpos_q;    // running interval's D >= 0
+    logic                 dnz_q;     // running interval's D != 0
     logic                 up_q, down_q;  // the DDA's steps, one clock later (timing)
     logic [DueWidth-1:0]  due_q;
     pg_e                  pg_q;
@@ -275,6 +276,7 @@ module traj_step_gen #(
         alt_q  <= nalt_q;
         r_q    <= reinit_q ? '0 : r_next;
         dpos_q <= !nd_q[RW-1];
+        dnz_q  <= (nd_q != '0);
       end else begin
         r_q    <= r_next;
       end
@@ -284,7 +286,7 @@ module traj_step_gen #(
     logic want_dir, can_emit, turn;
     logic [DueWidth-1:0] due_d;
     assign want_dir = (due_q != '0) ? !due_q[DueWidth-1]
-                    : ((active_q && d_q != '0) ? dpos_q : dir_q);
+                    : ((active_q && dnz_q) ? dpos_q : dir_q);
     assign can_emit = (due_q != '0) && (want_dir == dir_q)
                     && (pg_q == PgIdle || pg_q == PgHold || (pg_q == PgLow && timer_q == '0));
     assign turn     = (pg_q == PgIdle) && (want_dir != dir_q);
@@ -340,7 +342,7 @@ module traj_step_gen #(
     // |due| >= 2^(DueWidth-2), before it can wrap: it moves by <= 2 per clock)
     logic too_fast;
     assign too_fast    = load && (nd_q[RW-1] ? nalt_q[RW-1] : (!nalt_q[RW-1] && nalt_q != '0));
-    assign err_axis[a] = too_fast || (due_d[DueWidth-1] != due_d[DueWidth-2]);
+    assign err_axis[a] = too_fast || (due_q[DueWidth-1] != due_q[DueWidth-2]);
 
     assign step_o[a] = step_q;
     assign dir_o[a]  = dir_q;
