@@ -63,7 +63,7 @@ class LinkProto {
     const Dec c = decode(in);
     Out o{};
     o.tx_tdata = c.tx_tdata;
-    o.tx_tvalid = tx_state_q_ != kSIdle;
+    o.tx_tvalid = tx_state_q_ != kSIdle && !tx_crcld_q_;
     o.fifo_wr = c.wbyte && c.wdone && wen_q_;
     o.fifo_wr_data = c.wword;
     o.fifo_commit = c.store;
@@ -151,15 +151,18 @@ class LinkProto {
       tx_idx_q_ = 0;
       tx_esc_q_ = false;
       tx_crc_q_ = 0xFFFFFFFFu;
+      tx_w_q_ = 0;
       for (int a = 0; a < Axes; ++a) snap_q_[a] = in.sample[a] & out_mask();
     }
-    const uint32_t word_next = next_word(in, c.tx_w_next, tx_crc_d);
-    if (c.tx_first) tx_word_q_ = word_next;
+    const bool tx_crc_next = tx_w_q_ == (tx_stat_q_ ? kCrcWordS : kCrcWordA);
+    const uint32_t word_next = next_word(in, tx_w_q_);
+    if (c.tx_load && !tx_crc_next) tx_word_q_ = word_next;
+    if (c.tx_load) tx_w_q_ = (tx_w_q_ + 1) & 63;
+    if (tx_crcld_q_) tx_word_q_ = ~tx_crc_q_;
     if (c.tx_hs && tx_state_q_ == kSBody) {
       if (c.tx_adv) {
         tx_esc_q_ = false;
         tx_crc_q_ = tx_crc_d;
-        if ((tx_idx_q_ & 3) == 3) tx_word_q_ = word_next;
         tx_idx_q_ = static_cast<uint8_t>(tx_idx_q_ + 1);
       } else {
         tx_esc_q_ = true;
@@ -237,6 +240,7 @@ class LinkProto {
     stat_pend_q_ = c.want_stat || stat_due || (stat_pend_q_ && !tx_take_stat);
 
     // Answer state machine.
+    tx_crcld_q_ = c.tx_load && tx_crc_next;
     switch (tx_state_q_) {
       case kSIdle:
         if (tx_take_ans || tx_take_stat) tx_state_q_ = kSOpen;
@@ -277,7 +281,7 @@ class LinkProto {
     uint8_t code;
     bool tx_hs, tx_first, tx_adv, tx_last_byte;
     uint8_t tx_cur, tx_tdata;
-    int tx_w_next;
+    bool tx_load;
   };
 
   static bool known(uint8_t t) {
@@ -378,12 +382,12 @@ class LinkProto {
     }
 
     // answer side
-    c.tx_hs = tx_state_q_ != kSIdle && in.tx_tready;
+    c.tx_hs = tx_state_q_ != kSIdle && !tx_crcld_q_ && in.tx_tready;
     c.tx_cur = static_cast<uint8_t>(tx_word_q_ >> (8 * (tx_idx_q_ & 3)));
     const bool need_esc = c.tx_cur == 0x7E || c.tx_cur == 0x7D;
     c.tx_adv = c.tx_hs && tx_state_q_ == kSBody && (tx_esc_q_ || !need_esc);
     c.tx_first = c.tx_hs && tx_state_q_ == kSOpen;
-    c.tx_w_next = c.tx_first ? 0 : ((tx_idx_q_ >> 2) + 1) & 63;
+    c.tx_load = c.tx_first || (c.tx_adv && (tx_idx_q_ & 3) == 3);
     c.tx_last_byte = tx_idx_q_ == (tx_stat_q_ ? 4 * kCrcWordS + 3 : 4 * kCrcWordA + 3);
     c.tx_tdata = tx_state_q_ == kSBody ? (tx_esc_q_ ? static_cast<uint8_t>(c.tx_cur ^ 0x20)
                                                     : (need_esc ? uint8_t{0x7D} : c.tx_cur))
@@ -391,12 +395,11 @@ class LinkProto {
     return c;
   }
 
-  uint32_t next_word(const In& in, int w, uint32_t tx_crc_d) const {
+  uint32_t next_word(const In& in, int w) const {
     if (w == 0)
       return tx_stat_q_ ? (uint32_t(kStatLen) << 16) | kStatus
                         : (4u << 16) | (tx_code_q_ == 0 ? kAck : kNak);
     if (w == 1) return next_seq_q_;
-    if (w == (tx_stat_q_ ? kCrcWordS : kCrcWordA)) return ~tx_crc_d;
     if (!tx_stat_q_)
       return tx_code_q_ == 0 ? uint32_t{in.fifo_credits} : (uint32_t{in.fifo_credits} << 16) | tx_code_q_;
     switch (w) {
@@ -444,6 +447,7 @@ class LinkProto {
     stat_pend_q_ = false;
     tick_d1_q_ = tick_d2_q_ = false;
     tx_state_q_ = kSIdle;
+    tx_crcld_q_ = false;
   }
 
   // receive
@@ -472,6 +476,8 @@ class LinkProto {
   int tx_state_q_ = kSIdle;
   bool tx_stat_q_ = false, tx_esc_q_ = false;
   uint8_t tx_code_q_ = 0, tx_idx_q_ = 0;
+  int tx_w_q_ = 0;
+  bool tx_crcld_q_ = false;
   uint32_t tx_crc_q_ = 0, tx_word_q_ = 0;
   uint64_t snap_q_[Axes] = {};
 };

@@ -429,20 +429,23 @@ module traj_link_proto #(
   logic [31:0] tx_crc_q, tx_word_q;
   logic [Axes*OutWidth-1:0] snap_q;
 
-  logic       tx_hs, tx_first, tx_need_esc, tx_adv, tx_last_byte;
+  logic [5:0]  tx_w_q;      // the body word loaded next
+  logic        tx_crcld_q;  // the CRC word is loaded this cycle (from tx_crc_q, off the byte path)
+  logic       tx_hs, tx_first, tx_need_esc, tx_adv, tx_last_byte, tx_load, tx_crc_next;
   logic [7:0] tx_cur;
-  logic [5:0] tx_w_next;
   logic [31:0] tx_crc_d, word_next;
 
   assign tx_take_ans  = (tx_state_q == SIdle) && ans_pend_q;
   assign tx_take_stat = (tx_state_q == SIdle) && !ans_pend_q && stat_pend_q;
-  assign tx_hs        = (tx_state_q != SIdle) && tx_tready_i;
+  assign tx_hs        = tx_tvalid_o && tx_tready_i;
   assign tx_cur       = tx_word_q[8*tx_idx_q[1:0] +: 8];
   assign tx_need_esc  = (tx_cur == 8'h7E) || (tx_cur == 8'h7D);
   assign tx_adv       = tx_hs && (tx_state_q == SBody) && (tx_esc_q || !tx_need_esc);
   assign tx_crc_d     = crc8(tx_crc_q, tx_cur);
   assign tx_first     = tx_hs && (tx_state_q == SOpen);
-  assign tx_w_next    = tx_first ? 6'd0 : 6'(tx_idx_q[7:2] + 6'd1);
+  // a word is loaded after the opening flag and after each word's last byte
+  assign tx_load      = tx_first || (tx_adv && tx_idx_q[1:0] == 2'd3);
+  assign tx_crc_next  = tx_w_q == (tx_stat_q ? 6'(CrcWordS) : 6'(CrcWordA));
   assign tx_last_byte = tx_idx_q == (tx_stat_q ? 8'(4 * CrcWordS + 3) : 8'(4 * CrcWordA + 3));
 
   // the body word tx_w_next of the frame being sent
@@ -461,17 +464,15 @@ module traj_link_proto #(
   assign flags = {2'b00, fifo_level_i == '0, cfg_en_q, tick_err_i, ended_q, halt_q, playing_q};
   always_comb begin
     word_next = '0;
-    if (tx_w_next == 6'd0) begin
+    if (tx_w_q == 6'd0) begin
       word_next = tx_stat_q ? {16'(StatLen), 8'h00, TStatus}
                             : {16'd4, 8'h00, (tx_code_q == '0) ? TAck : TNak};
-    end else if (tx_w_next == 6'd1) begin
+    end else if (tx_w_q == 6'd1) begin
       word_next = next_seq_q;
-    end else if (tx_w_next == (tx_stat_q ? 6'(CrcWordS) : 6'(CrcWordA))) begin
-      word_next = ~tx_crc_d;
     end else if (!tx_stat_q) begin
       word_next = (tx_code_q == '0) ? {16'h0, fifo_credits_i} : {fifo_credits_i, 8'h00, 5'h0, tx_code_q};
     end else begin
-      case (tx_w_next)
+      case (tx_w_q)
         6'd2:  word_next = {fifo_level_i, flags, 8'(Axes)};
         6'd3:  word_next = n_played_q;
         6'd4:  word_next = n_ticks_q;
@@ -483,8 +484,8 @@ module traj_link_proto #(
         6'd10, 6'd11: word_next = '0;
         default: begin
           for (int a = 0; a < Axes; a++) begin
-            if (tx_w_next == 6'(12 + 2 * a)) word_next = samp_lo[a*32 +: 32];
-            if (tx_w_next == 6'(13 + 2 * a)) word_next = samp_hi[a*32 +: 32];
+            if (tx_w_q == 6'(12 + 2 * a)) word_next = samp_lo[a*32 +: 32];
+            if (tx_w_q == 6'(13 + 2 * a)) word_next = samp_hi[a*32 +: 32];
           end
         end
       endcase
@@ -494,7 +495,9 @@ module traj_link_proto #(
   always_ff @(posedge clk_i) begin
     if (!rst_ni) begin
       tx_state_q <= SIdle;
+      tx_crcld_q <= 1'b0;
     end else begin
+      tx_crcld_q <= tx_load && tx_crc_next;
       case (tx_state_q)
         SIdle:  if (tx_take_ans || tx_take_stat) tx_state_q <= SOpen;
         SOpen:  if (tx_hs) tx_state_q <= SBody;
@@ -512,15 +515,17 @@ module traj_link_proto #(
       tx_idx_q  <= '0;
       tx_esc_q  <= 1'b0;
       tx_crc_q  <= 32'hFFFFFFFF;
+      tx_w_q    <= '0;
       snap_q    <= sample_i;
     end
-    if (tx_first) tx_word_q <= word_next;
+    if (tx_load && !tx_crc_next) tx_word_q <= word_next;
+    if (tx_load) tx_w_q <= tx_w_q + 1'b1;
+    if (tx_crcld_q) tx_word_q <= ~tx_crc_q;
     if (tx_hs && tx_state_q == SBody) begin
       if (tx_adv) begin
         tx_esc_q <= 1'b0;
         tx_crc_q <= tx_crc_d;
         tx_idx_q <= tx_idx_q + 1'b1;
-        if (tx_idx_q[1:0] == 2'd3) tx_word_q <= word_next;
       end else begin
         tx_esc_q <= 1'b1;
       end
@@ -533,7 +538,77 @@ module traj_link_proto #(
       default: tx_tdata_o = 8'h7E;
     endcase
   end
-  assign tx_tvalid_o = (tx_state_q != SIdle);
+  assign tx_tvalid_o = (tx_state_q != SIdle) && !tx_crcld_q;
+
+`ifdef FORMAL
+  // ---------------------------------------------------------------------
+  // Formal properties of the framing (scripts/formal.sh, rtl.formal.*):
+  // a FIFO commit comes only from a good SEGMENT frame whose seq is next_seq
+  // and whose words all went to the FIFO (exactly SegWords of them), and it
+  // advances next_seq by one; next_seq moves only so or by RESET. So the
+  // stored-segment count equals the ACKed records, none is stored twice or
+  // skipped, and nothing of a bad frame is committed (the FIFO rolls back
+  // every other verdict: traj_seg_fifo's properties).
+  // ---------------------------------------------------------------------
+  localparam int SegWords = ((ChunkWidth < 32) ? 32 / ChunkWidth : 1) + RegBytes / ChunkB;
+  logic        f_past_valid = 1'b0;
+  logic [11:0] f_wr;        // FIFO words written since the last flag
+  logic        f_dv_q;      // a body byte was taken in the previous cycle
+  logic [31:0] f_seq0;      // next_seq after the last reset or RESET
+  logic [31:0] f_stores;    // commits since then
+  always_ff @(posedge clk_i) begin
+    f_past_valid <= 1'b1;
+    f_dv_q <= dv;
+    if (is_flag) f_wr <= '0;
+    else if (fifo_wr_o) f_wr <= f_wr + 1'b1;
+    if (!rst_ni) begin
+      f_seq0   <= '0;
+      f_stores <= '0;
+    end else if (do_reset) begin
+      f_seq0   <= seq_q;
+      f_stores <= '0;
+    end else if (fifo_commit_o) begin
+      f_stores <= f_stores + 1'b1;
+    end
+  end
+  // the UART gives at most one byte every other cycle
+  always_comb begin
+    if (!f_past_valid) assume (!rst_ni);
+    if (f_past_valid && f_dv_q) assume (!rx_valid_i);
+  end
+  // words a writing frame has produced after idx_q body bytes
+  int f_p, f_bytes;
+  assign f_p     = 32'(idx_q) - 8;
+  assign f_bytes = ((f_p > 8) ? 4 : (f_p > 4) ? f_p - 4 : 0)
+                 + ((f_p > RecBytes - 4) ? RegBytes : (f_p > 12) ? f_p - 12 : 0);
+  always_ff @(posedge clk_i) begin
+    if (f_past_valid && rst_ni) begin
+      // the registered comparisons describe the body when no byte came last cycle
+      if (!f_dv_q) begin
+        assert (len_ok_q == (idx_q == len_q + 12'd12));
+        assert (cbad_end_q == cbad_end);
+      end
+      // words written so far: all K and register bytes of a writing frame
+      if (!hunt_q && ChunkWidth <= 32) begin
+        assert (f_wr == (wen_q ? 12'(f_bytes >> $clog2(ChunkB)) : 12'd0));
+        assert (32'(wb_q) == (f_bytes & (ChunkB - 1)));
+      end
+      if (wen_q) assert (is_seg && len_q == 12'(RecBytes) && 32'(idx_q) > 8);
+      // a commit: a good SEGMENT, seq == next_seq, all its words written
+      if (fifo_commit_o) begin
+        assert (fend && good && is_seg && seq_eq_q && wen_q && !fifo_rollback_o);
+        if (ChunkWidth <= 32) assert (f_wr == 12'(SegWords));
+      end
+      if (fifo_commit_o || fifo_clear_o) assert (!fifo_wr_o);
+      // the count of stored records since the last RESET is next_seq's advance
+      assert (next_seq_q == f_seq0 + f_stores);
+    end
+    if (f_past_valid && rst_ni && $past(rst_ni)) begin
+      if ($past(fifo_commit_o)) assert (next_seq_q == $past(next_seq_q) + 1);
+      else if (!$past(do_reset)) assert (next_seq_q == $past(next_seq_q));
+    end
+  end
+`endif
 
   // -------------------------------------------------------------------
   // Outputs.
