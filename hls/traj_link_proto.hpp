@@ -83,17 +83,18 @@ class LinkProto {
     const LinkProto q = *this;  // the registers at the start of the cycle (nonblocking reads)
     const Dec c = decode(in);
     const uint8_t d = c.d;
-    const uint16_t p = c.p;
 
     // CONFIG shadow registers (datapath).
     if (c.dv && c.in_pay && is_cfg()) {
-      if (p < 4) sh_tick_q_ = (sh_tick_q_ >> 8) | (uint32_t{d} << 24);
-      else if (p < 8) sh_stat_q_ = (sh_stat_q_ >> 8) | (uint32_t{d} << 24);
-      else if (p == 16 || p == 17) sh_pulse_q_ = static_cast<uint16_t>((sh_pulse_q_ >> 8) | (d << 8));
-      else if (p == 18 || p == 19) sh_setup_q_ = static_cast<uint16_t>((sh_setup_q_ >> 8) | (d << 8));
-      else if (p == 20) sh_en_q_ = d & 1;
-      if (p >= 8 && p < 8 + Axes) sh_shift_q_[p - 8] = d & 63;
+      if (pd_.ctick) sh_tick_q_ = (sh_tick_q_ >> 8) | (uint32_t{d} << 24);
+      else if (pd_.k) sh_stat_q_ = (sh_stat_q_ >> 8) | (uint32_t{d} << 24);
+      else if (pd_.cpulse) sh_pulse_q_ = static_cast<uint16_t>((sh_pulse_q_ >> 8) | (d << 8));
+      else if (pd_.csetup) sh_setup_q_ = static_cast<uint16_t>((sh_setup_q_ >> 8) | (d << 8));
+      else if (pd_.cen) sh_en_q_ = d & 1;
+      for (int a = 0; a < Axes; ++a)
+        if (pd_.cshift && (idx_q_ & 7) == a) sh_shift_q_[a] = d & 63;
     }
+
 
     // Per-body flags and fields (datapath: set at the opening flag).
     const uint32_t crc_prev = crc_q_;
@@ -135,13 +136,15 @@ class LinkProto {
             break;
         }
         if (c.in_pay && c.cbad_byte) cbad_q_ = true;
-        if (c.in_pay && is_seg() && p >= 4 && p < 8 && d != 0) kz_q_ = false;
+        if (c.in_pay && is_seg() && pd_.k && d != 0) kz_q_ = false;
         if (c.wbyte) {
           asm_q_ = c.asm_d >> 8;
           wb_q_ = c.wdone ? 0 : wb_q_ + 1;
         }
       }
     }
+
+    const Position pd_next = position(q.idx_q_, q.len_q_);
 
     // Frame datapath of the answer side.
     const uint32_t tx_crc_d = crc32_byte(tx_crc_q_, c.tx_cur);
@@ -169,6 +172,7 @@ class LinkProto {
       }
     }
 
+    pd_ = pd_next;
     if (!in.rst_n) {
       reset();
       return;
@@ -269,11 +273,34 @@ class LinkProto {
  private:
   enum : int { kSIdle = 0, kSOpen = 1, kSBody = 2, kSClose = 3 };
 
+  // Registered decodes of the position in the body (the RTL's pd_*_q).
+  struct Position {
+    bool pay, over, k, reg, p0, p13, pseq, p7, ctick, cshift, cpulse, csetup, cen, cres;
+  };
+  static Position position(uint16_t idx, uint16_t len) {
+    const int p = (idx - 8) & 0xFFF;
+    Position r{};
+    r.pay = idx >= 8 && p < len;
+    r.over = idx >= 8 && p >= ((len + 4) & 0xFFF);
+    r.k = p >= 4 && p < 8;
+    r.reg = p >= 12 && p < kRecBytes - 4;
+    r.p0 = p == 0;
+    r.p13 = p >= 1 && p < 4;
+    r.pseq = p >= 8 && p < 12;
+    r.p7 = p == 7;
+    r.ctick = p < 4;
+    r.cshift = p >= 8 && p < 8 + Axes;
+    r.cpulse = p == 16 || p == 17;
+    r.csetup = p == 18 || p == 19;
+    r.cen = p == 20;
+    r.cres = p > 20 && p < 24;
+    return r;
+  }
+
   // Combinational decode of one cycle (the RTL's assigns and always_comb).
   struct Dec {
     bool is_flag, is_esc, dv;
     uint8_t d;
-    uint16_t p;
     bool in_pay, overlong, wbyte, wdone, cbad_byte, cbad_end;
     uint64_t asm_d, wword;
     bool fend, good, store, answer, want_stat, ooo;
@@ -301,30 +328,28 @@ class LinkProto {
     c.is_esc = in.rx_valid && !c.is_flag && !esc_q_ && in.rx_data == 0x7D;
     c.dv = in.rx_valid && !c.is_flag && !c.is_esc && !hunt_q_;
     c.d = esc_q_ ? static_cast<uint8_t>(in.rx_data ^ 0x20) : in.rx_data;
-    c.p = static_cast<uint16_t>((idx_q_ - 8) & 0xFFF);
-    c.in_pay = idx_q_ >= 8 && c.p < len_q_;
-    c.overlong = idx_q_ >= 8 && c.p >= ((len_q_ + 4) & 0xFFF);
-    const uint16_t p = c.p;
+    c.in_pay = pd_.pay;
+    c.overlong = pd_.over;
     const uint8_t d = c.d;
-    c.wbyte = c.dv && c.in_pay && is_seg() && ((p >= 4 && p < 8) || (p >= 12 && p < kRecBytes - 4));
+    c.wbyte = c.dv && c.in_pay && is_seg() && (pd_.k || pd_.reg);
     c.asm_d = ((uint64_t{d} << (ChunkWidth - 8)) | asm_q_) & chunk_mask();
     if (ChunkWidth > 32) {
-      c.wdone = wb_q_ == kChunkB - 1 || p == 7;
-      c.wword = p == 7 ? (c.asm_d >> (ChunkWidth - 32)) & 0xFFFFFFFFull : c.asm_d;
+      c.wdone = wb_q_ == kChunkB - 1 || pd_.p7;
+      c.wword = pd_.p7 ? (c.asm_d >> (ChunkWidth - 32)) & 0xFFFFFFFFull : c.asm_d;
     } else {
       c.wdone = wb_q_ == kChunkB - 1;
       c.wword = c.asm_d;
     }
-    const uint8_t seq_byte = static_cast<uint8_t>(seq_q_ >> (8 * (p & 3)));
+    const uint8_t seq_byte = static_cast<uint8_t>(seq_q_ >> (8 * (idx_q_ & 3)));
     c.cbad_byte = false;
     if (is_seg()) {
-      if (p == 0) c.cbad_byte = d != 1;
-      else if (p < 4) c.cbad_byte = d != 0;
-      else if (p >= 8 && p < 12) c.cbad_byte = d != seq_byte;
+      if (pd_.p0) c.cbad_byte = d != 1;
+      else if (pd_.p13) c.cbad_byte = d != 0;
+      else if (pd_.pseq) c.cbad_byte = d != seq_byte;
     } else if (is_cfg()) {
-      if (p >= 8 && p < 8 + Axes) c.cbad_byte = d > 63;
-      else if (p == 20) c.cbad_byte = d > 1;
-      else if (p > 20) c.cbad_byte = d != 0;
+      if (pd_.cshift) c.cbad_byte = d > 63;
+      else if (pd_.cen) c.cbad_byte = d > 1;
+      else if (pd_.cres) c.cbad_byte = d != 0;
     }
 
     // verdict
@@ -452,6 +477,7 @@ class LinkProto {
 
   // receive
   bool hunt_q_ = true, esc_q_ = false, bad_q_ = false, cbad_q_ = false, kz_q_ = false, wen_q_ = false;
+  Position pd_ = {};
   bool seq_eq_q_ = false, behind_q_ = false, len_ok_q_ = false, crc_ok_q_ = false, cbad_end_q_ = false;
   uint16_t idx_q_ = 0, len_q_ = 0;
   uint8_t type_q_ = 0;

@@ -126,12 +126,32 @@ module traj_link_proto #(
   assign dv      = rx_valid_i && !is_flag && !is_esc && !hunt_q;
   assign d       = esc_q ? (rx_data_i ^ 8'h20) : rx_data_i;
 
-  logic [11:0] p;         // payload offset of this byte (idx - 8)
+  // Decodes of the position in the body, registered (timing): a byte at
+  // cycle t sees the position after every earlier byte, since bytes come at
+  // most every other cycle. p = idx - 8 is the payload offset.
+  logic [11:0] p;
   logic        in_pay;    // a payload byte
   logic        overlong;  // past the CRC
+  logic        pd_pay_q, pd_over_q, pd_k_q, pd_reg_q, pd_p0_q, pd_p13_q, pd_pseq_q;
+  logic        pd_ctick_q, pd_cshift_q, pd_cpulse_q, pd_csetup_q, pd_cen_q, pd_cres_q;
   assign p        = idx_q - 12'd8;
-  assign in_pay   = (idx_q >= 12'd8) && (p < len_q);
-  assign overlong = (idx_q >= 12'd8) && (p >= len_q + 12'd4);
+  assign in_pay   = pd_pay_q;
+  assign overlong = pd_over_q;
+  always_ff @(posedge clk_i) begin
+    pd_pay_q    <= (idx_q >= 12'd8) && (p < len_q);
+    pd_over_q   <= (idx_q >= 12'd8) && (p >= len_q + 12'd4);
+    pd_k_q      <= (p >= 12'd4) && (p < 12'd8);
+    pd_reg_q    <= (p >= 12'd12) && (p < 12'(RecBytes - 4));
+    pd_p0_q     <= (p == 12'd0);
+    pd_p13_q    <= (p >= 12'd1) && (p < 12'd4);
+    pd_pseq_q   <= (p >= 12'd8) && (p < 12'd12);
+    pd_ctick_q  <= (p < 12'd4);
+    pd_cshift_q <= (p >= 12'd8) && (p < 12'(8 + Axes));
+    pd_cpulse_q <= (p == 12'd16) || (p == 12'd17);
+    pd_csetup_q <= (p == 12'd18) || (p == 12'd19);
+    pd_cen_q    <= (p == 12'd20);
+    pd_cres_q   <= (p > 12'd20) && (p < 12'd24);
+  end
 
   logic known;
   always_comb begin
@@ -148,12 +168,14 @@ module traj_link_proto #(
   // SEGMENT payload bytes that carry engine words: K and the registers.
   logic wbyte, wdone;
   logic [ChunkWidth-1:0] asm_d, wword;
-  assign wbyte = dv && in_pay && is_seg && ((p >= 12'd4 && p < 12'd8) || (p >= 12'd12 && p < 12'(RecBytes - 4)));
+  assign wbyte = dv && in_pay && is_seg && (pd_k_q || pd_reg_q);
   assign asm_d = {d, asm_q};
   if (ChunkWidth > 32) begin : g_khalf
     // K is half an engine word: the header word is K, zero-extended.
-    assign wdone = (32'(wb_q) == ChunkB - 1) || (p == 12'd7);
-    assign wword = (p == 12'd7) ? {{(ChunkWidth-32){1'b0}}, asm_d[ChunkWidth-1 -: 32]} : asm_d;
+    logic pd_p7_q;  // the last byte of K comes next (registered, as the other decodes)
+    always_ff @(posedge clk_i) pd_p7_q <= (p == 12'd7);
+    assign wdone = (32'(wb_q) == ChunkB - 1) || pd_p7_q;
+    assign wword = pd_p7_q ? {{(ChunkWidth-32){1'b0}}, asm_d[ChunkWidth-1 -: 32]} : asm_d;
   end else begin : g_kwhole
     assign wdone = (32'(wb_q) == ChunkB - 1);
     assign wword = asm_d;
@@ -162,17 +184,17 @@ module traj_link_proto #(
   // content check of one payload byte
   logic cbad_byte;
   logic [7:0] seq_byte;
-  assign seq_byte = seq_q[8*p[1:0] +: 8];
+  assign seq_byte = seq_q[8*idx_q[1:0] +: 8];  // byte p - 8 of seq (p[1:0] == idx[1:0])
   always_comb begin
     cbad_byte = 1'b0;
     if (is_seg) begin
-      if (p == 12'd0) cbad_byte = (d != 8'd1);
-      else if (p < 12'd4) cbad_byte = (d != 8'd0);
-      else if (p >= 12'd8 && p < 12'd12) cbad_byte = (d != seq_byte);
+      if (pd_p0_q) cbad_byte = (d != 8'd1);
+      else if (pd_p13_q) cbad_byte = (d != 8'd0);
+      else if (pd_pseq_q) cbad_byte = (d != seq_byte);
     end else if (is_cfg) begin
-      if (p >= 12'd8 && p < 12'(8 + Axes)) cbad_byte = (d > 8'd63);
-      else if (p == 12'd20) cbad_byte = (d > 8'd1);
-      else if (p > 12'd20) cbad_byte = (d != 8'd0);
+      if (pd_cshift_q) cbad_byte = (d > 8'd63);
+      else if (pd_cen_q) cbad_byte = (d > 8'd1);
+      else if (pd_cres_q) cbad_byte = (d != 8'd0);
     end
   end
 
@@ -184,16 +206,16 @@ module traj_link_proto #(
 
   always_ff @(posedge clk_i) begin
     if (dv && in_pay && is_cfg) begin
-      if (p < 12'd4) sh_tick_q <= {d, sh_tick_q[31:8]};
-      else if (p < 12'd8) sh_stat_q <= {d, sh_stat_q[31:8]};
-      else if (p == 12'd16 || p == 12'd17) sh_pulse_q <= {d, sh_pulse_q[15:8]};
-      else if (p == 12'd18 || p == 12'd19) sh_setup_q <= {d, sh_setup_q[15:8]};
-      else if (p == 12'd20) sh_en_q <= d[0];
+      if (pd_ctick_q) sh_tick_q <= {d, sh_tick_q[31:8]};
+      else if (pd_k_q) sh_stat_q <= {d, sh_stat_q[31:8]};
+      else if (pd_cpulse_q) sh_pulse_q <= {d, sh_pulse_q[15:8]};
+      else if (pd_csetup_q) sh_setup_q <= {d, sh_setup_q[15:8]};
+      else if (pd_cen_q) sh_en_q <= d[0];
     end
   end
   for (genvar a = 0; a < Axes; a++) begin : g_sh_shift
     always_ff @(posedge clk_i) begin
-      if (dv && in_pay && is_cfg && p == 12'(8 + a)) sh_shift_q[a*6 +: 6] <= d[5:0];
+      if (dv && in_pay && is_cfg && pd_cshift_q && idx_q[2:0] == 3'(a)) sh_shift_q[a*6 +: 6] <= d[5:0];
     end
   end
 
@@ -307,7 +329,7 @@ module traj_link_proto #(
           default: ;
         endcase
         if (in_pay && cbad_byte) cbad_q <= 1'b1;
-        if (in_pay && is_seg && p >= 12'd4 && p < 12'd8 && d != 8'd0) kz_q <= 1'b0;
+        if (in_pay && is_seg && pd_k_q && d != 8'd0) kz_q <= 1'b0;
         if (wbyte) begin
           asm_q <= asm_d[ChunkWidth-1:8];
           wb_q  <= wdone ? 4'd0 : wb_q + 1'b1;
