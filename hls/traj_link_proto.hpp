@@ -66,9 +66,9 @@ class LinkProto {
     o.tx_tvalid = tx_state_q_ != kSIdle && !tx_crcld_q_;
     o.fifo_wr = c.wbyte && c.wdone && wen_q_;
     o.fifo_wr_data = c.wword;
-    o.fifo_commit = c.store;
-    o.fifo_rollback = c.fend && !c.store;
-    o.fifo_clear = c.do_reset;
+    o.fifo_commit = v_.store;
+    o.fifo_rollback = v_.fend && !v_.store;
+    o.fifo_clear = v_.do_reset;
     o.release = playing_q_ && !halt_q_ && !stop_q_ && !in.tick && !tick_d1_q_ && !tick_d2_q_ && !in.underrun;
     o.run = playing_q_ && !halt_q_;
     o.tick_period = cfg_tick_q_;
@@ -177,6 +177,8 @@ class LinkProto {
       reset();
       return;
     }
+    const Dec v = v_;  // the verdict registered at the previous flag acts in this cycle
+    v_ = c;
 
     // Receive state.
     if (in.rx_valid) esc_q_ = c.is_esc;
@@ -197,12 +199,12 @@ class LinkProto {
     const bool playing = playing_q_, halt = halt_q_, stop = stop_q_;
     tick_d2_q_ = tick_d1_q_;
     tick_d1_q_ = in.tick;
-    if (c.store) ++next_seq_q_;
-    if (c.do_reset) {
+    if (v.store) ++next_seq_q_;
+    if (v.do_reset) {
       next_seq_q_ = q.seq_q_;
       halt_q_ = stop_q_ = end_q_ = ended_q_ = false;
     }
-    if (c.do_config) {
+    if (v.do_config) {
       cfg_tick_q_ = q.sh_tick_q_;
       cfg_stat_q_ = q.sh_stat_q_;
       for (int a = 0; a < Axes; ++a) cfg_shift_q_[a] = q.sh_shift_q_[a];
@@ -210,17 +212,17 @@ class LinkProto {
       cfg_setup_q_ = q.sh_setup_q_;
       cfg_en_q_ = q.sh_en_q_;
     }
-    if (c.do_start && !halt) {
+    if (v.do_start && !halt) {
       playing_q_ = true;
       stop_q_ = false;
       ended_q_ = false;
     }
-    if (c.do_stop) stop_q_ = playing;
-    if (c.do_resume && halt) {
+    if (v.do_stop) stop_q_ = playing;
+    if (v.do_resume && halt) {
       halt_q_ = false;
       playing_q_ = true;
     }
-    if (c.do_end) end_q_ = true;
+    if (v.do_end) end_q_ = true;
     if (in.underrun && playing) {
       playing_q_ = false;
       stop_q_ = false;
@@ -234,14 +236,14 @@ class LinkProto {
     }
     if (in.seg_start) ++n_played_q_;
     if (in.tick && playing && !halt) ++n_ticks_q_;
-    if (c.fend && !c.good) ++n_bad_q_;
-    if (c.ooo) ++n_ooo_q_;
+    if (v.fend && !v.good) ++n_bad_q_;
+    if (v.ooo) ++n_ooo_q_;
     if (in.rx_valid) ++n_bytes_q_;
-    if (c.do_config) stat_cnt_q_ = q.sh_stat_q_ - 1;
+    if (v.do_config) stat_cnt_q_ = q.sh_stat_q_ - 1;
     else if (in.tick && q.cfg_stat_q_ != 0) stat_cnt_q_ = stat_due ? q.cfg_stat_q_ - 1 : stat_cnt_q_ - 1;
-    ans_pend_q_ = c.answer || (ans_pend_q_ && !tx_take_ans);
-    if (c.answer) ans_code_q_ = c.code;
-    stat_pend_q_ = c.want_stat || stat_due || (stat_pend_q_ && !tx_take_stat);
+    ans_pend_q_ = v.answer || (ans_pend_q_ && !tx_take_ans);
+    if (v.answer) ans_code_q_ = v.code;
+    stat_pend_q_ = v.want_stat || stat_due || (stat_pend_q_ && !tx_take_stat);
 
     // Answer state machine.
     tx_crcld_q_ = c.tx_load && tx_crc_next;
@@ -473,11 +475,13 @@ class LinkProto {
     tick_d1_q_ = tick_d2_q_ = false;
     tx_state_q_ = kSIdle;
     tx_crcld_q_ = false;
+    v_ = Dec{};
   }
 
   // receive
   bool hunt_q_ = true, esc_q_ = false, bad_q_ = false, cbad_q_ = false, kz_q_ = false, wen_q_ = false;
   Position pd_ = {};
+  Dec v_ = {};  // the registered verdict (the RTL's v_*_q; only its verdict fields are read)
   bool seq_eq_q_ = false, behind_q_ = false, len_ok_q_ = false, crc_ok_q_ = false, cbad_end_q_ = false;
   uint16_t idx_q_ = 0, len_q_ = 0;
   uint8_t type_q_ = 0;

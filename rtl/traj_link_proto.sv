@@ -276,6 +276,26 @@ module traj_link_proto #(
     end
   end
 
+  // The verdict acts one cycle after the flag (timing), from registers: the
+  // body's registers it reads (seq, the CONFIG shadow) hold, since the next
+  // byte comes two cycles after the flag at the earliest.
+  logic       v_answer_q, v_store_q, v_want_stat_q, v_ooo_q, v_bad_q, v_fend_q;
+  logic       v_reset_q, v_config_q, v_start_q, v_stop_q, v_resume_q, v_end_q;
+  logic [2:0] v_code_q;
+  always_ff @(posedge clk_i) begin
+    if (!rst_ni) begin
+      v_answer_q <= 1'b0; v_store_q <= 1'b0; v_want_stat_q <= 1'b0; v_ooo_q <= 1'b0;
+      v_bad_q    <= 1'b0; v_fend_q  <= 1'b0; v_reset_q     <= 1'b0; v_config_q <= 1'b0;
+      v_start_q  <= 1'b0; v_stop_q  <= 1'b0; v_resume_q    <= 1'b0; v_end_q    <= 1'b0;
+      v_code_q   <= '0;
+    end else begin
+      v_answer_q <= answer; v_store_q <= store; v_want_stat_q <= want_stat; v_ooo_q <= ooo;
+      v_bad_q    <= fend && !good; v_fend_q <= fend; v_reset_q <= do_reset; v_config_q <= do_config;
+      v_start_q  <= do_start; v_stop_q <= do_stop; v_resume_q <= do_resume; v_end_q <= do_end;
+      v_code_q   <= code;
+    end
+  end
+
   // -------------------------------------------------------------------
   // Receive state.
   // -------------------------------------------------------------------
@@ -383,15 +403,15 @@ module traj_link_proto #(
       tick_d1_q <= tick_i;
       tick_d2_q <= tick_d1_q;
       // verdicts
-      if (store) next_seq_q <= next_seq_q + 1'b1;
-      if (do_reset) begin
+      if (v_store_q) next_seq_q <= next_seq_q + 1'b1;
+      if (v_reset_q) begin
         next_seq_q <= seq_q;
         halt_q     <= 1'b0;
         stop_q     <= 1'b0;
         end_q      <= 1'b0;
         ended_q    <= 1'b0;
       end
-      if (do_config) begin
+      if (v_config_q) begin
         cfg_tick_q  <= sh_tick_q;
         cfg_stat_q  <= sh_stat_q;
         cfg_shift_q <= sh_shift_q;
@@ -399,17 +419,17 @@ module traj_link_proto #(
         cfg_setup_q <= sh_setup_q;
         cfg_en_q    <= sh_en_q;
       end
-      if (do_start && !halt_q) begin
+      if (v_start_q && !halt_q) begin
         playing_q <= 1'b1;
         stop_q    <= 1'b0;
         ended_q   <= 1'b0;
       end
-      if (do_stop) stop_q <= playing_q;
-      if (do_resume && halt_q) begin
+      if (v_stop_q) stop_q <= playing_q;
+      if (v_resume_q && halt_q) begin
         halt_q    <= 1'b0;
         playing_q <= 1'b1;
       end
-      if (do_end) end_q <= 1'b1;
+      if (v_end_q) end_q <= 1'b1;
       // playback: an engine tick found no segment
       if (underrun_i && playing_q) begin
         playing_q <= 1'b0;
@@ -426,16 +446,16 @@ module traj_link_proto #(
       // counters
       if (seg_start_i) n_played_q <= n_played_q + 1'b1;
       if (tick_i && playing_q && !halt_q) n_ticks_q <= n_ticks_q + 1'b1;
-      if (fend && !good) n_bad_q <= n_bad_q + 1'b1;
-      if (ooo) n_ooo_q <= n_ooo_q + 1'b1;
+      if (v_bad_q) n_bad_q <= n_bad_q + 1'b1;
+      if (v_ooo_q) n_ooo_q <= n_ooo_q + 1'b1;
       if (rx_valid_i) n_bytes_q <= n_bytes_q + 1'b1;
       // status period in ticks
-      if (do_config) stat_cnt_q <= sh_stat_q - 1'b1;
+      if (v_config_q) stat_cnt_q <= sh_stat_q - 1'b1;
       else if (tick_i && cfg_stat_q != '0) stat_cnt_q <= stat_due ? cfg_stat_q - 1'b1 : stat_cnt_q - 1'b1;
       // answers
-      ans_pend_q  <= answer || (ans_pend_q && !tx_take_ans);
-      if (answer) ans_code_q <= code;
-      stat_pend_q <= want_stat || stat_due || (stat_pend_q && !tx_take_stat);
+      ans_pend_q  <= v_answer_q || (ans_pend_q && !tx_take_ans);
+      if (v_answer_q) ans_code_q <= v_code_q;
+      stat_pend_q <= v_want_stat_q || stat_due || (stat_pend_q && !tx_take_stat);
     end
   end
 
@@ -576,17 +596,19 @@ module traj_link_proto #(
   logic        f_past_valid = 1'b0;
   logic [11:0] f_wr;        // FIFO words written since the last flag
   logic        f_dv_q;      // a body byte was taken in the previous cycle
+  logic        f_rx_q;      // a byte (or flag) came in the previous cycle, or reset
   logic [31:0] f_seq0;      // next_seq after the last reset or RESET
   logic [31:0] f_stores;    // commits since then
   always_ff @(posedge clk_i) begin
     f_past_valid <= 1'b1;
     f_dv_q <= dv;
+    f_rx_q <= rx_valid_i || !rst_ni;
     if (is_flag) f_wr <= '0;
     else if (fifo_wr_o) f_wr <= f_wr + 1'b1;
     if (!rst_ni) begin
       f_seq0   <= '0;
       f_stores <= '0;
-    end else if (do_reset) begin
+    end else if (v_reset_q) begin
       f_seq0   <= seq_q;
       f_stores <= '0;
     end else if (fifo_commit_o) begin
@@ -596,7 +618,7 @@ module traj_link_proto #(
   // the UART gives at most one byte every other cycle
   always_comb begin
     if (!f_past_valid) assume (!rst_ni);
-    if (f_past_valid && f_dv_q) assume (!rx_valid_i);
+    if (f_past_valid && f_rx_q) assume (!rx_valid_i);
   end
   // words a writing frame has produced after idx_q body bytes
   int f_p, f_bytes;
@@ -606,7 +628,7 @@ module traj_link_proto #(
   always_ff @(posedge clk_i) begin
     if (f_past_valid && rst_ni) begin
       // the registered comparisons describe the body when no byte came last cycle
-      if (!f_dv_q) begin
+      if (!f_rx_q) begin
         assert (len_ok_q == (idx_q == len_q + 12'd12));
         assert (cbad_end_q == cbad_end);
       end
@@ -616,18 +638,21 @@ module traj_link_proto #(
         assert (32'(wb_q) == (f_bytes & (ChunkB - 1)));
       end
       if (wen_q) assert (is_seg && len_q == 12'(RecBytes) && 32'(idx_q) > 8);
-      // a commit: a good SEGMENT, seq == next_seq, all its words written
-      if (fifo_commit_o) begin
-        assert (fend && good && is_seg && seq_eq_q && wen_q && !fifo_rollback_o);
+      // a store: a good SEGMENT, seq == next_seq, all its words written
+      if (store) begin
+        assert (fend && good && is_seg && seq_eq_q && wen_q);
         if (ChunkWidth <= 32) assert (f_wr == 12'(SegWords));
       end
-      if (fifo_commit_o || fifo_clear_o) assert (!fifo_wr_o);
+      if (fifo_commit_o) assert (!fifo_rollback_o && !fifo_clear_o);
+      if (fifo_commit_o || fifo_rollback_o || fifo_clear_o) assert (!fifo_wr_o && !f_rx_q);
       // the count of stored records since the last RESET is next_seq's advance
       assert (next_seq_q == f_seq0 + f_stores);
     end
     if (f_past_valid && rst_ni && $past(rst_ni)) begin
+      // the FIFO commits exactly the stores, one cycle later
+      assert (fifo_commit_o == $past(store));
       if ($past(fifo_commit_o)) assert (next_seq_q == $past(next_seq_q) + 1);
-      else if (!$past(do_reset)) assert (next_seq_q == $past(next_seq_q));
+      else if (!$past(fifo_clear_o)) assert (next_seq_q == $past(next_seq_q));
     end
   end
 `endif
@@ -637,9 +662,9 @@ module traj_link_proto #(
   // -------------------------------------------------------------------
   assign fifo_wr_o       = wbyte && wdone && wen_q;
   assign fifo_wr_data_o  = wword;
-  assign fifo_commit_o   = store;
-  assign fifo_rollback_o = fend && !store;
-  assign fifo_clear_o    = do_reset;
+  assign fifo_commit_o   = v_store_q;
+  assign fifo_rollback_o = v_fend_q && !v_store_q;
+  assign fifo_clear_o    = v_reset_q;
   assign release_o       = playing_q && !halt_q && !stop_q && !tick_i && !tick_d1_q && !tick_d2_q && !underrun_i;
   assign run_o           = playing_q && !halt_q;
   assign tick_period_o   = cfg_tick_q;
