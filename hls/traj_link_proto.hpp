@@ -63,12 +63,12 @@ class LinkProto {
     const Dec c = decode(in);
     Out o{};
     o.tx_tdata = c.tx_tdata;
-    o.tx_tvalid = tx_state_q_ != kSIdle;
+    o.tx_tvalid = tx_state_q_ != kSIdle && !tx_crcld_q_;
     o.fifo_wr = c.wbyte && c.wdone && wen_q_;
     o.fifo_wr_data = c.wword;
-    o.fifo_commit = c.store;
-    o.fifo_rollback = c.fend && !c.store;
-    o.fifo_clear = c.do_reset;
+    o.fifo_commit = v_.store;
+    o.fifo_rollback = v_.fend && !v_.store;
+    o.fifo_clear = v_.do_reset;
     o.release = playing_q_ && !halt_q_ && !stop_q_ && !in.tick && !tick_d1_q_ && !tick_d2_q_ && !in.underrun;
     o.run = playing_q_ && !halt_q_;
     o.tick_period = cfg_tick_q_;
@@ -83,17 +83,18 @@ class LinkProto {
     const LinkProto q = *this;  // the registers at the start of the cycle (nonblocking reads)
     const Dec c = decode(in);
     const uint8_t d = c.d;
-    const uint16_t p = c.p;
 
     // CONFIG shadow registers (datapath).
     if (c.dv && c.in_pay && is_cfg()) {
-      if (p < 4) sh_tick_q_ = (sh_tick_q_ >> 8) | (uint32_t{d} << 24);
-      else if (p < 8) sh_stat_q_ = (sh_stat_q_ >> 8) | (uint32_t{d} << 24);
-      else if (p == 16 || p == 17) sh_pulse_q_ = static_cast<uint16_t>((sh_pulse_q_ >> 8) | (d << 8));
-      else if (p == 18 || p == 19) sh_setup_q_ = static_cast<uint16_t>((sh_setup_q_ >> 8) | (d << 8));
-      else if (p == 20) sh_en_q_ = d & 1;
-      if (p >= 8 && p < 8 + Axes) sh_shift_q_[p - 8] = d & 63;
+      if (pd_.ctick) sh_tick_q_ = (sh_tick_q_ >> 8) | (uint32_t{d} << 24);
+      else if (pd_.k) sh_stat_q_ = (sh_stat_q_ >> 8) | (uint32_t{d} << 24);
+      else if (pd_.cpulse) sh_pulse_q_ = static_cast<uint16_t>((sh_pulse_q_ >> 8) | (d << 8));
+      else if (pd_.csetup) sh_setup_q_ = static_cast<uint16_t>((sh_setup_q_ >> 8) | (d << 8));
+      else if (pd_.cen) sh_en_q_ = d & 1;
+      for (int a = 0; a < Axes; ++a)
+        if (pd_.cshift && (idx_q_ & 7) == a) sh_shift_q_[a] = d & 63;
     }
+
 
     // Per-body flags and fields (datapath: set at the opening flag).
     const uint32_t crc_prev = crc_q_;
@@ -135,13 +136,15 @@ class LinkProto {
             break;
         }
         if (c.in_pay && c.cbad_byte) cbad_q_ = true;
-        if (c.in_pay && is_seg() && p >= 4 && p < 8 && d != 0) kz_q_ = false;
+        if (c.in_pay && is_seg() && pd_.k && d != 0) kz_q_ = false;
         if (c.wbyte) {
           asm_q_ = c.asm_d >> 8;
           wb_q_ = c.wdone ? 0 : wb_q_ + 1;
         }
       }
     }
+
+    const Position pd_next = position(q.idx_q_, q.len_q_);
 
     // Frame datapath of the answer side.
     const uint32_t tx_crc_d = crc32_byte(tx_crc_q_, c.tx_cur);
@@ -151,25 +154,31 @@ class LinkProto {
       tx_idx_q_ = 0;
       tx_esc_q_ = false;
       tx_crc_q_ = 0xFFFFFFFFu;
+      tx_w_q_ = 0;
       for (int a = 0; a < Axes; ++a) snap_q_[a] = in.sample[a] & out_mask();
     }
-    const uint32_t word_next = next_word(in, c.tx_w_next, tx_crc_d);
-    if (c.tx_first) tx_word_q_ = word_next;
+    const bool tx_crc_next = tx_w_q_ == (tx_stat_q_ ? kCrcWordS : kCrcWordA);
+    const uint32_t word_next = next_word(in, tx_w_q_);
+    if (c.tx_load && !tx_crc_next) tx_word_q_ = word_next;
+    if (c.tx_load) tx_w_q_ = (tx_w_q_ + 1) & 63;
+    if (tx_crcld_q_) tx_word_q_ = ~tx_crc_q_;
     if (c.tx_hs && tx_state_q_ == kSBody) {
       if (c.tx_adv) {
         tx_esc_q_ = false;
         tx_crc_q_ = tx_crc_d;
-        if ((tx_idx_q_ & 3) == 3) tx_word_q_ = word_next;
         tx_idx_q_ = static_cast<uint8_t>(tx_idx_q_ + 1);
       } else {
         tx_esc_q_ = true;
       }
     }
 
+    pd_ = pd_next;
     if (!in.rst_n) {
       reset();
       return;
     }
+    const Dec v = v_;  // the verdict registered at the previous flag acts in this cycle
+    v_ = c;
 
     // Receive state.
     if (in.rx_valid) esc_q_ = c.is_esc;
@@ -190,12 +199,12 @@ class LinkProto {
     const bool playing = playing_q_, halt = halt_q_, stop = stop_q_;
     tick_d2_q_ = tick_d1_q_;
     tick_d1_q_ = in.tick;
-    if (c.store) ++next_seq_q_;
-    if (c.do_reset) {
+    if (v.store) ++next_seq_q_;
+    if (v.do_reset) {
       next_seq_q_ = q.seq_q_;
       halt_q_ = stop_q_ = end_q_ = ended_q_ = false;
     }
-    if (c.do_config) {
+    if (v.do_config) {
       cfg_tick_q_ = q.sh_tick_q_;
       cfg_stat_q_ = q.sh_stat_q_;
       for (int a = 0; a < Axes; ++a) cfg_shift_q_[a] = q.sh_shift_q_[a];
@@ -203,17 +212,17 @@ class LinkProto {
       cfg_setup_q_ = q.sh_setup_q_;
       cfg_en_q_ = q.sh_en_q_;
     }
-    if (c.do_start && !halt) {
+    if (v.do_start && !halt) {
       playing_q_ = true;
       stop_q_ = false;
       ended_q_ = false;
     }
-    if (c.do_stop) stop_q_ = playing;
-    if (c.do_resume && halt) {
+    if (v.do_stop) stop_q_ = playing;
+    if (v.do_resume && halt) {
       halt_q_ = false;
       playing_q_ = true;
     }
-    if (c.do_end) end_q_ = true;
+    if (v.do_end) end_q_ = true;
     if (in.underrun && playing) {
       playing_q_ = false;
       stop_q_ = false;
@@ -227,16 +236,17 @@ class LinkProto {
     }
     if (in.seg_start) ++n_played_q_;
     if (in.tick && playing && !halt) ++n_ticks_q_;
-    if (c.fend && !c.good) ++n_bad_q_;
-    if (c.ooo) ++n_ooo_q_;
+    if (v.fend && !v.good) ++n_bad_q_;
+    if (v.ooo) ++n_ooo_q_;
     if (in.rx_valid) ++n_bytes_q_;
-    if (c.do_config) stat_cnt_q_ = q.sh_stat_q_ - 1;
+    if (v.do_config) stat_cnt_q_ = q.sh_stat_q_ - 1;
     else if (in.tick && q.cfg_stat_q_ != 0) stat_cnt_q_ = stat_due ? q.cfg_stat_q_ - 1 : stat_cnt_q_ - 1;
-    ans_pend_q_ = c.answer || (ans_pend_q_ && !tx_take_ans);
-    if (c.answer) ans_code_q_ = c.code;
-    stat_pend_q_ = c.want_stat || stat_due || (stat_pend_q_ && !tx_take_stat);
+    ans_pend_q_ = v.answer || (ans_pend_q_ && !tx_take_ans);
+    if (v.answer) ans_code_q_ = v.code;
+    stat_pend_q_ = v.want_stat || stat_due || (stat_pend_q_ && !tx_take_stat);
 
     // Answer state machine.
+    tx_crcld_q_ = c.tx_load && tx_crc_next;
     switch (tx_state_q_) {
       case kSIdle:
         if (tx_take_ans || tx_take_stat) tx_state_q_ = kSOpen;
@@ -265,11 +275,34 @@ class LinkProto {
  private:
   enum : int { kSIdle = 0, kSOpen = 1, kSBody = 2, kSClose = 3 };
 
+  // Registered decodes of the position in the body (the RTL's pd_*_q).
+  struct Position {
+    bool pay, over, k, reg, p0, p13, pseq, p7, ctick, cshift, cpulse, csetup, cen, cres;
+  };
+  static Position position(uint16_t idx, uint16_t len) {
+    const int p = (idx - 8) & 0xFFF;
+    Position r{};
+    r.pay = idx >= 8 && p < len;
+    r.over = idx >= 8 && p >= ((len + 4) & 0xFFF);
+    r.k = p >= 4 && p < 8;
+    r.reg = p >= 12 && p < kRecBytes - 4;
+    r.p0 = p == 0;
+    r.p13 = p >= 1 && p < 4;
+    r.pseq = p >= 8 && p < 12;
+    r.p7 = p == 7;
+    r.ctick = p < 4;
+    r.cshift = p >= 8 && p < 8 + Axes;
+    r.cpulse = p == 16 || p == 17;
+    r.csetup = p == 18 || p == 19;
+    r.cen = p == 20;
+    r.cres = p > 20 && p < 24;
+    return r;
+  }
+
   // Combinational decode of one cycle (the RTL's assigns and always_comb).
   struct Dec {
     bool is_flag, is_esc, dv;
     uint8_t d;
-    uint16_t p;
     bool in_pay, overlong, wbyte, wdone, cbad_byte, cbad_end;
     uint64_t asm_d, wword;
     bool fend, good, store, answer, want_stat, ooo;
@@ -277,7 +310,7 @@ class LinkProto {
     uint8_t code;
     bool tx_hs, tx_first, tx_adv, tx_last_byte;
     uint8_t tx_cur, tx_tdata;
-    int tx_w_next;
+    bool tx_load;
   };
 
   static bool known(uint8_t t) {
@@ -297,30 +330,28 @@ class LinkProto {
     c.is_esc = in.rx_valid && !c.is_flag && !esc_q_ && in.rx_data == 0x7D;
     c.dv = in.rx_valid && !c.is_flag && !c.is_esc && !hunt_q_;
     c.d = esc_q_ ? static_cast<uint8_t>(in.rx_data ^ 0x20) : in.rx_data;
-    c.p = static_cast<uint16_t>((idx_q_ - 8) & 0xFFF);
-    c.in_pay = idx_q_ >= 8 && c.p < len_q_;
-    c.overlong = idx_q_ >= 8 && c.p >= ((len_q_ + 4) & 0xFFF);
-    const uint16_t p = c.p;
+    c.in_pay = pd_.pay;
+    c.overlong = pd_.over;
     const uint8_t d = c.d;
-    c.wbyte = c.dv && c.in_pay && is_seg() && ((p >= 4 && p < 8) || (p >= 12 && p < kRecBytes - 4));
+    c.wbyte = c.dv && c.in_pay && is_seg() && (pd_.k || pd_.reg);
     c.asm_d = ((uint64_t{d} << (ChunkWidth - 8)) | asm_q_) & chunk_mask();
     if (ChunkWidth > 32) {
-      c.wdone = wb_q_ == kChunkB - 1 || p == 7;
-      c.wword = p == 7 ? (c.asm_d >> (ChunkWidth - 32)) & 0xFFFFFFFFull : c.asm_d;
+      c.wdone = wb_q_ == kChunkB - 1 || pd_.p7;
+      c.wword = pd_.p7 ? (c.asm_d >> (ChunkWidth - 32)) & 0xFFFFFFFFull : c.asm_d;
     } else {
       c.wdone = wb_q_ == kChunkB - 1;
       c.wword = c.asm_d;
     }
-    const uint8_t seq_byte = static_cast<uint8_t>(seq_q_ >> (8 * (p & 3)));
+    const uint8_t seq_byte = static_cast<uint8_t>(seq_q_ >> (8 * (idx_q_ & 3)));
     c.cbad_byte = false;
     if (is_seg()) {
-      if (p == 0) c.cbad_byte = d != 1;
-      else if (p < 4) c.cbad_byte = d != 0;
-      else if (p >= 8 && p < 12) c.cbad_byte = d != seq_byte;
+      if (pd_.p0) c.cbad_byte = d != 1;
+      else if (pd_.p13) c.cbad_byte = d != 0;
+      else if (pd_.pseq) c.cbad_byte = d != seq_byte;
     } else if (is_cfg()) {
-      if (p >= 8 && p < 8 + Axes) c.cbad_byte = d > 63;
-      else if (p == 20) c.cbad_byte = d > 1;
-      else if (p > 20) c.cbad_byte = d != 0;
+      if (pd_.cshift) c.cbad_byte = d > 63;
+      else if (pd_.cen) c.cbad_byte = d > 1;
+      else if (pd_.cres) c.cbad_byte = d != 0;
     }
 
     // verdict
@@ -378,12 +409,12 @@ class LinkProto {
     }
 
     // answer side
-    c.tx_hs = tx_state_q_ != kSIdle && in.tx_tready;
+    c.tx_hs = tx_state_q_ != kSIdle && !tx_crcld_q_ && in.tx_tready;
     c.tx_cur = static_cast<uint8_t>(tx_word_q_ >> (8 * (tx_idx_q_ & 3)));
     const bool need_esc = c.tx_cur == 0x7E || c.tx_cur == 0x7D;
     c.tx_adv = c.tx_hs && tx_state_q_ == kSBody && (tx_esc_q_ || !need_esc);
     c.tx_first = c.tx_hs && tx_state_q_ == kSOpen;
-    c.tx_w_next = c.tx_first ? 0 : ((tx_idx_q_ >> 2) + 1) & 63;
+    c.tx_load = c.tx_first || (c.tx_adv && (tx_idx_q_ & 3) == 3);
     c.tx_last_byte = tx_idx_q_ == (tx_stat_q_ ? 4 * kCrcWordS + 3 : 4 * kCrcWordA + 3);
     c.tx_tdata = tx_state_q_ == kSBody ? (tx_esc_q_ ? static_cast<uint8_t>(c.tx_cur ^ 0x20)
                                                     : (need_esc ? uint8_t{0x7D} : c.tx_cur))
@@ -391,12 +422,11 @@ class LinkProto {
     return c;
   }
 
-  uint32_t next_word(const In& in, int w, uint32_t tx_crc_d) const {
+  uint32_t next_word(const In& in, int w) const {
     if (w == 0)
       return tx_stat_q_ ? (uint32_t(kStatLen) << 16) | kStatus
                         : (4u << 16) | (tx_code_q_ == 0 ? kAck : kNak);
     if (w == 1) return next_seq_q_;
-    if (w == (tx_stat_q_ ? kCrcWordS : kCrcWordA)) return ~tx_crc_d;
     if (!tx_stat_q_)
       return tx_code_q_ == 0 ? uint32_t{in.fifo_credits} : (uint32_t{in.fifo_credits} << 16) | tx_code_q_;
     switch (w) {
@@ -444,10 +474,14 @@ class LinkProto {
     stat_pend_q_ = false;
     tick_d1_q_ = tick_d2_q_ = false;
     tx_state_q_ = kSIdle;
+    tx_crcld_q_ = false;
+    v_ = Dec{};
   }
 
   // receive
   bool hunt_q_ = true, esc_q_ = false, bad_q_ = false, cbad_q_ = false, kz_q_ = false, wen_q_ = false;
+  Position pd_ = {};
+  Dec v_ = {};  // the registered verdict (the RTL's v_*_q; only its verdict fields are read)
   bool seq_eq_q_ = false, behind_q_ = false, len_ok_q_ = false, crc_ok_q_ = false, cbad_end_q_ = false;
   uint16_t idx_q_ = 0, len_q_ = 0;
   uint8_t type_q_ = 0;
@@ -472,6 +506,8 @@ class LinkProto {
   int tx_state_q_ = kSIdle;
   bool tx_stat_q_ = false, tx_esc_q_ = false;
   uint8_t tx_code_q_ = 0, tx_idx_q_ = 0;
+  int tx_w_q_ = 0;
+  bool tx_crcld_q_ = false;
   uint32_t tx_crc_q_ = 0, tx_word_q_ = 0;
   uint64_t snap_q_[Axes] = {};
 };

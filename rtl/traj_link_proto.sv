@@ -126,12 +126,32 @@ module traj_link_proto #(
   assign dv      = rx_valid_i && !is_flag && !is_esc && !hunt_q;
   assign d       = esc_q ? (rx_data_i ^ 8'h20) : rx_data_i;
 
-  logic [11:0] p;         // payload offset of this byte (idx - 8)
+  // Decodes of the position in the body, registered (timing): a byte at
+  // cycle t sees the position after every earlier byte, since bytes come at
+  // most every other cycle. p = idx - 8 is the payload offset.
+  logic [11:0] p;
   logic        in_pay;    // a payload byte
   logic        overlong;  // past the CRC
+  logic        pd_pay_q, pd_over_q, pd_k_q, pd_reg_q, pd_p0_q, pd_p13_q, pd_pseq_q;
+  logic        pd_ctick_q, pd_cshift_q, pd_cpulse_q, pd_csetup_q, pd_cen_q, pd_cres_q;
   assign p        = idx_q - 12'd8;
-  assign in_pay   = (idx_q >= 12'd8) && (p < len_q);
-  assign overlong = (idx_q >= 12'd8) && (p >= len_q + 12'd4);
+  assign in_pay   = pd_pay_q;
+  assign overlong = pd_over_q;
+  always_ff @(posedge clk_i) begin
+    pd_pay_q    <= (idx_q >= 12'd8) && (p < len_q);
+    pd_over_q   <= (idx_q >= 12'd8) && (p >= len_q + 12'd4);
+    pd_k_q      <= (p >= 12'd4) && (p < 12'd8);
+    pd_reg_q    <= (p >= 12'd12) && (p < 12'(RecBytes - 4));
+    pd_p0_q     <= (p == 12'd0);
+    pd_p13_q    <= (p >= 12'd1) && (p < 12'd4);
+    pd_pseq_q   <= (p >= 12'd8) && (p < 12'd12);
+    pd_ctick_q  <= (p < 12'd4);
+    pd_cshift_q <= (p >= 12'd8) && (p < 12'(8 + Axes));
+    pd_cpulse_q <= (p == 12'd16) || (p == 12'd17);
+    pd_csetup_q <= (p == 12'd18) || (p == 12'd19);
+    pd_cen_q    <= (p == 12'd20);
+    pd_cres_q   <= (p > 12'd20) && (p < 12'd24);
+  end
 
   logic known;
   always_comb begin
@@ -148,12 +168,14 @@ module traj_link_proto #(
   // SEGMENT payload bytes that carry engine words: K and the registers.
   logic wbyte, wdone;
   logic [ChunkWidth-1:0] asm_d, wword;
-  assign wbyte = dv && in_pay && is_seg && ((p >= 12'd4 && p < 12'd8) || (p >= 12'd12 && p < 12'(RecBytes - 4)));
+  assign wbyte = dv && in_pay && is_seg && (pd_k_q || pd_reg_q);
   assign asm_d = {d, asm_q};
   if (ChunkWidth > 32) begin : g_khalf
     // K is half an engine word: the header word is K, zero-extended.
-    assign wdone = (32'(wb_q) == ChunkB - 1) || (p == 12'd7);
-    assign wword = (p == 12'd7) ? {{(ChunkWidth-32){1'b0}}, asm_d[ChunkWidth-1 -: 32]} : asm_d;
+    logic pd_p7_q;  // the last byte of K comes next (registered, as the other decodes)
+    always_ff @(posedge clk_i) pd_p7_q <= (p == 12'd7);
+    assign wdone = (32'(wb_q) == ChunkB - 1) || pd_p7_q;
+    assign wword = pd_p7_q ? {{(ChunkWidth-32){1'b0}}, asm_d[ChunkWidth-1 -: 32]} : asm_d;
   end else begin : g_kwhole
     assign wdone = (32'(wb_q) == ChunkB - 1);
     assign wword = asm_d;
@@ -162,17 +184,17 @@ module traj_link_proto #(
   // content check of one payload byte
   logic cbad_byte;
   logic [7:0] seq_byte;
-  assign seq_byte = seq_q[8*p[1:0] +: 8];
+  assign seq_byte = seq_q[8*idx_q[1:0] +: 8];  // byte p - 8 of seq (p[1:0] == idx[1:0])
   always_comb begin
     cbad_byte = 1'b0;
     if (is_seg) begin
-      if (p == 12'd0) cbad_byte = (d != 8'd1);
-      else if (p < 12'd4) cbad_byte = (d != 8'd0);
-      else if (p >= 12'd8 && p < 12'd12) cbad_byte = (d != seq_byte);
+      if (pd_p0_q) cbad_byte = (d != 8'd1);
+      else if (pd_p13_q) cbad_byte = (d != 8'd0);
+      else if (pd_pseq_q) cbad_byte = (d != seq_byte);
     end else if (is_cfg) begin
-      if (p >= 12'd8 && p < 12'(8 + Axes)) cbad_byte = (d > 8'd63);
-      else if (p == 12'd20) cbad_byte = (d > 8'd1);
-      else if (p > 12'd20) cbad_byte = (d != 8'd0);
+      if (pd_cshift_q) cbad_byte = (d > 8'd63);
+      else if (pd_cen_q) cbad_byte = (d > 8'd1);
+      else if (pd_cres_q) cbad_byte = (d != 8'd0);
     end
   end
 
@@ -184,16 +206,16 @@ module traj_link_proto #(
 
   always_ff @(posedge clk_i) begin
     if (dv && in_pay && is_cfg) begin
-      if (p < 12'd4) sh_tick_q <= {d, sh_tick_q[31:8]};
-      else if (p < 12'd8) sh_stat_q <= {d, sh_stat_q[31:8]};
-      else if (p == 12'd16 || p == 12'd17) sh_pulse_q <= {d, sh_pulse_q[15:8]};
-      else if (p == 12'd18 || p == 12'd19) sh_setup_q <= {d, sh_setup_q[15:8]};
-      else if (p == 12'd20) sh_en_q <= d[0];
+      if (pd_ctick_q) sh_tick_q <= {d, sh_tick_q[31:8]};
+      else if (pd_k_q) sh_stat_q <= {d, sh_stat_q[31:8]};
+      else if (pd_cpulse_q) sh_pulse_q <= {d, sh_pulse_q[15:8]};
+      else if (pd_csetup_q) sh_setup_q <= {d, sh_setup_q[15:8]};
+      else if (pd_cen_q) sh_en_q <= d[0];
     end
   end
   for (genvar a = 0; a < Axes; a++) begin : g_sh_shift
     always_ff @(posedge clk_i) begin
-      if (dv && in_pay && is_cfg && p == 12'(8 + a)) sh_shift_q[a*6 +: 6] <= d[5:0];
+      if (dv && in_pay && is_cfg && pd_cshift_q && idx_q[2:0] == 3'(a)) sh_shift_q[a*6 +: 6] <= d[5:0];
     end
   end
 
@@ -254,6 +276,26 @@ module traj_link_proto #(
     end
   end
 
+  // The verdict acts one cycle after the flag (timing), from registers: the
+  // body's registers it reads (seq, the CONFIG shadow) hold, since the next
+  // byte comes two cycles after the flag at the earliest.
+  logic       v_answer_q, v_store_q, v_want_stat_q, v_ooo_q, v_bad_q, v_fend_q;
+  logic       v_reset_q, v_config_q, v_start_q, v_stop_q, v_resume_q, v_end_q;
+  logic [2:0] v_code_q;
+  always_ff @(posedge clk_i) begin
+    if (!rst_ni) begin
+      v_answer_q <= 1'b0; v_store_q <= 1'b0; v_want_stat_q <= 1'b0; v_ooo_q <= 1'b0;
+      v_bad_q    <= 1'b0; v_fend_q  <= 1'b0; v_reset_q     <= 1'b0; v_config_q <= 1'b0;
+      v_start_q  <= 1'b0; v_stop_q  <= 1'b0; v_resume_q    <= 1'b0; v_end_q    <= 1'b0;
+      v_code_q   <= '0;
+    end else begin
+      v_answer_q <= answer; v_store_q <= store; v_want_stat_q <= want_stat; v_ooo_q <= ooo;
+      v_bad_q    <= fend && !good; v_fend_q <= fend; v_reset_q <= do_reset; v_config_q <= do_config;
+      v_start_q  <= do_start; v_stop_q <= do_stop; v_resume_q <= do_resume; v_end_q <= do_end;
+      v_code_q   <= code;
+    end
+  end
+
   // -------------------------------------------------------------------
   // Receive state.
   // -------------------------------------------------------------------
@@ -307,7 +349,7 @@ module traj_link_proto #(
           default: ;
         endcase
         if (in_pay && cbad_byte) cbad_q <= 1'b1;
-        if (in_pay && is_seg && p >= 12'd4 && p < 12'd8 && d != 8'd0) kz_q <= 1'b0;
+        if (in_pay && is_seg && pd_k_q && d != 8'd0) kz_q <= 1'b0;
         if (wbyte) begin
           asm_q <= asm_d[ChunkWidth-1:8];
           wb_q  <= wdone ? 4'd0 : wb_q + 1'b1;
@@ -361,15 +403,15 @@ module traj_link_proto #(
       tick_d1_q <= tick_i;
       tick_d2_q <= tick_d1_q;
       // verdicts
-      if (store) next_seq_q <= next_seq_q + 1'b1;
-      if (do_reset) begin
+      if (v_store_q) next_seq_q <= next_seq_q + 1'b1;
+      if (v_reset_q) begin
         next_seq_q <= seq_q;
         halt_q     <= 1'b0;
         stop_q     <= 1'b0;
         end_q      <= 1'b0;
         ended_q    <= 1'b0;
       end
-      if (do_config) begin
+      if (v_config_q) begin
         cfg_tick_q  <= sh_tick_q;
         cfg_stat_q  <= sh_stat_q;
         cfg_shift_q <= sh_shift_q;
@@ -377,17 +419,17 @@ module traj_link_proto #(
         cfg_setup_q <= sh_setup_q;
         cfg_en_q    <= sh_en_q;
       end
-      if (do_start && !halt_q) begin
+      if (v_start_q && !halt_q) begin
         playing_q <= 1'b1;
         stop_q    <= 1'b0;
         ended_q   <= 1'b0;
       end
-      if (do_stop) stop_q <= playing_q;
-      if (do_resume && halt_q) begin
+      if (v_stop_q) stop_q <= playing_q;
+      if (v_resume_q && halt_q) begin
         halt_q    <= 1'b0;
         playing_q <= 1'b1;
       end
-      if (do_end) end_q <= 1'b1;
+      if (v_end_q) end_q <= 1'b1;
       // playback: an engine tick found no segment
       if (underrun_i && playing_q) begin
         playing_q <= 1'b0;
@@ -404,16 +446,16 @@ module traj_link_proto #(
       // counters
       if (seg_start_i) n_played_q <= n_played_q + 1'b1;
       if (tick_i && playing_q && !halt_q) n_ticks_q <= n_ticks_q + 1'b1;
-      if (fend && !good) n_bad_q <= n_bad_q + 1'b1;
-      if (ooo) n_ooo_q <= n_ooo_q + 1'b1;
+      if (v_bad_q) n_bad_q <= n_bad_q + 1'b1;
+      if (v_ooo_q) n_ooo_q <= n_ooo_q + 1'b1;
       if (rx_valid_i) n_bytes_q <= n_bytes_q + 1'b1;
       // status period in ticks
-      if (do_config) stat_cnt_q <= sh_stat_q - 1'b1;
+      if (v_config_q) stat_cnt_q <= sh_stat_q - 1'b1;
       else if (tick_i && cfg_stat_q != '0) stat_cnt_q <= stat_due ? cfg_stat_q - 1'b1 : stat_cnt_q - 1'b1;
       // answers
-      ans_pend_q  <= answer || (ans_pend_q && !tx_take_ans);
-      if (answer) ans_code_q <= code;
-      stat_pend_q <= want_stat || stat_due || (stat_pend_q && !tx_take_stat);
+      ans_pend_q  <= v_answer_q || (ans_pend_q && !tx_take_ans);
+      if (v_answer_q) ans_code_q <= v_code_q;
+      stat_pend_q <= v_want_stat_q || stat_due || (stat_pend_q && !tx_take_stat);
     end
   end
 
@@ -429,20 +471,23 @@ module traj_link_proto #(
   logic [31:0] tx_crc_q, tx_word_q;
   logic [Axes*OutWidth-1:0] snap_q;
 
-  logic       tx_hs, tx_first, tx_need_esc, tx_adv, tx_last_byte;
+  logic [5:0]  tx_w_q;      // the body word loaded next
+  logic        tx_crcld_q;  // the CRC word is loaded this cycle (from tx_crc_q, off the byte path)
+  logic       tx_hs, tx_first, tx_need_esc, tx_adv, tx_last_byte, tx_load, tx_crc_next;
   logic [7:0] tx_cur;
-  logic [5:0] tx_w_next;
   logic [31:0] tx_crc_d, word_next;
 
   assign tx_take_ans  = (tx_state_q == SIdle) && ans_pend_q;
   assign tx_take_stat = (tx_state_q == SIdle) && !ans_pend_q && stat_pend_q;
-  assign tx_hs        = (tx_state_q != SIdle) && tx_tready_i;
+  assign tx_hs        = tx_tvalid_o && tx_tready_i;
   assign tx_cur       = tx_word_q[8*tx_idx_q[1:0] +: 8];
   assign tx_need_esc  = (tx_cur == 8'h7E) || (tx_cur == 8'h7D);
   assign tx_adv       = tx_hs && (tx_state_q == SBody) && (tx_esc_q || !tx_need_esc);
   assign tx_crc_d     = crc8(tx_crc_q, tx_cur);
   assign tx_first     = tx_hs && (tx_state_q == SOpen);
-  assign tx_w_next    = tx_first ? 6'd0 : 6'(tx_idx_q[7:2] + 6'd1);
+  // a word is loaded after the opening flag and after each word's last byte
+  assign tx_load      = tx_first || (tx_adv && tx_idx_q[1:0] == 2'd3);
+  assign tx_crc_next  = tx_w_q == (tx_stat_q ? 6'(CrcWordS) : 6'(CrcWordA));
   assign tx_last_byte = tx_idx_q == (tx_stat_q ? 8'(4 * CrcWordS + 3) : 8'(4 * CrcWordA + 3));
 
   // the body word tx_w_next of the frame being sent
@@ -461,17 +506,15 @@ module traj_link_proto #(
   assign flags = {2'b00, fifo_level_i == '0, cfg_en_q, tick_err_i, ended_q, halt_q, playing_q};
   always_comb begin
     word_next = '0;
-    if (tx_w_next == 6'd0) begin
+    if (tx_w_q == 6'd0) begin
       word_next = tx_stat_q ? {16'(StatLen), 8'h00, TStatus}
                             : {16'd4, 8'h00, (tx_code_q == '0) ? TAck : TNak};
-    end else if (tx_w_next == 6'd1) begin
+    end else if (tx_w_q == 6'd1) begin
       word_next = next_seq_q;
-    end else if (tx_w_next == (tx_stat_q ? 6'(CrcWordS) : 6'(CrcWordA))) begin
-      word_next = ~tx_crc_d;
     end else if (!tx_stat_q) begin
       word_next = (tx_code_q == '0) ? {16'h0, fifo_credits_i} : {fifo_credits_i, 8'h00, 5'h0, tx_code_q};
     end else begin
-      case (tx_w_next)
+      case (tx_w_q)
         6'd2:  word_next = {fifo_level_i, flags, 8'(Axes)};
         6'd3:  word_next = n_played_q;
         6'd4:  word_next = n_ticks_q;
@@ -483,8 +526,8 @@ module traj_link_proto #(
         6'd10, 6'd11: word_next = '0;
         default: begin
           for (int a = 0; a < Axes; a++) begin
-            if (tx_w_next == 6'(12 + 2 * a)) word_next = samp_lo[a*32 +: 32];
-            if (tx_w_next == 6'(13 + 2 * a)) word_next = samp_hi[a*32 +: 32];
+            if (tx_w_q == 6'(12 + 2 * a)) word_next = samp_lo[a*32 +: 32];
+            if (tx_w_q == 6'(13 + 2 * a)) word_next = samp_hi[a*32 +: 32];
           end
         end
       endcase
@@ -494,7 +537,9 @@ module traj_link_proto #(
   always_ff @(posedge clk_i) begin
     if (!rst_ni) begin
       tx_state_q <= SIdle;
+      tx_crcld_q <= 1'b0;
     end else begin
+      tx_crcld_q <= tx_load && tx_crc_next;
       case (tx_state_q)
         SIdle:  if (tx_take_ans || tx_take_stat) tx_state_q <= SOpen;
         SOpen:  if (tx_hs) tx_state_q <= SBody;
@@ -512,15 +557,17 @@ module traj_link_proto #(
       tx_idx_q  <= '0;
       tx_esc_q  <= 1'b0;
       tx_crc_q  <= 32'hFFFFFFFF;
+      tx_w_q    <= '0;
       snap_q    <= sample_i;
     end
-    if (tx_first) tx_word_q <= word_next;
+    if (tx_load && !tx_crc_next) tx_word_q <= word_next;
+    if (tx_load) tx_w_q <= tx_w_q + 1'b1;
+    if (tx_crcld_q) tx_word_q <= ~tx_crc_q;
     if (tx_hs && tx_state_q == SBody) begin
       if (tx_adv) begin
         tx_esc_q <= 1'b0;
         tx_crc_q <= tx_crc_d;
         tx_idx_q <= tx_idx_q + 1'b1;
-        if (tx_idx_q[1:0] == 2'd3) tx_word_q <= word_next;
       end else begin
         tx_esc_q <= 1'b1;
       end
@@ -533,16 +580,91 @@ module traj_link_proto #(
       default: tx_tdata_o = 8'h7E;
     endcase
   end
-  assign tx_tvalid_o = (tx_state_q != SIdle);
+  assign tx_tvalid_o = (tx_state_q != SIdle) && !tx_crcld_q;
+
+`ifdef FORMAL
+  // ---------------------------------------------------------------------
+  // Formal properties of the framing (scripts/formal.sh, rtl.formal.*):
+  // a FIFO commit comes only from a good SEGMENT frame whose seq is next_seq
+  // and whose words all went to the FIFO (exactly SegWords of them), and it
+  // advances next_seq by one; next_seq moves only so or by RESET. So the
+  // stored-segment count equals the ACKed records, none is stored twice or
+  // skipped, and nothing of a bad frame is committed (the FIFO rolls back
+  // every other verdict: traj_seg_fifo's properties).
+  // ---------------------------------------------------------------------
+  localparam int SegWords = ((ChunkWidth < 32) ? 32 / ChunkWidth : 1) + RegBytes / ChunkB;
+  logic        f_past_valid = 1'b0;
+  logic [11:0] f_wr;        // FIFO words written since the last flag
+  logic        f_dv_q;      // a body byte was taken in the previous cycle
+  logic        f_rx_q;      // a byte (or flag) came in the previous cycle, or reset
+  logic [31:0] f_seq0;      // next_seq after the last reset or RESET
+  logic [31:0] f_stores;    // commits since then
+  always_ff @(posedge clk_i) begin
+    f_past_valid <= 1'b1;
+    f_dv_q <= dv;
+    f_rx_q <= rx_valid_i || !rst_ni;
+    if (is_flag) f_wr <= '0;
+    else if (fifo_wr_o) f_wr <= f_wr + 1'b1;
+    if (!rst_ni) begin
+      f_seq0   <= '0;
+      f_stores <= '0;
+    end else if (v_reset_q) begin
+      f_seq0   <= seq_q;
+      f_stores <= '0;
+    end else if (fifo_commit_o) begin
+      f_stores <= f_stores + 1'b1;
+    end
+  end
+  // the UART gives at most one byte every other cycle
+  always_comb begin
+    if (!f_past_valid) assume (!rst_ni);
+    if (f_past_valid && f_rx_q) assume (!rx_valid_i);
+  end
+  // words a writing frame has produced after idx_q body bytes
+  int f_p, f_bytes;
+  assign f_p     = 32'(idx_q) - 8;
+  assign f_bytes = ((f_p > 8) ? 4 : (f_p > 4) ? f_p - 4 : 0)
+                 + ((f_p > RecBytes - 4) ? RegBytes : (f_p > 12) ? f_p - 12 : 0);
+  always_ff @(posedge clk_i) begin
+    if (f_past_valid && rst_ni) begin
+      // the registered comparisons describe the body when no byte came last cycle
+      if (!f_rx_q) begin
+        assert (len_ok_q == (idx_q == len_q + 12'd12));
+        assert (cbad_end_q == cbad_end);
+      end
+      // words written so far: all K and register bytes of a writing frame
+      if (!hunt_q && ChunkWidth <= 32) begin
+        assert (f_wr == (wen_q ? 12'(f_bytes >> $clog2(ChunkB)) : 12'd0));
+        assert (32'(wb_q) == (f_bytes & (ChunkB - 1)));
+      end
+      if (wen_q) assert (is_seg && len_q == 12'(RecBytes) && 32'(idx_q) > 8);
+      // a store: a good SEGMENT, seq == next_seq, all its words written
+      if (store) begin
+        assert (fend && good && is_seg && seq_eq_q && wen_q);
+        if (ChunkWidth <= 32) assert (f_wr == 12'(SegWords));
+      end
+      if (fifo_commit_o) assert (!fifo_rollback_o && !fifo_clear_o);
+      if (fifo_commit_o || fifo_rollback_o || fifo_clear_o) assert (!fifo_wr_o && !f_rx_q);
+      // the count of stored records since the last RESET is next_seq's advance
+      assert (next_seq_q == f_seq0 + f_stores);
+    end
+    if (f_past_valid && rst_ni && $past(rst_ni)) begin
+      // the FIFO commits exactly the stores, one cycle later
+      assert (fifo_commit_o == $past(store));
+      if ($past(fifo_commit_o)) assert (next_seq_q == $past(next_seq_q) + 1);
+      else if (!$past(fifo_clear_o)) assert (next_seq_q == $past(next_seq_q));
+    end
+  end
+`endif
 
   // -------------------------------------------------------------------
   // Outputs.
   // -------------------------------------------------------------------
   assign fifo_wr_o       = wbyte && wdone && wen_q;
   assign fifo_wr_data_o  = wword;
-  assign fifo_commit_o   = store;
-  assign fifo_rollback_o = fend && !store;
-  assign fifo_clear_o    = do_reset;
+  assign fifo_commit_o   = v_store_q;
+  assign fifo_rollback_o = v_fend_q && !v_store_q;
+  assign fifo_clear_o    = v_reset_q;
   assign release_o       = playing_q && !halt_q && !stop_q && !tick_i && !tick_d1_q && !tick_d2_q && !underrun_i;
   assign run_o           = playing_q && !halt_q;
   assign tick_period_o   = cfg_tick_q;
