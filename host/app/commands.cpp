@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -63,18 +64,30 @@ void progress(const std::string& stage, double f) {
   if (stage == "done") end_progress();
 }
 
-void write_csv(const std::string& path, const stream::Header& h, const report::Samples& s) {
-  util::AtomicFile f(path);
-  std::ofstream& o = f.out();
-  const double lsb = std::ldexp(1.0, -h.frac_bits);
-  o << "tick,t_s,x_lsb,y_lsb,z_lsb,x,y,z\n";
-  char b[160];
-  for (size_t k = 0; k < s.v.size(); ++k) {
-    std::snprintf(b, sizeof b, "%zu,%.6f,%lld,%lld,%lld,%.10f,%.10f,%.10f\n", k, k * h.period, s.v[k][0], s.v[k][1],
-                  s.v[k][2], s.v[k][0] * lsb, s.v[k][1] * lsb, s.v[k][2] * lsb);
-    o << b;
+// The samples CSV, row by row.
+class CsvWriter {
+ public:
+  CsvWriter(const std::string& path, const stream::Header& h)
+      : file_(path), lsb_(std::ldexp(1.0, -h.frac_bits)), period_(h.period) {
+    file_.out() << "tick,t_s,x_lsb,y_lsb,z_lsb,x,y,z\n";
   }
-  f.commit();
+  void row(uint64_t k, const std::array<long long, 3>& v) {
+    char b[160];
+    std::snprintf(b, sizeof b, "%llu,%.6f,%lld,%lld,%lld,%.10f,%.10f,%.10f\n", static_cast<unsigned long long>(k),
+                  static_cast<double>(k) * period_, v[0], v[1], v[2], v[0] * lsb_, v[1] * lsb_, v[2] * lsb_);
+    file_.out() << b;
+  }
+  void commit() { file_.commit(); }  // not committed: nothing is left under the path
+
+ private:
+  util::AtomicFile file_;
+  double lsb_, period_;
+};
+
+void write_csv(const std::string& path, const stream::Header& h, const report::Samples& s) {
+  CsvWriter w(path, h);
+  for (size_t k = 0; k < s.v.size(); ++k) w.row(k, s.v[k]);
+  w.commit();
 }
 
 // The curves of a path already in memory, as a stream.
@@ -259,26 +272,30 @@ int sim_command(const SimArgs& a) {
                  rd.error.c_str(), rd.records.size());
     return 1;
   }
-  const auto sr = sim::simulate(rd.header, rd.records, a.tick_gap, [](double f) { progress("sim", f); });
+  // the samples go to the CSV as the core emits them (memory bounded whatever K is)
+  CsvWriter csv(a.csv, rd.header);
+  const auto sr = sim::simulate(rd.header, rd.records, a.tick_gap, [](double f) { progress("sim", f); },
+                                [&](uint64_t k, const std::array<long long, 3>& v) { csv.row(k, v); });
   end_progress();
   if (sr.engine == "traj_core") {
-    // version 2: both engines; every sample also against the exact prediction from the records
+    // a BCU format: both engines; every sample also against the exact prediction from the records
     const bool ok = sr.mismatches == 0 && sr.prediction_mismatches == 0 && !sr.tick_err && sr.underruns == 0;
-    if (ok) write_csv(a.csv, rd.header, sr.samples);
-    std::printf("%s: %zu segments (%llu FD, %llu BCU, %llu kind switches), %zu samples, %llu cycles on traj_core "
+    if (ok) csv.commit();
+    std::printf("%s: %zu segments (%llu FD, %llu BCU, %llu kind switches), %llu samples, %llu cycles on traj_core "
                 "(tick every %d), RTL == hls: %s, == host prediction: %s, tick_err %s, underruns %llu -> %s\n",
                 a.input.c_str(), rd.records.size(), static_cast<unsigned long long>(sr.fd_segments),
                 static_cast<unsigned long long>(sr.bcu_segments), static_cast<unsigned long long>(sr.switches),
-                sr.samples.v.size(), static_cast<unsigned long long>(sr.cycles), sr.tick_gap,
-                sr.mismatches ? "NO" : "yes", sr.prediction_mismatches ? "NO" : "yes", sr.tick_err ? "SET" : "clear",
-                static_cast<unsigned long long>(sr.underruns), ok ? a.csv.c_str() : "(no CSV written)");
+                static_cast<unsigned long long>(sr.sample_count), static_cast<unsigned long long>(sr.cycles),
+                sr.tick_gap, sr.mismatches ? "NO" : "yes", sr.prediction_mismatches ? "NO" : "yes",
+                sr.tick_err ? "SET" : "clear", static_cast<unsigned long long>(sr.underruns),
+                ok ? a.csv.c_str() : "(no CSV written)");
     if (!ok) std::fprintf(stderr, "trajcore sim: a check FAILED (see above)\n");
     return ok ? 0 : 1;
   }
-  write_csv(a.csv, rd.header, sr.samples);
-  std::printf("%s: %zu segments, %zu samples, %llu cycles, RTL == hls: %s -> %s\n", a.input.c_str(),
-              rd.records.size(), sr.samples.v.size(), static_cast<unsigned long long>(sr.cycles),
-              sr.mismatches ? "NO" : "yes", a.csv.c_str());
+  csv.commit();
+  std::printf("%s: %zu segments, %llu samples, %llu cycles, RTL == hls: %s -> %s\n", a.input.c_str(),
+              rd.records.size(), static_cast<unsigned long long>(sr.sample_count),
+              static_cast<unsigned long long>(sr.cycles), sr.mismatches ? "NO" : "yes", a.csv.c_str());
   return sr.mismatches ? 1 : 0;
 }
 

@@ -8,7 +8,7 @@
 //          (traj::bcu::MixedChain, bcu/chain.hpp).
 // Both use K = 2^d ticks per arc, d = round(log2(arc length / feed / period)),
 // so the feed is the nominal one to within a factor 2^(+-1/2) (printed).
-// The segments are written as a version-2 segment stream, which is read back
+// The segments are written as a segment stream with a BCU format, read back
 // from the file and simulated (the same path as `trajcore sim`); every sample
 // is checked against the hosts' exact prediction (RTL == hls == host) and
 // against the double-precision Bezier path within the per-sample bound:
@@ -106,7 +106,7 @@ int run_core_demo(const DemoOptions& opt) {
     }
   }
 
-  // The version-2 stream, written atomically, then read back from the file.
+  // The stream (with the BCU format), written atomically, then read back from the file.
   std::vector<stream::Record> recs;
   for (const auto& p : chain.pieces()) {
     stream::Record r;
@@ -183,7 +183,7 @@ int run_core_demo(const DemoOptions& opt) {
   std::printf("  segments      : %zu (%zu BCU, %zu FD), %llu kind switches\n", pieces.size(), nb, nf,
               static_cast<unsigned long long>(sr.switches));
   std::printf("  stream        : %s (version %d, %llu bytes), read back and simulated\n", stream_path.c_str(),
-              rd.header.version(), static_cast<unsigned long long>(std::filesystem::file_size(stream_path)));
+              stream::kVersion, static_cast<unsigned long long>(std::filesystem::file_size(stream_path)));
   std::printf("  ticks         : %llu samples in %llu clock cycles (tick every %d cycles; core minimum %d)\n",
               static_cast<unsigned long long>(n), static_cast<unsigned long long>(sr.cycles), sr.tick_gap, S);
   std::printf("  max error     : %.4f LSB (%.3g um) against the double-precision Bezier path\n", max_err,

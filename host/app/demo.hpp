@@ -24,7 +24,7 @@ struct DemoOptions {
 int run_demo(const DemoOptions& opt);
 // --engine bcu | mixed (core_demo.cpp): the circle as BCU segments (K = 2^d
 // ticks per arc), or arcs alternating FD / BCU / FD, chained exactly
-// (traj::bcu::MixedChain), written as a version-2 segment stream, read back
+// (traj::bcu::MixedChain), written as a segment stream with a BCU format, read back
 // and run through the Verilated traj_core.
 int run_core_demo(const DemoOptions& opt);
 

@@ -79,7 +79,7 @@ int main(int argc, char** argv) {
   d->add_option("--engine", demo.engine,
                 "fd: forward differences on traj_fd_engine (default); bcu: every arc one BCU segment of K = 2^d "
                 "ticks; mixed: arcs FD, BCU, FD chained exactly; bcu and mixed run on traj_core (both engines) "
-                "through a version-2 segment stream")
+                "through a segment stream with a BCU format")
       ->check(CLI::IsMember({"fd", "bcu", "mixed"}))
       ->capture_default_str();
   d->add_option("--stream", demo.stream, "bcu|mixed: the segment stream to write (default out/demo_<engine>.trj)");
@@ -87,7 +87,7 @@ int main(int argc, char** argv) {
   traj::app::SplineOptions spl;
   auto* sp = app.add_subcommand(
       "spline", "[BCU]'s C1 interpolating cubic Bezier spline through points (JSON {\"points\": [[x, y(, z)], "
-                "...]}), compiled to BCU segments for traj_core: a version-2 segment stream for `trajcore sim`");
+                "...]}), compiled to BCU segments for traj_core: a segment stream with a BCU format for `trajcore sim`");
   sp->add_option("points", spl.input, "points JSON file")->required();
   sp->add_option("-o,--output", spl.output, "segment stream to write")->capture_default_str();
   sp->add_option("--lambda", spl.lambda, "tension lambda (eq. 9), in (0, 1]")->capture_default_str();
@@ -134,7 +134,7 @@ int main(int argc, char** argv) {
   sm->add_option("stream", sa.input, "segment stream (.trj)")->required();
   sm->add_option("--csv", sa.csv, "samples CSV to write")->capture_default_str();
   sm->add_option("--tick-gap", sa.tick_gap, "clock cycles between ticks (0: shortest safe)");
-  sm->footer("A version-1 stream (FD segments) runs on traj_fd_engine, a version-2 stream (FD and BCU segments, "
+  sm->footer("A stream without a BCU format (FD segments) runs on traj_fd_engine, one with a BCU format (FD and BCU segments, "
              "from `trajcore demo --engine bcu|mixed` or `trajcore spline`) on traj_core.");
 
   auto* rn = app.add_subcommand("run", "Plan, compile, simulate on the Verilated core, and report (text + SVG)");

@@ -2,7 +2,7 @@
 // trajcore spline: [BCU]'s C1 interpolating cubic Bezier spline (eq. 9,
 // host/bcu/bezier_spline.hpp) through the points of a JSON file, compiled for
 // traj_core as BCU segments (or, --engine mixed, odd segments as FD), chained
-// exactly (traj::bcu::MixedChain), written as a version-2 segment stream.
+// exactly (traj::bcu::MixedChain), written as a segment stream with a BCU format.
 //
 // Points file: {"points": [[x, y], ...]} or [[x, y, z], ...] (2 or 3 axes, all
 // rows alike; z = 0 for 2 axes), N >= 2 points P_1..P_N to pass through. The

@@ -2,7 +2,6 @@
 #include "sim/sim.hpp"
 
 #include <chrono>
-#include <deque>
 #include <stdexcept>
 #include <string>
 
@@ -66,7 +65,7 @@ struct GapAfterFirstSegment {
 // cycles first); on_sample(sample, seg_done) for every real sample.
 template <class B, class Ticks, class OnSample>
 void clock_stream(const Feed& f, Ticks ticks, SimResult& res, const std::function<void(double)>& progress,
-                  OnSample on_sample) {
+                  const SampleSink& sink, OnSample on_sample) {
   using M = builds::ModelOf<B>;
   static_assert(B::Axes == 3, "report::Samples holds three axes");
   Lockstep<typename B::Rtl, M> ls;
@@ -76,10 +75,11 @@ void clock_stream(const Feed& f, Ticks ticks, SimResult& res, const std::functio
   ls.step(in);
   ls.step(in);
   in.rst_n = true;
-  res.samples.v.reserve(f.ticks);
+  if (!sink) res.samples.v.reserve(f.ticks);
   const uint64_t limit = (f.ticks + 4) * static_cast<uint64_t>(res.tick_gap) * 4 + f.words.size() * 4 + 10000;
   size_t wi = 0;
-  while (res.samples.v.size() < f.ticks) {
+  uint64_t& n = res.sample_count;
+  while (n < f.ticks) {
     if (ls.cycles() > limit) throw std::runtime_error("simulation stalled");
     in.tvalid = wi < f.words.size();
     in.tdata = in.tvalid ? f.words[wi] : 0;
@@ -94,8 +94,12 @@ void clock_stream(const Feed& f, Ticks ticks, SimResult& res, const std::functio
       std::array<long long, 3> s{};
       for (int a = 0; a < B::Axes; ++a) s[a] = static_cast<long long>(sext(o.sample[a], M::kOutWidth));
       on_sample(s, o.seg_done);
-      res.samples.v.push_back(s);
-      if (progress && (res.samples.v.size() % 100000 == 0)) progress(double(res.samples.v.size()) / f.ticks);
+      if (sink)
+        sink(n, s);
+      else
+        res.samples.v.push_back(s);
+      ++n;
+      if (progress && (n % 100000 == 0)) progress(double(n) / f.ticks);
     }
   }
   res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -109,17 +113,61 @@ struct Expect {
   bool done;
 };
 
-// A version-2 stream's words (kind on tuser) and the exact prediction of every
-// sample from the records themselves (FD: the register recurrence in exact
-// integers, modulo 2^Width as the engine wraps; BCU: the closed form of
-// traj::bcu::predict_sample).
+// The exact prediction of every sample from the records themselves (FD: the
+// register recurrence in exact integers, modulo 2^Width as the engine wraps;
+// BCU: the closed form of traj::bcu::predict_sample), one tick at a time: it
+// holds one segment's registers, whatever its K.
 template <class B>
-Feed core_feed(const stream::Header& h, const std::vector<stream::Record>& recs, std::deque<Expect>& expect,
-               SimResult& res) {
+class Prediction {
+ public:
+  Prediction(const std::vector<stream::Record>& recs, const bcu::Format& bf)
+      : recs_(recs), bf_(bf), mod_(mpz_class(1) << B::Width) {
+    load();
+  }
+  Expect next() {
+    if (s_ >= recs_.size()) throw std::runtime_error("the core emitted more samples than the stream holds");
+    const auto& r = recs_[s_];
+    Expect e{};
+    for (int a = 0; a < B::Axes; ++a) e.v[a] = r.is_bcu() ? bcu_sample(r, a) : fd_sample(a);
+    e.done = k_ + 1 == r.ticks;
+    if (++k_ == r.ticks) {
+      ++s_;
+      k_ = 0;
+      load();
+    }
+    return e;
+  }
+
+ private:
+  void load() {
+    if (s_ < recs_.size() && !recs_[s_].is_bcu()) reg_ = recs_[s_].regs;
+  }
+  long long bcu_sample(const stream::Record& r, int a) const {
+    return bcu::predict_sample(r.regs[a], r.depth(), static_cast<int>(k_), bf_.guard_bits);
+  }
+  long long fd_sample(int a) {  // the engine's r0 (W bits two's complement) >> G, then one step
+    auto& x = reg_[a];
+    v_ = x[0] % mod_;
+    if (v_ < 0) v_ += mod_;
+    if (v_ >= mod_ / 2) v_ -= mod_;
+    mpz_fdiv_q_2exp(v_.get_mpz_t(), v_.get_mpz_t(), B::GuardBits);
+    for (int i = 0; i < B::Degree; ++i) x[i] += x[i + 1];
+    return v_.get_si();
+  }
+  const std::vector<stream::Record>& recs_;
+  bcu::Format bf_;
+  mpz_class mod_, v_;
+  std::vector<std::vector<mpz_class>> reg_;
+  size_t s_ = 0;
+  uint32_t k_ = 0;
+};
+
+// The words of a stream with a BCU format (kind on tuser).
+template <class B>
+Feed core_feed(const stream::Header& h, const std::vector<stream::Record>& recs, SimResult& res) {
   Feed f;
   const fd::Compiler fdc(h.format());
   const bcu::Format bf = h.bcu_format();
-  const mpz_class mod = mpz_class(1) << B::Width;
   auto add = [&](const std::vector<uint64_t>& w, bool bcu) {
     f.words.insert(f.words.end(), w.begin(), w.end());
     f.bcu.insert(f.bcu.end(), w.size(), bcu);
@@ -127,36 +175,13 @@ Feed core_feed(const stream::Header& h, const std::vector<stream::Record>& recs,
   for (size_t s = 0; s < recs.size(); ++s) {
     const auto& r = recs[s];
     if (r.is_bcu()) {
-      const int d = r.depth();
-      add(bcu::stream_words(r.regs, d, bf), true);
-      for (uint32_t j = 0; j < r.ticks; ++j) {
-        Expect e{};
-        for (int a = 0; a < B::Axes; ++a) e.v[a] = bcu::predict_sample(r.regs[a], d, static_cast<int>(j), bf.guard_bits);
-        e.done = j + 1 == r.ticks;
-        expect.push_back(e);
-      }
+      add(bcu::stream_words(r.regs, r.depth(), bf), true);
       ++res.bcu_segments;
     } else {
       fd::Compiled c;
       c.ticks = r.ticks;
       c.regs = r.regs;
       add(fdc.words(c), false);
-      std::vector<std::vector<mpz_class>> reg = r.regs;
-      const size_t e0 = expect.size();
-      expect.resize(e0 + r.ticks);
-      for (int a = 0; a < B::Axes; ++a) {
-        auto& x = reg[a];
-        mpz_class v;
-        for (uint32_t k = 0; k < r.ticks; ++k) {
-          v = x[0] % mod;  // the engine's r0, W bits two's complement
-          if (v < 0) v += mod;
-          if (v >= mod / 2) v -= mod;
-          mpz_fdiv_q_2exp(v.get_mpz_t(), v.get_mpz_t(), B::GuardBits);
-          expect[e0 + k].v[a] = v.get_si();
-          expect[e0 + k].done = k + 1 == r.ticks;
-          for (int i = 0; i < B::Degree; ++i) x[i] += x[i + 1];
-        }
-      }
       ++res.fd_segments;
     }
     if (s > 0 && r.kind != recs[s - 1].kind) ++res.switches;
@@ -169,7 +194,7 @@ Feed core_feed(const stream::Header& h, const std::vector<stream::Record>& recs,
 
 template <class B>
 SimResult run(const stream::Header& h, const std::vector<stream::Record>& recs, int tick_gap,
-              const std::function<void(double)>& progress) {
+              const std::function<void(double)>& progress, const SampleSink& sink) {
   using M = builds::ModelOf<B>;
   using U = typename B::Unit;
   constexpr int kMin = U::template kMinGap<M>;
@@ -182,17 +207,16 @@ SimResult run(const stream::Header& h, const std::vector<stream::Record>& recs, 
   res.tick_gap = tick_gap;
   if constexpr (builds::kIsCore<B>) {
 #if TRAJ_APP_CORE
-    std::deque<Expect> expect;
-    const Feed f = core_feed<B>(h, recs, expect, res);
-    clock_stream<B>(f, GapAfterFirstSegment{static_cast<uint64_t>(tick_gap), f.first_len}, res, progress,
+    const Feed f = core_feed<B>(h, recs, res);
+    Prediction<B> expect(recs, h.bcu_format());
+    clock_stream<B>(f, GapAfterFirstSegment{static_cast<uint64_t>(tick_gap), f.first_len}, res, progress, sink,
                     [&](const std::array<long long, 3>& s, bool done) {
-                      const Expect& e = expect.front();
+                      const Expect e = expect.next();
                       if (s != e.v || done != e.done) ++res.prediction_mismatches;
-                      expect.pop_front();
                     });
 #endif
   } else {
-    clock_stream<B>(fd_feed(h, recs), EveryGap{static_cast<uint64_t>(tick_gap)}, res, progress,
+    clock_stream<B>(fd_feed(h, recs), EveryGap{static_cast<uint64_t>(tick_gap)}, res, progress, sink,
                     [](const std::array<long long, 3>&, bool) {});
   }
   return res;
@@ -263,14 +287,14 @@ std::string describe_carried() {
 
 template <class... B>
 SimResult dispatch(builds::List<B...>, const stream::Header& h, const std::vector<stream::Record>& recs,
-                   int tick_gap, const std::function<void(double)>& progress) {
+                   int tick_gap, const std::function<void(double)>& progress, const SampleSink& sink) {
   SimResult res;
   bool found = false;
   auto try_one = [&](auto tag) {
     using One = typename decltype(tag)::type;
     if (found || !matches(describe<One>(), h)) return;
     found = true;
-    res = run<One>(h, recs, tick_gap, progress);
+    res = run<One>(h, recs, tick_gap, progress, sink);
   };
   (try_one(std::common_type<B>{}), ...);
   if (!found)
@@ -317,14 +341,14 @@ bool has_core() {
 }
 
 SimResult simulate(const stream::Header& h, const std::vector<stream::Record>& recs, int tick_gap,
-                   const std::function<void(double)>& progress) {
+                   const std::function<void(double)>& progress, const SampleSink& sink) {
   if (!h.has_bcu())
     for (const auto& r : recs)
       if (r.is_bcu()) throw std::runtime_error("BCU segment in a stream without a BCU format");
   if (h.has_bcu() && !has_core())
-    throw std::runtime_error("this stream carries a BCU format (version 2) and this trajcore was built without "
+    throw std::runtime_error("this stream carries a BCU format and this trajcore was built without "
                              "host/bcu (TRAJ_SKIP): no traj_core to run it on");
-  return dispatch(builds::Carried{}, h, recs, tick_gap, progress);
+  return dispatch(builds::Carried{}, h, recs, tick_gap, progress, sink);
 }
 
 }  // namespace traj::sim

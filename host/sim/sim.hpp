@@ -1,12 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 // trajcore: run a segment stream through a Verilated engine, with its hls
 // model beside it on every cycle (the lockstep driver, lockstep.hpp).
-// Version-1 streams (forward-difference segments only) run on a
-// traj_fd_engine build, version-2 streams (the header carries a BCU format;
-// FD and BCU records in any order) on a traj_core build (both engines behind
-// one word stream, tuser = kind). The builds the tool carries are listed once,
+// Streams without a BCU format (forward-difference segments only) run on a
+// traj_fd_engine build, streams whose header carries a BCU format (FD and BCU
+// records in any order) on a traj_core build (both engines behind one word
+// stream, tuser = kind). The builds the tool carries are listed once,
 // in host/sim/CMakeLists.txt (TRAJ_SIM_BUILDS); carried() describes them.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -20,21 +21,26 @@
 namespace traj::sim {
 
 struct SimResult {
-  report::Samples samples;  // one per emitted sample (ticks in order)
+  report::Samples samples;  // one per emitted sample (ticks in order); empty when a sink took them
+  uint64_t sample_count = 0;
   uint64_t cycles = 0, underruns = 0, mismatches = 0;
   bool tick_err = false;
   double seconds = 0;
   std::string engine = "traj_fd_engine";  // the unit of the build run
   int tick_gap = 0;                       // clock cycles between ticks used
-  // traj_core runs (version-2 streams) only:
+  // traj_core runs (streams with a BCU format) only:
   uint64_t prediction_mismatches = 0;  // samples (and seg_done) != the exact prediction from the records
   uint64_t switches = 0;               // kind switches between consecutive segments
   uint64_t fd_segments = 0, bcu_segments = 0;
 };
 
+// Receives every sample in tick order instead of SimResult::samples: the
+// simulation then holds nothing per tick (memory bounded whatever K is).
+using SampleSink = std::function<void(uint64_t tick, const std::array<long long, 3>& sample)>;
+
 // Throws std::runtime_error if no carried build matches the stream's format.
 SimResult simulate(const stream::Header& h, const std::vector<stream::Record>& recs, int tick_gap = 0,
-                   const std::function<void(double)>& progress = {});
+                   const std::function<void(double)>& progress = {}, const SampleSink& sink = {});
 
 // One engine build the tool carries.
 struct Build {

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "stream/segment_stream.hpp"
 
+#include "fd/fd_compiler.hpp"
 #include "util/tick_period.hpp"
 
 #include <zlib.h>
@@ -8,11 +9,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <fstream>
-#include <iterator>
+#include <sstream>
 
 namespace traj::stream {
+
+static_assert(kMaxTicks == fd::Format{}.max_ticks, "the stream's K bound is the FD compiler's longest segment");
+
 namespace {
 
 uint32_t crc(const uint8_t* p, size_t n) {
@@ -79,15 +82,20 @@ std::string at(const std::string& name, size_t off) { return name + ": byte " + 
 fd::Format Header::format() const { return {axes, degree, width, chunk_width, guard_bits, frac_bits}; }
 
 bcu::Format Header::bcu_format() const {
-  if (!has_bcu()) throw StreamError("the stream header has no BCU format (version 1)");
+  if (!has_bcu()) throw StreamError("the stream header has no BCU format (CtrlWidth 0)");
   return {axes, chunk_width, bcu_ctrl_width, bcu_guard_bits, bcu_out_width, bcu_max_depth, frac_bits};
 }
 
 int Record::depth() const { return is_bcu() ? log2_exact(ticks) : -1; }
 
 size_t record_size(const Header& h, RecordKind kind) {
-  if (kind == RecordKind::kBcu) return 12 + size_t(h.axes) * 4 * ctrl_bytes(h);
-  return 12 + size_t(h.axes) * (h.degree + 1) * (h.width / 8);
+  if (kind == RecordKind::kBcu) return 16 + size_t(h.axes) * 4 * ctrl_bytes(h);
+  return 16 + size_t(h.axes) * (h.degree + 1) * (h.width / 8);
+}
+
+const std::vector<std::string>& known_units() {
+  static const std::vector<std::string> u = {"mm", "um", "m", "in", "deg", "rad"};
+  return u;
 }
 
 Header Header::from(const fd::Format& f, const bcu::Format& b, double period, const std::string& units) {
@@ -118,7 +126,7 @@ Header Header::from(const fd::Format& f, double period, const std::string& units
 }
 
 namespace {
-// The BCU half of a version-2 header: "" if fine, else what is wrong; `off` is
+// The BCU half of a header with a BCU format: "" if fine, else what is wrong; `off` is
 // the byte offset of the field at fault.
 std::string bcu_header_problem(const Header& h, size_t& off) {
   const bcu::Format f = h.bcu_format();
@@ -143,8 +151,21 @@ std::string bcu_header_problem(const Header& h, size_t& off) {
 }
 }  // namespace
 
+namespace {
+bool is_known_units(const std::string& u) {
+  for (const auto& k : known_units())
+    if (u == k) return true;
+  return false;
+}
+std::string units_list() {
+  std::string s;
+  for (const auto& k : known_units()) s += (s.empty() ? "" : ", ") + k;
+  return s;
+}
+}  // namespace
+
 std::vector<uint8_t> encode_header(const Header& h) {
-  if (h.units.size() > 15) throw StreamError("units '" + h.units + "' longer than 15 characters");
+  if (!is_known_units(h.units)) throw StreamError("units '" + h.units + "' unknown (known: " + units_list() + ")");
   if (const std::string m = util::tick_period_problem(h.period); !m.empty()) throw StreamError(m);
   h.format().validate();
   if (h.has_bcu()) {
@@ -152,10 +173,9 @@ std::vector<uint8_t> encode_header(const Header& h) {
     const std::string p = bcu_header_problem(h, off);
     if (!p.empty()) throw StreamError(p);
   }
-  const int version = h.version();
   std::vector<uint8_t> b{'T', 'R', 'J', 'S'};
-  put(b, version, 2);
-  put(b, header_bytes(version), 2);
+  put(b, kVersion, 2);
+  put(b, kHeaderBytes, 2);
   put(b, h.axes, 1);
   put(b, h.degree, 1);
   put(b, h.width, 2);
@@ -167,30 +187,38 @@ std::vector<uint8_t> encode_header(const Header& h) {
   std::memcpy(&pbits, &h.period, 8);
   put(b, pbits, 8);
   for (int i = 0; i < 16; ++i) b.push_back(i < static_cast<int>(h.units.size()) ? h.units[i] : 0);
-  if (version >= 2) {
-    put(b, h.bcu_ctrl_width, 2);
-    put(b, h.bcu_guard_bits, 2);
-    put(b, h.bcu_max_depth, 2);
-    put(b, h.bcu_out_width, 2);
-    put(b, 0, 8);
-  }
+  put(b, h.bcu_ctrl_width, 2);
+  put(b, h.bcu_guard_bits, 2);
+  put(b, h.bcu_max_depth, 2);
+  put(b, h.bcu_out_width, 2);
+  put(b, 0, 8);
   put(b, crc(b.data(), b.size()), 4);
   return b;
 }
 
-std::vector<uint8_t> encode_record(const Header& h, const Record& r) {
+namespace {
+// type, flags, reserved, K, seq: the first 12 bytes of every record.
+void put_record_head(std::vector<uint8_t>& b, int type, uint32_t ticks, uint32_t seq) {
+  put(b, type, 1);
+  put(b, 0, 1);
+  put(b, 0, 2);
+  put(b, ticks, 4);
+  put(b, seq, 4);
+}
+}  // namespace
+
+namespace {
+std::vector<uint8_t> encode_numbered(const Header& h, const Record& r, uint32_t seq) {
   if (static_cast<int>(r.regs.size()) != h.axes) throw StreamError("segment has the wrong number of axes");
   std::vector<uint8_t> b;
+  b.reserve(record_size(h, r.kind));
   if (r.is_bcu()) {
     if (!h.has_bcu()) throw StreamError("BCU segment in a stream whose header has no BCU format");
     const int d = r.depth();
     if (d < 0 || d > h.bcu_max_depth)
       throw StreamError("BCU segment with K=" + std::to_string(r.ticks) + " ticks: K must be 2^d with d <= MaxDepth " +
                         std::to_string(h.bcu_max_depth));
-    put(b, 2, 1);
-    put(b, 0, 1);
-    put(b, 0, 2);
-    put(b, r.ticks, 4);
+    put_record_head(b, 2, r.ticks, seq);
     for (const auto& ax : r.regs) {
       if (ax.size() != 4) throw StreamError("BCU segment needs 4 control values per axis");
       for (const auto& v : ax) {
@@ -202,10 +230,10 @@ std::vector<uint8_t> encode_record(const Header& h, const Record& r) {
     return b;
   }
   if (r.ticks < 1) throw StreamError("segment with K=0 ticks");
-  put(b, 1, 1);
-  put(b, 0, 1);
-  put(b, 0, 2);
-  put(b, r.ticks, 4);
+  if (r.ticks > kMaxTicks)
+    throw StreamError("segment with K=" + std::to_string(r.ticks) + " ticks, beyond the format's bound 2^20 = " +
+                      std::to_string(kMaxTicks));
+  put_record_head(b, 1, r.ticks, seq);
   for (const auto& ax : r.regs) {
     if (static_cast<int>(ax.size()) != h.degree + 1) throw StreamError("segment has the wrong number of registers");
     for (const auto& v : ax) {
@@ -216,24 +244,93 @@ std::vector<uint8_t> encode_record(const Header& h, const Record& r) {
   put(b, crc(b.data(), b.size()), 4);
   return b;
 }
+}  // namespace
+
+std::vector<uint8_t> encode_record(const Header& h, const Record& r) { return encode_numbered(h, r, r.seq); }
 
 std::vector<uint8_t> encode_end(uint32_t segments, uint64_t total_ticks) {
   std::vector<uint8_t> b;
-  put(b, 0xFF, 1);
-  put(b, 0, 3);
-  put(b, segments, 4);
-  put(b, static_cast<uint32_t>(total_ticks), 4);
+  put_record_head(b, 0xFF, static_cast<uint32_t>(total_ticks), segments);
   put(b, crc(b.data(), b.size()), 4);
   return b;
 }
 
+// ---------------------------------------------------------------------------
+// Continuity
+// ---------------------------------------------------------------------------
+namespace {
+// floor(v 2^e), exact for any sign of e.
+mpz_class shift_floor(const mpz_class& v, int e) {
+  mpz_class r;
+  if (e >= 0)
+    mpz_mul_2exp(r.get_mpz_t(), v.get_mpz_t(), static_cast<mp_bitcnt_t>(e));
+  else
+    mpz_fdiv_q_2exp(r.get_mpz_t(), v.get_mpz_t(), static_cast<mp_bitcnt_t>(-e));
+  return r;
+}
+mpz_class half_of(int g) { return g > 0 ? mpz_class(1) << (g - 1) : mpz_class(0); }
+const char* start_name(RecordKind k) { return k == RecordKind::kBcu ? "c_A" : "r[0]"; }
+}  // namespace
+
+std::string Continuity::check(const Record& r, int& axis) const {
+  if (!have_) return "";
+  const int gf = h_.guard_bits, gb = h_.bcu_guard_bits;
+  for (int a = 0; a < h_.axes; ++a) {
+    const mpz_class& e = end_[a];
+    mpz_class want;
+    if (r.is_bcu())
+      want = kind_ == RecordKind::kBcu ? e : shift_floor(e, gb - gf) - half_of(gb);
+    else
+      want = kind_ == RecordKind::kFd ? e : shift_floor(e, gf - gb) + half_of(gf);
+    if (r.regs[a][0] == want) continue;
+    axis = a;
+    const mpz_class jump = r.regs[a][0] - want;
+    std::ostringstream m;
+    m << "axis " << a << " starts at " << start_name(r.kind) << " = " << r.regs[a][0].get_str()
+      << ", not where the previous segment ends (" << want.get_str() << "): a jump of "
+      << std::ldexp(jump.get_d(), -(r.is_bcu() ? gb : gf)) << " output LSB";
+    return m.str();
+  }
+  return "";
+}
+
+void Continuity::advance(const Record& r) {
+  have_ = true;
+  kind_ = r.kind;
+  end_.resize(h_.axes);
+  if (r.is_bcu()) {
+    for (int a = 0; a < h_.axes; ++a) end_[a] = r.regs[a][3];
+    return;
+  }
+  fd::Compiled c;
+  c.ticks = r.ticks;
+  c.regs = r.regs;
+  for (int a = 0; a < h_.axes; ++a) end_[a] = fd::Compiler::state_at(c, a, r.ticks);
+}
+
+// ---------------------------------------------------------------------------
+// Writers
+// ---------------------------------------------------------------------------
+namespace {
+// The record as the writers number it, refused if it would jump.
+std::vector<uint8_t> numbered(const Header& h, const Record& r, uint64_t seq, Continuity& chain) {
+  std::vector<uint8_t> b = encode_numbered(h, r, static_cast<uint32_t>(seq));
+  int axis = 0;
+  const std::string jump = chain.check(r, axis);
+  if (!jump.empty()) throw StreamError("segment " + std::to_string(seq) + ": " + jump);
+  chain.advance(r);
+  return b;
+}
+}  // namespace
+
 void write_file(const std::string& path, const Header& h, const std::vector<Record>& recs) {
   std::vector<uint8_t> all = encode_header(h);
+  Continuity chain(h);
   uint64_t ticks = 0;
-  for (const auto& r : recs) {
-    const auto b = encode_record(h, r);
+  for (size_t i = 0; i < recs.size(); ++i) {
+    const auto b = numbered(h, recs[i], i, chain);
     all.insert(all.end(), b.begin(), b.end());
-    ticks += r.ticks;
+    ticks += recs[i].ticks;
   }
   const auto e = encode_end(static_cast<uint32_t>(recs.size()), ticks);
   all.insert(all.end(), e.begin(), e.end());
@@ -254,7 +351,8 @@ util::AtomicFile open_stream_file(const std::string& path) try {
 }
 }  // namespace
 
-StreamWriter::StreamWriter(const std::string& path, const Header& h) : h_(h), file_(open_stream_file(path)) {
+StreamWriter::StreamWriter(const std::string& path, const Header& h)
+    : h_(h), file_(open_stream_file(path)), chain_(h) {
   put(encode_header(h));
 }
 
@@ -264,7 +362,7 @@ void StreamWriter::put(const std::vector<uint8_t>& bytes) {
 }
 
 void StreamWriter::add(const Record& r) {
-  put(encode_record(h_, r));
+  put(numbered(h_, r, count_, chain_));
   ++count_;
   ticks_ += r.ticks;
 }
@@ -278,25 +376,66 @@ void StreamWriter::finish() {
   }
 }
 
-ReadResult decode(const std::vector<uint8_t>& b, const std::string& name) {
-  ReadResult res;
-  auto fail = [&](size_t off, const std::string& what) {
-    res.error = at(name, off) + what;
-    return res;
-  };
-  if (b.size() < kHeaderBytes) return fail(0, "truncated header (" + std::to_string(b.size()) + " bytes)");
-  if (std::memcmp(b.data(), "TRJS", 4) != 0) return fail(0, "bad magic (not a trajcore segment stream)");
+// ---------------------------------------------------------------------------
+// Reader
+// ---------------------------------------------------------------------------
+namespace {
+size_t read_some(std::istream& in, uint8_t* p, size_t n) {
+  in.read(reinterpret_cast<char*>(p), static_cast<std::streamsize>(n));
+  return static_cast<size_t>(in.gcount());
+}
+std::string hex2(unsigned v) {
+  char b[8];
+  std::snprintf(b, sizeof b, "0x%02X", v & 0xFF);
+  return b;
+}
+// Offset of the first nonzero byte in b[from, to), or `to`.
+size_t first_nonzero(const std::vector<uint8_t>& b, size_t from, size_t to) {
+  while (from < to && b[from] == 0) ++from;
+  return from;
+}
+}  // namespace
+
+bool StreamReader::fail(uint64_t off, const std::string& what) {
+  error_ = at(name_, off) + what;
+  done_ = true;
+  return false;
+}
+
+StreamReader::StreamReader(std::istream& in, std::string name) : in_(in), name_(std::move(name)) {
+  std::vector<uint8_t> b(kHeaderBytes);
+  const size_t n = read_some(in_, b.data(), b.size());
+  uint64_t where = 0;
+  const std::string p = header_problem(b, n, where);
+  if (!p.empty()) {
+    fail(where, p);
+    return;
+  }
+  chain_ = Continuity(h_);
+  off_ = kHeaderBytes;
+}
+
+std::string StreamReader::header_problem(const std::vector<uint8_t>& b, size_t n, uint64_t& at) {
+  const std::string truncated = "truncated header (" + std::to_string(n) + " bytes)";
+  if (n < 4) return truncated;
+  if (std::memcmp(b.data(), "TRJS", 4) != 0) return "bad magic (not a trajcore segment stream)";
+  if (n < 6) return truncated;
   const int version = static_cast<int>(get(&b[4], 2));
-  if (version < 1 || version > kVersion)
-    return fail(4, "unsupported version " + std::to_string(version) + " (this reader knows 1.." +
-                       std::to_string(kVersion) + ")");
-  const size_t hb = header_bytes(version);
-  if (get(&b[6], 2) != hb)
-    return fail(6, "unexpected header size " + std::to_string(get(&b[6], 2)) + " for version " +
-                       std::to_string(version) + " (" + std::to_string(hb) + ")");
-  if (b.size() < hb) return fail(0, "truncated header (" + std::to_string(b.size()) + " bytes)");
-  if (get(&b[hb - 4], 4) != crc(b.data(), hb - 4)) return fail(hb - 4, "header checksum mismatch");
-  Header& h = res.header;
+  if (version != kVersion) {
+    at = 4;
+    return "unsupported version " + std::to_string(version) + " (this reader reads version " +
+           std::to_string(kVersion) + " only: write the stream again with this trajcore)";
+  }
+  if (n < 8) return truncated;
+  if (get(&b[6], 2) != kHeaderBytes) {
+    at = 6;
+    return "unexpected header size " + std::to_string(get(&b[6], 2)) + " for version " + std::to_string(kVersion) +
+           " (" + std::to_string(kHeaderBytes) + ")";
+  }
+  if (n < size_t(kHeaderBytes)) return truncated;
+  at = kHeaderBytes - 4;
+  if (get(&b[kHeaderBytes - 4], 4) != crc(b.data(), kHeaderBytes - 4)) return "header checksum mismatch";
+  Header& h = h_;
   h.axes = b[8];
   h.degree = b[9];
   h.width = static_cast<int>(get(&b[10], 2));
@@ -306,88 +445,160 @@ ReadResult decode(const std::vector<uint8_t>& b, const std::string& name) {
   const uint64_t pbits = get(&b[20], 8);
   std::memcpy(&h.period, &pbits, 8);
   h.units.assign(reinterpret_cast<const char*>(&b[28]), strnlen(reinterpret_cast<const char*>(&b[28]), 16));
+  h.bcu_ctrl_width = static_cast<int>(get(&b[44], 2));
+  h.bcu_guard_bits = static_cast<int>(get(&b[46], 2));
+  h.bcu_max_depth = static_cast<int>(get(&b[48], 2));
+  h.bcu_out_width = static_cast<int>(get(&b[50], 2));
+  if ((at = first_nonzero(b, 18, 20)) < 20) return "header: reserved byte " + hex2(b[at]) + ", must be 0";
+  if ((at = first_nonzero(b, 52, 60)) < 60) return "header: reserved byte " + hex2(b[at]) + ", must be 0";
+  at = 8;
   try {
     h.format().validate();
   } catch (const std::exception& e) {
-    return fail(8, std::string("header: ") + e.what());
+    return std::string("header: ") + e.what();
   }
-  if (h.width % 8 != 0) return fail(10, "register width not a multiple of 8");
-  if (!(h.period > 0) || !std::isfinite(h.period)) return fail(20, "tick period must be positive and finite");
-  if (version >= 2) {
-    h.bcu_ctrl_width = static_cast<int>(get(&b[44], 2));
-    h.bcu_guard_bits = static_cast<int>(get(&b[46], 2));
-    h.bcu_max_depth = static_cast<int>(get(&b[48], 2));
-    h.bcu_out_width = static_cast<int>(get(&b[50], 2));
-    if (!h.has_bcu()) return fail(44, "header: version 2 without a BCU format (CtrlWidth 0)");
-    size_t field = 44;
-    const std::string p = bcu_header_problem(h, field);
-    if (!p.empty()) return fail(field, "header: " + p);
+  at = 10;
+  if (h.width % 8 != 0) return "register width not a multiple of 8";
+  at = 20;
+  if (const std::string m = util::tick_period_problem(h.period); !m.empty()) return "header: " + m;
+  at = 28;
+  if (!is_known_units(h.units)) return "header: units '" + h.units + "' unknown (known: " + units_list() + ")";
+  if ((at = first_nonzero(b, 28 + h.units.size(), 44)) < 44)
+    return "header: units padding byte " + hex2(b[at]) + ", must be 0";
+  if (!h.has_bcu()) {
+    at = first_nonzero(b, 44, 52);
+    if (at < 52) return "header: BCU field nonzero (" + hex2(b[at]) + ") with CtrlWidth 0 (no BCU format)";
+    return "";
   }
+  size_t field = 44;
+  const std::string p = bcu_header_problem(h, field);
+  at = field;
+  return p.empty() ? "" : "header: " + p;
+}
 
-  size_t off = hb;
-  uint64_t ticks = 0;
-  while (true) {
-    const size_t idx = res.records.size();
-    const std::string rec = "segment " + std::to_string(idx) + ": ";
-    if (off >= b.size()) return fail(off, "truncated: no end record after " + std::to_string(idx) + " segments");
-    if (b[off] == 0xFF) {
-      if (b.size() - off < 16) return fail(off, "truncated end record");
-      if (get(&b[off + 12], 4) != crc(&b[off], 12)) return fail(off, "end record checksum mismatch");
-      if (get(&b[off + 4], 4) != idx)
-        return fail(off, "end record counts " + std::to_string(get(&b[off + 4], 4)) + " segments, stream has " +
-                             std::to_string(idx));
-      if (get(&b[off + 8], 4) != static_cast<uint32_t>(ticks)) return fail(off, "end record tick total mismatch");
-      if (off + 16 != b.size()) return fail(off + 16, "trailing bytes after the end record");
-      res.complete = true;
-      return res;
+std::string StreamReader::record_problem(Record& r, uint64_t& at) {
+  const std::vector<uint8_t>& b = raw_;
+  const size_t rb = b.size();
+  at = off_;
+  if (get(&b[rb - 4], 4) != crc(b.data(), rb - 4)) return "checksum mismatch";
+  at = off_ + 1;
+  if (b[1] != 0) return "flags " + hex2(b[1]) + ", must be 0";
+  if ((at = off_ + first_nonzero(b, 2, 4)) < off_ + 4) return "reserved byte " + hex2(b[at - off_]) + ", must be 0";
+  at = off_ + 8;
+  r.seq = static_cast<uint32_t>(get(&b[8], 4));
+  if (r.seq != static_cast<uint32_t>(count_))
+    return "sequence number " + std::to_string(r.seq) + ", expected " + std::to_string(static_cast<uint32_t>(count_));
+  at = off_ + 4;
+  r.ticks = static_cast<uint32_t>(get(&b[4], 4));
+  size_t p = 12;
+  if (r.kind == RecordKind::kFd) {
+    if (r.ticks == 0) return "K=0 ticks";
+    if (r.ticks > kMaxTicks)
+      return "K=" + std::to_string(r.ticks) + " ticks, beyond the format's bound 2^20 = " + std::to_string(kMaxTicks);
+    const int wb = h_.width / 8;
+    r.regs.resize(h_.axes);
+    for (auto& ax : r.regs) {
+      ax.resize(h_.degree + 1);
+      for (auto& v : ax) {
+        v = get_signed(&b[p], wb);
+        p += wb;
+      }
     }
-    if (b[off] == 2 && version < 2)
-      return fail(off, rec + "record type 2 (BCU segment) in a version-1 stream, whose header has no BCU format");
-    if (b[off] != 1 && b[off] != 2) return fail(off, rec + "unknown record type " + std::to_string(b[off]));
-    const RecordKind kind = b[off] == 2 ? RecordKind::kBcu : RecordKind::kFd;
-    const size_t rb = record_size(h, kind);
-    if (b.size() - off < rb) return fail(off, rec + "truncated record");
-    if (get(&b[off + rb - 4], 4) != crc(&b[off], rb - 4)) return fail(off, rec + "checksum mismatch");
-    Record r;
-    r.kind = kind;
-    r.ticks = static_cast<uint32_t>(get(&b[off + 4], 4));
-    size_t p = off + 8;
-    if (kind == RecordKind::kFd) {
-      if (r.ticks == 0) return fail(off + 4, rec + "K=0 ticks");
-      r.regs.assign(h.axes, std::vector<mpz_class>(h.degree + 1));
-      for (auto& ax : r.regs)
-        for (auto& v : ax) {
-          v = get_signed(&b[p], h.width / 8);
-          p += h.width / 8;
+  } else {
+    const int d = r.depth();
+    if (d < 0 || d > h_.bcu_max_depth)
+      return "BCU K=" + std::to_string(r.ticks) + " is not 2^d with d <= MaxDepth " + std::to_string(h_.bcu_max_depth);
+    const int cb = ctrl_bytes(h_);
+    r.regs.resize(h_.axes);
+    for (int a = 0; a < h_.axes; ++a) {
+      r.regs[a].resize(4);
+      for (int i = 0; i < 4; ++i) {
+        mpz_class& v = r.regs[a][i];
+        v = get_signed(&b[p], cb);
+        if (!fits_bits(v, h_.bcu_ctrl_width)) {
+          at = off_ + p;
+          return "axis " + std::to_string(a) + " control value c" + std::to_string(i) + " = " + v.get_str() +
+                 " does not fit CtrlWidth " + std::to_string(h_.bcu_ctrl_width) + " bits";
         }
-    } else {
-      const int d = r.depth();
-      if (d < 0 || d > h.bcu_max_depth)
-        return fail(off + 4, rec + "BCU K=" + std::to_string(r.ticks) + " is not 2^d with d <= MaxDepth " +
-                                 std::to_string(h.bcu_max_depth));
-      const int cb = ctrl_bytes(h);
-      r.regs.assign(h.axes, std::vector<mpz_class>(4));
-      for (int a = 0; a < h.axes; ++a)
-        for (int i = 0; i < 4; ++i) {
-          mpz_class v = get_signed(&b[p], cb);
-          if (!fits_bits(v, h.bcu_ctrl_width))
-            return fail(p, rec + "axis " + std::to_string(a) + " control value c" + std::to_string(i) + " = " +
-                               v.get_str() + " does not fit CtrlWidth " + std::to_string(h.bcu_ctrl_width) + " bits");
-          r.regs[a][i] = v;
-          p += cb;
-        }
+        p += cb;
+      }
     }
-    ticks += r.ticks;
-    res.records.push_back(std::move(r));
-    off += rb;
   }
+  int axis = 0;
+  const std::string jump = chain_.check(r, axis);
+  if (!jump.empty()) {
+    const size_t per_axis = r.is_bcu() ? 4 * size_t(ctrl_bytes(h_)) : size_t(h_.degree + 1) * (h_.width / 8);
+    at = off_ + 12 + per_axis * axis;
+    return jump;
+  }
+  return "";
+}
+
+bool StreamReader::read_end() {
+  raw_.resize(kEndBytes);
+  raw_[0] = 0xFF;
+  if (read_some(in_, raw_.data() + 1, kEndBytes - 1) != size_t(kEndBytes - 1)) return fail(off_, "truncated end record");
+  const auto& b = raw_;
+  if (get(&b[12], 4) != crc(b.data(), 12)) return fail(off_, "end record checksum mismatch");
+  if (b[1] != 0) return fail(off_ + 1, "end record: flags " + hex2(b[1]) + ", must be 0");
+  if (const size_t z = first_nonzero(b, 2, 4); z < 4) return fail(off_ + z, "end record: reserved byte " + hex2(b[z]) + ", must be 0");
+  if (get(&b[8], 4) != count_)
+    return fail(off_ + 8, "end record counts " + std::to_string(get(&b[8], 4)) + " segments, stream has " +
+                              std::to_string(count_));
+  if (get(&b[4], 4) != static_cast<uint32_t>(ticks_)) return fail(off_ + 4, "end record tick total mismatch");
+  if (in_.peek() != std::char_traits<char>::eof()) return fail(off_ + kEndBytes, "trailing bytes after the end record");
+  complete_ = true;
+  done_ = true;
+  return false;
+}
+
+bool StreamReader::next(Record& r) {
+  if (done_) return false;
+  const std::string rec = "segment " + std::to_string(count_) + ": ";
+  uint8_t type = 0;
+  if (read_some(in_, &type, 1) != 1)
+    return fail(off_, "truncated: no end record after " + std::to_string(count_) + " segments");
+  if (type == 0xFF) return read_end();
+  if (type == 2 && !h_.has_bcu())
+    return fail(off_, rec + "record type 2 (BCU segment) in a stream whose header has no BCU format");
+  if (type != 1 && type != 2) return fail(off_, rec + "unknown record type " + hex2(type));
+  r.kind = static_cast<RecordKind>(type);
+  const size_t rb = record_size(h_, r.kind);
+  raw_.resize(rb);
+  raw_[0] = type;
+  if (read_some(in_, raw_.data() + 1, rb - 1) != rb - 1) return fail(off_, rec + "truncated record");
+  uint64_t where = off_;
+  const std::string p = record_problem(r, where);
+  if (!p.empty()) return fail(where, rec + p);
+  chain_.advance(r);
+  ++count_;
+  ticks_ += r.ticks;
+  off_ += rb;
+  return true;
+}
+
+namespace {
+ReadResult read_all(std::istream& in, const std::string& name) {
+  StreamReader rd(in, name);
+  ReadResult res;
+  res.header = rd.header();
+  Record r;
+  while (rd.next(r)) res.records.push_back(r);
+  res.complete = rd.complete();
+  res.error = rd.error();
+  return res;
+}
+}  // namespace
+
+ReadResult decode(const std::vector<uint8_t>& bytes, const std::string& name) {
+  std::istringstream in(std::string(bytes.begin(), bytes.end()), std::ios::binary);
+  return read_all(in, name);
 }
 
 ReadResult read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw StreamError(path + ": cannot open");
-  std::vector<uint8_t> b((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  return decode(b, path);
+  return read_all(in, path);
 }
 
 }  // namespace traj::stream

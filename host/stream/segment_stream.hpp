@@ -1,18 +1,18 @@
 // SPDX-License-Identifier: Apache-2.0
 // trajcore segment stream: the file (or link) format that carries compiled
-// segments from the host to the core. Version 1 carries forward-difference
-// segments only (traj_fd_engine); version 2 adds the BCU generator's format to
-// the header and BCU segment records (traj_core: both engines behind one word
-// stream, tuser = kind). A writer emits version 1 whenever the header has no
-// BCU format (so an FD-only stream reads on an FD-only reader), version 2
-// otherwise; the reader accepts both.
+// segments from the host to the core, version 3: forward-difference segments
+// (traj_fd_engine) and, when the header carries a BCU format, BCU segments
+// (traj_core: both engines behind one word stream, tuser = kind). Every record
+// carries its sequence number; the link (rtl/board/LINK.md) sends the records
+// as they are in the file, one per SEGMENT frame. The reader accepts version 3
+// only. host/stream/README.md is the reference for every layout.
 //
 // All integers little-endian. CRC-32 is zlib's (IEEE 802.3 polynomial).
 //
-//   Header, version 1: 48 bytes; version 2: 64 bytes
+//   Header, 64 bytes
 //     0  char[4]  magic "TRJS"
-//     4  u16      version (1 or 2)
-//     6  u16      header size in bytes (48 or 64)
+//     4  u16      version (3)
+//     6  u16      header size in bytes (64)
 //     8  u8       axes (1..8), both engines
 //     9  u8       FD degree (1..7)
 //    10  u16      FD register width in bits (multiple of 8, <= 128)
@@ -22,30 +22,30 @@
 //    16  i16      output fraction bits F (1 LSB = 2^-F units), both engines
 //    18  u16      reserved (0)
 //    20  f64      tick period in seconds
-//    28  char[16] units, NUL-padded (e.g. "mm")
-//   version 1:
-//    44  u32      CRC-32 of bytes 0..43
-//   version 2 (BCU generator format, traj::bcu::Format):
-//    44  u16      BCU CtrlWidth, control value width in bits (2..128-3*MaxDepth)
+//    28  char[16] units, one of known_units(), NUL-padded (padding all 0)
+//    44  u16      BCU CtrlWidth, control value width in bits (2..128-3*MaxDepth);
+//                 0: no BCU format (44..51 all 0, no BCU records)
 //    46  u16      BCU GuardBits, control bits below the output LSB (0..CtrlWidth-2)
 //    48  u16      BCU MaxDepth, largest d (1..30)
 //    50  u16      BCU OutWidth, sample width; must equal FD width - FD guard bits
 //                 (one sample port)
 //    52  u8[8]    reserved (0)
 //    60  u32      CRC-32 of bytes 0..59
-//   FD segment record, type 1, 12 + axes*(degree+1)*width/8 bytes:
+//   FD segment record, type 1, 16 + axes*(degree+1)*width/8 bytes:
 //     0  u8       record type: 1 = forward-difference segment
 //     1  u8       flags (0)
 //     2  u16      reserved (0)
-//     4  u32      K, the tick count (>= 1)
-//     8  bytes    registers, axis-major, r[0] first, each width/8 bytes, two's complement
+//     4  u32      K, the tick count, 1..kMaxTicks
+//     8  u32      seq, the sequence number: 0 for the first record, +1 per record
+//    12  bytes    registers, axis-major, r[0] first, each width/8 bytes, two's complement
 //     .  u32      CRC-32 of the record's bytes before it
-//   BCU segment record, type 2 (version 2 only), 12 + axes*4*ceil(CtrlWidth/8) bytes:
+//   BCU segment record, type 2, 16 + axes*4*ceil(CtrlWidth/8) bytes:
 //     0  u8       record type: 2 = BCU segment (cubic Bezier, K = 2^d samples)
 //     1  u8       flags (0)
 //     2  u16      reserved (0)
 //     4  u32      K = 2^d, the tick count, d = 0..MaxDepth
-//     8  bytes    control values c_0..c_3 (A, B, C, D), axis-major, each
+//     8  u32      seq, as for FD records (one count over both kinds)
+//    12  bytes    control values c_0..c_3 (A, B, C, D), axis-major, each
 //                 ceil(CtrlWidth/8) bytes two's complement, within CtrlWidth
 //                 bits; LSB 2^-GuardBits output LSB (the values the generator
 //                 gets, before the 8^(MaxDepth-d) pre-scaling of its word
@@ -53,17 +53,20 @@
 //     .  u32      CRC-32 of the record's bytes before it
 //   End record, 16 bytes:
 //     0  u8       record type: 0xFF
-//     1  u8[3]    reserved (0)
-//     4  u32      segment count (both kinds)
-//     8  u32      total ticks modulo 2^32
+//     1  u8       flags (0)
+//     2  u16      reserved (0)
+//     4  u32      total ticks modulo 2^32
+//     8  u32      seq = the segment count (the sequence number the next record would have)
 //    12  u32      CRC-32 of bytes 0..11
 //
-// A reader accepts records one by one: a damaged record stops the read with
-// an error naming its index and byte offset, and every record before it stays
-// accepted. A stream without its end record is reported as truncated. A BCU
-// record whose checksum holds but whose content does not fit the header's
-// format (K not a power of two up to 2^MaxDepth, a control value beyond
-// CtrlWidth bits) is refused the same way, naming the field.
+// A reader accepts records one by one: a bad record stops the read with an
+// error naming its byte offset and segment index, and every record before it
+// stays accepted. Refused: a checksum mismatch, a sequence number out of order
+// or repeated, nonzero flags or reserved bytes, an unknown record type or
+// units, K = 0 or beyond the format's bound (FD: kMaxTicks; BCU: 2^MaxDepth),
+// a BCU control value beyond CtrlWidth bits, and a segment that does not start
+// exactly where the previous one ends (check_start). A stream without its end
+// record is reported as truncated.
 #pragma once
 #include <gmpxx.h>
 
@@ -88,19 +91,21 @@ class StreamError : public std::runtime_error {
 struct Header {
   int axes = 3, degree = 3, width = 64, chunk_width = 16, guard_bits = 32, frac_bits = 16;
   double period = 1e-3;
-  std::string units = "mm";
-  // BCU generator format (version 2). bcu_ctrl_width == 0: no BCU engine, the
-  // stream is written as version 1 and cannot hold BCU records.
+  std::string units = "mm";  // one of known_units()
+  // BCU generator format. bcu_ctrl_width == 0: no BCU engine, the stream
+  // cannot hold BCU records (the fields are written as 0).
   int bcu_ctrl_width = 0, bcu_guard_bits = 0, bcu_max_depth = 0, bcu_out_width = 0;
 
   bool has_bcu() const { return bcu_ctrl_width != 0; }
-  int version() const { return has_bcu() ? 2 : 1; }
   fd::Format format() const;
   bcu::Format bcu_format() const;  // axes, chunk width and F from the shared fields
   static Header from(const fd::Format& f, double period, const std::string& units);
-  // Both engines (traj_core): version 2.
+  // Both engines (traj_core).
   static Header from(const fd::Format& f, const bcu::Format& b, double period, const std::string& units);
 };
+
+// The units a header may name.
+const std::vector<std::string>& known_units();
 
 enum class RecordKind : uint8_t { kFd = 1, kBcu = 2 };  // the record type byte
 
@@ -108,24 +113,53 @@ struct Record {
   uint32_t ticks = 0;                        // K (BCU: 2^d)
   std::vector<std::vector<mpz_class>> regs;  // [axis][i], signed: FD r[0..degree]; BCU c_0..c_3
   RecordKind kind = RecordKind::kFd;
+  uint32_t seq = 0;                          // sequence number (read: as in the stream; the writers number
+                                             // the records they write 0, 1, 2, ... whatever it holds)
 
   bool is_bcu() const { return kind == RecordKind::kBcu; }
   int depth() const;                         // BCU: d with K = 2^d (-1 if K is not a power of two)
 };
 
-constexpr int kVersion = 2;        // highest version written and read
-constexpr int kHeaderBytes = 48;   // version 1
-constexpr int kHeaderBytesV2 = 64; // version 2
+constexpr int kVersion = 3;       // the version written and read
+constexpr int kHeaderBytes = 64;
+constexpr int kEndBytes = 16;
+// The FD record's K bound: the compiler's longest segment (fd::Format::max_ticks).
+constexpr uint32_t kMaxTicks = uint32_t(1) << 20;
 
-inline int header_bytes(int version) { return version >= 2 ? kHeaderBytesV2 : kHeaderBytes; }
 // Size of a record of either kind under header h.
 size_t record_size(const Header& h, RecordKind kind);
 
 std::vector<uint8_t> encode_header(const Header& h);
+// One record's exact bytes as they stand in the stream (with r.seq): what a
+// link SEGMENT frame carries. Throws StreamError for content the format cannot
+// hold (K out of bounds, a value beyond its width, the wrong shape).
 std::vector<uint8_t> encode_record(const Header& h, const Record& r);
 std::vector<uint8_t> encode_end(uint32_t segments, uint64_t total_ticks);
 
-// Writes a whole stream to `path` atomically (temporary file, then rename).
+// Continuity: each segment starts exactly where the exact prediction of the
+// previous one ends. FD -> FD: r[0] = the previous r[0] after K ticks
+// (sum C(K,i) r[i]); BCU -> BCU: c_A = the previous c_D; across kinds the
+// integer maps of bcu/chain.hpp (the first sample of the new segment is the
+// end sample of the previous one, bit for bit).
+class Continuity {
+ public:
+  explicit Continuity(const Header& h) : h_(h) {}
+  // "" if r starts where the previous record ended (or is the first), else
+  // what is wrong; `axis` is set to the first axis that jumps.
+  std::string check(const Record& r, int& axis) const;
+  // r is accepted: the next record must start where r ends.
+  void advance(const Record& r);
+
+ private:
+  Header h_;
+  bool have_ = false;
+  RecordKind kind_ = RecordKind::kFd;
+  std::vector<mpz_class> end_;  // the previous record's exact end: FD r0 after K; BCU c_D
+};
+
+// Writes a whole stream to `path` atomically (temporary file, then rename),
+// the records numbered 0, 1, 2, ...; content the format cannot hold and a
+// stream that would jump are refused (StreamError) before anything is written.
 void write_file(const std::string& path, const Header& h, const std::vector<Record>& recs);
 
 // Incremental writer for long streams: records go to `path`.tmp as they come;
@@ -144,7 +178,39 @@ class StreamWriter {
   void put(const std::vector<uint8_t>& bytes);
   Header h_;
   util::AtomicFile file_;
+  Continuity chain_;
   uint64_t count_ = 0, ticks_ = 0;
+};
+
+// Incremental reader (bounded memory): the header on construction, then one
+// record per next(). Every check of the format is made here; nothing it
+// accepts can be refused later for its content.
+class StreamReader {
+ public:
+  StreamReader(std::istream& in, std::string name);
+  const Header& header() const { return h_; }
+  // true: r holds the next record, accepted. false: the end record was
+  // accepted (complete()) or the stream is bad (error()).
+  bool next(Record& r);
+  bool complete() const { return complete_; }
+  const std::string& error() const { return error_; }
+  // The exact bytes of the record last accepted by next() (a link frame's payload).
+  const std::vector<uint8_t>& raw() const { return raw_; }
+  uint64_t records() const { return count_; }
+
+ private:
+  bool fail(uint64_t off, const std::string& what);
+  std::string header_problem(const std::vector<uint8_t>& b, size_t n, uint64_t& at);
+  std::string record_problem(Record& r, uint64_t& at);
+  bool read_end();
+  std::istream& in_;
+  std::string name_;
+  Header h_;
+  Continuity chain_{Header{}};
+  std::vector<uint8_t> raw_;
+  uint64_t off_ = 0, count_ = 0, ticks_ = 0;
+  bool complete_ = false, done_ = false;
+  std::string error_;
 };
 
 struct ReadResult {

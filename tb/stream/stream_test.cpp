@@ -1,12 +1,18 @@
 // SPDX-License-Identifier: Apache-2.0
-// Segment stream format v1 (FD records) and v2 (v1 + the BCU format in the
-// header + BCU records): round trip, and every corruption or truncation is
-// reported with its place (byte offset and segment) while every record before
-// it stays accepted; version-1 files are read as before, and a header without
-// a BCU format is still written as version 1, byte for byte.
+// Segment stream format version 3 (FD records; BCU records when the header
+// carries a BCU format; every record numbered): round trip, every corruption
+// or truncation reported with its place (byte offset and segment) while every
+// record before it stays accepted, and every record that is out of order,
+// repeated, beyond the format's bounds, with nonzero reserved bits, or that
+// does not start where the previous one ends, refused with its place.
+// The test streams are chained by the test itself (the FD end by running the
+// difference recurrence tick by tick; the kind hand-offs from bcu/chain.hpp).
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+#include <functional>
+#include <sstream>
 #include <random>
 
 #include "stream/segment_stream.hpp"
@@ -30,24 +36,73 @@ Header header() {
   return h;
 }
 
-std::vector<Record> records(std::mt19937_64& rng, const Header& h, int n) {
+// Where the engine is after a record: FD r0 after K ticks of the difference
+// recurrence; BCU c_D.
+std::vector<mpz_class> end_of(const Record& r) {
+  std::vector<mpz_class> e;
+  for (auto x : r.regs) {
+    if (r.is_bcu()) {
+      e.push_back(x[3]);
+      continue;
+    }
+    for (uint32_t k = 0; k < r.ticks; ++k)
+      for (size_t i = 0; i + 1 < x.size(); ++i) x[i] += x[i + 1];
+    e.push_back(x[0]);
+  }
+  return e;
+}
+
+mpz_class floor_shift(const mpz_class& v, int e) {  // floor(v 2^e)
+  mpz_class r;
+  if (e >= 0) return v * (mpz_class(1) << e);
+  mpz_fdiv_q_2exp(r.get_mpz_t(), v.get_mpz_t(), static_cast<mp_bitcnt_t>(-e));
+  return r;
+}
+
+// The start the record after `prev` must have (bcu/chain.hpp's hand-offs).
+mpz_class start_after(const Header& h, const Record& prev, const mpz_class& end, RecordKind next) {
+  const int gf = h.guard_bits, gb = h.bcu_guard_bits;
+  if (next == RecordKind::kFd) return prev.is_bcu() ? floor_shift(end, gf - gb) + (mpz_class(1) << (gf - 1)) : end;
+  return prev.is_bcu() ? end : floor_shift(end, gb - gf) - (gb > 0 ? mpz_class(1) << (gb - 1) : mpz_class(0));
+}
+
+mpz_class signed_random(std::mt19937_64& rng, int bits) {
+  mpz_class x = mpz_class(static_cast<unsigned long>(rng() >> (64 - bits)));
+  return (rng() & 1) ? mpz_class(-x) : x;
+}
+
+// Records of the given kinds ('F' FD, 'B' BCU), numbered 0, 1, ..., each
+// starting where the previous one ends.
+std::vector<Record> chained(std::mt19937_64& rng, const Header& h, const std::string& kinds) {
   std::vector<Record> v;
-  for (int s = 0; s < n; ++s) {
+  for (size_t s = 0; s < kinds.size(); ++s) {
     Record r;
-    r.ticks = 1 + rng() % 1000;
-    r.regs.assign(h.axes, std::vector<mpz_class>(h.degree + 1));
-    for (auto& ax : r.regs)
-      for (auto& x : ax) {
-        x = mpz_class(static_cast<long>(rng() >> 2));
-        x <<= 1;
-        if (rng() & 1) x = -x;
+    r.seq = static_cast<uint32_t>(s);
+    if (kinds[s] == 'B') {
+      r.kind = RecordKind::kBcu;
+      r.ticks = 1u << (rng() % (h.bcu_max_depth + 1));
+      r.regs.assign(h.axes, std::vector<mpz_class>(4));
+      for (auto& ax : r.regs)
+        for (auto& x : ax) x = signed_random(rng, h.bcu_ctrl_width - 3);
+    } else {
+      r.ticks = 1 + rng() % 1000;
+      r.regs.assign(h.axes, std::vector<mpz_class>(h.degree + 1));
+      for (auto& ax : r.regs) {
+        ax[0] = signed_random(rng, h.width - 4);
+        for (int i = 1; i <= h.degree; ++i) ax[i] = signed_random(rng, 20);
       }
+    }
+    if (s > 0) {
+      const auto e = end_of(v.back());
+      for (int a = 0; a < h.axes; ++a) r.regs[a][0] = start_after(h, v.back(), e[a], r.kind);
+    }
     v.push_back(r);
   }
-  // extremes of the range
-  v[0].regs[0][0] = -(mpz_class(1) << (h.width - 1));
-  v[0].regs[1][0] = (mpz_class(1) << (h.width - 1)) - 1;
   return v;
+}
+
+std::vector<Record> records(std::mt19937_64& rng, const Header& h, int n) {
+  return chained(rng, h, std::string(static_cast<size_t>(n), 'F'));
 }
 
 std::vector<uint8_t> encode(const Header& h, const std::vector<Record>& recs) {
@@ -62,6 +117,11 @@ std::vector<uint8_t> encode(const Header& h, const std::vector<Record>& recs) {
   all.insert(all.end(), e.begin(), e.end());
   return all;
 }
+
+Header header_v2();
+Header header_v2_fwd() { return header_v2(); }
+
+size_t fd_record_bytes(const Header& h) { return 16 + size_t(h.axes) * (h.degree + 1) * (h.width / 8); }
 
 int get_version(const std::vector<uint8_t>& b) { return b[4] | (b[5] << 8); }
 
@@ -88,7 +148,7 @@ TEST(Stream, EverySingleByteCorruptionIsDetected) {
   const Header h = header();
   const auto recs = records(rng, h, 4);
   const auto good = encode(h, recs);
-  const size_t rb = 12 + size_t(h.axes) * (h.degree + 1) * 8;
+  const size_t rb = fd_record_bytes(h);
   for (size_t i = 0; i < good.size(); ++i) {
     for (uint8_t flip : {0x01, 0x80, 0xFF}) {
       auto bad = good;
@@ -141,6 +201,34 @@ TEST(Stream, RefusesToWriteBadContent) {
   bad = h;
   bad.units = "a very long unit name";
   EXPECT_THROW(encode_header(bad), StreamError);
+  bad.units = "furlong";
+  EXPECT_THROW(encode_header(bad), StreamError);
+  r.ticks = 1u << 20;  // the bound itself is fine
+  EXPECT_NO_THROW(encode_record(h, r));
+  r.ticks = (1u << 20) + 1;
+  EXPECT_THROW(encode_record(h, r), StreamError);
+}
+
+TEST(Stream, ExtremeValuesRoundTrip) {
+  // One record each (no predecessor to start from): the ends of the ranges.
+  Header h = header_v2_fwd();
+  Record f;
+  f.ticks = 1;
+  f.regs.assign(h.axes, std::vector<mpz_class>(h.degree + 1, 0));
+  f.regs[0][0] = -(mpz_class(1) << (h.width - 1));
+  f.regs[1][3] = (mpz_class(1) << (h.width - 1)) - 1;
+  Record b;
+  b.kind = RecordKind::kBcu;
+  b.ticks = 1u << h.bcu_max_depth;
+  const mpz_class lim = mpz_class(1) << (h.bcu_ctrl_width - 1);
+  b.regs.assign(h.axes, std::vector<mpz_class>(4, 0));
+  b.regs[0][0] = lim - 1;
+  b.regs[h.axes - 1][3] = -lim;
+  for (const Record& r : {f, b}) {
+    const auto res = decode(encode(h, {r}), "mem");
+    ASSERT_TRUE(res.complete) << res.error;
+    EXPECT_EQ(res.records[0].regs, r.regs);
+  }
 }
 
 TEST(Stream, WriteFileIsAtomic) {
@@ -156,7 +244,7 @@ TEST(Stream, WriteFileIsAtomic) {
 }
 
 // ---------------------------------------------------------------------------
-// Version 2: BCU records (type 2) mixed with FD records.
+// BCU records (type 2) mixed with FD records.
 // ---------------------------------------------------------------------------
 namespace {
 
@@ -170,32 +258,16 @@ Header header_v2() {
   return h;
 }
 
-// FD and BCU records, kinds mixed (both present, every arrangement of
-// neighbours), control values at the extremes of CtrlWidth too.
+// FD and BCU records, kinds mixed: FD, BCU, BCU, FD, ... (every pair of neighbouring kinds).
 std::vector<Record> mixed_records(std::mt19937_64& rng, const Header& h, int n) {
-  auto fd = records(rng, h, n);
-  const mpz_class lim = mpz_class(1) << (h.bcu_ctrl_width - 1);
-  for (int s = 0; s < n; ++s) {
-    if (s % 3 == 0) continue;  // FD, BCU, BCU, FD, ...: every pair of neighbouring kinds
-    Record r;
-    r.kind = RecordKind::kBcu;
-    r.ticks = 1u << (rng() % (h.bcu_max_depth + 1));
-    r.regs.assign(h.axes, std::vector<mpz_class>(4));
-    for (auto& ax : r.regs)
-      for (auto& x : ax) {
-        x = mpz_class(static_cast<long>(rng() >> 1)) % lim;
-        if (rng() & 1) x = -x;
-      }
-    r.regs[0][0] = lim - 1;
-    r.regs[h.axes - 1][3] = -lim;
-    fd[s] = r;
-  }
-  return fd;
+  std::string kinds;
+  for (int s = 0; s < n; ++s) kinds += s % 3 == 0 ? 'F' : 'B';
+  return chained(rng, h, kinds);
 }
 
 // Byte offset of every record (and of the end record, last).
 std::vector<size_t> offsets(const Header& h, const std::vector<Record>& recs) {
-  std::vector<size_t> o{static_cast<size_t>(header_bytes(h.version()))};
+  std::vector<size_t> o{static_cast<size_t>(kHeaderBytes)};
   for (const auto& r : recs) o.push_back(o.back() + record_size(h, r.kind));
   return o;
 }
@@ -207,7 +279,7 @@ TEST(StreamV2, RoundTripMixedKinds) {
   const Header h = header_v2();
   const auto recs = mixed_records(rng, h, 24);
   const auto bytes = encode(h, recs);
-  EXPECT_EQ(get_version(bytes), 2);
+  EXPECT_EQ(get_version(bytes), 3);
   EXPECT_EQ(bytes.size(), offsets(h, recs).back() + 16);
   const auto res = decode(bytes, "mem");
   ASSERT_TRUE(res.complete) << res.error;
@@ -232,18 +304,28 @@ TEST(StreamV2, RoundTripMixedKinds) {
   EXPECT_LT(nb, recs.size());
 }
 
-TEST(StreamV2, VersionOneIsStillWrittenAndRead) {
-  // No BCU format: version 1, 48-byte header, exactly the v1 layout.
+TEST(StreamV2, FdOnlyHeaderIsVersionThreeWithZeroBcuFields) {
   std::mt19937_64 rng(16);
   const Header h = header();
   const auto bytes = encode(h, records(rng, h, 3));
-  EXPECT_EQ(get_version(bytes), 1);
-  EXPECT_EQ(bytes[6] | (bytes[7] << 8), kHeaderBytes);
-  EXPECT_EQ(bytes.size(), size_t(kHeaderBytes) + 3 * record_size(h, RecordKind::kFd) + 16);
-  const auto res = decode(bytes, "v1.trj");
+  EXPECT_EQ(get_version(bytes), 3);
+  EXPECT_EQ(bytes[6] | (bytes[7] << 8), 64);
+  for (int i = 44; i < 60; ++i) EXPECT_EQ(bytes[i], 0) << i;
+  EXPECT_EQ(bytes.size(), 64 + 3 * fd_record_bytes(h) + 16);
+  const auto res = decode(bytes, "v3.trj");
   ASSERT_TRUE(res.complete) << res.error;
   EXPECT_FALSE(res.header.has_bcu());
   EXPECT_THROW(res.header.bcu_format(), StreamError);
+}
+
+TEST(StreamV2, OlderVersionsAreRefusedByName) {
+  for (int v : {1, 2, 4}) {
+    auto bytes = encode(header(), {});
+    bytes[4] = static_cast<uint8_t>(v);
+    EXPECT_EQ(decode(bytes, "old.trj").error,
+              "old.trj: byte 4: unsupported version " + std::to_string(v) +
+                  " (this reader reads version 3 only: write the stream again with this trajcore)");
+  }
 }
 
 TEST(StreamV2, EverySingleByteCorruptionIsDetected) {
@@ -348,7 +430,7 @@ TEST(StreamV2, BcuContentChecksNameTheField) {
   const auto good36 = encode(n, recs36);
   const auto off36 = offsets(n, recs36);
   auto bad = good36;
-  const size_t p = off36[1] + 8 + (1 * 4 + 2) * 5;
+  const size_t p = off36[1] + 12 + (1 * 4 + 2) * 5;
   bad[p + 4] = 0x10;  // bit 36 set, sign bit of 40 clear: 2^36 + ... does not fit 36 bits
   reseal(bad, off36[1], record_size(n, RecordKind::kBcu));
   const auto res = decode(bad, "f.trj");
@@ -358,13 +440,13 @@ TEST(StreamV2, BcuContentChecksNameTheField) {
   EXPECT_EQ(res.records.size(), 1u);
 }
 
-TEST(StreamV2, BcuRecordNeedsVersionTwo) {
-  // A type-2 record in a version-1 stream (sealed, so only the type check can catch it).
+TEST(StreamV2, BcuRecordNeedsABcuFormat) {
+  // A type-2 record in a stream without a BCU format (sealed, so only the type check can catch it).
   std::mt19937_64 rng(20);
   const Header h2 = header_v2();
   const auto recs = mixed_records(rng, h2, 3);
   Header h1 = h2;
-  h1.bcu_ctrl_width = 0;
+  h1.bcu_ctrl_width = h1.bcu_guard_bits = h1.bcu_max_depth = h1.bcu_out_width = 0;
   auto bytes = encode_header(h1);
   const auto fd0 = encode_record(h1, recs[0]);
   bytes.insert(bytes.end(), fd0.begin(), fd0.end());
@@ -372,10 +454,9 @@ TEST(StreamV2, BcuRecordNeedsVersionTwo) {
   bytes.insert(bytes.end(), bc.begin(), bc.end());
   const auto e = encode_end(2, recs[0].ticks + recs[1].ticks);
   bytes.insert(bytes.end(), e.begin(), e.end());
-  const auto res = decode(bytes, "old.trj");
-  EXPECT_EQ(res.error, "old.trj: byte " + std::to_string(kHeaderBytes + fd0.size()) +
-                           ": segment 1: record type 2 (BCU segment) in a version-1 stream, whose header has no "
-                           "BCU format");
+  const auto res = decode(bytes, "fd.trj");
+  EXPECT_EQ(res.error, "fd.trj: byte " + std::to_string(64 + fd0.size()) +
+                           ": segment 1: record type 2 (BCU segment) in a stream whose header has no BCU format");
   EXPECT_EQ(res.records.size(), 1u);
 }
 
@@ -390,8 +471,7 @@ TEST(StreamV2, BadBcuHeaderIsRefused) {
   auto sealed = [](size_t at, uint8_t v) {
     auto bytes = encode(header_v2(), {});
     bytes[at] = v;
-    const uint32_t c = static_cast<uint32_t>(crc32(crc32(0L, Z_NULL, 0), bytes.data(), 60));
-    for (int i = 0; i < 4; ++i) bytes[60 + i] = static_cast<uint8_t>(c >> (8 * i));
+    reseal(bytes, 0, 64);
     return decode(bytes, "h.trj").error;
   };
   EXPECT_EQ(sealed(50, 40), "h.trj: byte 50: header: BCU OutWidth 40 differs from the FD sample width 32 (width - "
@@ -399,7 +479,7 @@ TEST(StreamV2, BadBcuHeaderIsRefused) {
   EXPECT_EQ(sealed(50, 30), "h.trj: byte 50: header: BCU format: traj::bcu: Format.out_width = 30 out of range 32..64");
   EXPECT_EQ(sealed(48, 31), "h.trj: byte 48: header: BCU format: traj::bcu: Format.max_depth = 31 out of range 1..30");
   EXPECT_EQ(sealed(46, 39), "h.trj: byte 46: header: BCU format: traj::bcu: Format.guard_bits = 39 out of range 0..38");
-  EXPECT_EQ(sealed(44, 0), "h.trj: byte 44: header: version 2 without a BCU format (CtrlWidth 0)");
+  EXPECT_EQ(sealed(44, 0), "h.trj: byte 46: header: BCU field nonzero (0x09) with CtrlWidth 0 (no BCU format)");
 }
 
 TEST(StreamV2, RefusesToWriteBadBcuContent) {
@@ -434,4 +514,187 @@ TEST(StreamV2, WriterAndFileReadMixed) {
   ASSERT_EQ(res.records.size(), recs.size());
   for (size_t i = 0; i < recs.size(); ++i) EXPECT_EQ(res.records[i].regs, recs[i].regs);
   EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+}
+
+// ---------------------------------------------------------------------------
+// Integrity: order, bounds, reserved fields, codes, continuity.
+// ---------------------------------------------------------------------------
+namespace {
+
+void put32(std::vector<uint8_t>& b, size_t at, uint32_t v) {
+  for (int i = 0; i < 4; ++i) b[at + i] = static_cast<uint8_t>(v >> (8 * i));
+}
+
+// The stream of `recs` as they are (their seq fields), with a consistent end record.
+std::vector<uint8_t> as_given(const Header& h, const std::vector<Record>& recs) { return encode(h, recs); }
+
+struct Fixture {
+  Header h = header();
+  std::vector<Record> recs;
+  std::vector<uint8_t> good;
+  size_t rb = 0;
+  Fixture() {
+    std::mt19937_64 rng(30);
+    recs = records(rng, h, 5);
+    good = encode(h, recs);
+    rb = fd_record_bytes(h);
+  }
+  size_t off(size_t i) const { return 64 + i * rb; }
+  // Edit record i's bytes, re-seal its checksum, decode.
+  ReadResult edited(size_t i, const std::function<void(std::vector<uint8_t>&, size_t)>& edit) const {
+    auto b = good;
+    edit(b, off(i));
+    reseal(b, off(i), rb);
+    return decode(b, "plan.trj");
+  }
+};
+
+}  // namespace
+
+TEST(StreamIntegrity, SwappedRecordsAreRefused) {
+  Fixture f;
+  auto recs = f.recs;
+  std::swap(recs[1], recs[2]);
+  const auto res = decode(as_given(f.h, recs), "plan.trj");
+  EXPECT_EQ(res.error, "plan.trj: byte " + std::to_string(f.off(1) + 8) + ": segment 1: sequence number 2, expected 1");
+  ASSERT_EQ(res.records.size(), 1u);
+  EXPECT_EQ(res.records[0].regs, f.recs[0].regs);
+}
+
+TEST(StreamIntegrity, DuplicatedRecordIsRefused) {
+  // the end record counts the duplicate (encode() recomputes it), every CRC holds
+  Fixture f;
+  auto recs = f.recs;
+  recs.insert(recs.begin() + 2, recs[1]);
+  const auto res = decode(as_given(f.h, recs), "plan.trj");
+  EXPECT_EQ(res.error, "plan.trj: byte " + std::to_string(f.off(2) + 8) + ": segment 2: sequence number 1, expected 2");
+  EXPECT_EQ(res.records.size(), 2u);
+  // the first record must be 0
+  auto late = f.recs;
+  for (auto& r : late) r.seq += 7;
+  EXPECT_EQ(decode(as_given(f.h, late), "plan.trj").error,
+            "plan.trj: byte " + std::to_string(f.off(0) + 8) + ": segment 0: sequence number 7, expected 0");
+}
+
+TEST(StreamIntegrity, KBeyondTheBoundIsRefusedAtOnce) {
+  Fixture f;
+  for (uint32_t k : {0xFFFFFFFFu, 1u << 26, (1u << 20) + 1}) {
+    const auto res = f.edited(3, [&](std::vector<uint8_t>& b, size_t o) { put32(b, o + 4, k); });
+    EXPECT_EQ(res.error, "plan.trj: byte " + std::to_string(f.off(3) + 4) + ": segment 3: K=" + std::to_string(k) +
+                             " ticks, beyond the format's bound 2^20 = 1048576");
+    EXPECT_EQ(res.records.size(), 3u);
+  }
+  const auto zero = f.edited(3, [&](std::vector<uint8_t>& b, size_t o) { put32(b, o + 4, 0); });
+  EXPECT_EQ(zero.error, "plan.trj: byte " + std::to_string(f.off(3) + 4) + ": segment 3: K=0 ticks");
+}
+
+TEST(StreamIntegrity, NonzeroFlagsAndReservedAreRefused) {
+  Fixture f;
+  EXPECT_EQ(f.edited(2, [](std::vector<uint8_t>& b, size_t o) { b[o + 1] = 0x40; }).error,
+            "plan.trj: byte " + std::to_string(f.off(2) + 1) + ": segment 2: flags 0x40, must be 0");
+  EXPECT_EQ(f.edited(2, [](std::vector<uint8_t>& b, size_t o) { b[o + 3] = 0x01; }).error,
+            "plan.trj: byte " + std::to_string(f.off(2) + 3) + ": segment 2: reserved byte 0x01, must be 0");
+  // the end record's reserved byte
+  auto b = f.good;
+  const size_t e = f.off(f.recs.size());
+  b[e + 2] = 0x10;
+  reseal(b, e, 16);
+  EXPECT_EQ(decode(b, "plan.trj").error, "plan.trj: byte " + std::to_string(e + 2) +
+                                             ": end record: reserved byte 0x10, must be 0");
+  // the header's reserved fields
+  for (size_t at : {18u, 19u, 52u, 59u}) {
+    auto hb = f.good;
+    hb[at] = 0x20;
+    reseal(hb, 0, 64);
+    const auto res = decode(hb, "plan.trj");
+    EXPECT_EQ(res.error, "plan.trj: byte " + std::to_string(at) + ": header: reserved byte 0x20, must be 0");
+    EXPECT_TRUE(res.records.empty());
+  }
+}
+
+TEST(StreamIntegrity, UnknownUnitsAndRecordTypeAreRefused) {
+  Fixture f;
+  auto b = f.good;
+  b[28] = 'x';  // "xm"
+  reseal(b, 0, 64);
+  EXPECT_EQ(decode(b, "plan.trj").error,
+            "plan.trj: byte 28: header: units 'xm' unknown (known: mm, um, m, in, deg, rad)");
+  b = f.good;
+  b[40] = 'z';  // after the NUL of "mm"
+  reseal(b, 0, 64);
+  EXPECT_EQ(decode(b, "plan.trj").error, "plan.trj: byte 40: header: units padding byte 0x7A, must be 0");
+  for (uint8_t type : {0x00, 0x03, 0x7E}) {
+    const auto res = f.edited(2, [&](std::vector<uint8_t>& bb, size_t o) { bb[o] = type; });
+    char hex[8];
+    std::snprintf(hex, sizeof hex, "0x%02X", type);
+    EXPECT_EQ(res.error, "plan.trj: byte " + std::to_string(f.off(2)) + ": segment 2: unknown record type " + hex);
+    EXPECT_EQ(res.records.size(), 2u);
+  }
+}
+
+TEST(StreamIntegrity, AJumpInPositionIsRefused) {
+  Fixture f;
+  const size_t per_axis = size_t(f.h.degree + 1) * (f.h.width / 8);
+  // axis 1's r[0] of segment 3, one register LSB off (CRC re-sealed)
+  const auto res = f.edited(3, [&](std::vector<uint8_t>& b, size_t o) { b[o + 12 + per_axis] ^= 1; });
+  const std::string want = "plan.trj: byte " + std::to_string(f.off(3) + 12 + per_axis) +
+                           ": segment 3: axis 1 starts at r[0] = ";
+  EXPECT_EQ(res.error.rfind(want, 0), 0u) << res.error;
+  EXPECT_NE(res.error.find("not where the previous segment ends (" + end_of(f.recs[2])[1].get_str() + ")"),
+            std::string::npos)
+      << res.error;
+  EXPECT_EQ(res.records.size(), 3u);
+  // the writers refuse it before writing
+  auto recs = f.recs;
+  recs[3].regs[0][0] += 1;
+  const std::string path = ::testing::TempDir() + "/trajcore_jump.trj";
+  std::filesystem::remove(path);
+  EXPECT_THROW(write_file(path, f.h, recs), StreamError);
+  EXPECT_FALSE(std::filesystem::exists(path));
+  // a BCU segment's c_A too
+  std::mt19937_64 rng(31);
+  const Header h2 = header_v2();
+  auto mixed = mixed_records(rng, h2, 4);  // F B B F
+  mixed[2].regs[2][0] -= 1;
+  const auto off = offsets(h2, mixed);
+  const size_t cb = (h2.bcu_ctrl_width + 7) / 8;
+  const auto r2 = decode(encode(h2, mixed), "m.trj");
+  EXPECT_EQ(r2.error.rfind("m.trj: byte " + std::to_string(off[2] + 12 + 2 * 4 * cb) + ": segment 2: axis 2 starts at c_A = ", 0), 0u)
+      << r2.error;
+  EXPECT_EQ(r2.records.size(), 2u);
+}
+
+TEST(StreamIntegrity, RawBytesAreTheRecordsAsWritten) {
+  std::mt19937_64 rng(32);
+  const Header h = header_v2();
+  const auto recs = mixed_records(rng, h, 7);
+  const std::string path = ::testing::TempDir() + "/trajcore_raw.trj";
+  write_file(path, h, recs);
+  std::ifstream file(path, std::ios::binary);
+  const std::vector<uint8_t> all((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  std::istringstream in(std::string(all.begin(), all.end()));
+  StreamReader rd(in, path);
+  const auto off = offsets(h, recs);
+  Record r;
+  size_t i = 0;
+  while (rd.next(r)) {
+    ASSERT_LT(i, recs.size());
+    EXPECT_EQ(r.seq, i);
+    const std::vector<uint8_t> slice(all.begin() + off[i], all.begin() + off[i + 1]);
+    EXPECT_EQ(rd.raw(), slice) << i;
+    EXPECT_EQ(encode_record(h, r), slice) << i;
+    ++i;
+  }
+  EXPECT_TRUE(rd.complete()) << rd.error();
+  EXPECT_EQ(i, recs.size());
+}
+
+TEST(StreamIntegrity, EndRecordCarriesTheCount) {
+  Fixture f;
+  auto b = f.good;
+  const size_t e = f.off(f.recs.size());
+  put32(b, e + 8, 4);
+  reseal(b, e, 16);
+  EXPECT_EQ(decode(b, "plan.trj").error,
+            "plan.trj: byte " + std::to_string(e + 8) + ": end record counts 4 segments, stream has 5");
 }
