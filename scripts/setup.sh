@@ -11,6 +11,7 @@ PKGS=(
   libcli11-dev nlohmann-json3-dev libgmp-dev zlib1g-dev
   valgrind
   libtinyxml2-dev libdxflib-dev
+  libserialport-dev  # serial ports of the upload tool (host/link)
   linuxcnc-uspace  # rs274, LinuxCNC's interpreter: the oracle of the G-code cross-check (tb/input)
 )
 

@@ -162,10 +162,11 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
   }
   w.finish();
   end_progress();
-  std::printf("%s: %zu curves in %zu windows, %zu segments, %lld ticks (%.3f s of motion) -> %s\n"
+  std::fprintf(a.output == "-" ? stderr : stdout, "%s: %zu curves in %zu windows, %zu segments, %lld ticks (%.3f s of motion) -> %s\n"
               "host time %.3f s (%.0fx real time), first segment after %.1f ms\n",
               a.raster ? "raster" : a.input.c_str(), st.curves, st.windows, st.segments, st.ticks, st.motion_time,
-              a.output.c_str(), st.wall, st.motion_time / st.wall, st.first_segment * 1e3);
+              a.output == "-" ? "standard output" : a.output.c_str(), st.wall, st.motion_time / st.wall,
+              st.first_segment * 1e3);
   return 0;
 }
 
@@ -176,13 +177,14 @@ int plan_whole(const PlanArgs& a) {
   const job::JobConfig& cfg = in.cfg;
   const auto res = job::run_job(path, cfg, progress);
   stream::write_file(a.output, res.header, job::records_of(res));
-  std::printf("%s: %zu segments, %zu ticks (%.3f s of motion) -> %s\n", a.input.c_str(), res.segments.size(),
-              res.ticks.size(), res.plan.duration(), a.output.c_str());
+  FILE* out = a.output == "-" ? stderr : stdout;  // "-": the stream goes to standard output
+  std::fprintf(out, "%s: %zu segments, %zu ticks (%.3f s of motion) -> %s\n", a.input.c_str(), res.segments.size(),
+               res.ticks.size(), res.plan.duration(), a.output.c_str());
   // the plan report; the output columns are the host's exact prediction of
   // the core's samples (`trajcore run` confirms them on the Verilated core)
   const auto rep = report::make_report(path, cfg, res, report::predicted_samples(res));
-  std::fputs((in.toolpath_text + report::report_text(cfg, rep, res)).c_str(), stdout);
-  std::printf("(output columns: the host's exact prediction of the core's samples)\n");
+  std::fputs((in.toolpath_text + report::report_text(cfg, rep, res)).c_str(), out);
+  std::fprintf(out, "(output columns: the host's exact prediction of the core's samples)\n");
   const bool ok = passes(cfg, rep);
   if (!ok) std::fprintf(stderr, "trajcore plan: a check FAILED (see the report)\n");
   return ok ? 0 : 1;

@@ -7,6 +7,8 @@
 //   trajcore demo                              the built-in circle demo (cubic engine)
 //   trajcore demo --engine bcu|mixed           the circle through traj_core (BCU / FD+BCU segments)
 //   trajcore spline <points.json> -o out.trj   [BCU]'s C1 spline through points -> BCU segment stream
+//   trajcore upload <stream.trj|-> --port P    segment stream -> board (serial, pty, tcp)
+//   trajcore board --loopback                  the loopback board on a pty or TCP port (fault injection)
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
@@ -14,6 +16,7 @@
 
 #include "commands.hpp"
 #include "demo.hpp"
+#include "link_cmds.hpp"
 
 namespace fd = traj::fd;
 
@@ -112,7 +115,7 @@ int main(int argc, char** argv) {
   pl->add_option("path", pa.input,
                  "G-code (.ngc .nc .gcode .tap), SVG, DXF, curve or path JSON (the butterfly format, or "
                  "{\"curves\": [...]}), or a JSON Lines path (*.jsonl: one curve object per line, read as a stream)");
-  pl->add_option("-o,--output", pa.output, "segment stream to write")->capture_default_str();
+  pl->add_option("-o,--output", pa.output, "segment stream to write (- : standard output, e.g. piped into `trajcore upload -`)")->capture_default_str();
   auto* window_opt = pl->add_option(
       "--window", pa.window,
       "stream in bounded memory: plan a look-ahead window of this many curves, commit three quarters of it "
@@ -146,6 +149,9 @@ int main(int argc, char** argv) {
   rn->add_option("--out-dir", ra.out_dir, "where to write plan.trj, samples.csv, report.txt, *.svg")->capture_default_str();
   add_limits(rn, ra.cfg, v_axis, a_axis, j_axis);
 
+  traj::app::LinkCommands lc;
+  traj::app::add_link_commands(app, lc);
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -168,6 +174,8 @@ int main(int argc, char** argv) {
       return traj::app::run_command(ra);
     }
     if (*sm) return traj::app::sim_command(sa);
+    if (*lc.upload) return traj::app::upload_command(lc.up);
+    if (*lc.board) return traj::app::board_command(lc.bd);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "trajcore: error: %s\n", e.what());
     return 1;

@@ -10,6 +10,13 @@
 namespace traj::util {
 
 AtomicFile::AtomicFile(const std::string& path, std::ios::openmode mode) : path_(path), tmp_(path + ".tmp") {
+  if (path == "-") {  // a pipe: written as it comes, nothing to rename or remove
+    tmp_ = "/dev/stdout";
+    to_stdout_ = true;
+    out_.open(tmp_, mode | std::ios::out);
+    if (!out_) throw std::runtime_error("cannot write to standard output");
+    return;
+  }
   const std::filesystem::path p(path);
   if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path());
   errno = 0;
@@ -18,7 +25,7 @@ AtomicFile::AtomicFile(const std::string& path, std::ios::openmode mode) : path_
 }
 
 AtomicFile::~AtomicFile() {
-  if (done_) return;
+  if (done_ || to_stdout_) return;
   out_.close();
   std::remove(tmp_.c_str());
 }
@@ -26,6 +33,8 @@ AtomicFile::~AtomicFile() {
 void AtomicFile::commit() {
   out_.close();
   if (!out_) throw std::runtime_error("write failed: " + tmp_);
+  done_ = to_stdout_;
+  if (done_) return;
   std::error_code ec;
   std::filesystem::rename(tmp_, path_, ec);
   if (ec) throw std::runtime_error("cannot move " + tmp_ + " to " + path_ + ": " + ec.message());

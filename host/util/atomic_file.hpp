@@ -5,6 +5,8 @@
 // if commit() is never reached (an exception, an early return), the
 // destructor removes the temporary file, so the target is either the old
 // file, the complete new one, or absent. The parent directory is created.
+// The path "-" is standard output, written as it comes (a pipe's reader sees
+// an incomplete stream as truncated).
 #pragma once
 #include <fstream>
 #include <string>
@@ -27,7 +29,7 @@ class AtomicFile {
  private:
   std::string path_, tmp_;
   std::ofstream out_;
-  bool done_ = false;
+  bool done_ = false, to_stdout_ = false;
 };
 
 }  // namespace traj::util

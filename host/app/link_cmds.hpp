@@ -1,0 +1,43 @@
+// The link commands of the trajcore tool: `upload` (a segment stream to a
+// board over a serial port, pseudo-terminal or TCP) and `board` (the loopback
+// board with fault injection). Options are registered here; main.cpp runs the
+// chosen one.
+#pragma once
+#include <CLI/CLI.hpp>
+
+#include <string>
+
+#include "link/board.hpp"
+#include "link/board_server.hpp"
+#include "link/upload.hpp"
+
+namespace traj::app {
+
+struct UploadArgs {
+  std::string input;                 // "-": standard input
+  std::string port;
+  link::UploadOptions opt;
+};
+
+struct BoardArgs {
+  bool loopback = false;
+  int tcp_port = -1;                 // >= 0: listen on TCP (0: any free port); else a pseudo-terminal
+  link::BoardOptions board;
+  link::FaultOptions faults;
+  std::string faults_dir = "both";
+  bool once = false;                 // exit after one job's end
+  std::string played;                // file: the bytes of every played record, in order
+};
+
+struct LinkCommands {
+  UploadArgs up;
+  BoardArgs bd;
+  CLI::App* upload = nullptr;
+  CLI::App* board = nullptr;
+};
+
+void add_link_commands(CLI::App& app, LinkCommands& lc);
+int upload_command(const UploadArgs& a);
+int board_command(const BoardArgs& a);
+
+}  // namespace traj::app

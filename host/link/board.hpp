@@ -1,0 +1,82 @@
+// The loopback board: a host-side model of the board's protocol behaviour
+// (rtl/board/LINK.md): a FIFO of whole segment records, next_seq, ACK/NAK with
+// credits, CONFIG/START/STOP/RESUME/END, underrun halt, STATUS. It plays
+// records by their tick counts (it does not evaluate the polynomials), either
+// paced at a tick rate or as fast as the link feeds it. It is the reference of
+// the protocol for the host and the device of long uploads.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <functional>
+
+#include "link/frame.hpp"
+
+namespace traj::link {
+
+// The board build's segment format (what a real board is synthesised for).
+struct BoardFormat {
+  int axes = 3, degree = 5, width = 96, guard = 48;
+  size_t record_bytes() const { return 16 + size_t(axes) * size_t(degree + 1) * size_t(width / 8); }
+};
+
+struct BoardOptions {
+  BoardFormat format;
+  size_t fifo_segments = 256;    // FIFO capacity in whole segments
+  double clock_hz = kDefaultBoardClockHz;  // core clock: tick period in clocks -> seconds
+  uint32_t min_tick_clocks = 64; // shortest tick period the build honours
+  // Playback speed as a multiple of real time (tick period from CONFIG);
+  // 0: unpaced (a full FIFO plays its older half at once, END plays the rest;
+  // no underrun is possible).
+  double speed = 1.0;
+};
+
+class LoopbackBoard {
+ public:
+  explicit LoopbackBoard(const BoardOptions& o);
+
+  // Bytes from the host; the answers are appended to `out` (whole frames).
+  void receive(const uint8_t* p, size_t n, Bytes& out);
+  // Plays until `now` (seconds, any monotonic origin); periodic STATUS frames
+  // are appended to `out`.
+  void advance(double now, Bytes& out);
+  // Power-on reset: FIFO, next_seq, configuration and counters are lost.
+  void reset();
+
+  Status status() const;
+  bool playing() const { return playing_; }
+  bool end_reached() const { return end_reached_; }
+  uint64_t stored_total() const { return stored_total_; }
+
+  // Called with each record's seq and bytes as its playback starts.
+  std::function<void(uint32_t seq, const Bytes& record)> on_played;
+
+ private:
+  void on_frame(const Frame& f, Bytes& out);
+  void on_segment(const Frame& f, Bytes& out);
+  bool content_good(const Frame& f) const;
+  void ack(Bytes& out) const;
+  void nak(NakReason r, Bytes& out) const;
+  uint16_t credits() const;
+  void start_next_segment();
+  bool at_boundary();
+  void play_ticks(uint64_t ticks);
+  void play_unpaced();
+  int64_t start_sample(const Bytes& rec, int axis) const;
+
+  BoardOptions o_;
+  FrameDecoder dec_;
+  std::vector<FrameDecoder::Event> events_;
+  std::deque<Bytes> fifo_;
+  uint32_t next_seq_ = 0, seq_playing_ = 0;
+  bool configured_ = false, playing_ = false, halted_ = false, stop_req_ = false, end_marked_ = false,
+       end_reached_ = false, in_segment_ = false;
+  Config cfg_;
+  uint64_t left_in_segment_ = 0;
+  double last_time_ = -1, tick_budget_ = 0;
+  uint64_t next_status_tick_ = 0;
+  Status st_;  // counters and the position
+  uint64_t stored_total_ = 0;
+};
+
+}  // namespace traj::link
