@@ -33,7 +33,7 @@ class StepDecoder {
       position_ += dir ? 1 : -1;
       ++rises_;
       last_rise_ = cycle;
-      edges_.push_back(cycle);
+      edges_.push_back({cycle, dir});
     } else if (!step && step_) {
       if (cycle - last_rise_ < t_.pulse) fail(cycle, "step pulse shorter than the pulse width");
       last_fall_ = cycle;
@@ -42,7 +42,11 @@ class StepDecoder {
   }
 
   int64_t position() const { return position_; }
-  const std::vector<uint64_t>& edges() const { return edges_; }
+  struct Edge {
+    uint64_t cycle;
+    bool up;
+  };
+  const std::vector<Edge>& edges() const { return edges_; }
   const std::string& first_violation() const { return violation_; }
   uint64_t violations() const { return violations_; }
 
@@ -56,7 +60,7 @@ class StepDecoder {
   bool step_ = false, dir_ = false;
   uint64_t dir_change_ = kNever, last_rise_ = 0, last_fall_ = 0, rises_ = 0;
   int64_t position_ = 0;
-  std::vector<uint64_t> edges_;
+  std::vector<Edge> edges_;
   uint64_t violations_ = 0;
   std::string violation_;
 };

@@ -100,8 +100,10 @@ TEST(StepDecoder, CountsSignedStepsAndKeepsEdgeTimes) {
   const StepDecoder d = run({3, 4}, p);
   EXPECT_EQ(d.position(), 3);
   ASSERT_EQ(d.edges().size(), 7u);
-  EXPECT_EQ(d.edges()[0], 4u);
-  EXPECT_EQ(d.edges()[1], 10u);
+  EXPECT_EQ(d.edges()[0].cycle, 4u);
+  EXPECT_EQ(d.edges()[1].cycle, 10u);
+  EXPECT_TRUE(d.edges()[4].up);
+  EXPECT_FALSE(d.edges()[5].up);
   EXPECT_EQ(d.violations(), 0u) << d.first_violation();
 }
 
