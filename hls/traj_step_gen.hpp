@@ -1,8 +1,8 @@
 // trajcore hls: step/dir generator, cycle-accurate model of
 // rtl/traj_step_gen.sv (same registers, same names, same order). The method
-// (a DDA along the chord between consecutive samples, restarted exactly at
-// every tick from frac(q) * P), its exactness argument and the pulse timing
-// are described in the RTL header and rtl/README.md.
+// (a DDA along the chord between consecutive samples, exact step counts, the
+// serial preparation) and the pulse timing are described in the RTL header
+// and rtl/README.md.
 #pragma once
 #include <cstdint>
 
@@ -10,33 +10,30 @@
 
 namespace traj {
 
-template <int Axes = 3, int OutWidth = 48, int FracBits = 8, int PeriodWidth = 24, int DeltaWidth = 32,
-          int DueWidth = 16, int TimeWidth = 16>
+template <int Axes = 3, int OutWidth = 48, int FracBits = 14, int PeriodWidth = 18, int DueWidth = 8,
+          int TimeWidth = 16>
 class StepGen {
  public:
   static_assert(Axes >= 1 && Axes <= 8, "Axes must be 1..8");
   static_assert(OutWidth >= 8 && OutWidth <= 64, "OutWidth must be 8..64");
   static_assert(FracBits >= 1 && FracBits <= 16, "FracBits must be 1..16");
   static_assert(PeriodWidth >= 8 && PeriodWidth <= 32, "PeriodWidth must be 8..32");
-  static_assert(DeltaWidth >= 8 && DeltaWidth <= PeriodWidth + FracBits + 1 && DeltaWidth <= OutWidth + FracBits,
-                "DeltaWidth must be 8..PeriodWidth+FracBits+1");
   static_assert(DueWidth >= 4 && DueWidth <= 32, "DueWidth must be 4..32");
   static_assert(TimeWidth >= 2 && TimeWidth <= 16, "TimeWidth must be 2..16");
 
   static constexpr int F = FracBits;
-  static constexpr int QW = OutWidth + F;
   static constexpr int RW = PeriodWidth + F + 2;
-  static constexpr int kPrepClocks = 66 + F;  // sample -> next interval's operands ready
+  static constexpr int kPrepClocks = Axes * RW + 1;  // sample -> next interval's D ready
 
   struct In {
     bool rst_n = true;
     uint8_t shift[Axes] = {};
-    uint32_t period = 0;
+    uint32_t period = 1;
     uint32_t pulse = 1;
     uint32_t setup = 0;
     bool enable = false;
     bool sample_valid = false;
-    u128 sample[Axes] = {};  // OutWidth bits
+    u128 sample[Axes] = {};  // OutWidth bits; must hold for kPrepClocks after sample_valid
   };
   struct Out {
     bool step[Axes];
@@ -57,10 +54,26 @@ class StepGen {
   }
 
   void clock(const In& in) {
-    const uint32_t period = in.period & static_cast<uint32_t>(mask(PeriodWidth));
+    const uint32_t pmask = static_cast<uint32_t>(mask(PeriodWidth));
     const uint32_t tmask = static_cast<uint32_t>(mask(TimeWidth));
-    const bool take = in.sample_valid && sq_q_ == kIdle && !nready_q_;
+    const uint32_t period = in.period & pmask;
+    const uint32_t pulse = in.pulse & tmask, setup = in.setup & tmask;
+    const bool take = in.sample_valid && !prep_q_ && !nready_q_;
     const bool load = nready_q_ && (!active_q_ || last_q_);
+    const bool last_bit = bit_q_ == RW - 1;
+    const bool last_axis = ax_q_ == Axes - 1;
+    const int ax_next = take ? 0 : (ax_q_ + 1) % (1 << aw());
+    const int shift_next = ax_next < Axes ? (in.shift[ax_next] & 63) : 0;
+    const u128 nt = static_cast<u128>(nper_q_) << F;
+
+    // the sample bit of q's bit bit_q of axis ax_q (0 below bit 0, sign above)
+    const u128 s = ax_q_ < Axes ? in.sample[ax_q_] : 0;
+    const int j = j_q_;
+    const bool sbit = j < 0 ? false : (j >= OutWidth ? ((s >> (OutWidth - 1)) & 1) != 0 : ((s >> j) & 1) != 0);
+    // serial subtraction q - q_prev
+    const bool pbit = (ax_q_ < Axes && (ax_[ax_q_].qprev_q & 1) != 0) && !(reinit_q_ && bit_q_ < F);
+    const bool dbit = sbit ^ pbit ^ borrow_q_;
+    const bool borrow_d = (!sbit && pbit) || (!sbit && borrow_q_) || (pbit && borrow_q_);
 
     bool err_in = in.sample_valid && !take;
     Axis nx[Axes];
@@ -68,191 +81,203 @@ class StepGen {
       const Axis& q = ax_[a];
       Axis& n = nx[a];
       n = q;
-      // shift, difference, product, D -/+ T
-      const u128 diff = wrap(q.sh_q - q.qprev_q, QW);
-      const u128 top = diff >> (DeltaWidth - 1);
-      const bool fits = top == 0 || top == mask(QW - DeltaWidth + 1);
-      if (take) {
-        n.sh_q = wrap(in.sample[a] << F, QW);
-      } else if (sq_q_ == kShift && scnt_q_ < (in.shift[a] & 63)) {
-        n.sh_q = wrap(static_cast<u128>(sext(q.sh_q, QW) >> 1), QW);
-      }
-      if (sq_q_ == kDiff) {
-        n.qprev_q = q.sh_q;
-        n.frac_q = static_cast<uint32_t>(bits(q.qprev_q, 0, F));
-        n.nd_q = sext(diff, DeltaWidth);
-        n.nr_q = 0;
-      } else if (sq_q_ == kMul) {
-        n.nr_q = w(2 * q.nr_q + (((q.frac_q >> (F - 1)) & 1) ? static_cast<int64_t>(nper_q_) : 0));
-        n.frac_q = (q.frac_q << 1) & static_cast<uint32_t>(mask(F));
-      } else if (sq_q_ == kAlt) {
-        n.nalt_q = q.nd_q < 0 ? w(q.nd_q + nt_q_) : w(q.nd_q - nt_q_);
+      if (prep_q_ && ax_q_ == a) {
+        n.qprev_q = (q.qprev_q >> 1) | (static_cast<u128>(sbit) << (RW - 1));
+        n.nd_q = (q.nd_q >> 1) | (static_cast<u128>(dbit) << (RW - 1));
       }
       // DDA
-      const int64_t sum_d = w(q.r_q + q.d_q), sum_alt = w(q.r_q + q.alt_q);
-      const bool up = active_q_ && q.dpos_q && sum_alt >= 0;
-      const bool down = active_q_ && !q.dpos_q && sum_d < 0;
+      const u128 sum_d = wrap(q.r_q + q.d_q, RW), sum_alt = wrap(q.r_q + q.alt_q, RW);
+      const bool up = active_q_ && q.dpos_q && !neg(sum_alt);
+      const bool down = active_q_ && !q.dpos_q && neg(sum_d);
+      const u128 r_next = !active_q_ ? q.r_q : ((up || down) ? sum_alt : sum_d);
+      const u128 alt_d = neg(q.nd_q) ? wrap(q.nd_q + nt, RW) : wrap(q.nd_q - nt, RW);
       if (load) {
         n.d_q = q.nd_q;
-        n.alt_q = q.nalt_q;
-        n.r_q = q.nr_q;
-        n.dpos_q = q.nd_q >= 0;
-      } else if (active_q_) {
-        n.r_q = (up || down) ? sum_alt : sum_d;
+        n.alt_q = alt_d;
+        n.r_q = reinit_q_ ? 0 : r_next;
+        n.dpos_q = !neg(q.nd_q);
+      } else {
+        n.r_q = r_next;
       }
       // pulses
-      const bool want_dir = q.due_q != 0 ? q.due_q > 0 : ((active_q_ && q.d_q != 0) ? q.dpos_q : q.dir_q);
-      const bool turn = q.pg_q == kPgIdle && want_dir != q.dir_q && q.since_q >= (in.setup & tmask);
-      const bool emit = q.pg_q == kPgIdle && q.due_q != 0 && want_dir == q.dir_q;
-      const int64_t due_d = wd(q.due_q + (up ? 1 : 0) - (down ? 1 : 0) - (emit ? (q.dir_q ? 1 : -1) : 0));
+      const bool due_nz = q.due_q != 0;
+      const bool want_dir = due_nz ? !neg_due(q.due_q) : ((active_q_ && q.d_q != 0) ? q.dpos_q : q.dir_q);
+      const bool can_emit = due_nz && want_dir == q.dir_q &&
+                            (q.pg_q == kPgIdle || q.pg_q == kPgHold || (q.pg_q == kPgLow && q.timer_q == 0));
+      const bool turn = q.pg_q == kPgIdle && want_dir != q.dir_q;
+      const uint64_t dm = mask(DueWidth);
+      const uint64_t due_d =
+          (q.due_q + (q.up_q ? 1 : 0) - (q.down_q ? 1 : 0) - (can_emit ? (q.dir_q ? 1 : dm) : 0)) & dm;
+      n.up_q = up;
+      n.down_q = down;
       n.due_q = due_d;
-      if (q.since_q != tmask) n.since_q = q.since_q + 1;
-      switch (q.pg_q) {
-        case kPgIdle:
-          if (turn) {
-            n.dir_q = want_dir;
-            n.timer_q = in.setup & tmask;
-            n.pg_q = kPgSetup;
-          } else if (emit) {
-            n.step_q = true;
-            n.timer_q = (in.pulse - 1) & tmask;
-            n.pg_q = kPgHigh;
-          }
-          break;
-        case kPgSetup:
-          if (q.timer_q == 0) n.pg_q = kPgIdle;
-          else n.timer_q = q.timer_q - 1;
-          break;
-        case kPgHigh:
-          if (q.timer_q == 0) {
-            n.step_q = false;
-            n.since_q = 0;
-            n.timer_q = (in.pulse - 1) & tmask;
-            n.pg_q = kPgLow;
-          } else {
-            n.timer_q = q.timer_q - 1;
-          }
-          break;
-        default:  // kPgLow
-          if (q.timer_q == 0) n.pg_q = kPgIdle;
-          else n.timer_q = q.timer_q - 1;
-          break;
+      if (can_emit) {
+        n.step_q = true;
+        n.timer_q = (pulse - 1) & tmask;
+        n.pg_q = kPgHigh;
+      } else {
+        switch (q.pg_q) {
+          case kPgIdle:
+            if (turn) {
+              n.dir_q = want_dir;
+              n.timer_q = setup;
+              n.pg_q = kPgSetup;
+            }
+            break;
+          case kPgSetup:
+          case kPgHold:
+            if (q.timer_q == 0) n.pg_q = kPgIdle;
+            else n.timer_q = q.timer_q - 1;
+            break;
+          case kPgHigh:
+            if (q.timer_q == 0) {
+              n.step_q = false;
+              n.timer_q = (pulse - 1) & tmask;
+              n.pg_q = kPgLow;
+            } else {
+              n.timer_q = q.timer_q - 1;
+            }
+            break;
+          default:  // kPgLow
+            if (q.timer_q == 0) {
+              n.timer_q = hold_q_;
+              n.pg_q = kPgHold;
+            } else {
+              n.timer_q = q.timer_q - 1;
+            }
+            break;
+        }
       }
-      // errors
-      const bool too_fast = load && (q.nd_q < 0 ? q.nalt_q < 0 : q.nalt_q > 0);
-      const bool due_ovf = due_d >= (int64_t(1) << (DueWidth - 2)) || due_d < -(int64_t(1) << (DueWidth - 2));
-      err_in = err_in || (sq_q_ == kDiff && !first_q_ && !fits) || too_fast || due_ovf;
+      const bool too_fast = load && (neg(q.nd_q) ? neg(alt_d) : (!neg(alt_d) && alt_d != 0));
+      const bool due_ovf = ((due_d >> (DueWidth - 1)) & 1) != ((due_d >> (DueWidth - 2)) & 1);
+      err_in = err_in || too_fast || due_ovf;
       if (!in.rst_n) {
+        n.up_q = false;
+        n.down_q = false;
         n.due_q = 0;
         n.pg_q = kPgIdle;
         n.timer_q = 0;
-        n.since_q = tmask;
         n.step_q = false;
         n.dir_q = true;
       }
     }
 
     // shared control
-    int sq_d = sq_q_;
-    int scnt_d = scnt_q_, mcnt_d = mcnt_q_;
-    bool first_d = first_q_, nready_d = nready_q_;
-    uint32_t nper_d = nper_q_;
-    int64_t nt_d = nt_q_;
-    switch (sq_q_) {
-      case kIdle:
-        if (take) {
-          sq_d = kShift;
-          scnt_d = 0;
+    bool prep_d = prep_q_, first_d = first_q_, reinit_d = reinit_q_, nready_d = nready_q_;
+    int ax_d = ax_q_, bit_d = bit_q_;
+    if (take) {
+      prep_d = true;
+      ax_d = 0;
+      bit_d = 0;
+      reinit_d = period != cur_per_q_;
+    } else if (prep_q_) {
+      if (!last_bit) {
+        bit_d = bit_q_ + 1;
+      } else {
+        bit_d = 0;
+        ax_d = last_axis ? 0 : ax_next;
+        if (last_axis) {
+          prep_d = false;
+          first_d = false;
+          nready_d = !first_q_;
         }
-        break;
-      case kShift:
-        if (scnt_q_ == 63) sq_d = kDiff;
-        else scnt_d = scnt_q_ + 1;
-        break;
-      case kDiff:
-        first_d = false;
-        sq_d = first_q_ ? kIdle : kMul;
-        mcnt_d = 0;
-        nper_d = period;
-        nt_d = static_cast<int64_t>(period) << F;
-        break;
-      case kMul:
-        if (mcnt_q_ == F - 1) sq_d = kAlt;
-        else mcnt_d = mcnt_q_ + 1;
-        break;
-      default:  // kAlt
-        sq_d = kIdle;
-        nready_d = true;
-        break;
+      }
     }
     bool active_d = active_q_, last_d = last_q_;
-    uint32_t cnt_d = cnt_q_;
+    uint32_t cnt_d = cnt_q_, cur_per_d = cur_per_q_;
     if (load) {
       nready_d = false;
       active_d = true;
       cnt_d = nper_q_;
+      cur_per_d = nper_q_;
       last_d = nper_q_ == 1;
     } else if (active_q_) {
-      cnt_d = (cnt_q_ - 1) & static_cast<uint32_t>(mask(PeriodWidth));
+      cnt_d = (cnt_q_ - 1) & pmask;
       last_d = cnt_q_ == 2;
       if (last_q_) active_d = false;
     }
+    // datapath of the pass
+    const uint32_t hold_d = setup > pulse ? setup - pulse : 0;
+    uint32_t nper_d = nper_q_;
+    int j_d = j_q_;
+    bool borrow_dd = borrow_q_;
+    if (take) {
+      nper_d = period;
+      j_d = shift_next - F;
+      borrow_dd = false;
+    } else if (prep_q_) {
+      if (last_bit) {
+        j_d = shift_next - F;
+        borrow_dd = false;
+      } else {
+        j_d = j_q_ + 1;
+        borrow_dd = borrow_d;
+      }
+    }
 
     for (int a = 0; a < Axes; ++a) ax_[a] = nx[a];
-    sq_q_ = sq_d;
-    scnt_q_ = scnt_d;
-    mcnt_q_ = mcnt_d;
+    prep_q_ = prep_d;
+    ax_q_ = ax_d;
+    bit_q_ = bit_d;
+    j_q_ = j_d;
+    borrow_q_ = borrow_dd;
     first_q_ = first_d;
+    reinit_q_ = reinit_d;
     nready_q_ = nready_d;
     nper_q_ = nper_d;
-    nt_q_ = nt_d;
+    cur_per_q_ = cur_per_d;
     active_q_ = active_d;
     last_q_ = last_d;
     cnt_q_ = cnt_d;
+    hold_q_ = hold_d;
     en_q_ = in.enable;
     err_q_ = err_q_ || err_in;
     if (!in.rst_n) {
-      sq_q_ = kIdle;
-      scnt_q_ = 0;
-      mcnt_q_ = 0;
+      prep_q_ = false;
+      ax_q_ = 0;
+      bit_q_ = 0;
       first_q_ = true;
+      reinit_q_ = false;
       nready_q_ = false;
       active_q_ = false;
       last_q_ = false;
       cnt_q_ = 0;
+      cur_per_q_ = 0;
       en_q_ = false;
       err_q_ = false;
     }
   }
 
  private:
-  enum { kIdle, kShift, kDiff, kMul, kAlt };
-  enum { kPgIdle, kPgSetup, kPgHigh, kPgLow };
+  enum { kPgIdle, kPgSetup, kPgHigh, kPgLow, kPgHold };
 
-  // wrap to RW bits, signed
-  static int64_t w(int64_t v) { return static_cast<int64_t>(sext(static_cast<u128>(v), RW)); }
-  static int64_t wd(int64_t v) { return static_cast<int64_t>(sext(static_cast<u128>(v), DueWidth)); }
+  static constexpr int aw() {  // axis counter width: clog2(Axes), at least 1
+    for (int w = 1; w < 3; ++w)
+      if ((1 << w) >= Axes) return w;
+    return 3;
+  }
+  static bool neg(u128 v) { return ((v >> (RW - 1)) & 1) != 0; }
+  static bool neg_due(uint64_t v) { return ((v >> (DueWidth - 1)) & 1) != 0; }
 
   struct Axis {
-    u128 sh_q = 0, qprev_q = 0;       // q (QW bits)
-    uint32_t frac_q = 0;              // frac(q_prev), consumed from the top
-    int64_t nd_q = 0, nr_q = 0, nalt_q = 0;  // next interval (RW bits, signed)
-    int64_t d_q = 0, alt_q = 0, r_q = 0;     // running interval
+    u128 qprev_q = 0, nd_q = 0;          // RW bits
+    u128 d_q = 0, alt_q = 0, r_q = 0;    // RW bits, two's complement
     bool dpos_q = false;
-    int64_t due_q = 0;
+    bool up_q = false, down_q = false;   // the DDA's steps, one clock later
+    uint64_t due_q = 0;                  // DueWidth bits, two's complement
     int pg_q = kPgIdle;
-    uint32_t timer_q = 0, since_q = 0;
+    uint32_t timer_q = 0;
     bool step_q = false, dir_q = true;
   };
 
   Axis ax_[Axes];
-  int sq_q_ = kIdle;
-  int scnt_q_ = 0, mcnt_q_ = 0;
-  bool first_q_ = true, nready_q_ = false;
-  uint32_t nper_q_ = 0;
-  int64_t nt_q_ = 0;
+  bool prep_q_ = false;
+  int ax_q_ = 0, bit_q_ = 0, j_q_ = 0;
+  bool borrow_q_ = false, first_q_ = true, reinit_q_ = false, nready_q_ = false;
+  uint32_t nper_q_ = 0, cur_per_q_ = 0;
   bool active_q_ = false, last_q_ = false;
   uint32_t cnt_q_ = 0;
+  uint32_t hold_q_ = 0;
   bool en_q_ = false, err_q_ = false;
 };
 

@@ -27,7 +27,8 @@
 // cycles, as the FD engine's underrun_o does): so no segment is handed to the
 // engine after an underrun tick it could not serve.
 // Strobes (tick_i, seg_start_i, underrun_i, rx_valid_i, rx_err_i) are one
-// cycle each; the tx stream holds its byte until tx_tready_i.
+// cycle each, rx_valid_i at most every other cycle (the UART gives one per
+// character); the tx stream holds its byte until tx_tready_i.
 `default_nettype none
 `include "traj_check.svh"
 
@@ -80,7 +81,7 @@ module traj_link_proto #(
   localparam int ChunkB    = ChunkWidth / 8;
   localparam int StatLen   = 40 + 8 * Axes;                  // STATUS payload
   localparam int CrcWordA  = 3;                              // ACK/NAK: last body word
-  localparam int CrcWordS  = 3 + StatLen / 4;                // STATUS: last body word
+  localparam int CrcWordS  = 2 + StatLen / 4;                // STATUS: last body word
   localparam logic [31:0] Residue = 32'hDEBB20E3;
 
   // frame types
@@ -201,15 +202,20 @@ module traj_link_proto #(
   // -------------------------------------------------------------------
   logic        fend, good, cbad_end, playing_busy;
   logic [31:0] next_seq_q, diff;
-  logic        behind;    // seq below next_seq (mod 2^32): a re-send
+  // Comparisons of the body so far, registered (timing): rx_valid_i comes at
+  // most every other cycle, so at a flag they describe every byte before it.
+  logic        seq_eq_q;   // seq == next_seq
+  logic        behind_q;   // seq below next_seq (mod 2^32): a re-send
+  logic        len_ok_q;   // idx == 12 + len
+  logic        crc_ok_q;   // the CRC residue of a good body
+  logic        cbad_end_q; // the length or a whole field is wrong for the type (cbad_end)
   logic [2:0]  code;      // 0 ACK, 1..5 NAK reason
   logic        answer, store, want_stat, do_reset, do_config, do_start, do_stop, do_resume, do_end, ooo;
   logic        playing_q, halt_q, stop_q, end_q, ended_q;
 
   assign fend         = is_flag && !hunt_q && (idx_q != '0);
-  assign good         = !bad_q && !esc_q && (idx_q == len_q + 12'd12) && (crc_q == Residue);
+  assign good         = !bad_q && !esc_q && len_ok_q && crc_ok_q;
   assign diff         = seq_q - next_seq_q;
-  assign behind       = diff[31];
   assign playing_busy = playing_q || fifo_busy_i;
   always_comb begin
     case (type_q)
@@ -226,7 +232,7 @@ module traj_link_proto #(
     if (fend) begin
       answer = 1'b1;
       if (!good) code = 3'd1;
-      else if (cbad_q || cbad_end) code = 3'd4;
+      else if (cbad_q || cbad_end_q) code = 3'd4;
       else begin
         case (type_q)
           TReset:   if (playing_busy) code = 3'd5; else do_reset = 1'b1;
@@ -236,13 +242,13 @@ module traj_link_proto #(
           TResume:  do_resume = 1'b1;
           TStatReq: begin answer = 1'b0; want_stat = 1'b1; end
           TSegment:
-            if (diff == '0) begin
+            if (seq_eq_q) begin
               if (wen_q) store = 1'b1; else code = 3'd3;
-            end else if (!behind) begin
+            end else if (!behind_q) begin
               code = 3'd2; ooo = 1'b1;
             end
           default:  // TEnd
-            if (diff == '0) do_end = 1'b1; else begin code = 3'd2; ooo = 1'b1; end
+            if (seq_eq_q) do_end = 1'b1; else begin code = 3'd2; ooo = 1'b1; end
         endcase
       end
     end
@@ -266,14 +272,18 @@ module traj_link_proto #(
       end else if (dv) begin
         if (idx_q != 12'hFFF) idx_q <= idx_q + 1'b1;
         if (idx_q == 12'd8)
-          wen_q <= is_seg && !bad_q && (len_q == 12'(RecBytes)) && (seq_q == next_seq_q)
-                && (fifo_credits_i != '0);
+          wen_q <= is_seg && !bad_q && (len_q == 12'(RecBytes)) && seq_eq_q && (fifo_credits_i != '0);
       end
     end
   end
 
   // Per-body flags and fields: set at the opening flag, so not reset.
   always_ff @(posedge clk_i) begin
+    seq_eq_q <= (diff == '0);
+    behind_q <= diff[31];
+    len_ok_q <= (idx_q == len_q + 12'd12);
+    crc_ok_q <= (crc_q == Residue);
+    cbad_end_q <= cbad_end;
     if (is_flag) begin
       bad_q  <= 1'b0;
       cbad_q <= 1'b0;
@@ -318,7 +328,8 @@ module traj_link_proto #(
   logic [2:0]        ans_code_q;
   logic              tx_take_ans, tx_take_stat, stat_due;
 
-  assign stat_due = tick_i && (cfg_stat_q != '0) && (stat_cnt_q + 1'b1 >= cfg_stat_q);
+  // stat_cnt_q: ticks left to the next STATUS, minus one
+  assign stat_due = tick_i && (cfg_stat_q != '0) && (stat_cnt_q == '0);
 
   always_ff @(posedge clk_i) begin
     if (!rst_ni) begin
@@ -397,8 +408,8 @@ module traj_link_proto #(
       if (ooo) n_ooo_q <= n_ooo_q + 1'b1;
       if (rx_valid_i) n_bytes_q <= n_bytes_q + 1'b1;
       // status period in ticks
-      if (do_config) stat_cnt_q <= '0;
-      else if (tick_i && cfg_stat_q != '0) stat_cnt_q <= stat_due ? '0 : stat_cnt_q + 1'b1;
+      if (do_config) stat_cnt_q <= sh_stat_q - 1'b1;
+      else if (tick_i && cfg_stat_q != '0) stat_cnt_q <= stat_due ? cfg_stat_q - 1'b1 : stat_cnt_q - 1'b1;
       // answers
       ans_pend_q  <= answer || (ans_pend_q && !tx_take_ans);
       if (answer) ans_code_q <= code;

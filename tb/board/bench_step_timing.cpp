@@ -30,6 +30,10 @@
 
 #include "traj_step_gen.hpp"
 
+#ifndef BENCH_FRAC
+#define BENCH_FRAC 14  // FracBits of the board build (rtl/traj_board.sv)
+#endif
+
 namespace {
 
 constexpr double kClock = 48e6;
@@ -144,7 +148,7 @@ struct Result {
 };
 
 Result run(const Motion& m, double h) {
-  using Gen = traj::StepGen<1, 48>;
+  using Gen = traj::StepGen<1, 48, BENCH_FRAC>;
   const uint32_t P = static_cast<uint32_t>(std::llround(h * kClock));
   Gen gen;
   Gen::In in;
