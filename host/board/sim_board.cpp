@@ -50,12 +50,16 @@ void SimulatedBoard::reset() {
   rtl_->top->tick_ext_i = 0;
   for (int i = 0; i < kResetCycles; ++i) clock(none);
   rtl_->top->rst_ni = 1;
+  // The line idles a character time after reset before the host's first
+  // start bit, as a real link does (the receiver takes no edge in its first
+  // cycle out of reset).
+  quiet_ = 10 * kClocksPerBit;
   status_ = {};
 }
 
 void SimulatedBoard::clock(link::Bytes& out) {
   auto& t = *rtl_->top;
-  t.rx_i = rx_.next();
+  t.rx_i = quiet_ ? (--quiet_, true) : rx_.next();
   t.clk_i = 0;
   t.eval();
   if (rtl_->tick() && t.rst_ni) ticks_.push_back(cycle_);

@@ -78,7 +78,7 @@ class SimulatedBoard {
   link::Status status_;
   uint32_t next_seq_ = 0;
   uint64_t stored_total_ = 0, cycle_ = 0;
-  double last_now_ = -1;
+  uint32_t quiet_ = 0;  // cycles the RX line idles before the queue is sent
 };
 
 }  // namespace traj::board
