@@ -7,9 +7,8 @@
 // protocol (rtl/board/LINK.md) exactly as the hardware does, so `trajcore
 // upload` talks to it on a pseudo-terminal as to a board.
 //
-// It has the interface of link::LoopbackBoard (receive, advance, reset,
-// status), so the same server (link::serve, with fault injection) serves
-// either.
+// It is a link::Board, as the loopback board is, so the same server
+// (link::serve, with fault injection) serves either.
 #pragma once
 #include <cstdint>
 #include <memory>
@@ -17,6 +16,7 @@
 
 #include "board/step_decoder.hpp"
 #include "board/uart_pins.hpp"
+#include "link/board.hpp"
 #include "link/frame.hpp"
 
 namespace traj::board {
@@ -27,7 +27,7 @@ struct BoardBuild {
   static const int kAxes, kDegree, kWidth, kGuardBits;
 };
 
-class SimulatedBoard {
+class SimulatedBoard : public link::Board {
  public:
   SimulatedBoard();
   ~SimulatedBoard();
@@ -35,20 +35,20 @@ class SimulatedBoard {
   SimulatedBoard& operator=(const SimulatedBoard&) = delete;
 
   // Bytes from the host, queued on the RX pin; the answers come from advance().
-  void receive(const uint8_t* p, size_t n, link::Bytes& out);
+  void receive(const uint8_t* p, size_t n, link::Bytes& out) override;
   // Clocks the board: every queued byte is sent on the RX pin and at most
   // `max_cycles` more cycles run (idle cycles are skipped while the board
   // neither plays nor has bytes to send); the TX bytes are appended to `out`.
-  void advance(double now_s, link::Bytes& out);
+  void advance(double now_s, link::Bytes& out) override;
   void run(uint64_t cycles, link::Bytes& out);
   // Power-on reset of the board logic (a reset mid-job, a fault).
-  void reset();
+  void reset() override;
   // Runs two tick periods more, so that the last tick's steps reach the pins.
   void drain();
 
-  bool playing() const;
-  bool end_reached() const { return status_.flags & link::status_flag::kEndReached; }
-  uint64_t stored_total() const { return stored_total_; }
+  bool playing() const override;
+  bool end_reached() const override { return status_.flags & link::status_flag::kEndReached; }
+  uint64_t stored_total() const override { return stored_total_; }
   link::Status status() const { return status_; }
 
   // The step shift of each axis, from the last good CONFIG the host sent

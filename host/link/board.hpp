@@ -31,22 +31,37 @@ struct BoardOptions {
   double speed = 1.0;
 };
 
-class LoopbackBoard {
+// A board as the byte path sees it: what serve() (board_server.hpp) drives.
+// The loopback board below; the Verilated board top plugs in the same way.
+class Board {
+ public:
+  virtual ~Board() = default;
+  // Bytes from the host; the bytes the board sends back are appended to `out`.
+  virtual void receive(const uint8_t* p, size_t n, Bytes& out) = 0;
+  // Runs until `now` (seconds, any monotonic origin); bytes sent meanwhile
+  // (periodic STATUS) are appended to `out`.
+  virtual void advance(double now, Bytes& out) = 0;
+  // Power-on reset: FIFO, next_seq, configuration and counters are lost.
+  virtual void reset() = 0;
+  virtual bool end_reached() const = 0;
+  virtual bool playing() const = 0;
+  // Segments stored since construction (reset() does not clear it): the
+  // trigger of mid-job faults.
+  virtual uint64_t stored_total() const = 0;
+};
+
+class LoopbackBoard : public Board {
  public:
   explicit LoopbackBoard(const BoardOptions& o);
 
-  // Bytes from the host; the answers are appended to `out` (whole frames).
-  void receive(const uint8_t* p, size_t n, Bytes& out);
-  // Plays until `now` (seconds, any monotonic origin); periodic STATUS frames
-  // are appended to `out`.
-  void advance(double now, Bytes& out);
-  // Power-on reset: FIFO, next_seq, configuration and counters are lost.
-  void reset();
+  void receive(const uint8_t* p, size_t n, Bytes& out) override;
+  void advance(double now, Bytes& out) override;
+  void reset() override;
 
   Status status() const;
-  bool playing() const { return playing_; }
-  bool end_reached() const { return end_reached_; }
-  uint64_t stored_total() const { return stored_total_; }
+  bool playing() const override { return playing_; }
+  bool end_reached() const override { return end_reached_; }
+  uint64_t stored_total() const override { return stored_total_; }
 
   // Called with each record's seq and bytes as its playback starts.
   std::function<void(uint32_t seq, const Bytes& record)> on_played;

@@ -71,4 +71,41 @@ size_t FaultyTransport::read(uint8_t* p, size_t n, int timeout_ms) {
   return in_.pop(p, n, now_ms());
 }
 
+void serve(Transport& t, Board& board, const std::atomic<bool>& stop, const FaultOptions& f,
+           ServeStats& stats, double end_idle_s) {
+  std::unique_ptr<FaultyTransport> faulty;
+  if (f.any_bytes()) faulty = std::make_unique<FaultyTransport>(t, f);
+  Transport& port = faulty ? static_cast<Transport&>(*faulty) : t;
+  uint8_t buf[4096];
+  Bytes out;
+  double last_rx = now_ms();
+  auto count_faults = [&] {
+    if (!faulty) return;
+    stats.corrupted = faulty->to_board().corrupted + faulty->to_host().corrupted;
+    stats.dropped = faulty->to_board().dropped + faulty->to_host().dropped;
+    stats.duplicated = faulty->to_board().duplicated + faulty->to_host().duplicated;
+  };
+  try {
+    while (!stop.load()) {
+      const size_t n = port.read(buf, sizeof buf, board.playing() ? 0 : 1);  // a playing board runs on
+      out.clear();
+      const bool cut = f.cut_after && board.stored_total() >= f.cut_after;
+      if (n && !cut) {
+        board.receive(buf, n, out);
+        last_rx = now_ms();
+      }
+      if (f.reset_after && stats.resets == 0 && board.stored_total() >= f.reset_after) {
+        board.reset();
+        ++stats.resets;
+      }
+      if (end_idle_s > 0 && board.end_reached() && now_ms() - last_rx > end_idle_s * 1e3) break;
+      board.advance(now_ms() * 1e-3, out);
+      if (!out.empty() && !cut) port.write(out);
+    }
+  } catch (const LinkError&) {
+    // the tool closed its end: the board keeps its state for the next one
+  }
+  count_faults();
+}
+
 }  // namespace traj::link

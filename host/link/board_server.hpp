@@ -69,51 +69,13 @@ struct ServeStats {
   uint64_t corrupted = 0, dropped = 0, duplicated = 0, resets = 0;
 };
 
-double now_ms();
-
-// Serves a board on `t` until `stop` is set, the other end closes (a closed
+// Serves the board on `t` until `stop` is set, the other end closes (a closed
 // transport returns normally), or, with end_idle_s > 0, the job's end was
 // reached and the tool has been silent for end_idle_s. Resets the board
-// mid-job if asked (once per FaultOptions, counted in `stats`). Board: the
-// loopback board (LoopbackBoard) or the simulated board
-// (board::SimulatedBoard): receive(p, n, out), advance(now_s, out), reset(),
-// stored_total(), end_reached().
-template <class Board>
+// mid-job if asked (once per FaultOptions, counted in `stats`).
 void serve(Transport& t, Board& board, const std::atomic<bool>& stop, const FaultOptions& f,
-           ServeStats& stats, double end_idle_s) {
-  std::unique_ptr<FaultyTransport> faulty;
-  if (f.any_bytes()) faulty = std::make_unique<FaultyTransport>(t, f);
-  Transport& port = faulty ? static_cast<Transport&>(*faulty) : t;
-  uint8_t buf[4096];
-  Bytes out;
-  double last_rx = now_ms();
-  auto count_faults = [&] {
-    if (!faulty) return;
-    stats.corrupted = faulty->to_board().corrupted + faulty->to_host().corrupted;
-    stats.dropped = faulty->to_board().dropped + faulty->to_host().dropped;
-    stats.duplicated = faulty->to_board().duplicated + faulty->to_host().duplicated;
-  };
-  try {
-    while (!stop.load()) {
-      const size_t n = port.read(buf, sizeof buf, board.playing() ? 0 : 1);  // a playing board runs on
-      out.clear();
-      const bool cut = f.cut_after && board.stored_total() >= f.cut_after;
-      if (n && !cut) {
-        board.receive(buf, n, out);
-        last_rx = now_ms();
-      }
-      if (f.reset_after && stats.resets == 0 && board.stored_total() >= f.reset_after) {
-        board.reset();
-        ++stats.resets;
-      }
-      if (end_idle_s > 0 && board.end_reached() && now_ms() - last_rx > end_idle_s * 1e3) break;
-      board.advance(now_ms() * 1e-3, out);
-      if (!out.empty() && !cut) port.write(out);
-    }
-  } catch (const LinkError&) {
-    // the tool closed its end: the board keeps its state for the next one
-  }
-  count_faults();
-}
+           ServeStats& stats, double end_idle_s = 0);
+
+double now_ms();
 
 }  // namespace traj::link

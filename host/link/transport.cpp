@@ -101,7 +101,9 @@ class SerialTransport : public Transport {
     if (static_cast<size_t>(r) != n) throw LinkError(name_ + ": write timed out");
   }
   size_t read(uint8_t* p, size_t n, int timeout_ms) override {
-    const sp_return r = sp_blocking_read_next(port_, p, n, static_cast<unsigned>(timeout_ms < 0 ? 0 : timeout_ms));
+    // libserialport: timeout 0 waits for ever; a poll is the non-blocking read
+    const sp_return r = timeout_ms == 0 ? sp_nonblocking_read(port_, p, n)
+                                        : sp_blocking_read_next(port_, p, n, timeout_ms < 0 ? 0u : unsigned(timeout_ms));
     if (r < 0) check(r, "read failed");
     return static_cast<size_t>(r);
   }

@@ -21,6 +21,7 @@ class Uploader {
 
   UploadResult run() {
     const auto t0 = Clock::now();
+    config_ = make_config();  // refused options before the board is touched
     drain_input();
     const Status s = query_status();
     if (o_.resume && !(s.next_seq == 0 && s.segments_played == 0)) {
@@ -311,7 +312,7 @@ class Uploader {
     if (s.next_seq != 0 || s.fifo_level != 0 || (s.flags & (status_flag::kPlaying | status_flag::kUnderrunHalt)))
       fail("the board did not reset (next_seq " + std::to_string(s.next_seq) + ", FIFO level " +
            std::to_string(s.fifo_level) + ")");
-    command(Type::kConfig, 0, encode_config(make_config()));
+    command(Type::kConfig, 0, encode_config(config_));
     underruns_at_start_ = s.underruns;
     base_ = send_next_ = sent_end_ = 0;
     allowed_end_ = s.credits;
@@ -353,6 +354,10 @@ class Uploader {
     c.status_ticks = o_.status_period_s > 0
                          ? static_cast<uint32_t>(std::max(1.0, std::round(o_.status_period_s / src_.header().period)))
                          : 0;
+    const size_t axes = static_cast<size_t>(src_.header().axes);
+    if (o_.step_shift.size() > 1 && o_.step_shift.size() != axes)
+      fail("--step-shift has " + std::to_string(o_.step_shift.size()) + " values for a stream of " +
+           std::to_string(axes) + " axes (give one, or one per axis)");
     for (int a = 0; a < src_.header().axes && a < 8; ++a) {
       const int sh = o_.step_shift.empty() ? 0
                      : o_.step_shift.size() == 1 ? o_.step_shift[0]
@@ -454,6 +459,7 @@ class Uploader {
   bool tracking_ = false, watching_ = false, answered_ = false;
   std::optional<Answer> last_answer_;
   UploadProgress prog_;
+  Config config_;
 };
 
 }  // namespace

@@ -146,10 +146,10 @@ TEST_P(UploadFaults, RecoversWithEveryRecordPlayedOnceInOrder) {
   ASSERT_EQ(got.size(), want.size());
   for (size_t i = 0; i < want.size(); ++i) ASSERT_TRUE(got[i] == want[i]) << "record " << i;
   // the faults happened
-  if (f.corrupt > 0) EXPECT_GT(rig.stats().corrupted, 10u);
-  if (f.drop > 0) EXPECT_GT(rig.stats().dropped, 10u);
-  if (f.dup_frames > 0) EXPECT_GT(rig.stats().duplicated, 10u);
-  if (f.corrupt > 0 || f.drop > 0) EXPECT_GT(r.progress.resends, 0u);
+  EXPECT_TRUE(f.corrupt == 0 || rig.stats().corrupted > 10);
+  EXPECT_TRUE(f.drop == 0 || rig.stats().dropped > 10);
+  EXPECT_TRUE(f.dup_frames == 0 || rig.stats().duplicated > 10);
+  EXPECT_TRUE((f.corrupt == 0 && f.drop == 0) || r.progress.resends > 0);
 }
 
 FaultOptions faults(double corrupt, double drop, double dup, double delay, bool to_board = true,
@@ -291,6 +291,84 @@ TEST(Upload, KilledToolThenResumeAfterUnderrun) {
   rig.disconnect();
   EXPECT_TRUE(rig.played() == file_records(path));
   EXPECT_EQ(rig.board().status().underruns, 1u);
+}
+
+}  // namespace
+}  // namespace traj::link
+
+namespace traj::link {
+namespace {
+
+// A board built for another record format refuses every segment (NAK 4): the
+// tool names it instead of retrying for ever.
+TEST(Upload, BoardOfAnotherFormatIsNamed) {
+  const auto& path = raster_stream(10);
+  BoardOptions bo = fast_board();
+  bo.format.degree = 3;  // 160-byte records; the stream's are 232
+  Rig rig(bo, {});
+  try {
+    run(rig, path);
+    FAIL() << "a board of another record format took the job";
+  } catch (const UploadError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad content"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(rig.played().empty());
+}
+
+// A board playing a job is not reset by a second upload without --resume.
+TEST(Upload, PlayingBoardIsNotTakenOver) {
+  const auto& path = raster_stream(40);
+  BoardOptions bo = fast_board(64);
+  bo.speed = 1;  // real time: the first job plays for minutes
+  Rig rig(bo, {});
+  {
+    RecordSource src(path);
+    UploadOptions o = tool();
+    struct Gone {};
+    try {
+      upload(rig.port(), src, o, [&](const UploadProgress& p) {
+        if (p.have_status && (p.status.flags & status_flag::kPlaying)) throw Gone{};
+      });
+    } catch (const Gone&) {
+    }
+  }
+  rig.connect();
+  try {
+    run(rig, path);
+    FAIL() << "a second upload took over a playing board";
+  } catch (const UploadError& e) {
+    EXPECT_NE(std::string(e.what()).find("the board is playing a job"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(rig.board().playing());
+}
+
+// A stream that breaks off mid-job (its writer died): the reader's message,
+// and STOP: the board ends at a segment end, not by an underrun.
+TEST(Upload, TruncatedStreamStopsTheBoard) {
+  const auto& whole = raster_stream(40);
+  const std::string cut = whole + ".cut";
+  {
+    std::ifstream in(whole, std::ios::binary);
+    std::vector<char> b((std::istreambuf_iterator<char>(in)), {});
+    std::ofstream(cut, std::ios::binary).write(b.data(), 64 + 232 * 100 + 50);
+  }
+  BoardOptions bo = fast_board(32);
+  bo.speed = 20;  // 100 records stream through in about 0.1 s; a segment lasts about 2 ms
+  Rig rig(bo, {});
+  try {
+    run(rig, cut);
+    FAIL() << "a truncated stream uploaded";
+  } catch (const UploadError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("segment 100"), std::string::npos) << m;
+    EXPECT_NE(m.find("STOP sent"), std::string::npos) << m;
+  }
+  std::filesystem::remove(cut);
+  for (int i = 0; i < 300 && rig.board().playing(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  const Status s = rig.board().status();
+  EXPECT_FALSE(s.flags & status_flag::kPlaying);
+  EXPECT_EQ(s.underruns, 0u);
+  EXPECT_GT(s.fifo_level, 0);  // the rest of the FIFO is kept, not played
 }
 
 }  // namespace
