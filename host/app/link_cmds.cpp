@@ -11,6 +11,8 @@
 
 #include <cstdarg>
 
+#include "board/step_check.hpp"
+
 namespace traj::app {
 namespace {
 
@@ -99,10 +101,14 @@ void add_board(CLI::App& app, LinkCommands& lc) {
   auto& a = lc.bd;
   auto* c = lc.board = app.add_subcommand(
       "board", "A board on a pseudo-terminal (printed) or TCP port, for `trajcore upload --port`");
-  c->add_flag("--loopback", a.loopback, "the loopback board: the protocol model (FIFO, ACK/NAK, credits, STATUS)")
-      ->required();
+  c->add_flag("--loopback", a.loopback,
+              "the loopback board: the protocol model (FIFO, ACK/NAK, credits, STATUS); without it, the simulated "
+              "board: rtl/traj_board.sv Verilated, its pins driven and decoded");
+  c->add_option("--expect", a.expect,
+                "simulated board: the stream the tool uploads; the decoded step/dir pins are checked against its "
+                "exact prediction (exit status 1 if they differ)");
   c->add_option("--tcp", a.tcp_port, "listen on this TCP port of 127.0.0.1 (0: any free port) instead of a pty");
-  c->add_option("--fifo", a.board.fifo_segments, "FIFO capacity, whole segments")
+  c->add_option("--fifo", a.board.fifo_segments, "loopback: FIFO capacity, whole segments")
       ->check(CLI::Range(1, 65535))
       ->capture_default_str();
   c->add_option("--speed", a.board.speed, "playback speed, multiple of real time (0: as fast as the link feeds it)")
@@ -161,10 +167,40 @@ int upload_command(const UploadArgs& a) {
   return 0;
 }
 
-int board_command(const BoardArgs& a) {
+namespace {
+
+link::FaultOptions faults_of(const BoardArgs& a) {
   link::FaultOptions f = a.faults;
   f.to_board = a.faults_dir != "host";
   f.to_host = a.faults_dir != "board";
+  return f;
+}
+
+// Serves `board` to one tool after another on a pty or TCP port (printed on
+// stdout) until SIGINT/SIGTERM, or with --once until a job's end.
+template <class Board>
+link::ServeStats serve_tools(const BoardArgs& a, Board& board) {
+  auto listener = a.tcp_port >= 0 ? link::listen_tcp(a.tcp_port) : link::listen_pty();
+  std::printf("%s\n", listener->port_spec().c_str());
+  std::fflush(stdout);
+  catch_signals({SIGINT, SIGTERM});
+  link::ServeStats stats;
+  while (!g_interrupted.load()) {
+    auto t = listener->accept(100);
+    if (!t) continue;
+    link::serve(*t, board, g_interrupted, faults_of(a), stats, a.once ? 0.5 : 0);
+    if (a.once && board.end_reached()) break;
+  }
+  return stats;
+}
+
+std::string fault_summary(const link::ServeStats& stats) {
+  return strf("faults: %llu bytes corrupted, %llu dropped, %llu frames duplicated, %llu board resets",
+              static_cast<unsigned long long>(stats.corrupted), static_cast<unsigned long long>(stats.dropped),
+              static_cast<unsigned long long>(stats.duplicated), static_cast<unsigned long long>(stats.resets));
+}
+
+int loopback_board_command(const BoardArgs& a) {
   link::LoopbackBoard board(a.board);
   std::ofstream played;
   if (!a.played.empty()) {
@@ -178,28 +214,44 @@ int board_command(const BoardArgs& a) {
     crc = link::crc32_update(crc, rec.data(), rec.size());
     if (played) played.write(reinterpret_cast<const char*>(rec.data()), static_cast<std::streamsize>(rec.size()));
   };
-  auto listener = a.tcp_port >= 0 ? link::listen_tcp(a.tcp_port) : link::listen_pty();
-  std::printf("%s\n", listener->port_spec().c_str());
-  std::fflush(stdout);
-  catch_signals({SIGINT, SIGTERM});
-  link::ServeStats stats;
-  while (!g_interrupted.load()) {
-    auto t = listener->accept(100);
-    if (!t) continue;
-    link::serve(*t, board, g_interrupted, f, stats, a.once ? 0.5 : 0);
-    if (a.once && board.end_reached()) break;
-  }
+  const link::ServeStats stats = serve_tools(a, board);
   played.flush();
   const link::Status s = board.status();
   std::fprintf(stderr,
                "board: %llu segments played (CRC-32 of their bytes %08x), %u ticks, next_seq %u, end %s, underruns "
-               "%u, bad frames %u, out of order %u; faults: %llu bytes corrupted, %llu dropped, %llu frames "
-               "duplicated, %llu board resets\n",
+               "%u, bad frames %u, out of order %u; %s\n",
                static_cast<unsigned long long>(n_played), crc, s.ticks_played, s.next_seq,
                board.end_reached() ? "reached" : "not reached", s.underruns, s.bad_frames, s.out_of_order,
-               static_cast<unsigned long long>(stats.corrupted), static_cast<unsigned long long>(stats.dropped),
-               static_cast<unsigned long long>(stats.duplicated), static_cast<unsigned long long>(stats.resets));
+               fault_summary(stats).c_str());
   return 0;
 }
+
+int simulated_board_command(const BoardArgs& a) {
+  stream::ReadResult expect;
+  if (!a.expect.empty()) {
+    expect = stream::read_file(a.expect);
+    if (!expect.complete) throw std::runtime_error(expect.error);
+  }
+  board::SimulatedBoard board;
+  std::fprintf(stderr, "board: rtl/traj_board.sv Verilated, %.0f MHz, %u baud\n", board::BoardBuild::kClkHz / 1e6,
+               board::BoardBuild::kBaud);
+  const link::ServeStats stats = serve_tools(a, board);
+  board.drain();
+  const link::Status s = board.status();
+  std::fprintf(stderr,
+               "board: %u segments played, %u ticks, next_seq %u, end %s, underruns %u, bad frames %u, out of order "
+               "%u; %.3f s simulated; %s\n",
+               s.segments_played, s.ticks_played, s.next_seq, board.end_reached() ? "reached" : "not reached",
+               s.underruns, s.bad_frames, s.out_of_order, double(board.cycles()) / board::BoardBuild::kClkHz,
+               fault_summary(stats).c_str());
+  if (a.expect.empty()) return 0;
+  const board::StepCheck c = board::check_steps(expect, board.step_shifts(), board);
+  std::fprintf(stderr, "%s", board::describe(c).c_str());
+  return c.ok() ? 0 : 1;
+}
+
+}  // namespace
+
+int board_command(const BoardArgs& a) { return a.loopback ? loopback_board_command(a) : simulated_board_command(a); }
 
 }  // namespace traj::app

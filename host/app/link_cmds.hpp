@@ -27,6 +27,7 @@ struct BoardArgs {
   std::string faults_dir = "both";
   bool once = false;                 // exit after one job's end
   std::string played;                // file: the bytes of every played record, in order
+  std::string expect;                // simulated board: the stream whose prediction the pins are checked against
 };
 
 struct LinkCommands {

@@ -44,6 +44,7 @@ class Board {
   // Power-on reset: FIFO, next_seq, configuration and counters are lost.
   virtual void reset() = 0;
   virtual bool end_reached() const = 0;
+  virtual bool playing() const = 0;
   // Segments stored since construction (reset() does not clear it): the
   // trigger of mid-job faults.
   virtual uint64_t stored_total() const = 0;
@@ -58,7 +59,7 @@ class LoopbackBoard : public Board {
   void reset() override;
 
   Status status() const;
-  bool playing() const { return playing_; }
+  bool playing() const override { return playing_; }
   bool end_reached() const override { return end_reached_; }
   uint64_t stored_total() const override { return stored_total_; }
 

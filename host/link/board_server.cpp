@@ -87,7 +87,7 @@ void serve(Transport& t, Board& board, const std::atomic<bool>& stop, const Faul
   };
   try {
     while (!stop.load()) {
-      const size_t n = port.read(buf, sizeof buf, 1);
+      const size_t n = port.read(buf, sizeof buf, board.playing() ? 0 : 1);  // a playing board runs on
       out.clear();
       const bool cut = f.cut_after && board.stored_total() >= f.cut_after;
       if (n && !cut) {

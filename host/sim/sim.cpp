@@ -10,6 +10,7 @@
 
 #if TRAJ_APP_CORE
 #include "bcu/bcu_compiler.hpp"
+#include "fd/fd_ticker.hpp"
 #endif
 
 namespace traj::sim {
@@ -113,22 +114,21 @@ struct Expect {
   bool done;
 };
 
-// The exact prediction of every sample from the records themselves (FD: the
-// register recurrence in exact integers, modulo 2^Width as the engine wraps;
-// BCU: the closed form of traj::bcu::predict_sample), one tick at a time: it
-// holds one segment's registers, whatever its K.
+// The exact prediction of every sample from the records themselves (FD:
+// fd::FdTicker; BCU: the closed form of traj::bcu::predict_sample), one tick
+// at a time: it holds one segment's registers, whatever its K.
 template <class B>
 class Prediction {
  public:
   Prediction(const std::vector<stream::Record>& recs, const bcu::Format& bf)
-      : recs_(recs), bf_(bf), mod_(mpz_class(1) << B::Width) {
+      : recs_(recs), bf_(bf), fd_(B::Width, B::GuardBits) {
     load();
   }
   Expect next() {
     if (s_ >= recs_.size()) throw std::runtime_error("the core emitted more samples than the stream holds");
     const auto& r = recs_[s_];
     Expect e{};
-    for (int a = 0; a < B::Axes; ++a) e.v[a] = r.is_bcu() ? bcu_sample(r, a) : fd_sample(a);
+    for (int a = 0; a < B::Axes; ++a) e.v[a] = r.is_bcu() ? bcu_sample(r, a) : fd_.sample_and_step(a);
     e.done = k_ + 1 == r.ticks;
     if (++k_ == r.ticks) {
       ++s_;
@@ -140,24 +140,14 @@ class Prediction {
 
  private:
   void load() {
-    if (s_ < recs_.size() && !recs_[s_].is_bcu()) reg_ = recs_[s_].regs;
+    if (s_ < recs_.size() && !recs_[s_].is_bcu()) fd_.load(recs_[s_].regs);
   }
   long long bcu_sample(const stream::Record& r, int a) const {
     return bcu::predict_sample(r.regs[a], r.depth(), static_cast<int>(k_), bf_.guard_bits);
   }
-  long long fd_sample(int a) {  // the engine's r0 (W bits two's complement) >> G, then one step
-    auto& x = reg_[a];
-    v_ = x[0] % mod_;
-    if (v_ < 0) v_ += mod_;
-    if (v_ >= mod_ / 2) v_ -= mod_;
-    mpz_fdiv_q_2exp(v_.get_mpz_t(), v_.get_mpz_t(), B::GuardBits);
-    for (int i = 0; i < B::Degree; ++i) x[i] += x[i + 1];
-    return v_.get_si();
-  }
   const std::vector<stream::Record>& recs_;
   bcu::Format bf_;
-  mpz_class mod_, v_;
-  std::vector<std::vector<mpz_class>> reg_;
+  fd::FdTicker fd_;
   size_t s_ = 0;
   uint32_t k_ = 0;
 };

@@ -3,18 +3,17 @@
 # Verilates one unit of rtl/ into <target> as class <prefix>, with the
 # parameters given (-G), random initial state and X (the lockstep driver,
 # host/sim/lockstep.hpp, compares from the first reset edge on). FAST: -O3
-# (the tool's builds); TRACE: VCD tracing. Units: traj_fd_engine, traj_bcu,
-# traj_bcu_gen, traj_core.
+# (the tool's builds); TRACE: VCD tracing. Units: the rows of rtl/units.txt.
 function(traj_verilate_unit target prefix unit)
   cmake_parse_arguments(V "TRACE;FAST" "" "PARAMS" ${ARGN})
-  set(sources_traj_fd_engine traj_fd_engine.sv)
-  set(sources_traj_bcu traj_bcu.sv)
-  set(sources_traj_bcu_gen traj_bcu.sv traj_bcu_gen.sv)
-  set(sources_traj_core traj_fd_engine.sv traj_bcu.sv traj_bcu_gen.sv traj_core.sv)
-  if(NOT DEFINED sources_${unit})
-    message(FATAL_ERROR "traj_verilate_unit: unknown unit ${unit}")
+  # The unit's files: its row of rtl/units.txt (the one table of units).
+  file(STRINGS ${TRAJ_RTL_DIR}/units.txt rows REGEX "^${unit} ")
+  if(NOT rows)
+    message(FATAL_ERROR "traj_verilate_unit: ${unit} is not in rtl/units.txt")
   endif()
-  list(TRANSFORM sources_${unit} PREPEND ${TRAJ_RTL_DIR}/ OUTPUT_VARIABLE sources)
+  string(REGEX REPLACE " +" ";" files "${rows}")
+  list(POP_FRONT files)
+  list(TRANSFORM files PREPEND ${TRAJ_RTL_DIR}/ OUTPUT_VARIABLE sources)
   list(TRANSFORM V_PARAMS PREPEND -G OUTPUT_VARIABLE gparams)
   set(opt)
   if(V_FAST)

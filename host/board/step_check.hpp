@@ -1,0 +1,49 @@
+// SPDX-License-Identifier: Apache-2.0
+// The simulated board's step/dir pins against the host's exact prediction.
+//
+// The prediction is the stream's own: every tick's sample, from the records
+// by the exact register recurrence (fd::FdTicker). One step is 2^shift output
+// LSB, so after tick n an axis has made floor(s_n / 2^shift) - floor(s_0 /
+// 2^shift) steps (the first sample sets the position, no steps). Each
+// boundary the samples cross between ticks n-1 and n is one expected step,
+// in order and direction; the decoded rising edges of the step pin must be
+// exactly these, one for one (no step lost, none extra, none reversed).
+//
+// Timing: the step generator spreads a tick's steps along the chord between
+// the two samples over the tick period P, one tick behind the samples. An
+// expected step crosses its boundary at the chord time t_n + f·P (t_n: the
+// cycle of tick n, f: the fraction of the chord); its edge's delay from that
+// time is reported (minimum and maximum, µs): a constant latency plus the
+// pulse generator's queueing.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "board/sim_board.hpp"
+#include "stream/segment_stream.hpp"
+
+namespace traj::board {
+
+struct AxisSteps {
+  uint64_t expected = 0, decoded = 0;  // steps (edges)
+  int64_t final_expected = 0, final_decoded = 0;  // net position, steps
+  double delay_min_us = 0, delay_max_us = 0;
+};
+
+struct StepCheck {
+  uint64_t ticks_expected = 0, ticks_seen = 0;
+  std::vector<AxisSteps> axes;
+  uint64_t mismatches = 0;   // expected steps not matched by an edge of the same direction
+  uint64_t violations = 0;   // pulse width / direction setup or hold below the configured
+  std::string first_problem;
+  bool ok() const { return mismatches == 0 && violations == 0 && ticks_seen >= ticks_expected; }
+};
+
+StepCheck check_steps(const stream::ReadResult& expected, const std::vector<int>& shifts,
+                      const SimulatedBoard& board);
+
+// The report's paragraph.
+std::string describe(const StepCheck& c);
+
+}  // namespace traj::board

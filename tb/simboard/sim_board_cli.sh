@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
+# sim_board_cli.sh TRAJCORE DIR clean|faults|restart|reset
+# `trajcore plan` -> `trajcore upload` -> `trajcore board` (the simulated
+# board: rtl/traj_board.sv Verilated, pins driven and decoded), on a
+# pseudo-terminal as a user runs them, with a short raster (2 pieces, 0.77 s of
+# motion at 1 ms ticks):
+#   clean:  the decoded step/dir pins equal the stream's exact prediction;
+#   faults: the same through corrupted, dropped and duplicated bytes/frames;
+#   restart: the tool is killed (SIGKILL) during the upload and started
+#           again with --resume: still identical (no segment lost or twice);
+#   reset:  the board is reset mid-job: the upload stops with a message naming
+#           it and exits non-zero; the board reports no jump (it holds still).
+set -euo pipefail
+T=$1
+dir=$2
+mode=${3:-clean}
+rm -rf "$dir" && mkdir -p "$dir" && cd "$dir"
+"$T" plan --raster 2 -o plan.trj > plan.txt
+
+board=
+trap '[ -n "$board" ] && kill "$board" 2>/dev/null; true' EXIT
+start_board() {  # start_board OPTIONS...
+  "$T" board --expect plan.trj "$@" > port 2> board.txt &
+  board=$!
+  for _ in $(seq 100); do [ -s port ] && break; sleep 0.1; done
+}
+upload() {
+  "$T" upload plan.trj --port "$(cat port)" --clock-hz 36e6 --step-shift 26 --timeout-ms 3000 "$@" > upload.txt \
+    2> upload.err
+}
+
+case "$mode" in
+clean | faults | restart)
+  case "$mode" in
+  clean | restart) start_board --once ;;
+  faults) start_board --once --corrupt 0.001 --drop 0.001 --dup-frames 0.05 --seed 3 ;;
+  esac
+  if [ "$mode" = restart ]; then
+    upload &
+    tool=$!
+    sleep 0.4
+    kill -KILL "$tool"
+    wait "$tool" 2> /dev/null && { echo "the first upload ended before it was killed"; exit 1; }
+    upload --resume || { cat upload.err board.txt; exit 1; }
+  else
+    upload || { cat upload.err board.txt; exit 1; }
+  fi
+  rc=0
+  wait "$board" || rc=$?
+  board=
+  cat upload.txt board.txt
+  [ "$rc" -eq 0 ] || { echo "the board's check failed (exit $rc)"; exit 1; }
+  ticks=$(sed -n 's/.* \([0-9]*\) ticks (.*/\1/p' plan.txt)
+  grep -q "pins decoded against the exact prediction of $ticks ticks .*: identical" board.txt
+  if [ "$mode" = faults ]; then
+    grep -q "faults: [1-9][0-9]* bytes corrupted, [1-9][0-9]* dropped, [1-9][0-9]* frames duplicated" board.txt
+  fi
+  ;;
+reset)
+  start_board --reset-after 10
+  rc=0
+  upload || rc=$?
+  kill -TERM "$board"
+  wait "$board" || true
+  board=
+  cat upload.err board.txt
+  [ "$rc" -ne 0 ] || { echo "the upload went on through a board reset"; exit 1; }
+  grep -q "the board was reset mid-job" upload.err
+  grep -q "1 board resets" board.txt
+  ;;
+esac
