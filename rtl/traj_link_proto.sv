@@ -631,11 +631,17 @@ module traj_link_proto #(
       if (!f_rx_q) begin
         assert (len_ok_q == (idx_q == len_q + 12'd12));
         assert (cbad_end_q == cbad_end);
+        assert (seq_eq_q == (seq_q == next_seq_q));
+        assert (pd_pay_q == ((idx_q >= 12'd8) && (p < len_q)));
+        assert (pd_k_q == ((p >= 12'd4) && (p < 12'd8)));
+        assert (pd_reg_q == ((p >= 12'd12) && (p < 12'(RecBytes - 4))));
       end
+      if (!hunt_q && idx_q == '0) assert (f_wr == '0 && wb_q == '0 && !wen_q);
+      assert (32'(idx_q) <= 4095);
       // words written so far: all K and register bytes of a writing frame
       if (!hunt_q && ChunkWidth <= 32) begin
         assert (f_wr == (wen_q ? 12'(f_bytes >> $clog2(ChunkB)) : 12'd0));
-        assert (32'(wb_q) == (f_bytes & (ChunkB - 1)));
+        if (wen_q) assert (32'(wb_q) == (f_bytes & (ChunkB - 1)));
       end
       if (wen_q) assert (is_seg && len_q == 12'(RecBytes) && 32'(idx_q) > 8);
       // a store: a good SEGMENT, seq == next_seq, all its words written
@@ -644,7 +650,7 @@ module traj_link_proto #(
         if (ChunkWidth <= 32) assert (f_wr == 12'(SegWords));
       end
       if (fifo_commit_o) assert (!fifo_rollback_o && !fifo_clear_o);
-      if (fifo_commit_o || fifo_rollback_o || fifo_clear_o) assert (!fifo_wr_o && !f_rx_q);
+      if (fifo_commit_o || fifo_rollback_o || fifo_clear_o) assert (!fifo_wr_o);
       // the count of stored records since the last RESET is next_seq's advance
       assert (next_seq_q == f_seq0 + f_stores);
     end
