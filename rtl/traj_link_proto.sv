@@ -241,7 +241,10 @@ module traj_link_proto #(
   // Verdict at the closing flag.
   // -------------------------------------------------------------------
   logic        fend, good, cbad_end, playing_busy;
-  logic [31:0] next_seq_q, diff;
+  logic [31:0] next_seq_q;
+  /* verilator lint_off UNUSEDSIGNAL */
+  logic [31:0] diff;  // seq - next_seq: only its sign is read (seq behind next_seq)
+  /* verilator lint_on UNUSEDSIGNAL */
   // Comparisons of the body so far, registered (timing): rx_valid_i comes at
   // most every other cycle, so at a flag they describe every byte before it.
   logic        seq_eq_q;   // seq == next_seq
@@ -339,7 +342,7 @@ module traj_link_proto #(
 
   // Per-body flags and fields: set at the opening flag, so not reset.
   always_ff @(posedge clk_i) begin
-    seq_eq_q <= (diff == '0);
+    seq_eq_q <= (seq_q == next_seq_q);
     behind_q <= diff[31];
     len_ok_q <= (idx_q == len_q + 12'd12);
     crc_ok_q <= (crc_q == Residue);
