@@ -77,7 +77,7 @@ module traj_seg_fifo #(
   logic [CntW-1:0]       wr_cnt_q, rd_cnt_q;
   logic                  wr_pend_q, rd_busy_q, out_valid_q;
   logic [ChunkWidth-1:0] wr_data_q, rdata_q;
-  logic [LevelW-1:0]     stored_q, stored_d;
+  logic [LevelW-1:0]     stored_q, stored_d, credits_q;  // credits_q == Cap - stored_q (a flop, timing)
   logic                  stored_nz_q, stored_full_q;  // stored_q != 0, == Cap (flops, timing)
   logic                  last_issue_q;  // the last read of a segment was issued last cycle: its slot frees now
 
@@ -108,6 +108,7 @@ module traj_seg_fifo #(
       rd_busy_q   <= 1'b0;
       out_valid_q <= 1'b0;
       stored_q      <= '0;
+      credits_q     <= LevelW'(Cap);
       stored_nz_q   <= 1'b0;
       stored_full_q <= 1'b0;
       last_issue_q  <= 1'b0;
@@ -137,6 +138,7 @@ module traj_seg_fifo #(
       end
       out_valid_q <= issue || (out_valid_q && !m_axis_tready);
       stored_q      <= stored_d;
+      credits_q     <= LevelW'(Cap) - stored_d;
       stored_nz_q   <= (stored_d != '0);
       stored_full_q <= (stored_d == LevelW'(Cap));
     end
@@ -240,7 +242,7 @@ module traj_seg_fifo #(
   assign m_axis_tdata  = rdata_q;
   assign m_axis_tvalid = out_valid_q;
   assign level_o       = 16'(stored_q);
-  assign credits_o     = 16'(Cap) - 16'(stored_q);
+  assign credits_o     = 16'(credits_q);
   assign busy_o        = rd_busy_q;
 
 endmodule
