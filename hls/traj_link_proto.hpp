@@ -110,7 +110,7 @@ class LinkProto {
       crc_q_ = 0xFFFFFFFFu;
       wb_q_ = 0;
     } else {
-      if (in.rx_err || (in.rx_valid && esc_q_ && in.rx_data != 0x5E && in.rx_data != 0x5D)) bad_q_ = true;
+      if (rxe_q_ || (rxv_q_ && esc_q_ && rxd_q_ != 0x5E && rxd_q_ != 0x5D)) bad_q_ = true;
       if (c.dv) {
         crc_q_ = crc32_byte(crc_prev, d);
         if (c.overlong) bad_q_ = true;
@@ -173,6 +173,9 @@ class LinkProto {
     }
 
     pd_ = pd_next;
+    rxd_q_ = in.rx_data;
+    rxv_q_ = in.rx_valid;
+    rxe_q_ = in.rx_err;
     if (!in.rst_n) {
       reset();
       return;
@@ -181,7 +184,7 @@ class LinkProto {
     v_ = c;
 
     // Receive state.
-    if (in.rx_valid) esc_q_ = c.is_esc;
+    if (q.rxv_q_) esc_q_ = c.is_esc;
     if (c.is_flag) {
       hunt_q_ = false;
       idx_q_ = 0;
@@ -238,7 +241,7 @@ class LinkProto {
     if (in.tick && playing && !halt) ++n_ticks_q_;
     if (v.fend && !v.good) ++n_bad_q_;
     if (v.ooo) ++n_ooo_q_;
-    if (in.rx_valid) ++n_bytes_q_;
+    if (q.rxv_q_) ++n_bytes_q_;
     if (v.do_config) stat_cnt_q_ = q.sh_stat_q_ - 1;
     else if (in.tick && q.cfg_stat_q_ != 0) stat_cnt_q_ = stat_due ? q.cfg_stat_q_ - 1 : stat_cnt_q_ - 1;
     ans_pend_q_ = v.answer || (ans_pend_q_ && !tx_take_ans);
@@ -326,10 +329,10 @@ class LinkProto {
 
   Dec decode(const In& in) const {
     Dec c{};
-    c.is_flag = in.rx_valid && in.rx_data == 0x7E;
-    c.is_esc = in.rx_valid && !c.is_flag && !esc_q_ && in.rx_data == 0x7D;
-    c.dv = in.rx_valid && !c.is_flag && !c.is_esc && !hunt_q_;
-    c.d = esc_q_ ? static_cast<uint8_t>(in.rx_data ^ 0x20) : in.rx_data;
+    c.is_flag = rxv_q_ && rxd_q_ == 0x7E;
+    c.is_esc = rxv_q_ && !c.is_flag && !esc_q_ && rxd_q_ == 0x7D;
+    c.dv = rxv_q_ && !c.is_flag && !c.is_esc && !hunt_q_;
+    c.d = esc_q_ ? static_cast<uint8_t>(rxd_q_ ^ 0x20) : rxd_q_;
     c.in_pay = pd_.pay;
     c.overlong = pd_.over;
     const uint8_t d = c.d;
@@ -476,11 +479,14 @@ class LinkProto {
     tx_state_q_ = kSIdle;
     tx_crcld_q_ = false;
     v_ = Dec{};
+    rxv_q_ = rxe_q_ = false;
   }
 
   // receive
   bool hunt_q_ = true, esc_q_ = false, bad_q_ = false, cbad_q_ = false, kz_q_ = false, wen_q_ = false;
   Position pd_ = {};
+  uint8_t rxd_q_ = 0;  // the received byte, registered (the RTL also registers its compares)
+  bool rxv_q_ = false, rxe_q_ = false;
   Dec v_ = {};  // the registered verdict (the RTL's v_*_q; only its verdict fields are read)
   bool seq_eq_q_ = false, behind_q_ = false, len_ok_q_ = false, crc_ok_q_ = false, cbad_end_q_ = false;
   uint16_t idx_q_ = 0, len_q_ = 0;

@@ -80,7 +80,8 @@ class SegFifo {
     }
     out_valid_q_ = issue || (out_valid_q_ && !in.tready);
     if (clear_ok) stored_q_ = 0;
-    else stored_q_ = static_cast<uint16_t>(stored_q_ + (commit_ok ? 1 : 0) - (last_issue ? 1 : 0));
+    else stored_q_ = static_cast<uint16_t>(stored_q_ + (commit_ok ? 1 : 0) - (last_issue_q_ ? 1 : 0));
+    last_issue_q_ = last_issue;
   }
 
  private:
@@ -92,12 +93,13 @@ class SegFifo {
     rd_addr_q_ = rd_cnt_q_ = 0;
     rd_busy_q_ = out_valid_q_ = false;
     stored_q_ = 0;
+    last_issue_q_ = false;
   }
 
   uint64_t mem_[kTotal] = {};
   int wr_addr_q_ = 0, wr_base_q_ = 0, wr_pend_addr_q_ = 0, rd_addr_q_ = 0;
   int wr_cnt_q_ = 0, rd_cnt_q_ = 0;
-  bool wr_pend_q_ = false, rd_busy_q_ = false, out_valid_q_ = false;
+  bool wr_pend_q_ = false, rd_busy_q_ = false, out_valid_q_ = false, last_issue_q_ = false;
   uint64_t wr_data_q_ = 0, rdata_q_ = 0;
   uint16_t stored_q_ = 0;
 };

@@ -119,12 +119,30 @@ module traj_link_proto #(
   logic [ChunkWidth-9:0] asm_q;  // the bytes of the word so far, top-aligned (the last byte completes it)
   logic [3:0]  wb_q;
 
+  // The received byte and its decodes, registered (timing): the byte is
+  // handled one cycle after the UART delivers it.
+  logic [7:0] rxd_q;
+  logic       rxv_q, rxe_q, rx7e_q, rx7d_q, rxesc_ok_q;
+  always_ff @(posedge clk_i) begin
+    if (!rst_ni) begin
+      rxv_q <= 1'b0;
+      rxe_q <= 1'b0;
+    end else begin
+      rxv_q <= rx_valid_i;
+      rxe_q <= rx_err_i;
+    end
+    rxd_q      <= rx_data_i;
+    rx7e_q     <= (rx_data_i == 8'h7E);
+    rx7d_q     <= (rx_data_i == 8'h7D);
+    rxesc_ok_q <= (rx_data_i == 8'h5E) || (rx_data_i == 8'h5D);
+  end
+
   logic       is_flag, is_esc, dv;
   logic [7:0] d;
-  assign is_flag = rx_valid_i && (rx_data_i == 8'h7E);
-  assign is_esc  = rx_valid_i && !is_flag && !esc_q && (rx_data_i == 8'h7D);
-  assign dv      = rx_valid_i && !is_flag && !is_esc && !hunt_q;
-  assign d       = esc_q ? (rx_data_i ^ 8'h20) : rx_data_i;
+  assign is_flag = rxv_q && rx7e_q;
+  assign is_esc  = rxv_q && !rx7e_q && !esc_q && rx7d_q;
+  assign dv      = rxv_q && !rx7e_q && !is_esc && !hunt_q;
+  assign d       = esc_q ? (rxd_q ^ 8'h20) : rxd_q;
 
   // Decodes of the position in the body, registered (timing): a byte at
   // cycle t sees the position after every earlier byte, since bytes come at
@@ -223,7 +241,10 @@ module traj_link_proto #(
   // Verdict at the closing flag.
   // -------------------------------------------------------------------
   logic        fend, good, cbad_end, playing_busy;
-  logic [31:0] next_seq_q, diff;
+  logic [31:0] next_seq_q;
+  /* verilator lint_off UNUSEDSIGNAL */
+  logic [31:0] diff;  // seq - next_seq: only its sign is read (seq behind next_seq)
+  /* verilator lint_on UNUSEDSIGNAL */
   // Comparisons of the body so far, registered (timing): rx_valid_i comes at
   // most every other cycle, so at a flag they describe every byte before it.
   logic        seq_eq_q;   // seq == next_seq
@@ -306,7 +327,7 @@ module traj_link_proto #(
       idx_q  <= '0;
       wen_q  <= 1'b0;
     end else begin
-      if (rx_valid_i) esc_q <= is_esc;
+      if (rxv_q) esc_q <= is_esc;
       if (is_flag) begin
         hunt_q <= 1'b0;
         idx_q  <= '0;
@@ -321,7 +342,7 @@ module traj_link_proto #(
 
   // Per-body flags and fields: set at the opening flag, so not reset.
   always_ff @(posedge clk_i) begin
-    seq_eq_q <= (diff == '0);
+    seq_eq_q <= (seq_q == next_seq_q);
     behind_q <= diff[31];
     len_ok_q <= (idx_q == len_q + 12'd12);
     crc_ok_q <= (crc_q == Residue);
@@ -333,7 +354,7 @@ module traj_link_proto #(
       crc_q  <= 32'hFFFFFFFF;
       wb_q   <= '0;
     end else begin
-      if (rx_err_i || (rx_valid_i && esc_q && rx_data_i != 8'h5E && rx_data_i != 8'h5D)) bad_q <= 1'b1;
+      if (rxe_q || (rxv_q && esc_q && !rxesc_ok_q)) bad_q <= 1'b1;
       if (dv) begin
         crc_q <= crc8(crc_q, d);
         if (overlong) bad_q <= 1'b1;
@@ -448,7 +469,7 @@ module traj_link_proto #(
       if (tick_i && playing_q && !halt_q) n_ticks_q <= n_ticks_q + 1'b1;
       if (v_bad_q) n_bad_q <= n_bad_q + 1'b1;
       if (v_ooo_q) n_ooo_q <= n_ooo_q + 1'b1;
-      if (rx_valid_i) n_bytes_q <= n_bytes_q + 1'b1;
+      if (rxv_q) n_bytes_q <= n_bytes_q + 1'b1;
       // status period in ticks
       if (v_config_q) stat_cnt_q <= sh_stat_q - 1'b1;
       else if (tick_i && cfg_stat_q != '0) stat_cnt_q <= stat_due ? cfg_stat_q - 1'b1 : stat_cnt_q - 1'b1;
@@ -596,13 +617,15 @@ module traj_link_proto #(
   logic        f_past_valid = 1'b0;
   logic [11:0] f_wr;        // FIFO words written since the last flag
   logic        f_dv_q;      // a body byte was taken in the previous cycle
-  logic        f_rx_q;      // a byte (or flag) came in the previous cycle, or reset
+  logic        f_rx_q;      // a byte (or flag) was handled in the previous cycle, or reset
+  logic        f_in_q;      // rx_valid_i in the previous cycle
   logic [31:0] f_seq0;      // next_seq after the last reset or RESET
   logic [31:0] f_stores;    // commits since then
   always_ff @(posedge clk_i) begin
     f_past_valid <= 1'b1;
     f_dv_q <= dv;
-    f_rx_q <= rx_valid_i || !rst_ni;
+    f_rx_q <= rxv_q || !rst_ni;
+    f_in_q <= rx_valid_i;
     if (is_flag) f_wr <= '0;
     else if (fifo_wr_o) f_wr <= f_wr + 1'b1;
     if (!rst_ni) begin
@@ -618,7 +641,7 @@ module traj_link_proto #(
   // the UART gives at most one byte every other cycle
   always_comb begin
     if (!f_past_valid) assume (!rst_ni);
-    if (f_past_valid && f_rx_q) assume (!rx_valid_i);
+    if (f_past_valid && f_in_q) assume (!rx_valid_i);
   end
   // words a writing frame has produced after idx_q body bytes
   int f_p, f_bytes;
@@ -631,11 +654,17 @@ module traj_link_proto #(
       if (!f_rx_q) begin
         assert (len_ok_q == (idx_q == len_q + 12'd12));
         assert (cbad_end_q == cbad_end);
+        assert (seq_eq_q == (seq_q == next_seq_q));
+        assert (pd_pay_q == ((idx_q >= 12'd8) && (p < len_q)));
+        assert (pd_k_q == ((p >= 12'd4) && (p < 12'd8)));
+        assert (pd_reg_q == ((p >= 12'd12) && (p < 12'(RecBytes - 4))));
       end
+      if (!hunt_q && idx_q == '0) assert (f_wr == '0 && wb_q == '0 && !wen_q);
+      assert (32'(idx_q) <= 4095);
       // words written so far: all K and register bytes of a writing frame
       if (!hunt_q && ChunkWidth <= 32) begin
         assert (f_wr == (wen_q ? 12'(f_bytes >> $clog2(ChunkB)) : 12'd0));
-        assert (32'(wb_q) == (f_bytes & (ChunkB - 1)));
+        if (wen_q) assert (32'(wb_q) == (f_bytes & (ChunkB - 1)));
       end
       if (wen_q) assert (is_seg && len_q == 12'(RecBytes) && 32'(idx_q) > 8);
       // a store: a good SEGMENT, seq == next_seq, all its words written
@@ -644,7 +673,7 @@ module traj_link_proto #(
         if (ChunkWidth <= 32) assert (f_wr == 12'(SegWords));
       end
       if (fifo_commit_o) assert (!fifo_rollback_o && !fifo_clear_o);
-      if (fifo_commit_o || fifo_rollback_o || fifo_clear_o) assert (!fifo_wr_o && !f_rx_q);
+      if (fifo_commit_o || fifo_rollback_o || fifo_clear_o) assert (!fifo_wr_o);
       // the count of stored records since the last RESET is next_seq's advance
       assert (next_seq_q == f_seq0 + f_stores);
     end

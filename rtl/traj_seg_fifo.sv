@@ -26,8 +26,8 @@
 // streaming and one is stored; once started its SegWords words all leave on
 // m_axis (valid/ready, tvalid a flop, data held until taken) whatever
 // release_i does later. A write waiting for the port goes first.
-// level_o: stored segments, counting a streaming one until its last word has
-// been read from the RAM; credits_o = Cap - level_o.
+// level_o: stored segments, counting a streaming one until the cycle after
+// its last word has been read from the RAM; credits_o = Cap - level_o.
 `default_nettype none
 `include "traj_check.svh"
 
@@ -60,6 +60,7 @@ module traj_seg_fifo #(
   localparam int Total    = Cap * SegWords;
   localparam int AddrW    = (Total > 1) ? $clog2(Total) : 1;
   localparam int CntW     = $clog2(SegWords + 1);
+  localparam int LevelW   = $clog2(Cap + 1);
 
   `TRAJ_PARAM_CHECK(g_bad_chunk, ChunkWidth >= 8 && ChunkWidth <= 64,
                     "traj_seg_fifo: ChunkWidth must be 8..64")
@@ -76,22 +77,25 @@ module traj_seg_fifo #(
   logic [CntW-1:0]       wr_cnt_q, rd_cnt_q;
   logic                  wr_pend_q, rd_busy_q, out_valid_q;
   logic [ChunkWidth-1:0] wr_data_q, rdata_q;
-  logic [15:0]           stored_q;
+  logic [LevelW-1:0]     stored_q, stored_d, credits_q;  // credits_q == Cap - stored_q (a flop, timing)
+  logic                  stored_nz_q, stored_full_q;  // stored_q != 0, == Cap (flops, timing)
+  logic                  last_issue_q;  // the last read of a segment was issued last cycle: its slot frees now
 
   function automatic logic [AddrW-1:0] next_addr(input logic [AddrW-1:0] a);
     next_addr = (a == AddrW'(Total - 1)) ? '0 : a + 1'b1;
   endfunction
 
   logic wr_take, commit_ok, rewind, start, issue, last_issue, seg_end, clear_ok;
-  assign wr_take    = wr_i && (wr_cnt_q != CntW'(SegWords)) && (stored_q != 16'(Cap));
+  assign wr_take    = wr_i && (wr_cnt_q != CntW'(SegWords)) && !stored_full_q;
   assign commit_ok  = commit_i && (wr_cnt_q == CntW'(SegWords));
   assign rewind     = rollback_i || (commit_i && !commit_ok);
-  assign start      = !rd_busy_q && (stored_q != '0) && release_i && !clear_i;
+  assign start      = !rd_busy_q && stored_nz_q && release_i && !clear_i;
   assign issue      = (rd_busy_q || start) && (rd_cnt_q != CntW'(SegWords)) && !wr_pend_q
                     && (!out_valid_q || m_axis_tready);
   assign last_issue = issue && (rd_cnt_q == CntW'(SegWords - 1));
   assign seg_end    = out_valid_q && m_axis_tready && (rd_cnt_q == CntW'(SegWords));
   assign clear_ok   = clear_i && !rd_busy_q;
+  assign stored_d   = clear_ok ? '0 : stored_q + LevelW'(commit_ok) - LevelW'(last_issue_q);
 
   always_ff @(posedge clk_i) begin
     if (!rst_ni) begin
@@ -103,8 +107,13 @@ module traj_seg_fifo #(
       rd_cnt_q    <= '0;
       rd_busy_q   <= 1'b0;
       out_valid_q <= 1'b0;
-      stored_q    <= '0;
+      stored_q      <= '0;
+      credits_q     <= LevelW'(Cap);
+      stored_nz_q   <= 1'b0;
+      stored_full_q <= 1'b0;
+      last_issue_q  <= 1'b0;
     end else begin
+      last_issue_q  <= last_issue;
       // write side
       wr_pend_q <= wr_take;
       if (commit_ok) begin
@@ -128,8 +137,10 @@ module traj_seg_fifo #(
         if (issue) rd_cnt_q <= rd_cnt_q + 1'b1;
       end
       out_valid_q <= issue || (out_valid_q && !m_axis_tready);
-      if (clear_ok) stored_q <= '0;
-      else stored_q <= stored_q + 16'(commit_ok) - 16'(last_issue);
+      stored_q      <= stored_d;
+      credits_q     <= LevelW'(Cap) - stored_d;
+      stored_nz_q   <= (stored_d != '0);
+      stored_full_q <= (stored_d == LevelW'(Cap));
     end
   end
 
@@ -185,10 +196,11 @@ module traj_seg_fifo #(
 
   logic [7:0] f_out, f_held;  // segments committed and neither out nor cleared; stored + in flight
   assign f_out  = f_committed - f_cleared - f_ended;
-  assign f_held = 8'(stored_q) + 8'(rd_busy_q && rd_cnt_q == CntW'(SegWords));
+  assign f_held = 8'(stored_q) + 8'(rd_busy_q && rd_cnt_q == CntW'(SegWords) && !last_issue_q);
   int f_unread;    // committed words not yet read from the RAM
   int f_in_open;   // words in the open slot
-  assign f_unread  = 32'(stored_q) * SegWords - ((rd_cnt_q == CntW'(SegWords)) ? 0 : 32'(rd_cnt_q));
+  assign f_unread  = 32'(stored_q) * SegWords
+                   - ((rd_cnt_q == CntW'(SegWords)) ? (last_issue_q ? SegWords : 0) : 32'(rd_cnt_q));
   assign f_in_open = 32'(wr_cnt_q);
 
   always_ff @(posedge clk_i) begin
@@ -204,6 +216,7 @@ module traj_seg_fifo #(
       assert (f_unread >= 0);
       assert ((32'(rd_addr_q) + f_unread) % Total == 32'(wr_base_q));
       if (rd_busy_q && rd_cnt_q != CntW'(SegWords)) assert (stored_q != '0);
+      if (last_issue_q) assert (rd_busy_q && rd_cnt_q == CntW'(SegWords) && stored_q != '0);
       if (!rd_busy_q) assert (rd_cnt_q == '0 && !out_valid_q);
       if (rd_busy_q && rd_cnt_q == '0) assert (!out_valid_q);
       if (rd_busy_q && rd_cnt_q == CntW'(SegWords)) assert (out_valid_q);
@@ -213,6 +226,7 @@ module traj_seg_fifo #(
       assert (f_started - f_ended == 8'(rd_busy_q));
       assert (f_out == f_held);
       assert (level_o + credits_o == 16'(Cap));
+      assert (stored_nz_q == (stored_q != '0) && stored_full_q == (32'(stored_q) == Cap));
     end
     if (f_past_valid && rst_ni && $past(rst_ni)) begin
       // a rollback (or a commit of a partial slot) restores the committed pointer
@@ -227,8 +241,8 @@ module traj_seg_fifo #(
 
   assign m_axis_tdata  = rdata_q;
   assign m_axis_tvalid = out_valid_q;
-  assign level_o       = stored_q;
-  assign credits_o     = 16'(Cap) - stored_q;
+  assign level_o       = 16'(stored_q);
+  assign credits_o     = 16'(credits_q);
   assign busy_o        = rd_busy_q;
 
 endmodule

@@ -16,6 +16,9 @@ unit=$1 work=$2; shift 2
 blast=""
 case $unit in
   traj_bcu_gen) blast="memory_map; opt -fast; techmap; opt -fast; abc -g AND; opt_clean;"; DEPTH=${DEPTH:-8} ;;
+  # traj_seg_fifo: the word-level model takes z3 about 10 minutes for 10 BMC
+  # steps (pointer arithmetic modulo the slot count); bit-blasted, seconds.
+  traj_seg_fifo) blast="memory_map; opt -fast; techmap; opt -fast; abc -g AND; opt_clean;" ;;
 esac
 DEPTH=${DEPTH:-24}
 files=$("$root/scripts/unit_files.sh" "$unit")
