@@ -38,6 +38,8 @@ struct PlanFitResult {
   plan::Plan plan;
   std::vector<plan::TimeSegment> segments;
   double t_plan = 0, t_ticks = 0, t_fit = 0;  // host seconds
+  int rounds = 0;      // plans made (1: no repair needed)
+  size_t repairs = 0;  // speed caps added by the tick checks and the fit (beyond the request's own)
 };
 
 // The tick samples of the accepted plan are left in `ts`. Throws

@@ -168,7 +168,7 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
       plan::append_ticks_range(path, plan, h, T0, k_last + 1, k_end, out, k_org);
     };
     const PlanFitResult fit = plan_and_fit(req, ts);
-    st.caps += req.options.caps.size();
+    st.caps += fit.repairs;
     st.max_window_ticks = std::max(st.max_window_ticks, ts.size());
     for (const auto& sg : fit.segments) emit(sg);
     // the fitted positions before the committed end: the next window's fit

@@ -281,10 +281,20 @@ struct Grid {
 Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t) {
   Grid g;
   const int d = p.dim();
+  // the caps that meet the curve at hand, swept along the path (caps sorted
+  // by start): the cost does not grow with the number of caps per curve
+  std::vector<SpeedCap> caps_by_start = o.caps, caps;
+  std::sort(caps_by_start.begin(), caps_by_start.end(),
+            [](const SpeedCap& a, const SpeedCap& b) { return a.s0 < b.s0; });
+  size_t next_cap = 0;
   for (size_t ci = 0; ci < p.size(); ++ci) {
     const geo::Curve& c = p.curve(ci);
     const geo::ArcLength& al = p.arclength(ci);
     const double s_off = p.offset(ci), len = al.total();
+    while (next_cap < caps_by_start.size() && caps_by_start[next_cap].s0 <= s_off + len)
+      caps.push_back(caps_by_start[next_cap++]);
+    caps.erase(std::remove_if(caps.begin(), caps.end(), [&](const SpeedCap& cp) { return cp.s1 < s_off; }),
+               caps.end());
     // mandatory points: curvature extrema and inflections, and knots where
     // the curve is not C2 (the acceleration K v^2 steps there)
     std::vector<double> must;
@@ -298,7 +308,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
         must.push_back(al.s(uk));
       }
     }
-    for (const auto& cp : o.caps) {
+    for (const auto& cp : caps) {
       const double mid = 0.5 * (cp.s0 + cp.s1) - s_off;
       if (mid > 0 && mid < len) must.push_back(mid);
     }
@@ -361,7 +371,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
         vl = 0;
         corner = true;
       }
-      for (const auto& cp : o.caps)
+      for (const auto& cp : caps)
         if (s_off + s >= cp.s0 && s_off + s <= cp.s1) vl = std::min(vl, cp.v);
       for (double fs : forced_here)
         if (std::fabs(fs - s) <= 1e-12) corner = true;
