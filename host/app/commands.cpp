@@ -17,6 +17,7 @@
 #include "input/toolpath_file.hpp"
 #include "job/streaming.hpp"
 #include "job/toolpath_job.hpp"
+#include "job/toolpath_stream.hpp"
 #include "report/report.hpp"
 #include "sim/sim.hpp"
 #include "stream/segment_stream.hpp"
@@ -124,10 +125,16 @@ bool passes(const job::JobConfig& cfg, const report::Report& rep) {
 
 int plan_streamed(const PlanArgs& a, bool jsonl) {
   std::unique_ptr<input::CurveSource> src;
+  std::unique_ptr<job::ToolpathStream> toolpath;
+  job::JobConfig cfg = a.cfg;
   if (a.raster > 0) {
     src = std::make_unique<input::RasterSource>(a.raster);
   } else if (jsonl) {
     src = std::make_unique<input::JsonlSource>(a.input);  // read line by line as the windows need curves
+  } else if (input::is_toolpath(input::file_kind(a.input, a.format))) {
+    // G-code read a line at a time as the windows need curves, blended in chunks
+    toolpath = std::make_unique<job::ToolpathStream>(a.input, input::file_kind(a.input, a.format), a.cfg);
+    cfg = toolpath->config();
   } else {
     if (a.input.empty()) throw PlanError("plan: give a path file or --raster N");
     src = std::make_unique<PathSource>(input::load_path(a.input), a.input);  // checks the file and the joins
@@ -140,9 +147,11 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
   stream::StreamWriter w(a.output, a.cfg.machine.header());
   job::StreamStats st;
   try {
-    st = job::run_streaming(
-        *src, a.cfg, so, [&](const fd::Compiled& c, const plan::TimeSegment&) { w.add({c.ticks, c.regs}); },
-        [](const std::string&, double curves) { show_progress("stream", util::fmt("%.0f curves", curves)); });
+    const job::SegmentSink sink = [&](const fd::Compiled& c, const plan::TimeSegment&) { w.add({c.ticks, c.regs}); };
+    const job::Progress prog = [](const std::string&, double curves) {
+      show_progress("stream", util::fmt("%.0f curves", curves));
+    };
+    st = toolpath ? job::run_streaming(*toolpath, cfg, so, sink, prog) : job::run_streaming(*src, cfg, so, sink, prog);
   } catch (...) {
     end_progress();  // the writer removes its temporary file
     throw;
@@ -153,6 +162,18 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
               "host time %.3f s (%.0fx real time), first segment after %.1f ms\n",
               a.raster ? "raster" : a.input.c_str(), st.curves, st.windows, st.segments, st.ticks, st.motion_time,
               a.output.c_str(), st.wall, st.motion_time / st.wall, st.first_segment * 1e3);
+  if (toolpath) {
+    for (const auto& n : toolpath->notes()) std::fprintf(stderr, "trajcore: note: %s\n", n.c_str());
+    const auto& t = toolpath->totals();
+    std::printf("Toolpath (streamed: blended in %zu chunks, at most %zu moves held, %zu moves cut between chunks)\n"
+                "  moves                %zu programmed; %zu feed and %zu rapid curves after blending, %zu exact "
+                "stops\n"
+                "  corners              %d blended (largest blend deviation %.4g mm, within half the tolerance), "
+                "%zu kept as stops\n"
+                "  local speed caps     %zu from tick checks and the fit\n",
+                t.chunks, t.max_pending, t.split_moves, t.moves, t.feed_curves, t.rapid_curves, t.stops,
+                t.corners_blended, t.blend_deviation, t.corner_stops, st.caps);
+  }
   return 0;
 }
 
@@ -199,10 +220,6 @@ std::string core_line(const sim::SimResult& sr) {
 }  // namespace
 
 int plan_command(const PlanArgs& a) {
-  if (!a.input.empty() && a.raster == 0 && input::is_toolpath(input::file_kind(a.input, a.format)) &&
-      a.window > 0)
-    throw PlanError("plan: " + a.input + ": a toolpath file is planned whole; --window (streaming) takes JSON "
-                    "and JSON Lines paths");
   const bool jsonl = !a.input.empty() && a.raster == 0 && input::file_kind(a.input, a.format) == input::FileKind::kJsonl;
   if (jsonl && a.window_given && a.window == 0)
     throw PlanError("plan: a JSON Lines path is always streamed: --window must be at least 2");

@@ -18,11 +18,19 @@ using plan::PlanError;
 
 // The curves held by the streaming window: each built once (arc-length
 // tables) and shared by the windows that plan it, with its spline kept so
-// that it can be cut at a commit.
+// that it can be cut at a commit, and its speed and stop.
 struct Window {
   std::deque<std::shared_ptr<const PathCurve>> curves;
   std::deque<geo::BSpline> splines;
+  std::deque<double> speeds;
+  std::deque<bool> stops;
 
+  void push_back(StreamCurve&& c) {
+    curves.push_back(std::make_shared<const PathCurve>(c.curve, c.where));
+    splines.push_back(std::move(c.curve));
+    speeds.push_back(c.speed);
+    stops.push_back(c.stop);
+  }
   Path path() const {
     Path p;
     for (const auto& c : curves) p.add(c);
@@ -32,6 +40,8 @@ struct Window {
     for (size_t i = 0; i < n; ++i) {
       curves.pop_front();
       splines.pop_front();
+      speeds.pop_front();
+      stops.pop_front();
     }
   }
   // Cuts curve i in two inside the knot span that holds its parameter middle
@@ -43,25 +53,54 @@ struct Window {
     while (k + 1 < c.n_ctrl() && c.knots[k + 1] <= mid) ++k;
     auto halves = geo::split_at(c, 0.5 * (c.knots[k] + c.knots[k + 1]));
     const std::string w = curves[i]->where;
+    const auto at = static_cast<long>(i) + 1;
     curves[i] = std::make_shared<const PathCurve>(halves.first, w + " (first part)");
-    curves.insert(curves.begin() + static_cast<long>(i) + 1,
-                  std::make_shared<const PathCurve>(halves.second, w + " (second part)"));
+    curves.insert(curves.begin() + at, std::make_shared<const PathCurve>(halves.second, w + " (second part)"));
     splines[i] = std::move(halves.first);
-    splines.insert(splines.begin() + static_cast<long>(i) + 1, std::move(halves.second));
+    splines.insert(splines.begin() + at, std::move(halves.second));
+    speeds.insert(speeds.begin() + at, speeds[i]);
+    stops.insert(stops.begin() + at, stops[i]);
+    stops[i] = false;
+  }
+  // The curves' speeds and stops as speed caps on `path` (the window's path).
+  void add_caps(const Path& path, double feed, std::vector<plan::SpeedCap>& caps) const {
+    const double eps = 1e-9 * std::max(1.0, path.length());
+    for (size_t i = 0; i < curves.size(); ++i) {
+      const double s0 = path.offset(i), s1 = path.offset(i + 1);
+      if (speeds[i] > 0 && speeds[i] < feed) caps.push_back({s0, s1, speeds[i]});
+      if (stops[i] && i + 1 < curves.size()) caps.push_back({s1 - eps, s1 + eps, 0.0});
+    }
   }
 };
 
-// True if curves i-1 and i of `path` meet at a tangent break.
+// The curves of a CurveSource, at the feed limit, without stops.
+struct PlainSource : StreamSource {
+  explicit PlainSource(CurveSource& s) : src(s) {}
+  bool next(StreamCurve& c) override {
+    c.speed = 0;
+    c.stop = false;
+    return src.next(c.curve, c.where);
+  }
+  CurveSource& src;
+};
+
+// True if curves i-1 and i of `path` meet at a tangent break or a curvature
+// step (the planner's test: a jump of d2C/ds2 on an axis).
 bool corner_at(const Path& path, size_t i, double corner_tol) {
   const plan::Frame e = plan::frame_at(path, i - 1, path.curve(i - 1).u_end(), path.offset(i));
   const plan::Frame f = plan::frame_at(path, i, path.curve(i).u_begin(), path.offset(i));
-  double dot = 0;
-  for (int a = 0; a < path.dim(); ++a) dot += e.T[a] * f.T[a];
-  return std::acos(std::clamp(dot, -1.0, 1.0)) > corner_tol;
+  double dot = 0, kscale = 0, kjump = 0;
+  for (int a = 0; a < path.dim(); ++a) {
+    dot += e.T[a] * f.T[a];
+    kscale = std::max({kscale, std::fabs(e.K[a]), std::fabs(f.K[a])});
+    kjump = std::max(kjump, std::fabs(f.K[a] - e.K[a]));
+  }
+  return std::acos(std::clamp(dot, -1.0, 1.0)) > corner_tol || kjump > 1e-9 * (1 + kscale);
 }
 
 // How many curves of a (not last) window to commit. The commit junction
-// should not be a corner: the next window's first segment must start at the
+// should not be a corner (nor a curvature step, which the planner passes at a
+// station of its own jump speed, like a corner): the next window's first segment must start at the
 // last committed tick, just before the junction, and turn the velocity from
 // there; at a corner (passed at a near-stop within one tick) that can fail
 // where a whole-path fit would have started the turn earlier. The nearest
@@ -96,6 +135,12 @@ double time_at_arc_length(const plan::Plan& plan, double s) {
 
 StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOptions& so, const SegmentSink& sink,
                           const Progress& progress) {
+  PlainSource plain(src);
+  return run_streaming(plain, cfg, so, sink, progress);
+}
+
+StreamStats run_streaming(StreamSource& src, const JobConfig& cfg, const StreamOptions& so, const SegmentSink& sink,
+                          const Progress& progress) {
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
   if (so.window < 2 || so.commit < 1 || so.commit >= so.window)
@@ -116,6 +161,7 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
   double T0 = 0, v_commit = 0;
   long long k_last = -1;  // last committed tick
   plan::TickSample carried{};
+  std::vector<double> carried_stations;  // stations of the previous window beyond its commit, from the commit
   std::vector<plan::TickSample> ts;  // the window's ticks; storage reused window after window
 
   SegmentCompiler sc(cfg.machine);
@@ -128,12 +174,10 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
   };
 
   while (true) {
-    geo::BSpline b;
-    std::string where;
+    StreamCurve c;
     while (!exhausted && win.curves.size() < so.window) {
-      if (src.next(b, where)) {
-        win.curves.push_back(std::make_shared<const PathCurve>(b, where));
-        win.splines.push_back(b);
+      if (src.next(c)) {
+        win.push_back(std::move(c));
         ++st.curves;
       } else {
         exhausted = true;
@@ -153,7 +197,10 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
     req.limits = &cfg.limits;
     req.options = cfg.plan_options();
     req.options.v_start = v_commit;
+    win.add_caps(path, cfg.limits.feed, req.options.caps);
     if (!last) req.options.force_stations = {s_commit};
+    for (double sc : carried_stations)
+      if (sc < s_commit) req.options.force_stations.push_back(sc);
     req.segments = sopt;
     req.what = "streaming window " + std::to_string(st.windows) + " (curves from " + path.entry(0).where + ")";
     req.carried = k_last >= 0;
@@ -192,6 +239,13 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
       T0 -= whole * h;
     }
     v_commit = last ? 0 : plan::state_at(fit.plan, Tc).v;
+    // The stations of this plan beyond the commit become stations of the
+    // next window: its plan from v_commit then has blocks no longer than
+    // this one's there, which kept v_commit (a restarted plan with other
+    // station places could need to be slower at its start than v_commit).
+    carried_stations.clear();
+    for (const auto& stn : fit.plan.stations)
+      if (stn.s > s_commit + 1e-12 && stn.s < path.length() - 1e-12) carried_stations.push_back(stn.s - s_commit);
     ++st.windows;
     win.pop_front(ncommit);
     if (progress) progress("stream", static_cast<double>(st.curves));

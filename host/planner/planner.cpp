@@ -314,9 +314,9 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
     }
     std::vector<double> forced_here;
     for (double fs : o.force_stations)
-      if (fs - s_off > 0 && fs - s_off <= len) {
-        must.push_back(fs - s_off);
-        forced_here.push_back(fs - s_off);
+      if (fs - s_off > 0 && fs - s_off <= len + 1e-12) {  // a station at a curve's end: offset + len rounds
+        must.push_back(std::min(fs - s_off, len));
+        forced_here.push_back(std::min(fs - s_off, len));
       }
     std::sort(must.begin(), must.end());
     must.push_back(len);
