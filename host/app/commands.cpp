@@ -99,6 +99,7 @@ struct Loaded {
   plan::Path path;
   job::JobConfig cfg;
   std::string toolpath_text;  // a toolpath's moves and corners, for the report
+  double fastest_feed_move = 0;  // a toolpath's: the top of the path plot's colour scale (0: the feed limit)
 };
 
 Loaded load(const std::string& file, const std::string& format, const job::JobConfig& cfg) {
@@ -115,7 +116,10 @@ Loaded load(const std::string& file, const std::string& format, const job::JobCo
                 "%zu kept as stops\n",
                 tp.moves.size(), tpp.feed_moves, tpp.rapids, tpp.stops, tpp.corners_blended, tpp.blend_deviation,
                 tpp.corner_stops);
-  return {std::move(tpp.path), std::move(tpp.cfg), b};
+  double fastest = 0;
+  for (const auto& m : tp.moves)
+    if (m.kind == input::Move::Kind::kFeed) fastest = std::max(fastest, m.feed > 0 ? m.feed : cfg.limits.feed);
+  return {std::move(tpp.path), std::move(tpp.cfg), b, fastest};
 }
 
 bool passes(const job::JobConfig& cfg, const report::Report& rep) {
@@ -158,9 +162,11 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
   }
   w.finish();
   end_progress();
-  std::printf("%s: %zu curves in %zu windows, %zu segments, %lld ticks (%.3f s of motion) -> %s\n"
+  std::printf("%s: %zu curves in %zu windows (%zu planned again with half their commit), %zu segments, %lld ticks "
+              "(%.3f s of motion) -> %s\n"
               "host time %.3f s (%.0fx real time), first segment after %.1f ms\n",
-              a.raster ? "raster" : a.input.c_str(), st.curves, st.windows, st.segments, st.ticks, st.motion_time,
+              a.raster ? "raster" : a.input.c_str(), st.curves, st.windows, st.retries, st.segments, st.ticks,
+              st.motion_time,
               a.output.c_str(), st.wall, st.motion_time / st.wall, st.first_segment * 1e3);
   if (toolpath) {
     for (const auto& n : toolpath->notes()) std::fprintf(stderr, "trajcore: note: %s\n", n.c_str());
@@ -254,7 +260,7 @@ int run_command(const RunArgs& a) {
   end_progress();
   write_csv(stage.dir + "/samples.csv", res.header, sr.samples);
   const auto rep = report::make_report(path, cfg, res, sr.samples);
-  report::write_plots(stage.dir, path, cfg, res, sr.samples);
+  report::write_plots(stage.dir, path, cfg, res, sr.samples, in.fastest_feed_move);
   const std::string text = in.toolpath_text + report::report_text(cfg, rep, res) + core_line(sr);
   {
     util::AtomicFile f(stage.dir + "/report.txt");

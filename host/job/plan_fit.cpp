@@ -92,7 +92,7 @@ size_t fit_all(const PlanFitRequest& req, const plan::Plan& plan, const std::vec
     } catch (const plan::FitError& e) {
       const long long idx = e.tick - req.k_base;
       if (idx <= 0 && req.carried)  // the carried tick is committed: nothing left to slow down there
-        throw plan::PlanError(req.what +
+        throw JunctionError(req.what +
                               ": the motion committed by the previous window cannot be continued within the limits "
                               "at their junction (" + e.what() + "); plan with a larger window (--window)");
       const size_t k = static_cast<size_t>(std::max<long long>(idx, 0));

@@ -19,6 +19,13 @@
 
 namespace traj::job {
 
+// The motion committed by a previous window (the carried tick) cannot be
+// continued within the limits.
+class JunctionError : public plan::PlanError {
+ public:
+  using plan::PlanError::PlanError;
+};
+
 struct PlanFitRequest {
   const plan::Path* path = nullptr;
   const plan::Limits* limits = nullptr;

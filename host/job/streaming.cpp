@@ -6,6 +6,7 @@
 #include <cmath>
 #include <deque>
 #include <memory>
+#include <optional>
 
 #include "job/plan_fit.hpp"
 
@@ -36,13 +37,27 @@ struct Window {
     for (const auto& c : curves) p.add(c);
     return p;
   }
-  void pop_front(size_t n) {
+  // The first n curves, taken out (a held window's committed curves).
+  Window take_front(size_t n) {
+    Window w;
     for (size_t i = 0; i < n; ++i) {
+      w.curves.push_back(std::move(curves.front()));
+      w.splines.push_back(std::move(splines.front()));
+      w.speeds.push_back(speeds.front());
+      w.stops.push_back(stops.front());
       curves.pop_front();
       splines.pop_front();
       speeds.pop_front();
       stops.pop_front();
     }
+    return w;
+  }
+  // Puts curves taken by take_front back in front.
+  void restore_front(Window&& w) {
+    curves.insert(curves.begin(), w.curves.begin(), w.curves.end());
+    splines.insert(splines.begin(), w.splines.begin(), w.splines.end());
+    speeds.insert(speeds.begin(), w.speeds.begin(), w.speeds.end());
+    stops.insert(stops.begin(), w.stops.begin(), w.stops.end());
   }
   // Cuts curve i in two inside the knot span that holds its parameter middle
   // (a smooth place: no knot there).
@@ -121,6 +136,18 @@ size_t choose_commit(Window& win, Path& path, size_t ncommit, double corner_tol)
   return ncommit;
 }
 
+// s, or the curve junction of `path` it lies at up to rounding (a station
+// carried from the previous window, whose arc lengths started elsewhere): a
+// station a rounding error away from a junction would be a second grid point
+// beside it, without the junction's speed bound.
+double snap_to_junction(const Path& path, double s) {
+  const size_t i = path.curve_at(s);
+  const double eps = 1e-9 * std::max(1.0, path.length());
+  if (std::fabs(s - path.offset(i)) <= eps) return path.offset(i);
+  if (std::fabs(s - path.offset(i + 1)) <= eps) return path.offset(i + 1);
+  return s;
+}
+
 // Time at which `plan` reaches arc length s (bisection on the profile).
 double time_at_arc_length(const plan::Plan& plan, double s) {
   double lo = 0, hi = plan.duration();
@@ -139,6 +166,114 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
   return run_streaming(plain, cfg, so, sink, progress);
 }
 
+namespace {
+
+// What a window hands to the next, exactly: the window's start time
+// k_org h + T0 with 0 <= T0 < h (the tick count is held as an integer, so
+// tick times and the committed tick keep full precision however long the path
+// runs: a double T0 alone would round the tick grid to 7e-9 ticks past 2^25
+// ticks, 9 hours at 1 ms), the speed at the commit, the last committed tick
+// and its sample, the fitted positions before it (the next fit checks its
+// sampled tangential/normal windows across the junction), and the stations
+// and repair caps of the plan beyond the commit.
+struct Carry {
+  long long k_org = 0;
+  double T0 = 0, v = 0;
+  long long k_last = -1;  // last committed tick (-1: at rest, nothing committed)
+  plan::TickSample tick{};
+  std::vector<std::array<double, plan::kMaxAxes>> history;
+  std::vector<double> stations;
+  std::vector<plan::SpeedCap> caps;
+};
+
+struct WindowPlan {
+  std::vector<plan::TimeSegment> segments;
+  size_t ncommit = 0;  // curves committed
+  Carry next;
+  size_t repairs = 0, ticks = 0;
+};
+
+// Plans the window `win` from `in`, committing at most about `commit_max`
+// curves (all if `last`).
+WindowPlan plan_window(Window& win, const Carry& in, size_t commit_max, bool last, const JobConfig& cfg,
+                       size_t index, std::vector<plan::TickSample>& ts) {
+  const double h = cfg.machine.period;
+  WindowPlan wp;
+  Path path = win.path();
+  size_t ncommit = last ? win.curves.size() : std::min(commit_max, win.curves.size() - 1);
+  if (!last) ncommit = choose_commit(win, path, ncommit, cfg.plan.corner_tol);
+  wp.ncommit = ncommit;
+  const double s_commit = last ? path.length() : path.offset(ncommit);
+
+  double Tc = 0;
+  long long k_end = 0;
+  PlanFitRequest req;
+  req.path = &path;
+  req.limits = &cfg.limits;
+  req.options = cfg.plan_options();
+  req.options.v_start = in.v;
+  win.add_caps(path, cfg.limits.feed, req.options.caps);
+  const size_t own_caps = req.options.caps.size();
+  req.options.caps.insert(req.options.caps.end(), in.caps.begin(), in.caps.end());
+  if (!last) req.options.force_stations = {s_commit};
+  for (double sc : in.stations)
+    if (sc < s_commit) req.options.force_stations.push_back(snap_to_junction(path, sc));
+  req.segments = cfg.segment_options();
+  req.segments.history = in.history;
+  req.what = "streaming window " + std::to_string(index) + " (curves from " + path.entry(0).where + ")";
+  req.carried = in.k_last >= 0;
+  req.t_offset = in.T0;
+  req.k_base = in.k_last < 0 ? 0 : in.k_last;
+  req.sample = [&](const plan::Plan& plan, std::vector<plan::TickSample>& out) {
+    Tc = last ? plan.duration() : time_at_arc_length(plan, s_commit);
+    k_end = in.k_org + (last ? static_cast<long long>(std::ceil((in.T0 + Tc) / h - 1e-9))
+                             : static_cast<long long>(std::floor((in.T0 + Tc) / h + 1e-9)));
+    out.clear();
+    if (in.k_last >= 0) out.push_back(in.tick);
+    plan::append_ticks_range(path, plan, h, in.T0, in.k_last + 1, k_end, out, in.k_org);
+  };
+  PlanFitResult fit = plan_and_fit(req, ts);
+  wp.repairs = fit.repairs;
+  wp.ticks = ts.size();
+
+  Carry& next = wp.next;
+  next.history = in.history;
+  {
+    auto t = plan::fitted_tail(fit.segments, path.dim(), h, 3);
+    next.history.insert(next.history.end(), t.begin(), t.end());
+    while (next.history.size() > 3) next.history.erase(next.history.begin());
+  }
+  next.k_last = in.k_last;
+  next.tick = in.tick;
+  if (!ts.empty()) {
+    next.tick = ts.back();
+    next.tick.curve = static_cast<size_t>(-1);
+    next.tick.s = 0;
+    next.k_last = k_end;
+  }
+  next.T0 = in.T0 + Tc;
+  next.k_org = in.k_org;
+  {
+    const double whole = std::floor(next.T0 / h);
+    next.k_org += static_cast<long long>(whole);
+    next.T0 -= whole * h;
+  }
+  next.v = last ? 0 : plan::state_at(fit.plan, Tc).v;
+  // The stations of this plan beyond the commit become stations of the
+  // next window, and the repair caps found there its caps: its plan from
+  // v_commit then has the blocks and the speed bounds of this one there.
+  for (size_t i = own_caps; i < req.options.caps.size(); ++i) {
+    const plan::SpeedCap& cp = req.options.caps[i];
+    if (cp.s1 > s_commit) next.caps.push_back({cp.s0 - s_commit, cp.s1 - s_commit, cp.v});
+  }
+  for (const auto& stn : fit.plan.stations)
+    if (stn.s > s_commit + 1e-12 && stn.s < path.length() - 1e-12) next.stations.push_back(stn.s - s_commit);
+  wp.segments = std::move(fit.segments);
+  return wp;
+}
+
+}  // namespace
+
 StreamStats run_streaming(StreamSource& src, const JobConfig& cfg, const StreamOptions& so, const SegmentSink& sink,
                           const Progress& progress) {
   using Clock = std::chrono::steady_clock;
@@ -148,20 +283,10 @@ StreamStats run_streaming(StreamSource& src, const JobConfig& cfg, const StreamO
                     ", window " + std::to_string(so.window) + ")");
   cfg.validate();
   const double h = cfg.machine.period;
-  plan::SegmentOptions sopt = cfg.segment_options();
 
   StreamStats st;
   Window win;
   bool exhausted = false;
-  // The window's start time is k_org h + T0 with 0 <= T0 < h: the tick count
-  // is held as an integer, so tick times and the committed tick keep full
-  // precision however long the path runs (a double T0 alone would round the
-  // tick grid to 7e-9 ticks past 2^25 ticks, 9 hours at 1 ms).
-  long long k_org = 0;
-  double T0 = 0, v_commit = 0;
-  long long k_last = -1;  // last committed tick
-  plan::TickSample carried{};
-  std::vector<double> carried_stations;  // stations of the previous window beyond its commit, from the commit
   std::vector<plan::TickSample> ts;  // the window's ticks; storage reused window after window
 
   SegmentCompiler sc(cfg.machine);
@@ -173,6 +298,15 @@ StreamStats run_streaming(StreamSource& src, const JobConfig& cfg, const StreamO
     st.ticks += seg.K;
   };
 
+  // A window's segments are emitted once the next window has planned from
+  // its commit: a restarted plan (other stations, other grid points) can
+  // occasionally not continue the committed motion within the limits; the
+  // held window is then planned again with half its commit (more of the
+  // slow-down is left to the next window), and the next window retried.
+  Carry carry;             // into the window to plan
+  Carry held_from;         // into the held window
+  std::optional<WindowPlan> held;
+  Window held_curves;      // the held window's committed curves
   while (true) {
     StreamCurve c;
     while (!exhausted && win.curves.size() < so.window) {
@@ -184,77 +318,37 @@ StreamStats run_streaming(StreamSource& src, const JobConfig& cfg, const StreamO
       }
     }
     if (win.curves.empty()) break;
-    Path path = win.path();
     const bool last = exhausted;
-    size_t ncommit = last ? win.curves.size() : std::min(so.commit, win.curves.size() - 1);
-    if (!last) ncommit = choose_commit(win, path, ncommit, cfg.plan.corner_tol);
-    const double s_commit = last ? path.length() : path.offset(ncommit);
-
-    double Tc = 0;
-    long long k_end = 0;
-    PlanFitRequest req;
-    req.path = &path;
-    req.limits = &cfg.limits;
-    req.options = cfg.plan_options();
-    req.options.v_start = v_commit;
-    win.add_caps(path, cfg.limits.feed, req.options.caps);
-    if (!last) req.options.force_stations = {s_commit};
-    for (double sc : carried_stations)
-      if (sc < s_commit) req.options.force_stations.push_back(sc);
-    req.segments = sopt;
-    req.what = "streaming window " + std::to_string(st.windows) + " (curves from " + path.entry(0).where + ")";
-    req.carried = k_last >= 0;
-    req.t_offset = T0;
-    req.k_base = k_last < 0 ? 0 : k_last;
-    req.sample = [&](const plan::Plan& plan, std::vector<plan::TickSample>& out) {
-      Tc = last ? plan.duration() : time_at_arc_length(plan, s_commit);
-      k_end = k_org + (last ? static_cast<long long>(std::ceil((T0 + Tc) / h - 1e-9))
-                            : static_cast<long long>(std::floor((T0 + Tc) / h + 1e-9)));
-      out.clear();
-      if (k_last >= 0) out.push_back(carried);
-      plan::append_ticks_range(path, plan, h, T0, k_last + 1, k_end, out, k_org);
-    };
-    const PlanFitResult fit = plan_and_fit(req, ts);
-    st.caps += fit.repairs;
-    st.max_window_ticks = std::max(st.max_window_ticks, ts.size());
-    for (const auto& sg : fit.segments) emit(sg);
-    // the fitted positions before the committed end: the next window's fit
-    // checks its sampled tangential/normal windows across the junction
-    {
-      auto t = plan::fitted_tail(fit.segments, path.dim(), h, 3);
-      auto& hist = sopt.history;
-      hist.insert(hist.end(), t.begin(), t.end());
-      while (hist.size() > 3) hist.erase(hist.begin());
+    WindowPlan wp;
+    try {
+      wp = plan_window(win, carry, so.commit, last, cfg, st.windows, ts);
+    } catch (const JunctionError&) {
+      if (!held || held->ncommit <= 1) throw;
+      win.restore_front(std::move(held_curves));
+      held = plan_window(win, held_from, held->ncommit / 2, false, cfg, st.windows - 1, ts);
+      carry = held->next;
+      held_curves = win.take_front(held->ncommit);
+      ++st.retries;
+      continue;
     }
-    if (!ts.empty()) {
-      carried = ts.back();
-      carried.curve = static_cast<size_t>(-1);
-      carried.s = 0;
-      k_last = k_end;
-    }
-    T0 += Tc;
-    {
-      const double whole = std::floor(T0 / h);
-      k_org += static_cast<long long>(whole);
-      T0 -= whole * h;
-    }
-    v_commit = last ? 0 : plan::state_at(fit.plan, Tc).v;
-    // The stations of this plan beyond the commit become stations of the
-    // next window: its plan from v_commit then has blocks no longer than
-    // this one's there, which kept v_commit (a restarted plan with other
-    // station places could need to be slower at its start than v_commit).
-    carried_stations.clear();
-    for (const auto& stn : fit.plan.stations)
-      if (stn.s > s_commit + 1e-12 && stn.s < path.length() - 1e-12) carried_stations.push_back(stn.s - s_commit);
+    st.caps += wp.repairs;
+    st.max_window_ticks = std::max(st.max_window_ticks, wp.ticks);
+    if (held)
+      for (const auto& sg : held->segments) emit(sg);
     ++st.windows;
-    win.pop_front(ncommit);
     if (progress) progress("stream", static_cast<double>(st.curves));
     if (last) {
-      emit(hold_segment(k_last, carried.x, path.dim(), cfg.machine.degree));
+      for (const auto& sg : wp.segments) emit(sg);
+      const Carry& end = wp.next;
+      emit(hold_segment(end.k_last, end.tick.x, win.splines.front().dim(), cfg.machine.degree));
+      st.motion_time = static_cast<double>(end.k_org) * h + end.T0;
       break;
     }
+    held_from = std::move(carry);
+    carry = wp.next;
+    held_curves = win.take_front(wp.ncommit);
+    held = std::move(wp);
   }
-  st.motion_time = static_cast<double>(k_org) * h + T0;
   st.wall = std::chrono::duration<double>(Clock::now() - t_start).count();
   return st;
 }

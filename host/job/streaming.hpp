@@ -45,6 +45,7 @@ struct StreamOptions {
 
 struct StreamStats {
   size_t curves = 0, windows = 0, segments = 0, caps = 0;
+  size_t retries = 0;             // windows planned again with half their commit (run_streaming)
   long long ticks = 0;            // samples emitted
   double motion_time = 0;         // s
   double wall = 0;                // host seconds, planning + compilation
