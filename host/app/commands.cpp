@@ -162,7 +162,9 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
   }
   w.finish();
   end_progress();
-  std::printf("%s: %zu curves in %zu windows (%zu planned again with half their commit), %zu segments, %lld ticks "
+  // the summary goes to standard error when the stream goes to standard output
+  std::FILE* text = a.output == "-" ? stderr : stdout;
+  std::fprintf(text, "%s: %zu curves in %zu windows (%zu planned again with half their commit), %zu segments, %lld ticks "
               "(%.3f s of motion) -> %s\n"
               "host time %.3f s (%.0fx real time), first segment after %.1f ms\n",
               a.raster ? "raster" : a.input.c_str(), st.curves, st.windows, st.retries, st.segments, st.ticks,
@@ -171,7 +173,7 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
   if (toolpath) {
     for (const auto& n : toolpath->notes()) std::fprintf(stderr, "trajcore: note: %s\n", n.c_str());
     const auto& t = toolpath->totals();
-    std::printf("Toolpath (streamed: blended in %zu chunks, at most %zu moves held, %zu moves cut between chunks)\n"
+    std::fprintf(text, "Toolpath (streamed: blended in %zu chunks, at most %zu moves held, %zu moves cut between chunks)\n"
                 "  moves                %zu programmed; %zu feed and %zu rapid curves after blending, %zu exact "
                 "stops\n"
                 "  corners              %d blended (largest blend deviation %.4g mm, within half the tolerance), "
@@ -190,13 +192,14 @@ int plan_whole(const PlanArgs& a) {
   const job::JobConfig& cfg = in.cfg;
   const auto res = job::run_job(path, cfg, progress);
   stream::write_file(a.output, res.header, job::records_of(res));
-  std::printf("%s: %zu segments, %zu ticks (%.3f s of motion) -> %s\n", a.input.c_str(), res.segments.size(),
+  std::FILE* text = a.output == "-" ? stderr : stdout;  // the stream may go to standard output
+  std::fprintf(text, "%s: %zu segments, %zu ticks (%.3f s of motion) -> %s\n", a.input.c_str(), res.segments.size(),
               res.ticks.size(), res.plan.duration(), a.output.c_str());
   // the plan report; the output columns are the host's exact prediction of
   // the core's samples (`trajcore run` confirms them on the Verilated core)
   const auto rep = report::make_report(path, cfg, res, report::predicted_samples(res));
-  std::fputs((in.toolpath_text + report::report_text(cfg, rep, res)).c_str(), stdout);
-  std::printf("(output columns: the host's exact prediction of the core's samples)\n");
+  std::fputs((in.toolpath_text + report::report_text(cfg, rep, res)).c_str(), text);
+  std::fprintf(text, "(output columns: the host's exact prediction of the core's samples)\n");
   const bool ok = passes(cfg, rep);
   if (!ok) std::fprintf(stderr, "trajcore plan: a check FAILED (see the report)\n");
   return ok ? 0 : 1;
