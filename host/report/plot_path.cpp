@@ -291,7 +291,7 @@ void draw_colour_bar(std::ostringstream& o, const Feed& F, double bx, double top
     const double y = by - (F.over ? 40 : 22);
     o << "<rect x=\"" << num(bx) << "\" y=\"" << num(y) << "\" width=\"" << num(cbw) << "\" height=\"12\" fill=\""
       << kRapidColour << "\"/>\n";
-    o << text(bx + cbw + 7, y + 10, "rapid (> " + vfmt(F.scale) + ")", " font-size=\"10\"");
+    o << text(bx + cbw + 7, y + 10, "rapid", " font-size=\"10\"");
   }
   o << "<text transform=\"translate(" << num(bx + cbw + 52) << " " << num(by + bh / 2)
     << ") rotate(-90)\" text-anchor=\"middle\" font-size=\"12\">" << esc("output feed (" + u + "/s)") << "</text>\n";
