@@ -281,12 +281,22 @@ struct Grid {
 Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t) {
   Grid g;
   const int d = p.dim();
-  // the caps that meet the curve at hand, swept along the path (caps sorted
-  // by start): the cost does not grow with the number of caps per curve
-  std::vector<SpeedCap> caps_by_start = o.caps, caps;
+  // the caps that meet the curve at hand, and those that hold the grid point
+  // at hand, swept along the path (caps sorted by start; grid points come in
+  // increasing s): the cost does not grow with the number of caps
+  std::vector<SpeedCap> caps_by_start = o.caps, caps, caps_here;
   std::sort(caps_by_start.begin(), caps_by_start.end(),
             [](const SpeedCap& a, const SpeedCap& b) { return a.s0 < b.s0; });
-  size_t next_cap = 0;
+  size_t next_cap = 0, next_cap_here = 0;
+  auto cap_at = [&](double s_abs, double vl) {
+    while (next_cap_here < caps_by_start.size() && caps_by_start[next_cap_here].s0 <= s_abs)
+      caps_here.push_back(caps_by_start[next_cap_here++]);
+    caps_here.erase(std::remove_if(caps_here.begin(), caps_here.end(),
+                                   [&](const SpeedCap& cp) { return cp.s1 < s_abs; }),
+                    caps_here.end());
+    for (const auto& cp : caps_here) vl = std::min(vl, cp.v);
+    return vl;
+  };
   for (size_t ci = 0; ci < p.size(); ++ci) {
     const geo::Curve& c = p.curve(ci);
     const geo::ArcLength& al = p.arclength(ci);
@@ -371,8 +381,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
         vl = 0;
         corner = true;
       }
-      for (const auto& cp : caps)
-        if (s_off + s >= cp.s0 && s_off + s <= cp.s1) vl = std::min(vl, cp.v);
+      vl = cap_at(s_off + s, vl);
       for (double fs : forced_here)
         if (std::fabs(fs - s) <= 1e-12) corner = true;
       while (kb < knot_bound.size() && knot_bound[kb].first < s - 1e-12) ++kb;
