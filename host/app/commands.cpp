@@ -18,6 +18,7 @@
 #include "input/toolpath_file.hpp"
 #include "job/streaming.hpp"
 #include "job/toolpath_job.hpp"
+#include "job/toolpath_stream.hpp"
 #include "report/report.hpp"
 #include "sim/sim.hpp"
 #include "stream/segment_stream.hpp"
@@ -111,6 +112,7 @@ struct Loaded {
   plan::Path path;
   job::JobConfig cfg;
   std::string toolpath_text;  // a toolpath's moves and corners, for the report
+  double fastest_feed_move = 0;  // a toolpath's: the top of the path plot's colour scale (0: the feed limit)
 };
 
 Loaded load(const std::string& file, const std::string& format, const job::JobConfig& cfg) {
@@ -127,7 +129,10 @@ Loaded load(const std::string& file, const std::string& format, const job::JobCo
                 "%zu kept as stops\n",
                 tp.moves.size(), tpp.feed_moves, tpp.rapids, tpp.stops, tpp.corners_blended, tpp.blend_deviation,
                 100 * job::ToolpathOptions{}.blend_share, tpp.corner_stops);
-  return {std::move(tpp.path), std::move(tpp.cfg), b};
+  double fastest = 0;
+  for (const auto& m : tp.moves)
+    if (m.kind == input::Move::Kind::kFeed) fastest = std::max(fastest, m.feed > 0 ? m.feed : cfg.limits.feed);
+  return {std::move(tpp.path), std::move(tpp.cfg), b, fastest};
 }
 
 bool passes(const job::JobConfig& cfg, const report::Report& rep) {
@@ -137,10 +142,16 @@ bool passes(const job::JobConfig& cfg, const report::Report& rep) {
 
 int plan_streamed(const PlanArgs& a, bool jsonl) {
   std::unique_ptr<input::CurveSource> src;
+  std::unique_ptr<job::ToolpathStream> toolpath;
+  job::JobConfig cfg = a.cfg;
   if (a.raster > 0) {
     src = std::make_unique<input::RasterSource>(a.raster);
   } else if (jsonl) {
     src = std::make_unique<input::JsonlSource>(a.input);  // read line by line as the windows need curves
+  } else if (input::is_toolpath(input::file_kind(a.input, a.format))) {
+    // G-code read a line at a time as the windows need curves, blended in chunks
+    toolpath = std::make_unique<job::ToolpathStream>(a.input, input::file_kind(a.input, a.format), a.cfg);
+    cfg = toolpath->config();
   } else {
     if (a.input.empty()) throw PlanError("plan: give a path file or --raster N");
     src = std::make_unique<PathSource>(input::load_path(a.input), a.input);  // checks the file and the joins
@@ -153,20 +164,38 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
   stream::StreamWriter w(a.output, a.cfg.machine.header());
   job::StreamStats st;
   try {
-    st = job::run_streaming(
-        *src, a.cfg, so, [&](const fd::Compiled& c, const plan::TimeSegment&) { w.add({c.ticks, c.regs}); },
-        [](const std::string&, double curves) { show_progress("stream", util::fmt("%.0f curves", curves)); });
+    const job::SegmentSink sink = [&](const fd::Compiled& c, const plan::TimeSegment&) { w.add({c.ticks, c.regs}); };
+    const job::Progress prog = [](const std::string&, double curves) {
+      show_progress("stream", util::fmt("%.0f curves", curves));
+    };
+    st = toolpath ? job::run_streaming(*toolpath, cfg, so, sink, prog) : job::run_streaming(*src, cfg, so, sink, prog);
   } catch (...) {
     end_progress();  // the writer removes its temporary file
     throw;
   }
   w.finish();
   end_progress();
-  std::fprintf(a.output == "-" ? stderr : stdout, "%s: %zu curves in %zu windows, %zu segments, %lld ticks (%.3f s of motion) -> %s\n"
+  // the summary goes to standard error when the stream goes to standard output
+  std::FILE* text = a.output == "-" ? stderr : stdout;
+  std::fprintf(text, "%s: %zu curves in %zu windows (%zu planned again with half their commit), %zu segments, %lld ticks "
+              "(%.3f s of motion) -> %s\n"
               "host time %.3f s (%.0fx real time), first segment after %.1f ms\n",
-              a.raster ? "raster" : a.input.c_str(), st.curves, st.windows, st.segments, st.ticks, st.motion_time,
-              a.output == "-" ? "standard output" : a.output.c_str(), st.wall, st.motion_time / st.wall,
-              st.first_segment * 1e3);
+              a.raster ? "raster" : a.input.c_str(), st.curves, st.windows, st.retries, st.segments, st.ticks,
+              st.motion_time,
+              a.output == "-" ? "standard output" : a.output.c_str(), st.wall, st.motion_time / st.wall, st.first_segment * 1e3);
+  if (toolpath) {
+    for (const auto& n : toolpath->notes()) std::fprintf(stderr, "trajcore: note: %s\n", n.c_str());
+    const auto& t = toolpath->totals();
+    std::fprintf(text, "Toolpath (streamed: blended in %zu chunks, at most %zu moves held, %zu moves cut between chunks)\n"
+                "  moves                %zu programmed; %zu feed and %zu rapid curves after blending, %zu exact "
+                "stops\n"
+                "  corners              %d blended (largest blend deviation %.4g mm, within %g %% of the tolerance), "
+                "%zu kept as stops\n"
+                "  local speed caps     %zu from tick checks and the fit\n",
+                t.chunks, t.max_pending, t.split_moves, t.moves, t.feed_curves, t.rapid_curves, t.stops,
+                t.corners_blended, t.blend_deviation, 100 * job::ToolpathOptions{}.blend_share, t.corner_stops,
+                st.caps);
+  }
   return 0;
 }
 
@@ -177,14 +206,14 @@ int plan_whole(const PlanArgs& a) {
   const job::JobConfig& cfg = in.cfg;
   const auto res = job::run_job(path, cfg, progress);
   stream::write_file(a.output, res.header, job::records_of(res));
-  FILE* out = a.output == "-" ? stderr : stdout;  // "-": the stream goes to standard output
-  std::fprintf(out, "%s: %zu segments, %zu ticks (%.3f s of motion) -> %s\n", a.input.c_str(), res.segments.size(),
-               res.ticks.size(), res.plan.duration(), a.output.c_str());
+  std::FILE* text = a.output == "-" ? stderr : stdout;  // the stream may go to standard output
+  std::fprintf(text, "%s: %zu segments, %zu ticks (%.3f s of motion) -> %s\n", a.input.c_str(), res.segments.size(),
+              res.ticks.size(), res.plan.duration(), a.output.c_str());
   // the plan report; the output columns are the host's exact prediction of
   // the core's samples (`trajcore run` confirms them on the Verilated core)
   const auto rep = report::make_report(path, cfg, res, report::predicted_samples(res));
-  std::fputs((in.toolpath_text + report::report_text(cfg, rep, res)).c_str(), out);
-  std::fprintf(out, "(output columns: the host's exact prediction of the core's samples)\n");
+  std::fputs((in.toolpath_text + report::report_text(cfg, rep, res)).c_str(), text);
+  std::fprintf(text, "(output columns: the host's exact prediction of the core's samples)\n");
   const bool ok = passes(cfg, rep);
   if (!ok) std::fprintf(stderr, "trajcore plan: a check FAILED (see the report)\n");
   return ok ? 0 : 1;
@@ -214,10 +243,6 @@ std::string core_line(const sim::SimResult& sr) {
 }  // namespace
 
 int plan_command(const PlanArgs& a) {
-  if (!a.input.empty() && a.raster == 0 && input::is_toolpath(input::file_kind(a.input, a.format)) &&
-      a.window > 0)
-    throw PlanError("plan: " + a.input + ": a toolpath file is planned whole; --window (streaming) takes JSON "
-                    "and JSON Lines paths");
   const bool jsonl = !a.input.empty() && a.raster == 0 && input::file_kind(a.input, a.format) == input::FileKind::kJsonl;
   if (jsonl && a.window_given && a.window == 0)
     throw PlanError("plan: a JSON Lines path is always streamed: --window must be at least 2");
@@ -252,7 +277,7 @@ int run_command(const RunArgs& a) {
   end_progress();
   write_csv(stage.dir + "/samples.csv", res.header, sr.samples);
   const auto rep = report::make_report(path, cfg, res, sr.samples);
-  report::write_plots(stage.dir, path, cfg, res, sr.samples);
+  report::write_plots(stage.dir, path, cfg, res, sr.samples, in.fastest_feed_move);
   const std::string text = in.toolpath_text + report::report_text(cfg, rep, res) + core_line(sr);
   {
     util::AtomicFile f(stage.dir + "/report.txt");

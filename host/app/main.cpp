@@ -118,7 +118,7 @@ int main(int argc, char** argv) {
   pl->add_option("-o,--output", pa.output, "segment stream to write (- : standard output, e.g. piped into `trajcore upload -`)")->capture_default_str();
   auto* window_opt = pl->add_option(
       "--window", pa.window,
-      "stream in bounded memory: plan a look-ahead window of this many curves, commit three quarters of it "
+      "stream in bounded memory (JSON, JSON Lines, and toolpaths: G-code read a line at a time, corners blended in chunks): plan a look-ahead window of this many curves, commit three quarters of it "
       "(half below 16), "
       "write segments as they are final (0: plan the whole path at once; a .jsonl path is always streamed, "
       "default window 64)");

@@ -2,7 +2,9 @@
 #include "input/gcode.hpp"
 
 #include <cmath>
+#include <deque>
 #include <fstream>
+#include <memory>
 #include <map>
 #include <optional>
 #include <set>
@@ -82,35 +84,51 @@ class Interpreter {
  public:
   Interpreter(std::string name, GcodeOptions opt) : name_(std::move(name)), opt_(opt) {}
 
-  Toolpath run(std::istream& in) {
-    std::string text;
-    int line = 0;
-    bool seen_content = false, in_percent = false;
-    while (std::getline(in, text)) {
-      ++line;
-      if (!text.empty() && text.back() == '\r') text.pop_back();
-      const Block b = gcode::lex_line(text, line, name_);
+  // Reads lines until at least one move is pending or the program has
+  // ended; false once the program has ended and every move was taken.
+  bool read_more(std::istream& in) {
+    while (out_.moves.empty() && !ended_) {
+      if (!std::getline(in, text_)) {
+        finish(line_no_, false);
+        break;
+      }
+      ++line_no_;
+      if (!text_.empty() && text_.back() == '\r') text_.pop_back();
+      const Block b = gcode::lex_line(text_, line_no_, name_);
       if (b.percent) {
-        if (in_percent) return finish(line, true);
-        line_ = line;
-        if (seen_content) fail("%", "'%' only on the first line, or to close a program opened with '%'");
-        in_percent = true;
-        seen_content = true;
+        if (in_percent_) {
+          finish(line_no_, true);
+          break;
+        }
+        line_ = line_no_;
+        if (seen_content_) fail("%", "'%' only on the first line, or to close a program opened with '%'");
+        in_percent_ = true;
+        seen_content_ = true;
         continue;
       }
-      if (text.find_first_not_of(" \t") != std::string::npos) seen_content = true;
+      if (text_.find_first_not_of(" \t") != std::string::npos) seen_content_ = true;
       if (b.words.empty()) continue;
       if (b.block_delete && opt_.block_delete) continue;
-      if (execute(b)) return finish(line, true);
+      if (execute(b)) finish(line_no_, true);
     }
-    return finish(line, false);
+    return !out_.moves.empty();
   }
+
+  // The moves produced and not yet taken (in program order), and the notes.
+  std::deque<Move>& pending() { return out_.moves; }
+  const std::vector<std::string>& notes() const { return out_.notes; }
 
  private:
   std::string name_;
   GcodeOptions opt_;
-  Toolpath out_;
+  struct {
+    std::deque<Move> moves;
+    std::vector<std::string> notes;
+  } out_;
   std::set<std::string> noted_;
+  std::string text_;  // the line being read
+  int line_no_ = 0;
+  bool seen_content_ = false, in_percent_ = false, ended_ = false;
 
   // Machine state (mm, the program's start X0 Y0 Z0).
   Vector3d pos_ = Vector3d::Zero();
@@ -152,14 +170,14 @@ class Interpreter {
   }
   const std::string& text(char c) const { return words_.at(c).text; }
 
-  Toolpath finish(int line, bool ended) {
+  void finish(int line, bool ended) {
     line_ = line;
     if (nurbs_) {
       line_ = nurbs_->line;
       fail("G5.2", "NURBS not closed with G5.3 before the end of the program");
     }
     if (!ended) fail("end of file", "the program has no M2, M30 or closing '%'");
-    return std::move(out_);
+    ended_ = true;
   }
 
   // Returns true at the program's end (M2, M30).
@@ -555,16 +573,55 @@ class Interpreter {
 
 }  // namespace
 
-Toolpath read_gcode(std::istream& in, const std::string& name, const GcodeOptions& options) {
-  Toolpath tp = Interpreter(name, options).run(in);
+struct GcodeReader::Impl {
+  Impl(std::string name, GcodeOptions opt) : interp(std::move(name), opt) {}
+  std::ifstream file;
+  std::istream* in = nullptr;
+  Interpreter interp;
+};
+
+GcodeReader::GcodeReader(const std::string& file, const GcodeOptions& options)
+    : impl_(std::make_unique<Impl>(file, options)) {
+  impl_->file.open(file);
+  if (!impl_->file) throw InputError(file + ": cannot open");
+  impl_->in = &impl_->file;
+}
+
+GcodeReader::GcodeReader(std::istream& in, const std::string& name, const GcodeOptions& options)
+    : impl_(std::make_unique<Impl>(name, options)) {
+  impl_->in = &in;
+}
+
+GcodeReader::~GcodeReader() = default;
+
+bool GcodeReader::next(Move& m) {
+  if (!impl_->interp.read_more(*impl_->in)) return false;
+  m = std::move(impl_->interp.pending().front());
+  impl_->interp.pending().pop_front();
+  return true;
+}
+
+const std::vector<std::string>& GcodeReader::notes() const { return impl_->interp.notes(); }
+
+namespace {
+Toolpath read_all(GcodeReader& r) {
+  Toolpath tp;
+  Move m;
+  while (r.next(m)) tp.moves.push_back(std::move(m));
+  tp.notes = r.notes();
   tp.axes = 3;
   return tp;
 }
+}  // namespace
+
+Toolpath read_gcode(std::istream& in, const std::string& name, const GcodeOptions& options) {
+  GcodeReader r(in, name, options);
+  return read_all(r);
+}
 
 Toolpath read_gcode(const std::string& file, const GcodeOptions& options) {
-  std::ifstream in(file);
-  if (!in) throw InputError(file + ": cannot open");
-  return read_gcode(in, file, options);
+  GcodeReader r(file, options);
+  return read_all(r);
 }
 
 }  // namespace traj::input

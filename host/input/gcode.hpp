@@ -15,7 +15,9 @@
 // Moves of zero length produce no Move.
 #pragma once
 #include <istream>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "input/toolpath.hpp"
 
@@ -25,6 +27,24 @@ struct GcodeOptions {
   // LinuxCNC's block-delete switch: when on, lines starting with '/' are
   // skipped; when off (LinuxCNC's default, and rs274's) they run.
   bool block_delete = false;
+};
+
+// The moves one at a time, as the program is read (a line at a time): memory
+// does not grow with the program. Errors as read_gcode's, thrown by next()
+// when the line that has them is reached.
+class GcodeReader {
+ public:
+  explicit GcodeReader(const std::string& file, const GcodeOptions& options = {});
+  GcodeReader(std::istream& in, const std::string& name, const GcodeOptions& options = {});
+  ~GcodeReader();
+  // The next move; false at the program's end.
+  bool next(Move& m);
+  // Notes so far (words accepted and not acted on).
+  const std::vector<std::string>& notes() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
 };
 
 Toolpath read_gcode(const std::string& file, const GcodeOptions& options = {});

@@ -87,7 +87,8 @@ JobResult run_job(const plan::Path& p, const JobConfig& cfg, const Progress& pro
   PlanFitResult fit = plan_and_fit(req, r.ticks);
   r.plan = std::move(fit.plan);
   r.segments = std::move(fit.segments);
-  r.repairs = static_cast<int>(req.options.caps.size());
+  r.repairs = static_cast<int>(fit.repairs);
+  r.rounds = fit.rounds;
   r.segments.push_back(
       hold_segment(static_cast<long long>(r.ticks.size()) - 1, r.ticks.back().x, p.dim(), m.degree));
 

@@ -34,7 +34,8 @@ struct JobResult {
   std::vector<fd::Compiled> compiled;
   stream::Header header;
   double fit_tol = 0;
-  int repairs = 0;  // local speed caps added by the tick-level checks
+  int repairs = 0;  // local speed caps added by the tick-level checks and the fit
+  int rounds = 0;   // plans made (each round adds every cap its checks found)
   double t_plan = 0, t_ticks = 0, t_fit = 0, t_compile = 0;  // seconds
 };
 

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <array>
 #include <cmath>
 
 namespace traj::job {
@@ -24,20 +25,117 @@ plan::SpeedCap cap_around(const plan::TickSample& t, double ratio, double shrink
   return {t.s - w, t.s + w, std::max(v, 1e-6 * feed)};
 }
 
+// The repair caps of earlier rounds, to tell how often a place has been
+// capped already: a place capped again is slowed by a further 0.8 per time it
+// was (0.8, 0.64, 0.51 ... of its speed), so that a place needing a large
+// slow-down takes a number of rounds that grows as the square root of its
+// logarithm, not as the logarithm.
+class Earlier {
+ public:
+  Earlier(const std::vector<plan::SpeedCap>& caps, size_t from) {
+    for (size_t i = from; i < caps.size(); ++i) {
+      iv_.push_back({caps[i].s0, caps[i].s1});
+      width_ = std::max(width_, caps[i].s1 - caps[i].s0);
+    }
+    std::sort(iv_.begin(), iv_.end());
+  }
+  // 0.8 to the power of the number of earlier caps holding s.
+  double shrink(double s) const {
+    auto it = std::upper_bound(iv_.begin(), iv_.end(), std::make_pair(s, 1e300));
+    double f = 1;
+    while (it != iv_.begin()) {
+      --it;
+      if (it->first < s - width_) break;
+      if (it->second >= s) f *= 0.8;
+    }
+    return f;
+  }
+
+ private:
+  std::vector<std::pair<double, double>> iv_;
+  double width_ = 0;
+};
+
 // Caps where a tick exceeds a limit (at most one cap per six ticks); returns how many.
 size_t cap_tick_violations(const PlanFitRequest& req, const std::vector<plan::TickSample>& ts,
-                           std::vector<plan::SpeedCap>& caps) {
+                           std::vector<plan::SpeedCap>& caps, const Earlier& earlier) {
   const size_t before = caps.size();
   const int dim = req.path->dim();
   long long last = -1000000;
   for (size_t k = req.carried ? 1 : 0; k < ts.size(); ++k) {
     const double q = plan::tick_ratio(ts[k], *req.limits, dim);
     if (q > 1 + 1e-9 && static_cast<long long>(k) > last + 5) {
-      caps.push_back(cap_around(ts[k], q, 1.0, req.options.period, req.path->length(), req.limits->feed));
+      caps.push_back(cap_around(ts[k], q, earlier.shrink(ts[k].s), req.options.period, req.path->length(),
+                                req.limits->feed));
       last = static_cast<long long>(k);
     }
   }
   return caps.size() - before;
+}
+
+// Ticks fitted at once: a longer tick sequence is fitted in parts that join
+// at a shared tick, as streaming windows do (the part after it gets the
+// fitted positions before it as history), so that a failure costs one part,
+// not the whole fit.
+constexpr size_t kFitPart = 1 << 16;
+// After a failed fit, the search for further failures resumes this many
+// ticks later (the caps already cover about five ticks' travel each side).
+constexpr size_t kResumeAfterFailure = 8;
+
+// The plan's positions of the (up to 3) ticks before ts[i]: the history of a
+// part that follows a failed one (only to look for further failures; that
+// round is not accepted).
+std::vector<std::array<double, plan::kMaxAxes>> plan_history(const std::vector<plan::TickSample>& ts, size_t i) {
+  std::vector<std::array<double, plan::kMaxAxes>> h;
+  for (size_t k = i >= 3 ? i - 3 : 0; k < i; ++k) {
+    std::array<double, plan::kMaxAxes> q{};
+    for (int a = 0; a < plan::kMaxAxes; ++a) q[a] = ts[k].x[a];
+    h.push_back(q);
+  }
+  return h;
+}
+
+// Fits every tick of `ts`, part by part, and caps the speed at every place
+// where a fit fails (the search goes on after each failure, so one round
+// finds them all: the number of rounds does not grow with the path's length).
+// Returns the number of failures; `segs` is the fit when there were none.
+size_t fit_all(const PlanFitRequest& req, const plan::Plan& plan, const std::vector<plan::TickSample>& ts,
+               std::vector<plan::TimeSegment>& segs, std::vector<plan::SpeedCap>& caps, const Earlier& earlier) {
+  const double h = req.options.period;
+  const size_t n = ts.size() - 1;  // ticks to fit: 1..n
+  segs.clear();
+  size_t failures = 0;
+  plan::SegmentOptions so = req.segments;
+  std::vector<plan::TickSample> part;
+  for (size_t i0 = 0; i0 < n;) {
+    const size_t i1 = std::min(n, i0 + kFitPart);
+    const bool whole = i0 == 0 && i1 == n;
+    if (!whole) part.assign(ts.begin() + static_cast<long>(i0), ts.begin() + static_cast<long>(i1) + 1);
+    try {
+      auto s = plan::fit_segments(*req.path, plan, whole ? ts : part, *req.limits, so, h, req.t_offset,
+                                  req.k_base + static_cast<long long>(i0));
+      if (failures == 0) {
+        so.history = plan::fitted_tail(s, req.path->dim(), h, 3);
+        segs.insert(segs.end(), s.begin(), s.end());
+      } else {
+        so.history = plan_history(ts, i1);
+      }
+      i0 = i1;
+    } catch (const plan::FitError& e) {
+      const long long idx = e.tick - req.k_base;
+      if (idx <= 0 && req.carried)  // the carried tick is committed: nothing left to slow down there
+        throw JunctionError(req.what +
+                              ": the motion committed by the previous window cannot be continued within the limits "
+                              "at their junction (" + e.what() + "); plan with a larger window (--window)");
+      const size_t k = static_cast<size_t>(std::max<long long>(idx, 0));
+      for (size_t j : {k, std::min(k + 1, n)})
+        caps.push_back(cap_around(ts[j], 0, 0.8 * earlier.shrink(ts[j].s), h, req.path->length(), req.limits->feed));
+      ++failures;
+      i0 = std::max(i0 + 1, std::min(n, k + kResumeAfterFailure));
+      so.history = plan_history(ts, i0);
+    }
+  }
+  return failures;
 }
 
 }  // namespace
@@ -46,10 +144,13 @@ PlanFitResult plan_and_fit(PlanFitRequest& req, std::vector<plan::TickSample>& t
   PlanFitResult r;
   const double h = req.options.period;
   auto& caps = req.options.caps;
+  const size_t given = caps.size();
   for (int attempt = 0;; ++attempt) {
+    r.rounds = attempt + 1;
+    r.repairs = caps.size() - given;
     if (attempt > kMaxAttempts)
-      throw plan::PlanError(req.what + ": the limits cannot be met: " + std::to_string(caps.size()) +
-                            " local speed caps did not suffice");
+      throw plan::PlanError(req.what + ": the limits cannot be met: " + std::to_string(caps.size() - given) +
+                            " local speed caps in " + std::to_string(kMaxAttempts) + " rounds did not suffice");
     if (req.progress) req.progress("plan", 0);
     const auto a0 = Clock::now();
     r.plan = plan::plan_path(*req.path, *req.limits, req.options);
@@ -61,28 +162,17 @@ PlanFitResult plan_and_fit(PlanFitRequest& req, std::vector<plan::TickSample>& t
     const auto a2 = Clock::now();
     r.t_plan += secs(a0, a1);
     r.t_ticks += secs(a1, a2);
-    if (cap_tick_violations(req, ts, caps) > 0) continue;
+    const Earlier earlier(caps, given);
+    if (cap_tick_violations(req, ts, caps, earlier) > 0) continue;
     if (ts.size() < 2) {  // nothing to fit (a window's commit shorter than a tick)
       r.segments.clear();
       return r;
     }
     if (req.progress) req.progress("fit", 0);
     const auto a3 = Clock::now();
-    try {
-      r.segments = plan::fit_segments(*req.path, r.plan, ts, *req.limits, req.segments, h, req.t_offset, req.k_base);
-    } catch (const plan::FitError& e) {
-      r.t_fit += secs(a3, Clock::now());
-      const long long idx = e.tick - req.k_base;
-      if (idx <= 0 && req.carried)  // the carried tick is committed: nothing left to slow down there
-        throw plan::PlanError(req.what +
-                              ": the motion committed by the previous window cannot be continued within the limits "
-                              "at their junction (" + e.what() + "); plan with a larger window (--window)");
-      const size_t k = static_cast<size_t>(idx);
-      for (size_t j : {k, std::min(k + 1, ts.size() - 1)})
-        caps.push_back(cap_around(ts[j], 0, 0.8, h, req.path->length(), req.limits->feed));
-      continue;
-    }
+    const size_t failures = fit_all(req, r.plan, ts, r.segments, caps, earlier);
     r.t_fit += secs(a3, Clock::now());
+    if (failures > 0) continue;
     if (req.progress) req.progress("fit", 1);
     return r;
   }

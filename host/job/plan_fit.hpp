@@ -19,6 +19,13 @@
 
 namespace traj::job {
 
+// The motion committed by a previous window (the carried tick) cannot be
+// continued within the limits.
+class JunctionError : public plan::PlanError {
+ public:
+  using plan::PlanError::PlanError;
+};
+
 struct PlanFitRequest {
   const plan::Path* path = nullptr;
   const plan::Limits* limits = nullptr;
@@ -38,6 +45,8 @@ struct PlanFitResult {
   plan::Plan plan;
   std::vector<plan::TimeSegment> segments;
   double t_plan = 0, t_ticks = 0, t_fit = 0;  // host seconds
+  int rounds = 0;      // plans made (1: no repair needed)
+  size_t repairs = 0;  // speed caps added by the tick checks and the fit (beyond the request's own)
 };
 
 // The tick samples of the accepted plan are left in `ts`. Throws

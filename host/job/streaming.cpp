@@ -6,6 +6,7 @@
 #include <cmath>
 #include <deque>
 #include <memory>
+#include <optional>
 
 #include "job/plan_fit.hpp"
 
@@ -18,21 +19,45 @@ using plan::PlanError;
 
 // The curves held by the streaming window: each built once (arc-length
 // tables) and shared by the windows that plan it, with its spline kept so
-// that it can be cut at a commit.
+// that it can be cut at a commit, and its speed and stop.
 struct Window {
   std::deque<std::shared_ptr<const PathCurve>> curves;
   std::deque<geo::BSpline> splines;
+  std::deque<double> speeds;
+  std::deque<bool> stops;
 
+  void push_back(StreamCurve&& c) {
+    curves.push_back(std::make_shared<const PathCurve>(c.curve, c.where));
+    splines.push_back(std::move(c.curve));
+    speeds.push_back(c.speed);
+    stops.push_back(c.stop);
+  }
   Path path() const {
     Path p;
     for (const auto& c : curves) p.add(c);
     return p;
   }
-  void pop_front(size_t n) {
+  // The first n curves, taken out (a held window's committed curves).
+  Window take_front(size_t n) {
+    Window w;
     for (size_t i = 0; i < n; ++i) {
+      w.curves.push_back(std::move(curves.front()));
+      w.splines.push_back(std::move(splines.front()));
+      w.speeds.push_back(speeds.front());
+      w.stops.push_back(stops.front());
       curves.pop_front();
       splines.pop_front();
+      speeds.pop_front();
+      stops.pop_front();
     }
+    return w;
+  }
+  // Puts curves taken by take_front back in front.
+  void restore_front(Window&& w) {
+    curves.insert(curves.begin(), w.curves.begin(), w.curves.end());
+    splines.insert(splines.begin(), w.splines.begin(), w.splines.end());
+    speeds.insert(speeds.begin(), w.speeds.begin(), w.speeds.end());
+    stops.insert(stops.begin(), w.stops.begin(), w.stops.end());
   }
   // Cuts curve i in two inside the knot span that holds its parameter middle
   // (a smooth place: no knot there).
@@ -43,25 +68,54 @@ struct Window {
     while (k + 1 < c.n_ctrl() && c.knots[k + 1] <= mid) ++k;
     auto halves = geo::split_at(c, 0.5 * (c.knots[k] + c.knots[k + 1]));
     const std::string w = curves[i]->where;
+    const auto at = static_cast<long>(i) + 1;
     curves[i] = std::make_shared<const PathCurve>(halves.first, w + " (first part)");
-    curves.insert(curves.begin() + static_cast<long>(i) + 1,
-                  std::make_shared<const PathCurve>(halves.second, w + " (second part)"));
+    curves.insert(curves.begin() + at, std::make_shared<const PathCurve>(halves.second, w + " (second part)"));
     splines[i] = std::move(halves.first);
-    splines.insert(splines.begin() + static_cast<long>(i) + 1, std::move(halves.second));
+    splines.insert(splines.begin() + at, std::move(halves.second));
+    speeds.insert(speeds.begin() + at, speeds[i]);
+    stops.insert(stops.begin() + at, stops[i]);
+    stops[i] = false;
+  }
+  // The curves' speeds and stops as speed caps on `path` (the window's path).
+  void add_caps(const Path& path, double feed, std::vector<plan::SpeedCap>& caps) const {
+    const double eps = 1e-9 * std::max(1.0, path.length());
+    for (size_t i = 0; i < curves.size(); ++i) {
+      const double s0 = path.offset(i), s1 = path.offset(i + 1);
+      if (speeds[i] > 0 && speeds[i] < feed) caps.push_back({s0, s1, speeds[i]});
+      if (stops[i] && i + 1 < curves.size()) caps.push_back({s1 - eps, s1 + eps, 0.0});
+    }
   }
 };
 
-// True if curves i-1 and i of `path` meet at a tangent break.
+// The curves of a CurveSource, at the feed limit, without stops.
+struct PlainSource : StreamSource {
+  explicit PlainSource(CurveSource& s) : src(s) {}
+  bool next(StreamCurve& c) override {
+    c.speed = 0;
+    c.stop = false;
+    return src.next(c.curve, c.where);
+  }
+  CurveSource& src;
+};
+
+// True if curves i-1 and i of `path` meet at a tangent break or a curvature
+// step (the planner's test: a jump of d2C/ds2 on an axis).
 bool corner_at(const Path& path, size_t i, double corner_tol) {
   const plan::Frame e = plan::frame_at(path, i - 1, path.curve(i - 1).u_end(), path.offset(i));
   const plan::Frame f = plan::frame_at(path, i, path.curve(i).u_begin(), path.offset(i));
-  double dot = 0;
-  for (int a = 0; a < path.dim(); ++a) dot += e.T[a] * f.T[a];
-  return std::acos(std::clamp(dot, -1.0, 1.0)) > corner_tol;
+  double dot = 0, kscale = 0, kjump = 0;
+  for (int a = 0; a < path.dim(); ++a) {
+    dot += e.T[a] * f.T[a];
+    kscale = std::max({kscale, std::fabs(e.K[a]), std::fabs(f.K[a])});
+    kjump = std::max(kjump, std::fabs(f.K[a] - e.K[a]));
+  }
+  return std::acos(std::clamp(dot, -1.0, 1.0)) > corner_tol || kjump > 1e-9 * (1 + kscale);
 }
 
 // How many curves of a (not last) window to commit. The commit junction
-// should not be a corner: the next window's first segment must start at the
+// should not be a corner (nor a curvature step, which the planner passes at a
+// station of its own jump speed, like a corner): the next window's first segment must start at the
 // last committed tick, just before the junction, and turn the velocity from
 // there; at a corner (passed at a near-stop within one tick) that can fail
 // where a whole-path fit would have started the turn earlier. The nearest
@@ -82,6 +136,18 @@ size_t choose_commit(Window& win, Path& path, size_t ncommit, double corner_tol)
   return ncommit;
 }
 
+// s, or the curve junction of `path` it lies at up to rounding (a station
+// carried from the previous window, whose arc lengths started elsewhere): a
+// station a rounding error away from a junction would be a second grid point
+// beside it, without the junction's speed bound.
+double snap_to_junction(const Path& path, double s) {
+  const size_t i = path.curve_at(s);
+  const double eps = 1e-9 * std::max(1.0, path.length());
+  if (std::fabs(s - path.offset(i)) <= eps) return path.offset(i);
+  if (std::fabs(s - path.offset(i + 1)) <= eps) return path.offset(i + 1);
+  return s;
+}
+
 // Time at which `plan` reaches arc length s (bisection on the profile).
 double time_at_arc_length(const plan::Plan& plan, double s) {
   double lo = 0, hi = plan.duration();
@@ -96,6 +162,120 @@ double time_at_arc_length(const plan::Plan& plan, double s) {
 
 StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOptions& so, const SegmentSink& sink,
                           const Progress& progress) {
+  PlainSource plain(src);
+  return run_streaming(plain, cfg, so, sink, progress);
+}
+
+namespace {
+
+// What a window hands to the next, exactly: the window's start time
+// k_org h + T0 with 0 <= T0 < h (the tick count is held as an integer, so
+// tick times and the committed tick keep full precision however long the path
+// runs: a double T0 alone would round the tick grid to 7e-9 ticks past 2^25
+// ticks, 9 hours at 1 ms), the speed at the commit, the last committed tick
+// and its sample, the fitted positions before it (the next fit checks its
+// sampled tangential/normal windows across the junction), and the stations
+// and repair caps of the plan beyond the commit.
+struct Carry {
+  long long k_org = 0;
+  double T0 = 0, v = 0;
+  long long k_last = -1;  // last committed tick (-1: at rest, nothing committed)
+  plan::TickSample tick{};
+  std::vector<std::array<double, plan::kMaxAxes>> history;
+  std::vector<double> stations;
+  std::vector<plan::SpeedCap> caps;
+};
+
+struct WindowPlan {
+  std::vector<plan::TimeSegment> segments;
+  size_t ncommit = 0;  // curves committed
+  Carry next;
+  size_t repairs = 0, ticks = 0;
+};
+
+// Plans the window `win` from `in`, committing at most about `commit_max`
+// curves (all if `last`).
+WindowPlan plan_window(Window& win, const Carry& in, size_t commit_max, bool last, const JobConfig& cfg,
+                       size_t index, std::vector<plan::TickSample>& ts) {
+  const double h = cfg.machine.period;
+  WindowPlan wp;
+  Path path = win.path();
+  size_t ncommit = last ? win.curves.size() : std::min(commit_max, win.curves.size() - 1);
+  if (!last) ncommit = choose_commit(win, path, ncommit, cfg.plan.corner_tol);
+  wp.ncommit = ncommit;
+  const double s_commit = last ? path.length() : path.offset(ncommit);
+
+  double Tc = 0;
+  long long k_end = 0;
+  PlanFitRequest req;
+  req.path = &path;
+  req.limits = &cfg.limits;
+  req.options = cfg.plan_options();
+  req.options.v_start = in.v;
+  win.add_caps(path, cfg.limits.feed, req.options.caps);
+  const size_t own_caps = req.options.caps.size();
+  req.options.caps.insert(req.options.caps.end(), in.caps.begin(), in.caps.end());
+  if (!last) req.options.force_stations = {s_commit};
+  for (double sc : in.stations)
+    if (sc < s_commit) req.options.force_stations.push_back(snap_to_junction(path, sc));
+  req.segments = cfg.segment_options();
+  req.segments.history = in.history;
+  req.what = "streaming window " + std::to_string(index) + " (curves from " + path.entry(0).where + ")";
+  req.carried = in.k_last >= 0;
+  req.t_offset = in.T0;
+  req.k_base = in.k_last < 0 ? 0 : in.k_last;
+  req.sample = [&](const plan::Plan& plan, std::vector<plan::TickSample>& out) {
+    Tc = last ? plan.duration() : time_at_arc_length(plan, s_commit);
+    k_end = in.k_org + (last ? static_cast<long long>(std::ceil((in.T0 + Tc) / h - 1e-9))
+                             : static_cast<long long>(std::floor((in.T0 + Tc) / h + 1e-9)));
+    out.clear();
+    if (in.k_last >= 0) out.push_back(in.tick);
+    plan::append_ticks_range(path, plan, h, in.T0, in.k_last + 1, k_end, out, in.k_org);
+  };
+  PlanFitResult fit = plan_and_fit(req, ts);
+  wp.repairs = fit.repairs;
+  wp.ticks = ts.size();
+
+  Carry& next = wp.next;
+  next.history = in.history;
+  {
+    auto t = plan::fitted_tail(fit.segments, path.dim(), h, 3);
+    next.history.insert(next.history.end(), t.begin(), t.end());
+    while (next.history.size() > 3) next.history.erase(next.history.begin());
+  }
+  next.k_last = in.k_last;
+  next.tick = in.tick;
+  if (!ts.empty()) {
+    next.tick = ts.back();
+    next.tick.curve = static_cast<size_t>(-1);
+    next.tick.s = 0;
+    next.k_last = k_end;
+  }
+  next.T0 = in.T0 + Tc;
+  next.k_org = in.k_org;
+  {
+    const double whole = std::floor(next.T0 / h);
+    next.k_org += static_cast<long long>(whole);
+    next.T0 -= whole * h;
+  }
+  next.v = last ? 0 : plan::state_at(fit.plan, Tc).v;
+  // The stations of this plan beyond the commit become stations of the
+  // next window, and the repair caps found there its caps: its plan from
+  // v_commit then has the blocks and the speed bounds of this one there.
+  for (size_t i = own_caps; i < req.options.caps.size(); ++i) {
+    const plan::SpeedCap& cp = req.options.caps[i];
+    if (cp.s1 > s_commit) next.caps.push_back({cp.s0 - s_commit, cp.s1 - s_commit, cp.v});
+  }
+  for (const auto& stn : fit.plan.stations)
+    if (stn.s > s_commit + 1e-12 && stn.s < path.length() - 1e-12) next.stations.push_back(stn.s - s_commit);
+  wp.segments = std::move(fit.segments);
+  return wp;
+}
+
+}  // namespace
+
+StreamStats run_streaming(StreamSource& src, const JobConfig& cfg, const StreamOptions& so, const SegmentSink& sink,
+                          const Progress& progress) {
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
   if (so.window < 2 || so.commit < 1 || so.commit >= so.window)
@@ -103,19 +283,10 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
                     ", window " + std::to_string(so.window) + ")");
   cfg.validate();
   const double h = cfg.machine.period;
-  plan::SegmentOptions sopt = cfg.segment_options();
 
   StreamStats st;
   Window win;
   bool exhausted = false;
-  // The window's start time is k_org h + T0 with 0 <= T0 < h: the tick count
-  // is held as an integer, so tick times and the committed tick keep full
-  // precision however long the path runs (a double T0 alone would round the
-  // tick grid to 7e-9 ticks past 2^25 ticks, 9 hours at 1 ms).
-  long long k_org = 0;
-  double T0 = 0, v_commit = 0;
-  long long k_last = -1;  // last committed tick
-  plan::TickSample carried{};
   std::vector<plan::TickSample> ts;  // the window's ticks; storage reused window after window
 
   SegmentCompiler sc(cfg.machine);
@@ -127,80 +298,57 @@ StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOp
     st.ticks += seg.K;
   };
 
+  // A window's segments are emitted once the next window has planned from
+  // its commit: a restarted plan (other stations, other grid points) can
+  // occasionally not continue the committed motion within the limits; the
+  // held window is then planned again with half its commit (more of the
+  // slow-down is left to the next window), and the next window retried.
+  Carry carry;             // into the window to plan
+  Carry held_from;         // into the held window
+  std::optional<WindowPlan> held;
+  Window held_curves;      // the held window's committed curves
   while (true) {
-    geo::BSpline b;
-    std::string where;
+    StreamCurve c;
     while (!exhausted && win.curves.size() < so.window) {
-      if (src.next(b, where)) {
-        win.curves.push_back(std::make_shared<const PathCurve>(b, where));
-        win.splines.push_back(b);
+      if (src.next(c)) {
+        win.push_back(std::move(c));
         ++st.curves;
       } else {
         exhausted = true;
       }
     }
     if (win.curves.empty()) break;
-    Path path = win.path();
     const bool last = exhausted;
-    size_t ncommit = last ? win.curves.size() : std::min(so.commit, win.curves.size() - 1);
-    if (!last) ncommit = choose_commit(win, path, ncommit, cfg.plan.corner_tol);
-    const double s_commit = last ? path.length() : path.offset(ncommit);
-
-    double Tc = 0;
-    long long k_end = 0;
-    PlanFitRequest req;
-    req.path = &path;
-    req.limits = &cfg.limits;
-    req.options = cfg.plan_options();
-    req.options.v_start = v_commit;
-    if (!last) req.options.force_stations = {s_commit};
-    req.segments = sopt;
-    req.what = "streaming window " + std::to_string(st.windows) + " (curves from " + path.entry(0).where + ")";
-    req.carried = k_last >= 0;
-    req.t_offset = T0;
-    req.k_base = k_last < 0 ? 0 : k_last;
-    req.sample = [&](const plan::Plan& plan, std::vector<plan::TickSample>& out) {
-      Tc = last ? plan.duration() : time_at_arc_length(plan, s_commit);
-      k_end = k_org + (last ? static_cast<long long>(std::ceil((T0 + Tc) / h - 1e-9))
-                            : static_cast<long long>(std::floor((T0 + Tc) / h + 1e-9)));
-      out.clear();
-      if (k_last >= 0) out.push_back(carried);
-      plan::append_ticks_range(path, plan, h, T0, k_last + 1, k_end, out, k_org);
-    };
-    const PlanFitResult fit = plan_and_fit(req, ts);
-    st.caps += req.options.caps.size();
-    st.max_window_ticks = std::max(st.max_window_ticks, ts.size());
-    for (const auto& sg : fit.segments) emit(sg);
-    // the fitted positions before the committed end: the next window's fit
-    // checks its sampled tangential/normal windows across the junction
-    {
-      auto t = plan::fitted_tail(fit.segments, path.dim(), h, 3);
-      auto& hist = sopt.history;
-      hist.insert(hist.end(), t.begin(), t.end());
-      while (hist.size() > 3) hist.erase(hist.begin());
+    WindowPlan wp;
+    try {
+      wp = plan_window(win, carry, so.commit, last, cfg, st.windows, ts);
+    } catch (const JunctionError&) {
+      if (!held || held->ncommit <= 1) throw;
+      win.restore_front(std::move(held_curves));
+      held = plan_window(win, held_from, held->ncommit / 2, false, cfg, st.windows - 1, ts);
+      carry = held->next;
+      held_curves = win.take_front(held->ncommit);
+      ++st.retries;
+      continue;
     }
-    if (!ts.empty()) {
-      carried = ts.back();
-      carried.curve = static_cast<size_t>(-1);
-      carried.s = 0;
-      k_last = k_end;
-    }
-    T0 += Tc;
-    {
-      const double whole = std::floor(T0 / h);
-      k_org += static_cast<long long>(whole);
-      T0 -= whole * h;
-    }
-    v_commit = last ? 0 : plan::state_at(fit.plan, Tc).v;
+    st.caps += wp.repairs;
+    st.max_window_ticks = std::max(st.max_window_ticks, wp.ticks);
+    if (held)
+      for (const auto& sg : held->segments) emit(sg);
     ++st.windows;
-    win.pop_front(ncommit);
     if (progress) progress("stream", static_cast<double>(st.curves));
     if (last) {
-      emit(hold_segment(k_last, carried.x, path.dim(), cfg.machine.degree));
+      for (const auto& sg : wp.segments) emit(sg);
+      const Carry& end = wp.next;
+      emit(hold_segment(end.k_last, end.tick.x, win.splines.front().dim(), cfg.machine.degree));
+      st.motion_time = static_cast<double>(end.k_org) * h + end.T0;
       break;
     }
+    held_from = std::move(carry);
+    carry = wp.next;
+    held_curves = win.take_front(wp.ncommit);
+    held = std::move(wp);
   }
-  st.motion_time = static_cast<double>(k_org) * h + T0;
   st.wall = std::chrono::duration<double>(Clock::now() - t_start).count();
   return st;
 }

@@ -22,6 +22,22 @@ namespace traj::job {
 
 using input::CurveSource;
 
+// One curve of a streamed path with how it is to be run (a toolpath's move,
+// or a part of one).
+struct StreamCurve {
+  geo::BSpline curve;
+  std::string where;
+  double speed = 0;   // the speed over this curve, units/s; 0: the feed limit (Limits::feed)
+  bool stop = false;  // the machine stops exactly at its end
+};
+
+class StreamSource {
+ public:
+  virtual ~StreamSource() = default;
+  // The next curve; false at the end of the path.
+  virtual bool next(StreamCurve& c) = 0;
+};
+
 struct StreamOptions {
   size_t window = 64;  // curves held at once
   size_t commit = 48;  // curves committed per window (< window); the rest is look-ahead, planned again
@@ -29,6 +45,7 @@ struct StreamOptions {
 
 struct StreamStats {
   size_t curves = 0, windows = 0, segments = 0, caps = 0;
+  size_t retries = 0;             // windows planned again with half their commit (run_streaming)
   long long ticks = 0;            // samples emitted
   double motion_time = 0;         // s
   double wall = 0;                // host seconds, planning + compilation
@@ -39,6 +56,10 @@ struct StreamStats {
 // Called for every compiled segment, in order.
 using SegmentSink = std::function<void(const fd::Compiled&, const plan::TimeSegment&)>;
 
+// Each window plans its curves with their speeds as speed caps and their
+// stops as caps of speed 0 (as toolpath_plan does for a whole toolpath).
+StreamStats run_streaming(StreamSource& src, const JobConfig& cfg, const StreamOptions& so, const SegmentSink& sink,
+                          const Progress& progress = {});
 StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOptions& so, const SegmentSink& sink,
                           const Progress& progress = {});
 

@@ -11,10 +11,8 @@ namespace traj::job {
 
 using plan::PlanError;
 
-namespace {
-
-// The toolpath with its corners blended within `share` of each move's tolerance.
-input::Toolpath blended(const input::Toolpath& tp, double tol, double share, ToolpathPlan& r) {
+input::Toolpath blend_toolpath(const input::Toolpath& tp, double tol, double share, ToolpathPlan& r) {
+  if (!(share > 0 && share < 1)) throw PlanError("blend share must be in (0, 1)");
   input::Toolpath part = tp;
   for (auto& m : part.moves)
     if (m.tolerance >= 0) m.tolerance *= share;
@@ -25,18 +23,19 @@ input::Toolpath blended(const input::Toolpath& tp, double tol, double share, Too
   return corners::to_toolpath(b, tp);
 }
 
-}  // namespace
+double rapid_speed(const JobConfig& cfg, int axes, const ToolpathOptions& o) {
+  double v_axis_min = cfg.limits.v_axis[0];
+  for (int a = 1; a < axes && a < plan::kMaxAxes; ++a) v_axis_min = std::min(v_axis_min, cfg.limits.v_axis[a]);
+  return o.rapid > 0 ? o.rapid : v_axis_min;
+}
 
 ToolpathPlan toolpath_plan(const input::Toolpath& original, const JobConfig& cfg, const ToolpathOptions& o) {
   if (original.moves.empty()) throw PlanError("the toolpath has no moves");
   ToolpathPlan r;
   r.cfg = cfg;
-  if (!(o.blend_share > 0 && o.blend_share < 1)) throw PlanError("blend share must be in (0, 1)");
-  const input::Toolpath tp = o.blend ? blended(original, cfg.limits.tol, o.blend_share, r) : original;
+  const input::Toolpath tp = o.blend ? blend_toolpath(original, cfg.limits.tol, o.blend_share, r) : original;
   if (o.blend) r.cfg.limits.tol = cfg.limits.tol * (1 - o.blend_share);
-  double v_axis_min = cfg.limits.v_axis[0];
-  for (int a = 1; a < tp.axes && a < plan::kMaxAxes; ++a) v_axis_min = std::min(v_axis_min, cfg.limits.v_axis[a]);
-  const double rapid = o.rapid > 0 ? o.rapid : v_axis_min;
+  const double rapid = rapid_speed(cfg, tp.axes, o);
   double fastest = 0;
   std::vector<double> speed(tp.moves.size());
   for (size_t i = 0; i < tp.moves.size(); ++i) {

@@ -47,4 +47,10 @@ struct ToolpathPlan {
 // feed is not positive.
 ToolpathPlan toolpath_plan(const input::Toolpath& tp, const JobConfig& cfg, const ToolpathOptions& o = {});
 
+// Parts of toolpath_plan, for a toolpath streamed in chunks (job/toolpath_stream.hpp):
+// the corners blended within `share` of each move's tolerance (default: of
+// `tol`), with r's corner counts and largest deviation set; and the rapid speed.
+input::Toolpath blend_toolpath(const input::Toolpath& tp, double tol, double share, ToolpathPlan& r);
+double rapid_speed(const JobConfig& cfg, int axes, const ToolpathOptions& o);
+
 }  // namespace traj::job

@@ -335,10 +335,30 @@ struct Grid {
 Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t, double J_t) {
   Grid g;
   const int d = p.dim();
+  // the caps that meet the curve at hand, and those that hold the grid point
+  // at hand, swept along the path (caps sorted by start; grid points come in
+  // increasing s): the cost does not grow with the number of caps
+  std::vector<SpeedCap> caps_by_start = o.caps, caps, caps_here;
+  std::sort(caps_by_start.begin(), caps_by_start.end(),
+            [](const SpeedCap& a, const SpeedCap& b) { return a.s0 < b.s0; });
+  size_t next_cap = 0, next_cap_here = 0;
+  auto cap_at = [&](double s_abs, double vl) {
+    while (next_cap_here < caps_by_start.size() && caps_by_start[next_cap_here].s0 <= s_abs)
+      caps_here.push_back(caps_by_start[next_cap_here++]);
+    caps_here.erase(std::remove_if(caps_here.begin(), caps_here.end(),
+                                   [&](const SpeedCap& cp) { return cp.s1 < s_abs; }),
+                    caps_here.end());
+    for (const auto& cp : caps_here) vl = std::min(vl, cp.v);
+    return vl;
+  };
   for (size_t ci = 0; ci < p.size(); ++ci) {
     const geo::Curve& c = p.curve(ci);
     const geo::ArcLength& al = p.arclength(ci);
     const double s_off = p.offset(ci), len = al.total();
+    while (next_cap < caps_by_start.size() && caps_by_start[next_cap].s0 <= s_off + len)
+      caps.push_back(caps_by_start[next_cap++]);
+    caps.erase(std::remove_if(caps.begin(), caps.end(), [&](const SpeedCap& cp) { return cp.s1 < s_off; }),
+               caps.end());
     // mandatory points: curvature extrema and inflections, and knots where
     // the curve is not C2 (the acceleration K v^2 steps there)
     std::vector<double> must;
@@ -352,15 +372,15 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
         must.push_back(al.s(uk));
       }
     }
-    for (const auto& cp : o.caps) {
+    for (const auto& cp : caps) {
       const double mid = 0.5 * (cp.s0 + cp.s1) - s_off;
       if (mid > 0 && mid < len) must.push_back(mid);
     }
     std::vector<double> forced_here;
     for (double fs : o.force_stations)
-      if (fs - s_off > 0 && fs - s_off <= len) {
-        must.push_back(fs - s_off);
-        forced_here.push_back(fs - s_off);
+      if (fs - s_off > 0 && fs - s_off <= len + 1e-12) {  // a station at a curve's end: offset + len rounds
+        must.push_back(std::min(fs - s_off, len));
+        forced_here.push_back(std::min(fs - s_off, len));
       }
     std::sort(must.begin(), must.end());
     must.push_back(len);
@@ -415,8 +435,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
         vl = 0;
         corner = true;
       }
-      for (const auto& cp : o.caps)
-        if (s_off + s >= cp.s0 && s_off + s <= cp.s1) vl = std::min(vl, cp.v);
+      vl = cap_at(s_off + s, vl);
       for (double fs : forced_here)
         if (std::fabs(fs - s) <= 1e-12) corner = true;
       while (kb < knot_bound.size() && knot_bound[kb].first < s - 1e-12) ++kb;

@@ -2,8 +2,11 @@
 // path_feed.svg (plot_svg.hpp, path_svg): the path of the core's output
 // samples at equal scale, axes in units, coloured by the output feed (chord
 // speed of consecutive samples) on a labelled colour bar from 0 to the
-// commanded feed; steps above the feed in a colour of their own; start, end
-// and direction of travel marked.
+// commanded feed, or for a toolpath to its fastest feed move (so that the
+// rapid speed does not squeeze the feed moves into a few colours); steps
+// faster than that within the feed limit (rapids) in grey, steps above the
+// feed limit in a colour of their own; start, end and direction of travel
+// marked.
 //
 // A 2-D path, or a 3-D one whose z range is negligible (at most 1e-6 of its
 // x-y extent), is drawn as one x-y plot. A 3-D path is drawn in three
@@ -29,7 +32,8 @@ namespace {
 
 using Pos = std::function<std::array<double, 3>(size_t)>;
 constexpr size_t kMaxPoints = 40000;  // points of the path in the whole file
-constexpr int kBands = 20;            // colour bands over [0, feed]; kBands: above the feed
+constexpr int kBands = 20;            // colour bands over [0, scale]; kBands: above the feed; kRapid: between
+constexpr int kRapid = kBands + 1;
 
 // The samples and what colours them.
 struct Feed {
@@ -37,7 +41,9 @@ struct Feed {
   const Pos& pos;
   int d;
   double h, feed, allow_v;
+  double scale;           // top of the colour scale (<= feed): faster steps within the feed are "rapid"
   size_t over = 0;        // steps above feed + allow_v
+  size_t rapid = 0;       // steps above scale + allow_v, within feed + allow_v
   double smin = 0, smax = 0;  // range of the chord speed
 };
 
@@ -90,6 +96,7 @@ void measure_feed(Feed& F) {
     F.smin = k ? std::min(F.smin, s) : s;
     F.smax = std::max(F.smax, s);
     if (s > F.feed + F.allow_v) ++F.over;
+    else if (s > F.scale + F.allow_v) ++F.rapid;
   }
 }
 
@@ -104,8 +111,8 @@ void measure_feed(Feed& F) {
 // max_points points remain.
 std::vector<std::string> feed_bands(const Feed& F, const View& v, size_t max_points) {
   const size_t n = F.n;
-  const double h = F.h, feed = F.feed;
-  std::vector<std::string> bands(kBands + 1);
+  const double h = F.h, feed = F.feed, scale = F.scale;
+  std::vector<std::string> bands(kRapid + 1);
   double tol = 0.25, spacing = 0;
   for (int attempt = 0; attempt < 64; ++attempt) {
     for (auto& b : bands) b.clear();
@@ -147,8 +154,10 @@ std::vector<std::string> feed_bands(const Feed& F, const View& v, size_t max_poi
       int b;
       if (stroke_over) {
         b = kBands;
+      } else if (len / (steps * h) > scale + F.allow_v) {
+        b = kRapid;
       } else {
-        const double f = std::clamp(len / (steps * h) / feed * kBands, 0.0, kBands - 1e-9);
+        const double f = std::clamp(len / (steps * h) / scale * kBands, 0.0, kBands - 1e-9);
         b = static_cast<int>(f);
         if (cur >= 0 && cur < kBands && f > cur - 0.2 && f < cur + 1.2) b = cur;
       }
@@ -206,17 +215,17 @@ void draw_axes(std::ostringstream& o, const View& v, double step, const std::str
 // then coloured; the frame over it.
 void draw_bands(std::ostringstream& o, const View& v, const std::vector<std::string>& bands, const std::string& prefix) {
   o << "<defs>\n";
-  for (int b = 0; b <= kBands; ++b)
+  for (int b = 0; b <= kRapid; ++b)
     if (!bands[b].empty()) o << "<path id=\"" << prefix << b << "\" d=\"" << bands[b] << "\"/>\n";
   o << "</defs>\n<g fill=\"none\" stroke-width=\"2.4\" stroke-linecap=\"round\" stroke-linejoin=\"round\">\n";
   o << "<g stroke=\"#333\" stroke-width=\"3.6\" stroke-opacity=\"0.55\">";
-  for (int b = 0; b <= kBands; ++b)
+  for (int b = 0; b <= kRapid; ++b)
     if (!bands[b].empty()) o << "<use xlink:href=\"#" << prefix << b << "\"/>";
   o << "</g>\n";
-  for (int b = 0; b <= kBands; ++b)
+  for (int b = 0; b <= kRapid; ++b)
     if (!bands[b].empty())
       o << "<use xlink:href=\"#" << prefix << b << "\" stroke=\""
-        << (b == kBands ? kOverColour : viridis((b + 0.5) / kBands)) << "\"/>\n";
+        << (b == kBands ? kOverColour : b == kRapid ? kRapidColour : viridis((b + 0.5) / kBands)) << "\"/>\n";
   o << "</g>\n<rect x=\"" << num(v.left) << "\" y=\"" << num(v.top) << "\" width=\"" << num(v.w()) << "\" height=\""
     << num(v.h()) << "\" fill=\"none\" stroke=\"#555\"/>\n";
 }
@@ -259,9 +268,9 @@ void draw_ends(std::ostringstream& o, const Feed& F, const View& v) {
   }
 }
 
-// Colour bar, 0 .. commanded feed, at x = bx, centred on [top, top + span].
+// Colour bar, 0 .. the colour scale's top, at x = bx, centred on [top, top + span].
 void draw_colour_bar(std::ostringstream& o, const Feed& F, double bx, double top, double span, const std::string& u) {
-  const double cbw = 16, bh = std::min(span, 360.0), by = top + (span - bh) / 2, feed = F.feed;
+  const double cbw = 16, bh = std::min(span, 360.0), by = top + (span - bh) / 2, feed = F.scale;
   o << "<g id=\"colourbar\" data-vmin=\"0\" data-vmax=\"" << gfmt(feed, 10) << "\">\n";
   for (int b = 0; b < kBands; ++b)
     o << "<rect x=\"" << num(bx) << "\" y=\"" << num(by + bh - (b + 1) * bh / kBands) << "\" width=\"" << num(cbw)
@@ -278,6 +287,12 @@ void draw_colour_bar(std::ostringstream& o, const Feed& F, double bx, double top
       << "\" height=\"12\" fill=\"" << kOverColour << "\"/>\n";
     o << text(bx + cbw + 7, by - 12, "> feed", " font-size=\"10\"");
   }
+  if (F.rapid) {
+    const double y = by - (F.over ? 40 : 22);
+    o << "<rect x=\"" << num(bx) << "\" y=\"" << num(y) << "\" width=\"" << num(cbw) << "\" height=\"12\" fill=\""
+      << kRapidColour << "\"/>\n";
+    o << text(bx + cbw + 7, y + 10, "rapid", " font-size=\"10\"");
+  }
   o << "<text transform=\"translate(" << num(bx + cbw + 52) << " " << num(by + bh / 2)
     << ") rotate(-90)\" text-anchor=\"middle\" font-size=\"12\">" << esc("output feed (" + u + "/s)") << "</text>\n";
   o << "</g>\n";
@@ -293,7 +308,9 @@ void draw_heading(std::ostringstream& o, const Feed& F, double left, const std::
             " fill=\"#444\"");
   o << text(left, 59,
             "output feed " + vfmt(F.smin) + " \xE2\x80\xA6 " + vfmt(F.smax) + " " + u + "/s (commanded " +
-                vfmt(F.feed) + " " + u + "/s)" +
+                vfmt(F.feed) + " " + u + "/s" +
+                (F.scale < F.feed ? "; colours up to the fastest feed move, " + vfmt(F.scale) + " " + u + "/s" : "") +
+                ")" +
                 (F.over ? "; " + std::to_string(F.over) + " steps above the feed" : ""),
             F.over ? " fill=\"#c0392b\" font-weight=\"bold\"" : " fill=\"#444\"");
 }
@@ -399,8 +416,9 @@ bool needs_three_views(const Feed& F) {
 }  // namespace
 
 std::string path_svg(size_t n, const std::function<std::array<double, 3>(size_t)>& pos, int d,
-                     const job::JobConfig& cfg, double h, double allow_v) {
-  Feed F{n, pos, d, h, cfg.limits.feed, allow_v};
+                     const job::JobConfig& cfg, double h, double allow_v, double scale_feed) {
+  const double scale = scale_feed > 0 ? std::min(scale_feed, cfg.limits.feed) : cfg.limits.feed;
+  Feed F{n, pos, d, h, cfg.limits.feed, allow_v, scale};
   measure_feed(F);
   return needs_three_views(F) ? drawing_svg(F, cfg.machine.units) : flat_svg(F, cfg.machine.units);
 }

@@ -325,7 +325,8 @@ void write_all(const std::vector<std::pair<std::string, std::string>>& files) {
 
 }  // namespace
 
-void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, const JobResult& r, const Samples& s) {
+void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, const JobResult& r, const Samples& s,
+                 double scale_feed) {
   {
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
@@ -484,7 +485,7 @@ void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, co
                              " samples a column), so that no peak is lost."
                        : std::string()),
       panels, 0, T);
-  const std::string path = path_svg(n, X, d, cfg, h, sd * allow_v);
+  const std::string path = path_svg(n, X, d, cfg, h, sd * allow_v, scale_feed);
   write_all({{dir + "/path_feed.svg", path}, {dir + "/profile.svg", prof}});
 }
 

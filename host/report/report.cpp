@@ -199,7 +199,8 @@ std::string report_text(const JobConfig& cfg, const Report& rep, const JobResult
   o << "  motion time          " << fmt("%.4f", rep.motion_time) << " s (" << rep.ticks << " samples at "
     << fmt("%g", cfg.machine.period * 1e3) << " ms)\n";
   o << "  stations             " << r.plan.stations.size() << " (" << r.plan.refinements << " added by refinement, "
-    << r.plan.grid_points << " grid points, " << r.repairs << " local speed caps from tick checks)\n";
+    << r.plan.grid_points << " grid points, " << r.repairs << " local speed caps from tick checks and the fit, "
+    << r.rounds << (r.rounds == 1 ? " plan)\n" : " plans)\n");
   o << "  segments             " << rep.segments << " (K " << rep.k_min << ".." << rep.k_max << " ticks, degree "
     << r.header.degree << ")\n";
   o << "  engine format        Width " << r.header.width << ", Guard " << r.header.guard_bits << " (K_max "

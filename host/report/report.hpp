@@ -41,7 +41,8 @@ Samples predicted_samples(const job::JobResult& r);
 Report make_report(const plan::Path& p, const job::JobConfig& cfg, const job::JobResult& r, const Samples& s);
 std::string report_text(const job::JobConfig& cfg, const Report& rep, const job::JobResult& r);
 // SVG plots: path coloured by feed; feed, acceleration and jerk against time.
+// scale_feed: the top of the path's colour scale (svg::path_svg).
 void write_plots(const std::string& dir, const plan::Path& p, const job::JobConfig& cfg, const job::JobResult& r,
-                 const Samples& s);
+                 const Samples& s, double scale_feed = 0);
 
 }  // namespace traj::report

@@ -16,6 +16,7 @@ namespace traj::util {
 class AtomicFile {
  public:
   // Throws std::runtime_error("cannot write <path>.tmp") if it cannot be opened.
+  // "-" is standard output, written as it comes (no temporary, no rename).
   explicit AtomicFile(const std::string& path, std::ios::openmode mode = std::ios::out);
   ~AtomicFile();
   AtomicFile(const AtomicFile&) = delete;

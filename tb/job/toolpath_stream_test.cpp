@@ -1,0 +1,245 @@
+// A CAM-like G-code program (tb/bench/cam_program.hpp, 2 000 lines: a
+// zig-zag surface finish of 0.5 mm G1 segments with G2/G3 u-turns) planned
+// whole (as `trajcore run` does) and streamed in small windows and small
+// blending chunks (`plan --window`). Against independent references:
+//   * the programmed path, from the program's text parsed here (lines and XY
+//     semicircles, not the library's reader): every output sample of both
+//     plans within the tolerance of it, every programmed vertex within the
+//     tolerance of both outputs, and the two outputs' nearest points to each
+//     vertex within the tolerance of each other;
+//   * the limits, from the samples' differences (tb/planner/output_check.hpp),
+//     on the streamed output run through the hls engine model and on the
+//     whole plan's exact prediction of the core's samples.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cam_program.hpp"
+#include "fd_drive.hpp"
+#include "input/gcode.hpp"
+#include "job/job.hpp"
+#include "job/streaming.hpp"
+#include "job/toolpath_job.hpp"
+#include "job/toolpath_stream.hpp"
+#include "output_check.hpp"
+#include "report/report.hpp"
+#include "traj_fd_engine.hpp"
+
+using namespace traj;
+using P3 = std::array<double, 3>;
+
+namespace {
+
+// One programmed move: a segment a -> b, or an XY arc about c of radius r
+// (z constant) from a to b.
+struct Prim {
+  bool arc = false;
+  P3 a{}, b{}, c{};
+  double r = 0;
+};
+
+double dist(const P3& p, const P3& q) { return std::hypot(p[0] - q[0], p[1] - q[1], p[2] - q[2]); }
+
+double dist_to(const Prim& m, const P3& p) {
+  if (!m.arc) {
+    P3 d{m.b[0] - m.a[0], m.b[1] - m.a[1], m.b[2] - m.a[2]};
+    const double dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    double t = dd > 0 ? ((p[0] - m.a[0]) * d[0] + (p[1] - m.a[1]) * d[1] + (p[2] - m.a[2]) * d[2]) / dd : 0;
+    t = std::clamp(t, 0.0, 1.0);
+    return dist(p, {m.a[0] + t * d[0], m.a[1] + t * d[1], m.a[2] + t * d[2]});
+  }
+  // a semicircle (a and b opposite on it): the u-turn bulges to +x at the
+  // pass end x = 100, to -x at x = 0
+  const double ex = p[0] - m.c[0], ey = p[1] - m.c[1];
+  const double out = (m.a[0] > 50 ? 1.0 : -1.0);
+  if (ex * out >= 0) {
+    const double rho = std::hypot(ex, ey);
+    return std::hypot(rho - m.r, p[2] - m.c[2]);
+  }
+  return std::min(dist(p, m.a), dist(p, m.b));
+}
+
+// The program's moves from its text: G0/G1 with any of X Y Z, and G2/G3 X Y
+// I J (the generator's forms), from the start X0 Y0 Z0.
+std::vector<Prim> parse(const std::string& text) {
+  std::vector<Prim> out;
+  std::istringstream in(text);
+  std::string line;
+  P3 pos{0, 0, 0};
+  while (std::getline(in, line)) {
+    std::istringstream w(line);
+    std::string g, word;
+    w >> g;
+    if (g != "G0" && g != "G1" && g != "G2" && g != "G3") continue;
+    P3 q = pos;
+    double i = 0, j = 0;
+    while (w >> word) {
+      const double v = std::stod(word.substr(1));
+      switch (word[0]) {
+        case 'X': q[0] = v; break;
+        case 'Y': q[1] = v; break;
+        case 'Z': q[2] = v; break;
+        case 'I': i = v; break;
+        case 'J': j = v; break;
+        default: break;
+      }
+    }
+    if (g == "G2" || g == "G3")
+      out.push_back({true, pos, q, {pos[0] + i, pos[1] + j, pos[2]}, std::hypot(i, j)});
+    else
+      out.push_back({false, pos, q, {}, 0});
+    pos = q;
+  }
+  return out;
+}
+
+// Largest distance of the samples from the programmed feed moves (a cursor
+// follows the samples along the program), and of the vertices from the
+// samples' polyline, with each vertex's nearest point on it.
+struct Compare {
+  double sample_dev = 0, vertex_dev = 0;
+  std::vector<P3> nearest;  // per vertex (end of each programmed move)
+};
+
+P3 nearest_on_polyline(const std::vector<P3>& x, size_t lo, size_t hi, const P3& v) {
+  P3 best = x[lo];
+  double bd = 1e300;
+  for (size_t k = lo; k + 1 <= hi && k + 1 < x.size(); ++k) {
+    const P3& a = x[k];
+    const P3& b = x[k + 1];
+    P3 d{b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    double t = dd > 0 ? ((v[0] - a[0]) * d[0] + (v[1] - a[1]) * d[1] + (v[2] - a[2]) * d[2]) / dd : 0;
+    t = std::clamp(t, 0.0, 1.0);
+    const P3 q{a[0] + t * d[0], a[1] + t * d[1], a[2] + t * d[2]};
+    if (dist(q, v) < bd) bd = dist(q, v), best = q;
+  }
+  return best;
+}
+
+Compare compare(const std::vector<Prim>& prog, const std::vector<P3>& x) {
+  Compare c;
+  // samples: a cursor on the program follows them forward
+  size_t m = 0;
+  for (size_t k = 0; k < x.size(); ++k) {
+    double best = 1e300;
+    size_t bm = m;
+    for (size_t j = m > 2 ? m - 2 : 0; j < std::min(prog.size(), m + 6); ++j) {
+      const double d = dist_to(prog[j], x[k]);
+      if (d < best) best = d, bm = j;
+    }
+    m = bm;
+    c.sample_dev = std::max(c.sample_dev, best);
+  }
+  // vertices: their nearest output point, searched in a window of samples
+  // that moves forward with them
+  size_t lo = 0;
+  for (const Prim& p : prog) {
+    const P3 v = p.b;
+    size_t kbest = lo;
+    double bd = 1e300;
+    for (size_t k = lo; k < x.size() && k < lo + 400; ++k)
+      if (dist(x[k], v) < bd) bd = dist(x[k], v), kbest = k;
+    const size_t a = kbest > 2 ? kbest - 2 : 0;
+    const P3 q = nearest_on_polyline(x, a, kbest + 2, v);
+    c.nearest.push_back(q);
+    c.vertex_dev = std::max(c.vertex_dev, dist(q, v));
+    lo = a;
+  }
+  return c;
+}
+
+std::vector<P3> to_mm(const report::Samples& s) {
+  const double lsb = std::ldexp(1.0, -32);
+  std::vector<P3> x;
+  for (const auto& v : s.v) x.push_back({v[0] * lsb, v[1] * lsb, v[2] * lsb});
+  return x;
+}
+
+}  // namespace
+
+TEST(ToolpathStream, CamProgramStreamedAgreesWithWholePath) {
+  const auto dir = std::filesystem::temp_directory_path() / ("toolpath_stream_test_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string file = (dir / "cam.ngc").string();
+  std::string text;
+  {
+    std::ostringstream o;
+    bench::write_cam_program(o, 2000);
+    text = o.str();
+    std::ofstream(file) << text;
+  }
+  const std::vector<Prim> prog = parse(text);
+  ASSERT_GT(prog.size(), 1900u);
+  const job::JobConfig cfg;  // tolerance 0.001 mm; the program's G64 P0.05 for the blends
+  const double tol = 0.05 / 2 + cfg.limits.tol / 2;  // blends within half of P, the fit within half of --tol
+
+  // whole path, as `trajcore run` plans it; its exact prediction of the core's samples
+  const input::Toolpath tp = input::read_gcode(file);
+  const job::ToolpathPlan tpp = job::toolpath_plan(tp, cfg);
+  const job::JobResult wr = job::run_job(tpp.path, tpp.cfg);
+  const std::vector<P3> xw = to_mm(report::predicted_samples(wr));
+
+  // streamed: small windows and small blending chunks, so that the test
+  // crosses many commits and chunk cuts
+  job::ToolpathStream src(file, input::FileKind::kGcode, cfg, {}, 64);
+  job::StreamOptions so;
+  so.window = 16;
+  so.commit = 12;
+  std::vector<fd::Compiled> comp;
+  const job::StreamStats st =
+      job::run_streaming(src, src.config(), so, [&](const fd::Compiled& c, const plan::TimeSegment&) { comp.push_back(c); });
+  EXPECT_GT(st.windows, 100u);
+  EXPECT_GT(src.totals().chunks, 10u);
+  EXPECT_LE(src.totals().max_pending, 2 * 64u);
+  // through the hls engine model
+  using Eng = FdEngine<3, 5, 96, 16, 48>;
+  fd::Compiler compiler(job::Machine{}.format());
+  Eng e;
+  std::vector<P3> xs;
+  const double lsb = std::ldexp(1.0, -32);
+  test::run_segments(e, compiler, comp, Eng::kWords + Eng::kChunks + 2, [&](size_t, uint64_t, const Eng::Out& o) {
+    P3 v{};
+    for (int a = 0; a < 3; ++a) v[a] = static_cast<double>(sext(o.sample[a], Eng::kOutWidth)) * lsb;
+    xs.push_back(v);
+  });
+  EXPECT_EQ(static_cast<long long>(xs.size()), st.ticks);
+
+  // limits at the samples (q: the largest stated sample error of the segments)
+  double q = 0;
+  for (const auto& c : comp) q = std::max(q, (0.5 + c.bound_lsb) * lsb);
+  const auto vs = test::check_output_limits(xs, 3, src.config().limits, cfg.machine.period, q, true);
+  EXPECT_LE(vs.worst, 1 + 1e-9) << "streamed: " << vs.what << " at tick " << vs.tick;
+  double qw = 0;
+  for (const auto& c : wr.compiled) qw = std::max(qw, (0.5 + c.bound_lsb) * lsb);
+  const auto vw = test::check_output_limits(xw, 3, tpp.cfg.limits, cfg.machine.period, qw, true);
+  EXPECT_LE(vw.worst, 1 + 1e-9) << "whole: " << vw.what << " at tick " << vw.tick;
+
+  // against the programmed path
+  const Compare cs = compare(prog, xs), cw = compare(prog, xw);
+  EXPECT_LE(cs.sample_dev, tol);
+  EXPECT_LE(cw.sample_dev, tol);
+  EXPECT_LE(cs.vertex_dev, tol);
+  EXPECT_LE(cw.vertex_dev, tol);
+  double agree = 0;
+  for (size_t i = 0; i < cs.nearest.size(); ++i) agree = std::max(agree, dist(cs.nearest[i], cw.nearest[i]));
+  EXPECT_LE(agree, tol);
+  // both start and end where the program does
+  EXPECT_LE(dist(xs.back(), xw.back()), 1e-9);
+  EXPECT_LE(dist(xs.front(), xw.front()), 1e-9);
+  // about the same motion time (each plan is greedy; a window sees less)
+  EXPECT_NEAR(st.motion_time / wr.plan.duration(), 1.0, 0.05);
+  std::printf("  whole %.3f s, streamed %.3f s (%zu windows, %zu planned again, %zu chunks); deviation from the "
+              "program: samples %.4g / %.4g mm, vertices %.4g / %.4g mm (streamed / whole), nearest points agree "
+              "within %.4g mm; worst limit ratio %.4f / %.4f\n",
+              wr.plan.duration(), st.motion_time, st.windows, st.retries, src.totals().chunks, cs.sample_dev,
+              cw.sample_dev, cs.vertex_dev, cw.vertex_dev, agree, vs.worst, vw.worst);
+  std::filesystem::remove_all(dir);
+}
