@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "geometry/bspline.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <charconv>
 #include <string>
@@ -256,7 +257,8 @@ std::vector<BezierPiece> bezier_pieces(const BSpline& c0) {
     piece.hom = Q;
     out.push_back(std::move(piece));
     if (b < m) {
-      for (int i = p - mult; i <= p; ++i) next.row(i) = P.row(b - p + i);
+      // (a hodograph of a curve with a C0 knot has interior multiplicity p + 1: no point inserted)
+      for (int i = std::max(0, p - mult); i <= p; ++i) next.row(i) = P.row(b - p + i);
       Q.swap(next);
       a = b;
       ++b;

@@ -126,6 +126,7 @@ class Interpreter {
 
   // An open G5.2 NURBS: control points (mm) and weights, its order and place.
   struct Nurbs {
+    Nurbs() {}  // declared: clang sees a nested struct's member initialisers only once the class is complete
     std::vector<Vector3d> points;
     std::vector<double> weights;
     int order = 3;
