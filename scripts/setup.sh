@@ -13,6 +13,7 @@ PKGS=(
   libtinyxml2-dev libdxflib-dev
   libserialport-dev  # serial ports of the upload tool (host/link)
   linuxcnc-uspace  # rs274, LinuxCNC's interpreter: the oracle of the G-code cross-check (tb/input)
+  clang libclang-rt-14-dev  # libFuzzer and the sanitizer runtimes of the fuzz targets (tb/fuzz, scripts/fuzz.sh)
 )
 
 missing=()

@@ -199,15 +199,17 @@ const MixedChain::Piece& MixedChain::add_fd(const fd::PolySegment& s, const std:
   p.fd = fdc_.compile(s, pieces_.empty() ? nullptr : &st, where);
   p.ticks = p.fd.ticks;
   p.words = fdc_.words(p.fd);
-  // exact samples k = 0..K by the engine's own recurrence on exact integers
-  // (the compiler range-checked r0, so no wrap is needed)
+  // exact samples k = 0..K by the engine's own recurrence on exact integers,
+  // r0 reduced to Width bits as the engine holds it (r[1..N] may have wrapped)
   const int A = fdc_.format().axes, N = fdc_.format().degree, G = fdc_.format().guard_bits;
   p.samples.assign(p.ticks + 1, std::vector<int64_t>(A));
   for (int a = 0; a < A; ++a) {
     std::vector<mpz_class> r = p.fd.regs[a];
     mpz_class s0;
     for (uint64_t k = 0; k <= p.ticks; ++k) {
-      mpz_fdiv_q_2exp(s0.get_mpz_t(), r[0].get_mpz_t(), G);
+      s0 = r[0];
+      fd::wrap_to_width(s0, fdc_.format().width);
+      mpz_fdiv_q_2exp(s0.get_mpz_t(), s0.get_mpz_t(), G);
       p.samples[k][a] = s0.get_si();
       for (int i = 0; i < N; ++i) r[i] += r[i + 1];
     }

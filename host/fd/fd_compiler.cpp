@@ -56,6 +56,29 @@ void Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>* sta
   // before its end), so start may be &out.end.
   if (!compile_grid(f_, scale_ld_, limit_ld_, seg, start, out))
     out = compile_exact(f_, scale_ld_, limit_ld_, seg, start, where);
+  wrap_differences(out);
+}
+
+// r[1..N] as the engine holds them: two's complement in Width bits. The
+// engine's adders wrap modulo 2^Width, so r0(k) = sum_i r_i C(k,i) modulo
+// 2^Width is the same for the exact and the wrapped values, and r0(k) itself
+// is range-checked: only a difference register that needs more than Width
+// bits (one-tick quintics: r[4], r[5]) changes. `end` stays the exact r0(K).
+void Compiler::wrap_differences(Compiled& c) const {
+  for (auto& axis : c.regs)
+    for (size_t i = 1; i < axis.size(); ++i) wrap_to_width(axis[i], f_.width);
+}
+
+void wrap_to_width(mpz_class& v, int width) {
+  mpz_ptr p = v.get_mpz_t();
+  const auto w = static_cast<mp_bitcnt_t>(width);
+  if (mpz_sizeinbase(p, 2) < w) return;  // |v| < 2^(W-1): already a W-bit two's complement value
+  mpz_fdiv_r_2exp(p, p, w);              // 0 <= v < 2^W
+  if (mpz_tstbit(p, w - 1)) {            // top bit set: the negative value
+    mpz_class m;
+    mpz_setbit(m.get_mpz_t(), w);
+    mpz_sub(p, p, m.get_mpz_t());
+  }
 }
 
 Compiled Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>* start,
@@ -65,7 +88,7 @@ Compiled Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>*
   return out;
 }
 
-mpz_class Compiler::state_at(const Compiled& c, int axis, uint64_t k) {
+mpz_class Compiler::state_at(const Compiled& c, int axis, uint64_t k, int width) {
   const auto& r = c.regs[axis];
   mpz_class s = 0;
   if (r.empty()) return s;
@@ -78,11 +101,12 @@ mpz_class Compiler::state_at(const Compiled& c, int axis, uint64_t k) {
     mpz_divexact_ui(b, b, static_cast<unsigned long>(i));
     mpz_addmul(sp, r[i].get_mpz_t(), b);
   }
+  if (width > 0) wrap_to_width(s, width);
   return s;
 }
 
 mpz_class Compiler::sample_at(const Compiled& c, int axis, uint64_t k) const {
-  mpz_class s = state_at(c, axis, k);
+  mpz_class s = state_at(c, axis, k, f_.width);
   mpz_fdiv_q_2exp(s.get_mpz_t(), s.get_mpz_t(), f_.guard_bits);
   return s;
 }

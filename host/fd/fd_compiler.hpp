@@ -130,7 +130,11 @@ class Compiler {
   std::vector<uint64_t> words(const Compiled& c) const;
 
   // Exact prediction: r0 at tick k (0 <= k <= K) and the output sample there.
-  static mpz_class state_at(const Compiled& c, int axis, uint64_t k);
+  // The registers r[1..N] of a compiled segment are Width-bit two's complement
+  // values (they may have wrapped, see wrap_differences): with `width` > 0 the
+  // state is reduced to Width bits as the engine holds it (the exact r0 for
+  // any segment the compiler accepted); 0 gives the plain sum.
+  static mpz_class state_at(const Compiled& c, int axis, uint64_t k, int width = 0);
   mpz_class sample_at(const Compiled& c, int axis, uint64_t k) const;
 
   // Q(K) of the error analysis in register LSB (exact) and in output LSB.
@@ -144,6 +148,7 @@ class Compiler {
   static RegisterNeeds register_needs(int degree, uint64_t k, double tol_lsb);
 
  private:
+  void wrap_differences(Compiled& c) const;
   Format f_;
   // Longest K <= max_ticks with Q(K) <= tol/2 (0 if none), computed once: the
   // budget check of compile() is then K <= kfit_ (Q(K) is increasing in K).
@@ -164,6 +169,9 @@ struct PathCounts {
   uint64_t grid2 = 0, grid3 = 0, grid4 = 0, exact = 0, reference = 0;
 };
 PathCounts& path_counts();
+
+// v reduced to a `width`-bit two's complement value: -2^(W-1) <= v < 2^(W-1).
+void wrap_to_width(mpz_class& v, int width);
 
 // Binomial C(k, i) exactly.
 mpz_class binom(uint64_t k, int i);

@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "geometry/error.hpp"
+#include "util/format.hpp"
 
 namespace traj::geo {
 
@@ -45,16 +46,34 @@ const GL6& gl6rule() {
 }
 }  // namespace
 
+namespace {
+// Relative rounding noise of the speed on one span. The rational speed |A' w - A w'| / w^2 cancels
+// where the weight peaks (a conic with a large middle weight): its rounding grows like the span's
+// weight ratio squared (measured: a rational quadratic with middle weight 300 has no level of
+// refinement at which two GL6 halves agree to 1e-14). Below this level two estimates cannot agree,
+// so the adaptive rule accepts a difference that small instead of halving until the budget is spent.
+double speed_noise(const Curve& c, int span) {
+  constexpr double kEps = std::numeric_limits<double>::epsilon();
+  if (!c.rational()) return 0;
+  const Eigen::MatrixXd& h = c.bezier()[static_cast<size_t>(span)].hom;
+  const Eigen::VectorXd w = h.col(h.cols() - 1);
+  const double ratio = w.maxCoeff() / w.minCoeff();
+  return 8 * kEps * ratio * ratio;
+}
+}  // namespace
+
 ArcLength::ArcLength(const Curve& c, double rel_tol) : c_(&c), rel_tol_(rel_tol) {
   if (!(rel_tol > 0)) throw GeometryError("ArcLength: rel_tol must be positive");
   const auto& spans = c.spans();
   cum_.assign(spans.size() + 1, 0.0);
   span_tol_.assign(spans.size(), 0.0);
+  noise_.assign(spans.size(), 0.0);
+  for (size_t i = 0; i < spans.size(); ++i) noise_[i] = speed_noise(c, static_cast<int>(i));
   for (size_t i = 0; i < spans.size(); ++i) {
     const double est = gl6(static_cast<int>(i), spans[i].u0, spans[i].u1);
     span_tol_[i] = 1e-3 * rel_tol * std::abs(est);  // absolute floor for sub-interval tolerances
     cum_[i + 1] = cum_[i] + adapt(static_cast<int>(i), spans[i].u0, spans[i].u1, est,
-                                  std::max(rel_tol * std::abs(est), std::numeric_limits<double>::min()), 0);
+                                  std::max(rel_tol * std::abs(est), std::numeric_limits<double>::min()));
   }
 }
 
@@ -154,13 +173,30 @@ double ArcLength::gl6(int span, double a, double b) const {
   return acc * h;
 }
 
-double ArcLength::adapt(int span, double a, double b, double whole, double tol, int depth) const {
+double ArcLength::adapt(int span, double a, double b, double whole, double tol) const {
+  long budget = kAdaptBudget;
+  const double v = adapt(span, a, b, whole, tol, 0, budget);
+  if (!std::isfinite(v)) refuse(span, "the speed overflows the double range");
+  return v;
+}
+
+double ArcLength::adapt(int span, double a, double b, double whole, double tol, int depth, long& budget) const {
+  if (--budget < 0)
+    refuse(span, "no convergence within " + std::to_string(12 * kAdaptBudget) + " speed evaluations");
   const double m = 0.5 * (a + b);
   const double l = gl6(span, a, m), r = gl6(span, m, b);
   const double sum = l + r;
+  if (!std::isfinite(sum)) return sum;
   const double umin = 1e-14 * (c_->spans()[span].u1 - c_->spans()[span].u0);
-  if (std::abs(sum - whole) <= tol || depth >= 60 || (b - a) <= umin) return sum;
-  return adapt(span, a, m, l, 0.5 * tol, depth + 1) + adapt(span, m, b, r, 0.5 * tol, depth + 1);
+  const double noise = noise_[span] * (std::abs(l) + std::abs(r));
+  if (std::abs(sum - whole) <= std::max(tol, noise) || depth >= 60 || (b - a) <= umin) return sum;
+  return adapt(span, a, m, l, 0.5 * tol, depth + 1, budget) + adapt(span, m, b, r, 0.5 * tol, depth + 1, budget);
+}
+
+void ArcLength::refuse(int span, const std::string& why) const {
+  const PowerSpan& sp = c_->spans()[span];
+  throw GeometryError("arc length of the knot span [" + util::shortest(sp.u0) + ", " + util::shortest(sp.u1) +
+                      "]: " + why + " (control points, weights or knot spacing too extreme for double precision)");
 }
 
 double ArcLength::span_length(int span, double a, double b) const {
@@ -172,7 +208,7 @@ double ArcLength::span_length(int span, double a, double b) const {
   if (a == sp.u0 && b == sp.u1) return cum_[span + 1] - cum_[span];
   const double whole = gl6(span, a, b);
   const double tol = std::max(rel_tol_ * std::abs(whole), span_tol_[span]);
-  return adapt(span, a, b, whole, std::max(tol, std::numeric_limits<double>::min()), 0);
+  return adapt(span, a, b, whole, std::max(tol, std::numeric_limits<double>::min()));
 }
 
 double ArcLength::s(double u) const {

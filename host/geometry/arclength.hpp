@@ -88,7 +88,13 @@ class ArcLength {
 
  private:
   double gl6(int span, double a, double b) const;
-  double adapt(int span, double a, double b, double whole, double tol, int depth) const;
+  // Adaptive GL6 on [a, b] of one span. At most kAdaptBudget interval splits (12 evaluations each):
+  // a tolerance that is never met (a speed that overflows or underflows, extreme knot spacing or
+  // weights) is refused with a GeometryError naming the span instead of halving 2^60 times.
+  static constexpr long kAdaptBudget = 20000;
+  double adapt(int span, double a, double b, double whole, double tol) const;
+  double adapt(int span, double a, double b, double whole, double tol, int depth, long& budget) const;
+  [[noreturn]] void refuse(int span, const std::string& why) const;
   // Fast path pieces (see the header comment); false = give up, result undefined.
   bool fast_advance(int span, double u_from, double ds, double s_tol, double& u_out,
                     const double* d_from = nullptr) const;
@@ -103,6 +109,7 @@ class ArcLength {
   double rel_tol_;
   std::vector<double> cum_;
   std::vector<double> span_tol_;
+  std::vector<double> noise_;  // per span: relative rounding noise of the speed (see speed_noise)
   mutable ArcLengthStats stats_;
 };
 

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "geometry/bspline.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <charconv>
 #include <string>
@@ -51,10 +52,10 @@ BSpline BSpline::from_homogeneous(int degree, const Eigen::MatrixXd& hom, const 
   return c;
 }
 
-std::string degree_range_error(long long degree, bool rational, int max_degree) {
+std::string degree_range_error(long long degree, bool rational, int max_degree, const std::string& shown) {
   const int cap = max_degree > 0 ? max_degree : (rational ? kMaxDegreeRational : kMaxDegree);
   if (degree >= 1 && degree <= cap) return {};
-  std::string m = "degree: " + std::to_string(degree) + " out of range 1.." + std::to_string(cap);
+  std::string m = "degree: " + (shown.empty() ? std::to_string(degree) : shown) + " out of range 1.." + std::to_string(cap);
   if (degree > cap && max_degree <= 0)
     m += rational ? " for a rational curve (the quotient rule amplifies the power basis's rounding by the weights; "
                     "non-rational curves: up to " + std::to_string(kMaxDegree) + ")"
@@ -74,6 +75,9 @@ void validate(const BSpline& c, const std::string& where, int max_degree) {
     for (int j = 0; j < c.dim(); ++j)
       if (!std::isfinite(c.ctrl(i, j)))
         fail(where, "control_points[" + std::to_string(i) + "][" + std::to_string(j) + "]: not a finite number");
+      else if (std::abs(c.ctrl(i, j)) > kMaxCoordinate)
+        fail(where, "control_points[" + std::to_string(i) + "][" + std::to_string(j) + "]: " + shortest(c.ctrl(i, j)) +
+                        " beyond +-" + shortest(kMaxCoordinate) + " (the geometry's double-precision range)");
   if (c.rational()) {
     if (c.weights.size() != n)
       fail(where, "weights: " + std::to_string(c.weights.size()) + " weights for " + std::to_string(n) +
@@ -84,6 +88,14 @@ void validate(const BSpline& c, const std::string& where, int max_degree) {
       if (!(c.weights[i] > 0))
         fail(where, "weights[" + std::to_string(i) + "]: " + shortest(c.weights[i]) + " (weights must be positive)");
     }
+    Eigen::Index lo = 0, hi = 0;
+    c.weights.minCoeff(&lo);
+    c.weights.maxCoeff(&hi);
+    if (c.weights[hi] > kMaxWeightRatio * c.weights[lo])
+      fail(where, "weights[" + std::to_string(hi) + "]: " + shortest(c.weights[hi]) + " is " +
+                      shortest(c.weights[hi] / c.weights[lo]) + " times weights[" + std::to_string(lo) + "] = " +
+                      shortest(c.weights[lo]) + ", beyond the ratio " + shortest(kMaxWeightRatio) +
+                      " (the rational speed loses about ratio^2 ulp to cancellation)");
   }
   const int m = n + c.degree + 1;
   if (c.knots.size() != m)
@@ -91,6 +103,9 @@ void validate(const BSpline& c, const std::string& where, int max_degree) {
                     std::to_string(m));
   for (int i = 0; i < m; ++i) {
     if (!std::isfinite(c.knots[i])) fail(where, "knots[" + std::to_string(i) + "]: not a finite number");
+    if (std::abs(c.knots[i]) > kMaxKnot)
+      fail(where, "knots[" + std::to_string(i) + "]: " + shortest(c.knots[i]) + " beyond +-" + shortest(kMaxKnot) +
+                      " (the speed |r'| ~ |P| / knot span underflows: rescale the knot vector)");
     if (i > 0 && c.knots[i] < c.knots[i - 1])
       fail(where, "knots[" + std::to_string(i) + "]: " + shortest(c.knots[i]) + " < previous " + shortest(c.knots[i - 1]) +
                       " (knot vector must be non-decreasing)");
@@ -207,28 +222,47 @@ BSpline clamp(const BSpline& c0) {
 }
 
 std::vector<BezierPiece> bezier_pieces(const BSpline& c0) {
-  BSpline c = clamp(c0);
+  // The NURBS Book's A5.6 (DecomposeCurve): one left-to-right sweep that raises each interior knot
+  // to multiplicity p in the piece being built and starts the next piece from the points it leaves,
+  // O(n p^2) in all (inserting the knots one at a time into the whole curve copies it per knot).
+  const BSpline c = clamp(c0);
   const int p = c.degree;
-  // Raise every interior knot to multiplicity >= p. Then on each non-empty span [t_j, t_{j+1})
-  // (p <= j <= n-1) the active control points j-p..j are that span's Bezier points.
-  std::vector<double> interior;
-  for (int i = p + 1; i < c.n_ctrl(); ++i)
-    if (c.knots[i] > c.u_begin() && c.knots[i] < c.u_end() && (interior.empty() || interior.back() != c.knots[i]))
-      interior.push_back(c.knots[i]);
-  for (double u : interior) {
-    int s = 0;
-    for (int i = 0; i < c.knots.size(); ++i) s += (c.knots[i] == u);
-    if (s < p) c = insert_knot(c, u, p - s);
-  }
-  const Eigen::MatrixXd H = c.homogeneous();
+  const Eigen::VectorXd& U = c.knots;
+  const Eigen::MatrixXd P = c.homogeneous();
+  const int m = static_cast<int>(U.size()) - 1;
   std::vector<BezierPiece> out;
-  for (int j = p; j < c.n_ctrl(); ++j) {
-    if (!(c.knots[j] < c.knots[j + 1])) continue;
-    BezierPiece b;
-    b.u0 = c.knots[j];
-    b.u1 = c.knots[j + 1];
-    b.hom = H.middleRows(j - p, p + 1);
-    out.push_back(std::move(b));
+  Eigen::MatrixXd Q = P.topRows(p + 1), next(p + 1, P.cols());
+  std::vector<double> alpha(static_cast<size_t>(p) + 1);
+  int a = p, b = p + 1;
+  while (b < m) {
+    const int i0 = b;
+    while (b < m && U[b + 1] == U[b]) ++b;
+    const int mult = b - i0 + 1;
+    if (mult < p) {
+      const double numer = U[b] - U[a];
+      for (int j = p; j > mult; --j) alpha[j - mult - 1] = numer / (U[a + j] - U[a]);
+      const int r = p - mult;
+      for (int j = 1; j <= r; ++j) {
+        const int save = r - j, s = mult + j;
+        for (int k = p; k >= s; --k) {
+          const double al = alpha[k - s];
+          Q.row(k) = al * Q.row(k) + (1.0 - al) * Q.row(k - 1);
+        }
+        if (b < m) next.row(save) = Q.row(p);
+      }
+    }
+    BezierPiece piece;
+    piece.u0 = U[a];
+    piece.u1 = U[b];
+    piece.hom = Q;
+    out.push_back(std::move(piece));
+    if (b < m) {
+      // (a hodograph of a curve with a C0 knot has interior multiplicity p + 1: no point inserted)
+      for (int i = std::max(0, p - mult); i <= p; ++i) next.row(i) = P.row(b - p + i);
+      Q.swap(next);
+      a = b;
+      ++b;
+    }
   }
   return out;
 }

@@ -22,6 +22,19 @@ namespace traj::geo {
 constexpr int kMaxDegree = 15;          // non-rational B-splines and Beziers
 constexpr int kMaxDegreeRational = 7;   // NURBS / rational Beziers
 
+// Magnitudes accepted (validate): each refused naming the field, so that no input reaches the
+// geometry where its arithmetic overflows, underflows or drowns in rounding.
+// Coordinates: |x| <= 1e15 (a kilometre in picometres), so that |r'|^2 |r''|^2 and the curvature
+// formulas stay inside the double range for any accepted knot spacing.
+constexpr double kMaxCoordinate = 1e15;
+// Knots: |t| <= 1e12. Far larger parameters make the speed |r'| ~ |P| / t underflow when squared
+// (knots [0, 1e300] gave a zero-length curve).
+constexpr double kMaxKnot = 1e12;
+// Weights: max/min <= 1e3. The rational speed |A' w - A w'| / w^2 loses about (max/min)^2 ulp to
+// cancellation: at 1e3 the arc length still agrees with a long-double reference to 2e-13
+// (host/geometry/README.md), at 1e8 no digit is left.
+constexpr double kMaxWeightRatio = 1e3;
+
 struct BSpline {
   int degree = 0;
   Eigen::MatrixXd ctrl;     // n_ctrl x dim: row i is control point i (Cartesian, not weighted)
@@ -50,7 +63,8 @@ void validate(const BSpline& c, const std::string& where = "curve", int max_degr
 
 // The message validate() gives for a degree outside the accepted range ("degree: 16 out of range
 // 1..15 (...)"), or "" if the degree is accepted; for readers that check the degree first.
-std::string degree_range_error(long long degree, bool rational, int max_degree = 0);
+// `shown` replaces the number in the message (a reader's own text of a degree beyond long long).
+std::string degree_range_error(long long degree, bool rational, int max_degree = 0, const std::string& shown = {});
 
 // Boehm knot insertion of u, `times` times (multiplicity after insertion must stay <= degree+1).
 BSpline insert_knot(const BSpline& c, double u, int times = 1);

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "geometry/error.hpp"
+#include "util/format.hpp"
 
 namespace traj::geo {
 
@@ -115,6 +116,12 @@ Curve::Curve(const BSpline& spline, const std::string& where, int max_degree) {
       }
     }
   }
+  for (const PowerSpan& s : spans_)
+    for (double v : s.coef)
+      if (!std::isfinite(v))
+        throw GeometryError(where + ": knots: the span [" + util::shortest(s.u0) + ", " + util::shortest(s.u1) +
+                            "] is too short for its control points: the curve's derivatives there overflow the "
+                            "double range (merge or respace the knots)");
 }
 
 int Curve::find_span(double u) const {

@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "geometry/json_io.hpp"
 
+#include <climits>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <iterator>
 #include <algorithm>
@@ -27,6 +29,26 @@ std::string nlohmann_problem(const char* what) {
     if (e != std::string::npos) m.erase(0, e + 2);
   }
   return m;
+}
+
+// At most kMaxEcho characters of a text the input controls (a field path 2 million levels deep, a
+// token of megabytes) go into a message: the head and the tail with the size in between.
+constexpr std::size_t kMaxEcho = 160;
+std::string clip(const std::string& t) {
+  if (t.size() <= kMaxEcho) return t;
+  return t.substr(0, kMaxEcho / 2) + " ... (" + std::to_string(t.size()) + " characters) ... " +
+         t.substr(t.size() - kMaxEcho / 2);
+}
+
+// "<name>:<line>:<column>" of byte `at` of `text` (1-based; lines counted from `first_line`).
+std::string place(const std::string& name, const std::string& text, std::size_t at, std::size_t first_line) {
+  std::size_t line = first_line, line_start = 0;
+  for (std::size_t i = 0; i < at && i < text.size(); ++i)
+    if (text[i] == '\n') {
+      ++line;
+      line_start = i + 1;
+    }
+  return name + ":" + std::to_string(line) + ":" + std::to_string(at - line_start + 1);
 }
 
 // SAX handler: builds the document with nlohmann's own DOM builder and keeps the path of the value
@@ -77,17 +99,10 @@ class PathSax {
     const std::size_t end = std::min(offset, text_.size());
     std::size_t at = end > 0 ? end - 1 : 0;
     if (ex.id == 406 && token.size() <= end) at = end - token.size();
-    std::size_t line = first_line_, line_start = 0;
-    for (std::size_t i = 0; i < at; ++i)
-      if (text_[i] == '\n') {
-        ++line;
-        line_start = i + 1;
-      }
-    std::string problem = nlohmann_problem(ex.what());
+    std::string problem = clip(nlohmann_problem(ex.what()));
     if (ex.id == 406) problem += " (beyond the double range)";
-    const std::string f = path();
-    throw GeometryError(name_ + ":" + std::to_string(line) + ":" + std::to_string(at - line_start + 1) + ": " +
-                        (f.empty() ? "" : f + ": ") + problem);
+    const std::string f = clip(path());
+    throw GeometryError(place(name_, text_, at, first_line_) + ": " + (f.empty() ? "" : f + ": ") + problem);
   }
   // Path of the value being read: object keys joined by '.', array indices in brackets.
   std::string path() const {
@@ -146,13 +161,17 @@ nlohmann::json load_json_file(const std::string& path, const std::string& name_i
 }
 
 nlohmann::json parse_json_text(const std::string& text, const std::string& name, std::size_t first_line) {
+  // nlohmann's lexer takes a NUL byte for the end of the input and would accept whatever follows it;
+  // JSON text holds no raw NUL anywhere (not even in a string), so one is refused where it stands.
+  if (const std::size_t nul = text.find('\0'); nul != std::string::npos)
+    throw GeometryError(place(name, text, nul, first_line) + ": NUL byte (JSON text holds none)");
   nlohmann::json doc;
   PathSax sax(doc, text, name, first_line);
   try {
     nlohmann::json::sax_parse(text, &sax);
   } catch (const nlohmann::json::exception& e) {  // not expected: the parser reports through parse_error
-    const std::string p = sax.path();
-    fail(name, (p.empty() ? "" : p + ": ") + nlohmann_problem(e.what()));
+    const std::string p = clip(sax.path());
+    fail(name, (p.empty() ? "" : p + ": ") + clip(nlohmann_problem(e.what())));
   }
   return doc;
 }
@@ -168,7 +187,10 @@ BSpline parse_curve_fields(const nlohmann::json& doc, const std::string& where, 
   field = "degree";
   const auto& deg = member(doc, "degree", where);
   if (!deg.is_number_integer()) fail(where, "degree: expected an integer");
-  const long long p = deg.get<long long>();
+  // An unsigned value beyond long long (18446744073709551615) is shown as written, not as its
+  // two's complement reading (-1).
+  const bool huge = deg.is_number_unsigned() && deg.get<std::uint64_t>() > static_cast<std::uint64_t>(LLONG_MAX);
+  const long long p = huge ? LLONG_MAX : deg.get<long long>();
 
   bool rational = false;
   field = "rational";
@@ -177,7 +199,8 @@ BSpline parse_curve_fields(const nlohmann::json& doc, const std::string& where, 
     rational = it->get<bool>();
   }
   field = "degree";
-  if (const std::string e = degree_range_error(p, rational); !e.empty()) fail(where, e);
+  if (const std::string e = degree_range_error(p, rational, 0, huge ? deg.dump() : std::string()); !e.empty())
+    fail(where, e);
   c.degree = static_cast<int>(p);
 
   field = "control_points";

@@ -28,6 +28,9 @@ constexpr double kInch = 25.4;
 // relative one (rs274 2.9 accepts r 10 -> 10.015 mm and 100 -> 100.09 mm,
 // refuses 10 -> 10.029 mm: checked with it).
 constexpr double kRadiusTolInch = 0.00005, kRadiusTolMm = kRadiusTolInch * kInch;
+// Full turns of one G2/G3 (P word): each is four arc pieces; more is no toolpath, and P beyond int
+// would overflow the count.
+constexpr int kMaxTurns = 10000;
 constexpr double kSpiralAbsInch = 2 * 0.001 * 1.41421356237309504880;
 constexpr double kSpiralAbsMm = 2 * 0.01 * 1.41421356237309504880;
 constexpr double kSpiralRel = 0.001;
@@ -144,6 +147,7 @@ class Interpreter {
 
   // An open G5.2 NURBS: control points (mm) and weights, its order and place.
   struct Nurbs {
+    Nurbs() {}  // declared: clang sees a nested struct's member initialisers only once the class is complete
     std::vector<Vector3d> points;
     std::vector<double> weights;
     int order = 3;
@@ -409,6 +413,8 @@ class Interpreter {
       const double p = value('P');
       if (std::abs(p - std::round(p)) > 1e-4) fail(text('P'), "the number of turns must be an integer");
       if (std::round(p) < 1) fail(text('P'), "the number of turns must be 1 or more");
+      if (std::round(p) > kMaxTurns)
+        fail(text('P'), "the number of turns must be at most " + std::to_string(kMaxTurns));
       turns = static_cast<int>(std::round(p));
     }
     const bool ijk = has('I') || has('J') || has('K');

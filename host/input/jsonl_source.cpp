@@ -9,11 +9,13 @@ namespace traj::input {
 
 using plan::PlanError;
 
-JsonlSource::JsonlSource(const std::string& file) : file_(file) {
+JsonlSource::JsonlSource(const std::string& file) : file_(file), in_(file_in_) {
   if (std::filesystem::is_directory(file)) throw PlanError(file + ": is a directory, not a path file");
-  in_.open(file, std::ios::binary);
-  if (!in_) throw PlanError(file + ": cannot open file");
+  file_in_.open(file, std::ios::binary);
+  if (!file_in_) throw PlanError(file + ": cannot open file");
 }
+
+JsonlSource::JsonlSource(std::istream& in, const std::string& name) : file_(name), in_(in) {}
 
 bool JsonlSource::next(geo::BSpline& out, std::string& where) {
   while (std::getline(in_, buf_)) {

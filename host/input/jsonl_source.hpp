@@ -30,13 +30,16 @@ class JsonlSource : public CurveSource {
  public:
   // Opens the file; PlanError "<file>: cannot open file" (or "is a directory").
   explicit JsonlSource(const std::string& file);
+  // Reads `in` (kept alive by the caller), naming it `name` in messages: text already in memory.
+  JsonlSource(std::istream& in, const std::string& name);
   bool next(geo::BSpline& out, std::string& where) override;
   size_t line() const { return line_; }      // lines read so far
   size_t curves() const { return curves_; }  // curves returned so far
 
  private:
   std::string file_;
-  std::ifstream in_;
+  std::ifstream file_in_;
+  std::istream& in_;
   std::string buf_;
   size_t line_ = 0, curves_ = 0;
   Eigen::VectorXd prev_end_;  // end point of the last curve returned

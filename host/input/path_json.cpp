@@ -12,6 +12,10 @@ namespace traj::input {
 using plan::Path;
 using plan::PlanError;
 
+namespace {
+Path path_from_json(const nlohmann::json& doc, const std::string& file);
+}  // namespace
+
 Path load_path(const std::string& file) {
   if (std::filesystem::is_directory(file)) throw PlanError(file + ": is a directory, not a path file");
   // every JSON error (syntax, truncation, a number out of the double range)
@@ -22,6 +26,21 @@ Path load_path(const std::string& file) {
   } catch (const geo::GeometryError& e) {
     throw PlanError(e.what());
   }
+  return path_from_json(doc, file);
+}
+
+Path parse_path(const std::string& text, const std::string& name) {
+  nlohmann::json doc;
+  try {
+    doc = geo::parse_json_text(text, name);
+  } catch (const geo::GeometryError& e) {
+    throw PlanError(e.what());
+  }
+  return path_from_json(doc, name);
+}
+
+namespace {
+Path path_from_json(const nlohmann::json& doc, const std::string& file) {
   Path p;
   try {
     if (doc.is_object() && doc.contains("curves")) {
@@ -39,5 +58,6 @@ Path load_path(const std::string& file) {
   }
   return p;
 }
+}  // namespace
 
 }  // namespace traj::input

@@ -11,5 +11,7 @@
 namespace traj::input {
 
 plan::Path load_path(const std::string& file);
+// The same for JSON text already in memory, named `name` in messages.
+plan::Path parse_path(const std::string& text, const std::string& name);
 
 }  // namespace traj::input

@@ -67,6 +67,11 @@ bool fits_bits(const mpz_class& v, int bits) {
   // v = -2^(bits-1) exactly
   return mpz_sgn(z) < 0 && n == static_cast<size_t>(bits) && mpz_scan1(z, 0) == static_cast<mp_bitcnt_t>(bits - 1);
 }
+// Bits of the shortest two's complement form of v.
+size_t signed_bits(const mpz_class& v) {
+  for (size_t b = mpz_sizeinbase(v.get_mpz_t(), 2);; ++b)
+    if (fits_bits(v, static_cast<int>(b))) return b;
+}
 // d with K = 2^d, or -1.
 int log2_exact(uint32_t k) {
   if (k == 0 || (k & (k - 1)) != 0) return -1;
@@ -164,6 +169,21 @@ std::string units_list() {
 }
 }  // namespace
 
+namespace {
+// The header byte of the FD format field a fd::Format::validate() message names ("format: <field>=...").
+size_t fd_field_offset(const std::string& message) {
+  static const std::pair<const char*, size_t> kFields[] = {
+      {"axes", 8}, {"degree", 9}, {"width", 10}, {"chunk_width", 12}, {"guard_bits", 14}, {"frac_bits", 16}};
+  const std::string prefix = "format: ";
+  const size_t b = message.rfind(prefix, 0) == 0 ? prefix.size() : 0;
+  const size_t e = message.find_first_of("= ", b);
+  const std::string field = message.substr(b, e == std::string::npos ? std::string::npos : e - b);
+  for (const auto& [name, off] : kFields)
+    if (field == name) return off;
+  return 8;
+}
+}  // namespace
+
 std::vector<uint8_t> encode_header(const Header& h) {
   if (!is_known_units(h.units)) throw StreamError("units '" + h.units + "' unknown (known: " + units_list() + ")");
   if (const std::string m = util::tick_period_problem(h.period); !m.empty()) throw StreamError(m);
@@ -234,11 +254,15 @@ std::vector<uint8_t> encode_numbered(const Header& h, const Record& r, uint32_t 
     throw StreamError("segment with K=" + std::to_string(r.ticks) + " ticks, beyond the format's bound 2^20 = " +
                       std::to_string(kMaxTicks));
   put_record_head(b, 1, r.ticks, seq);
-  for (const auto& ax : r.regs) {
+  for (size_t a = 0; a < r.regs.size(); ++a) {
+    const auto& ax = r.regs[a];
     if (static_cast<int>(ax.size()) != h.degree + 1) throw StreamError("segment has the wrong number of registers");
-    for (const auto& v : ax) {
-      if (!fits_bits(v, h.width)) throw StreamError("register value does not fit the register width");
-      put_signed(b, v, h.width / 8);
+    for (size_t i = 0; i < ax.size(); ++i) {
+      if (!fits_bits(ax[i], h.width))
+        throw StreamError("segment " + std::to_string(seq) + ": axis " + std::to_string(a) + ": r[" + std::to_string(i) +
+                          "] = " + ax[i].get_str() + " needs " + std::to_string(signed_bits(ax[i])) +
+                          " bits, the register width is " + std::to_string(h.width));
+      put_signed(b, ax[i], h.width / 8);
     }
   }
   put(b, crc(b.data(), b.size()), 4);
@@ -305,7 +329,7 @@ void Continuity::advance(const Record& r) {
   fd::Compiled c;
   c.ticks = r.ticks;
   c.regs = r.regs;
-  for (int a = 0; a < h_.axes; ++a) end_[a] = fd::Compiler::state_at(c, a, r.ticks);
+  for (int a = 0; a < h_.axes; ++a) end_[a] = fd::Compiler::state_at(c, a, r.ticks, h_.width);
 }
 
 // ---------------------------------------------------------------------------
@@ -451,10 +475,10 @@ std::string StreamReader::header_problem(const std::vector<uint8_t>& b, size_t n
   h.bcu_out_width = static_cast<int>(get(&b[50], 2));
   if ((at = first_nonzero(b, 18, 20)) < 20) return "header: reserved byte " + hex2(b[at]) + ", must be 0";
   if ((at = first_nonzero(b, 52, 60)) < 60) return "header: reserved byte " + hex2(b[at]) + ", must be 0";
-  at = 8;
   try {
     h.format().validate();
   } catch (const std::exception& e) {
+    at = fd_field_offset(e.what());
     return std::string("header: ") + e.what();
   }
   at = 10;

@@ -13,7 +13,7 @@ namespace traj::util {
 // Empty if `h` (seconds) is a valid tick period, otherwise the message.
 inline std::string tick_period_problem(double h) {
   if (std::isfinite(h) && h > 0) return {};
-  return "tick period " + fmt("%g", h) + " s must be positive and finite";
+  return "tick period " + shortest(h) + " s must be positive and finite";
 }
 
 }  // namespace traj::util

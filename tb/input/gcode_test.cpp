@@ -219,6 +219,8 @@ TEST(Gcode, Refusals) {
       {"F1\nG0 X1 G1 Y2\nM2\n", "t.ngc:2: G1: two G codes from the same modal group (G0)"},
       {"F1\nG1 X1 R2\nM2\n", "t.ngc:2: R2: no G code in this block uses it"},
       {"F1\nG2 X0 Y0 I10 J0 P0\nM2\n", "t.ngc:2: P0: the number of turns must be 1 or more"},
+      // found by the fuzzer: the count overflowed int (undefined behaviour)
+      {"F1\nG2 X0 Y0 I10 J0 P1000000000000\nM2\n", "t.ngc:2: P1000000000000: the number of turns must be at most 10000"},
       {"F1\nG2 X1 Y0 R0.2\nM2\n", "t.ngc:2: R0.2: the radius is too small to reach the end point"},
       {"F1\nG2 X0.0019 I0.001 J0\nM2\n", "t.ngc:2: G2: zero-radius arc (start radius 0.001, end radius 0.0009)"},
       {"F1\nG5.2 X1 Y0 P1\nX2 Y2 P1\nG1 X5\nM2\n", "t.ngc:4: G1: G5.2 NURBS not closed with G5.3"},

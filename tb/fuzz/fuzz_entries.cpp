@@ -1,0 +1,103 @@
+#include "fuzz_entries.hpp"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "input/dxf.hpp"
+#include "input/gcode.hpp"
+#include "input/jsonl_source.hpp"
+#include "input/path_json.hpp"
+#include "input/svg.hpp"
+#include "stream/segment_stream.hpp"
+
+namespace traj::fuzz {
+
+namespace {
+[[noreturn]] void finding(const std::string& what) {
+  std::fprintf(stderr, "fuzz finding: %s\n", what.c_str());
+  std::abort();
+}
+
+// A refusal is accepted if its message is short enough to be one error line.
+void refused(const std::exception& e) {
+  const std::string m = e.what();
+  if (m.size() > kMaxMessage)
+    finding("error message of " + std::to_string(m.size()) + " bytes: " + m.substr(0, 200) + " ...");
+}
+
+// Runs `read`, accepting a return or any std::runtime_error (the project's error classes).
+template <class F>
+int guarded(F&& read) {
+  try {
+    read();
+  } catch (const std::runtime_error& e) {
+    refused(e);
+  }
+  return 0;
+}
+
+std::string text(const uint8_t* data, std::size_t size) { return std::string(reinterpret_cast<const char*>(data), size); }
+}  // namespace
+
+int stream(const uint8_t* data, std::size_t size) {
+  std::istringstream in(text(data, size));
+  stream::StreamReader r(in, "fuzz.trj");
+  stream::Record rec;
+  while (r.next(rec)) {
+    // An accepted record is the exact bytes its decoded form encodes to.
+    if (stream::encode_record(r.header(), rec) != r.raw()) finding("record re-encodes to other bytes");
+  }
+  if (!r.complete() && r.error().empty()) finding("stream neither complete nor refused");
+  if (r.error().size() > kMaxMessage) finding("stream error of " + std::to_string(r.error().size()) + " bytes");
+  return 0;
+}
+
+int json(const uint8_t* data, std::size_t size) {
+  return guarded([&] { input::parse_path(text(data, size), "fuzz.json"); });
+}
+
+int jsonl(const uint8_t* data, std::size_t size) {
+  return guarded([&] {
+    std::istringstream in(text(data, size));
+    input::JsonlSource src(in, "fuzz.jsonl");
+    geo::BSpline b;
+    std::string where;
+    while (src.next(b, where)) plan::PathCurve(b, where);  // the planner's loading: arc length, tables
+  });
+}
+
+int gcode(const uint8_t* data, std::size_t size) {
+  return guarded([&] {
+    std::istringstream in(text(data, size));
+    input::read_gcode(in, "fuzz.ngc");
+  });
+}
+
+int svg(const uint8_t* data, std::size_t size) {
+  return guarded([&] { input::parse_svg(text(data, size), "fuzz.svg"); });
+}
+
+int dxf(const uint8_t* data, std::size_t size) {
+  // dxflib reads files only: one temporary file per process, rewritten for each input.
+  static const std::string path = "/tmp/trajcore-fuzz-" + std::to_string(getpid()) + ".dxf";
+  {
+    std::ofstream f(path, std::ios::binary | std::ios::trunc);
+    f.write(reinterpret_cast<const char*>(data), static_cast<std::streamsize>(size));
+  }
+  const int r = guarded([&] { input::read_dxf(path); });
+  std::remove(path.c_str());
+  return r;
+}
+
+const std::vector<Target>& targets() {
+  static const std::vector<Target> t = {{"stream", stream}, {"json", json}, {"jsonl", jsonl},
+                                        {"gcode", gcode},   {"svg", svg},   {"dxf", dxf}};
+  return t;
+}
+
+}  // namespace traj::fuzz
