@@ -103,6 +103,7 @@ class Core {
     bool fdf_q = false;                 // an FD segment is in flight
     int rem_q = 0;                      // words of the forwarded segment still to come
     int pend_fd_q = 0, pend_bcu_q = 0;  // ticks routed to an engine not yet answered (0..3)
+    bool fd_tick_q = false;             // fd_tick of the previous cycle: the FD engine takes rising edges only
     bool err_q = false;                 // sticky: a segment ended with a tick still pending
     // input register slice
     bool out_v_q = false, sk_v_q = false, out_u_q = false, sk_u_q = false;
@@ -212,7 +213,8 @@ class Core {
     // order: sticky error, reported on tick_err.
     const int pf = q.pend_fd_q - ((fo.sample_valid || fo.underrun) ? 1 : 0);
     const int pb = q.pend_bcu_q - ((bcu_.sample_valid() || bcu_.underrun()) ? 1 : 0);
-    n.pend_fd_q = (pf + (fd_tick ? 1 : 0)) & 3;
+    n.fd_tick_q = fd_tick;
+    n.pend_fd_q = (pf + ((fd_tick && !q.fd_tick_q) ? 1 : 0)) & 3;
     n.pend_bcu_q = (pb + (bcu_tick ? 1 : 0)) & 3;
     if ((c.pop_b && pb > 0 && c.owner1 && !c.tick_kind) || (c.pop_f && pf > 0 && c.owner1 && c.tick_kind))
       n.err_q = true;

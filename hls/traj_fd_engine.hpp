@@ -27,7 +27,12 @@
 // (the same rotate path), so loading costs no wide multiplexer.
 // A segment is accepted only while no segment is active and no update runs.
 //
-// Ticks: tick_i is latched into a pending flag. A pending tick is processed when
+// Tick contract: one strobe = one tick. A tick is a cycle with tick_i high
+// after a cycle with tick_i low (a rising edge; tick_i is never sampled as a
+// level). tick_i high in two consecutive cycles violates the contract: it is
+// one tick and sets the sticky tick_err.
+//
+// Ticks: a new tick is latched into a pending flag. A pending tick is processed when
 // no update runs and no segment is half loaded (and no header is being
 // accepted that cycle). With a segment active it emits sample = r[0] >> Guard
 // (the top OutWidth bits), raises seg_done with the K-th sample, and starts the
@@ -183,8 +188,10 @@ class FdEngine {
         sample_valid_d = primed_q_;
       }
     }
-    const bool tick_d = (tick_q_ && !consume) || in.tick;
-    const bool tick_err_d = tick_err_q_ || (in.tick && tick_q_ && !consume);
+    const bool tick_new = in.tick && !tick_in_q_;   // tick_i rises
+    const bool tick_held = in.tick && tick_in_q_;   // high a second cycle: violation
+    const bool tick_d = (tick_q_ && !consume) || tick_new;
+    const bool tick_err_d = tick_err_q_ || (tick_new && tick_q_ && !consume) || tick_held;
 
     // Commit.
     for (int n = 0; n < kRegs; ++n) {
@@ -200,6 +207,7 @@ class FdEngine {
     phase_q_ = phase_d;
     last_tick_q_ = last_tick_d;
     tick_q_ = tick_d;
+    tick_in_q_ = in.tick;
     tick_err_q_ = tick_err_d;
     sample_valid_q_ = sample_valid_d;
     underrun_q_ = underrun_d;
@@ -230,6 +238,7 @@ class FdEngine {
     busy_q_ = false;
     phase_q_ = 0;
     tick_q_ = false;
+    tick_in_q_ = false;
     tick_err_q_ = false;
     sample_valid_q_ = false;
     underrun_q_ = false;
@@ -247,6 +256,7 @@ class FdEngine {
   int phase_q_ = 0;
   bool last_tick_q_ = false;
   bool tick_q_ = false;
+  bool tick_in_q_ = false;  // tick_i of the previous cycle (edge detection)
   bool tick_err_q_ = false;
   bool sample_valid_q_ = false;
   bool underrun_q_ = false;

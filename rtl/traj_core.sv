@@ -17,7 +17,11 @@
 //     the same cycle: up to 3 BCU segments and 1 FD segment, with the number
 //     of BCU segments older than the FD one), else to the engine of the last
 //     segment. Within a run of BCU segments ticks may come
-//     on every clock.
+//     on every clock. Tick contract per engine: the FD engine takes a tick on
+//     a rising edge of its tick (high two cycles in a row = one tick and
+//     tick_err); the BCU generator takes one tick per cycle its tick is high
+//     (its one-sample-per-clock rate). The core counts FD ticks as the FD
+//     engine does.
 //   * one sample output, same ports and latency (2) as the engines: the
 //     sample of the engine that emitted last; on an underrun it holds.
 `default_nettype none
@@ -77,6 +81,7 @@ module traj_core #(
   logic               fdf_q;
   logic [RemBits-1:0] rem_q;
   logic [1:0]         pend_fd_q, pend_bcu_q;
+  logic               fd_tick_q;  // fd_tick of the previous cycle: the FD engine takes rising edges only
   logic               err_q;
   // input register slice
   logic                  out_v_q, sk_v_q, out_u_q, sk_u_q, fd_v_q, bcu_v_q;
@@ -133,6 +138,7 @@ module traj_core #(
       sel_q       <= 1'b0;
       primed_q    <= 1'b0;
       pend_fd_q   <= '0;
+      fd_tick_q   <= 1'b0;
       pend_bcu_q  <= '0;
       err_q       <= 1'b0;
     end else begin
@@ -148,7 +154,8 @@ module traj_core #(
       fpos_q      <= (push && !bcu_v_q) ? nb1 : fpos1;
       sel_q      <= sel_now;
       primed_q   <= primed_q || fd_real || bcu_real;
-      pend_fd_q  <= pf + {1'b0, fd_tick};
+      fd_tick_q  <= fd_tick;
+      pend_fd_q  <= pf + {1'b0, fd_tick && !fd_tick_q};
       pend_bcu_q <= pb + {1'b0, bcu_tick};
       if ((pop_b && pb != 2'd0 && owner1 && !tick_kind) || (pop_f && pf != 2'd0 && owner1 && tick_kind))
         err_q <= 1'b1;

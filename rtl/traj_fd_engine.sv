@@ -13,8 +13,12 @@
 //     ceil(32/ChunkWidth) words, least significant first),
 //     then registers axis-major, r[0] first, least significant chunk first,
 //     shifted into the same rotate chain;
-//   * ticks are latched; a tick with no active segment raises underrun and the
-//     output holds (never jumps); a tick while one is pending sets tick_err.
+//   * tick contract: one strobe = one tick. A tick is a cycle with tick_i high
+//     after a cycle with tick_i low (a rising edge; tick_i is never sampled as
+//     a level). tick_i high in two consecutive cycles violates the contract:
+//     it is one tick and sets the sticky tick_err. The tick is latched; a tick
+//     with no active segment raises underrun and the output holds (never
+//     jumps); a tick while one is pending also sets tick_err.
 `default_nettype none
 `include "traj_check.svh"
 
@@ -75,6 +79,7 @@ module traj_fd_engine #(
   logic [CountWidth-1:0] count_q;
   logic                  active_q, primed_q, busy_q, last_tick_q;
   logic                  tick_q, tick_err_q;
+  logic                  tick_in_q;  // tick_i of the previous cycle (edge detection)
   logic                  hdr_q;      // == (wcnt_q < HdrWords), kept as a flop for timing
   logic                  cnt_one_q;  // == (count_q == 1), kept as a flop for timing
   logic [WcntWidth-1:0]  wcnt_q;
@@ -87,6 +92,11 @@ module traj_fd_engine #(
   // ---------------------------------------------------------------------
   logic ready, accept, header, in_header, load_shift, wcnt_zero, consume, run, step, last_phase;
   logic count_is_one;
+  logic tick_new;   // a new tick: tick_i rises
+  logic tick_held;  // tick_i high for a second cycle: contract violation
+
+  assign tick_new  = tick_i && !tick_in_q;
+  assign tick_held = tick_i && tick_in_q;
 
   assign ready        = !active_q && !busy_q;
   assign accept       = s_axis_tvalid && ready;
@@ -177,6 +187,7 @@ module traj_fd_engine #(
       busy_q         <= 1'b0;
       phase_q        <= '0;
       tick_q         <= 1'b0;
+      tick_in_q      <= 1'b0;
       tick_err_q     <= 1'b0;
       sample_valid_q <= 1'b0;
       underrun_q     <= 1'b0;
@@ -205,8 +216,9 @@ module traj_fd_engine #(
         end
       end
       // Tick handling.
-      tick_q         <= (tick_q && !consume) || tick_i;
-      tick_err_q     <= tick_err_q || (tick_i && tick_q && !consume);
+      tick_in_q      <= tick_i;
+      tick_q         <= (tick_q && !consume) || tick_new;
+      tick_err_q     <= tick_err_q || (tick_new && tick_q && !consume) || tick_held;
       sample_valid_q <= consume && (active_q || primed_q);
       // primed: a real sample has left since reset (a K = 0 segment emits
       // none), so an underrun repeats a sample that was output, never the
@@ -279,6 +291,14 @@ module traj_fd_engine #(
       end
       // tick_err is sticky until reset
       if ($past(rst_ni) && $past(tick_err_q)) assert (tick_err_q);
+      // tick contract: one strobe = one tick. tick_i high in two consecutive
+      // cycles is one tick (no second pending tick) and sets tick_err.
+      if ($past(rst_ni) && $past(tick_i) && $past(tick_in_q)) begin
+        assert (tick_err_q);
+        assert (tick_q == ($past(tick_q) && !$past(consume)));
+      end
+      if ($past(rst_ni) && $past(tick_i) && !$past(tick_in_q)) assert (tick_q);
+      if ($past(rst_ni)) assert (tick_in_q == $past(tick_i));
       // the output never moves except with a sample of an active segment:
       // underrun, idle, loading and reset hold it (no jump)
       if (!$past(run)) assert (sample_q == $past(sample_q));

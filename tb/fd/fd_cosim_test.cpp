@@ -81,6 +81,7 @@ class Bench {
     return true;
   }
   bool tready() const { return ls_.model().outputs().tready; }
+  bool tick_err() const { return ls_.model().outputs().tick_err; }
   uint64_t cycles() const { return ls_.cycles(); }
   uint64_t samples() const { return samples_; }
   uint64_t underruns() const { return underruns_; }
@@ -277,4 +278,38 @@ TEST(FdCosim, ZeroTickFirstSegmentEmitsNothing) {
   }
   // 3 real samples, then 2 underruns that repeat the last one
   EXPECT_EQ(b.samples(), 5u);
+}
+
+TEST(FdCosim, OneStrobeIsOneTick) {
+  // The tick contract: a strobe of any width is one tick (one sample), and a
+  // strobe wider than one cycle violates the contract and sets tick_err.
+  // Independent reference: the number of strobes sent.
+  Bench b("fd_cosim_one_strobe");
+  std::string why;
+  std::mt19937_64 rng(3);
+  for (int i = 0; i < 2; ++i) ASSERT_TRUE(b.cycle({false, false, false, 0}, &why)) << why;
+  std::vector<uint64_t> w;
+  const uint32_t K = 1000;
+  if (FD_CHUNK < 32)
+    for (int s = 0; s < 32; s += FD_CHUNK) w.push_back((K >> s) & traj::mask(FD_CHUNK));
+  else
+    w.push_back(K);
+  for (int n = 0; n < Eng::kRegs * Eng::kChunks; ++n) w.push_back(rng() & traj::mask(FD_CHUNK));
+  for (size_t i = 0; i < w.size();) {
+    const bool rdy = b.tready();
+    ASSERT_TRUE(b.cycle({true, true, false, w[i]}, &why)) << why;
+    if (rdy) ++i;
+  }
+  auto strobe = [&](int width) {
+    for (int i = 0; i < width; ++i) ASSERT_TRUE(b.cycle({true, false, true, 0}, &why)) << why;
+    for (int i = 0; i < 3 * Eng::kChunks + 3; ++i) ASSERT_TRUE(b.cycle({true, false, false, 0}, &why)) << why;
+  };
+  for (int t = 0; t < 5; ++t) strobe(1);
+  EXPECT_EQ(b.samples(), 5u);
+  EXPECT_FALSE(b.tick_err()) << "one-cycle strobes are the contract";
+  strobe(2);
+  EXPECT_EQ(b.samples(), 6u) << "a 2-cycle strobe is one tick";
+  EXPECT_TRUE(b.tick_err()) << "a 2-cycle strobe violates the contract";
+  strobe(12);  // e.g. a 1 us pulse at 12 MHz
+  EXPECT_EQ(b.samples(), 7u) << "a 12-cycle strobe is one tick";
 }

@@ -1,0 +1,292 @@
+// trajcore hls: step/dir generator, cycle-accurate model of
+// rtl/traj_step_gen.sv (same registers, same names, same order). The method
+// (a DDA along the chord between consecutive samples, exact step counts, the
+// serial preparation) and the pulse timing are described in the RTL header
+// and rtl/README.md.
+#pragma once
+#include <cstdint>
+
+#include "traj_common.hpp"
+
+namespace traj {
+
+template <int Axes = 3, int OutWidth = 48, int FracBits = 14, int PeriodWidth = 18, int DueWidth = 8,
+          int TimeWidth = 16>
+class StepGen {
+ public:
+  static_assert(Axes >= 1 && Axes <= 8, "Axes must be 1..8");
+  static_assert(OutWidth >= 8 && OutWidth <= 64, "OutWidth must be 8..64");
+  static_assert(FracBits >= 1 && FracBits <= 16, "FracBits must be 1..16");
+  static_assert(PeriodWidth >= 8 && PeriodWidth <= 32, "PeriodWidth must be 8..32");
+  static_assert(DueWidth >= 4 && DueWidth <= 32, "DueWidth must be 4..32");
+  static_assert(TimeWidth >= 2 && TimeWidth <= 16, "TimeWidth must be 2..16");
+
+  static constexpr int F = FracBits;
+  static constexpr int RW = PeriodWidth + F + 2;
+  static constexpr int kPrepClocks = Axes * RW + 2;  // sample -> next interval's D ready
+
+  struct In {
+    bool rst_n = true;
+    uint8_t shift[Axes] = {};
+    uint32_t period = 1;
+    uint32_t pulse = 1;
+    uint32_t setup = 0;
+    bool enable = false;
+    bool sample_valid = false;
+    u128 sample[Axes] = {};  // OutWidth bits; must hold for kPrepClocks after sample_valid
+  };
+  struct Out {
+    bool step[Axes];
+    bool dir[Axes];
+    bool enable;
+    bool err;
+  };
+
+  Out outputs() const {
+    Out o{};
+    for (int a = 0; a < Axes; ++a) {
+      o.step[a] = ax_[a].step_q;
+      o.dir[a] = ax_[a].dir_q;
+    }
+    o.enable = en_q_;
+    o.err = err_q_;
+    return o;
+  }
+
+  void clock(const In& in) {
+    const uint32_t pmask = static_cast<uint32_t>(mask(PeriodWidth));
+    const uint32_t tmask = static_cast<uint32_t>(mask(TimeWidth));
+    const uint32_t period = in.period & pmask;
+    const uint32_t pulse = in.pulse & tmask, setup = in.setup & tmask;
+    const bool take = in.sample_valid && !prep_q_ && !alt_q_st_ && !nready_q_;
+    const bool load = nready_q_ && (!active_q_ || last_q_);
+    const bool last_bit = bit_q_ == RW - 1;
+    const bool last_axis = ax_q_ == Axes - 1;
+    const int ax_next = take ? 0 : (ax_q_ + 1) % (1 << aw());
+    const int shift_next = ax_next < Axes ? (in.shift[ax_next] & 63) : 0;
+    const u128 nt = static_cast<u128>(nper_q_) << F;
+
+    // the sample bit of q's bit bit_q of axis ax_q (0 below bit 0, sign above)
+    const u128 s = ax_q_ < Axes ? in.sample[ax_q_] : 0;
+    const int j = j_q_;
+    const bool sbit = j < 0 ? false : (j >= OutWidth ? ((s >> (OutWidth - 1)) & 1) != 0 : ((s >> j) & 1) != 0);
+    // serial subtraction q - q_prev
+    const bool pbit = (ax_q_ < Axes && (ax_[ax_q_].qprev_q & 1) != 0) && !(reinit_q_ && bit_q_ < F);
+    const bool dbit = sbit ^ pbit ^ borrow_q_;
+    const bool borrow_d = (!sbit && pbit) || (!sbit && borrow_q_) || (pbit && borrow_q_);
+
+    bool err_in = in.sample_valid && !take;
+    Axis nx[Axes];
+    for (int a = 0; a < Axes; ++a) {
+      const Axis& q = ax_[a];
+      Axis& n = nx[a];
+      n = q;
+      if (prep_q_ && ax_q_ == a) {
+        n.qprev_q = (q.qprev_q >> 1) | (static_cast<u128>(sbit) << (RW - 1));
+        n.nd_q = (q.nd_q >> 1) | (static_cast<u128>(dbit) << (RW - 1));
+      }
+      // DDA
+      const u128 sum_d = wrap(q.r_q + q.d_q, RW), sum_alt = wrap(q.r_q + q.alt_q, RW);
+      const bool up = active_q_ && q.dpos_q && !neg(sum_alt);
+      const bool down = active_q_ && !q.dpos_q && neg(sum_d);
+      const u128 r_next = !active_q_ ? q.r_q : ((up || down) ? sum_alt : sum_d);
+      const u128 alt_d = neg(q.nd_q) ? wrap(q.nd_q + nt, RW) : wrap(q.nd_q - nt, RW);
+      if (alt_q_st_) n.nalt_q = alt_d;
+      if (load) {
+        n.d_q = q.nd_q;
+        n.alt_q = q.nalt_q;
+        n.r_q = reinit_q_ ? 0 : r_next;
+        n.dpos_q = !neg(q.nd_q);
+        n.dnz_q = q.nd_q != 0;
+      } else {
+        n.r_q = r_next;
+      }
+      // pulses
+      const bool due_nz = q.due_q != 0;
+      const bool want_dir = due_nz ? !neg_due(q.due_q) : ((active_q_ && q.dnz_q) ? q.dpos_q : q.dir_q);
+      const bool can_emit = due_nz && want_dir == q.dir_q &&
+                            (q.pg_q == kPgIdle || q.pg_q == kPgHold || (q.pg_q == kPgLow && q.timer_q == 0));
+      const bool turn = q.pg_q == kPgIdle && want_dir != q.dir_q;
+      const uint64_t dm = mask(DueWidth);
+      const uint64_t due_d =
+          (q.due_q + (q.up_q ? 1 : 0) - (q.down_q ? 1 : 0) - (can_emit ? (q.dir_q ? 1 : dm) : 0)) & dm;
+      n.up_q = up;
+      n.down_q = down;
+      n.due_q = due_d;
+      if (can_emit) {
+        n.step_q = true;
+        n.timer_q = (pulse - 1) & tmask;
+        n.pg_q = kPgHigh;
+      } else {
+        switch (q.pg_q) {
+          case kPgIdle:
+            if (turn) {
+              n.dir_q = want_dir;
+              n.timer_q = setup;
+              n.pg_q = kPgSetup;
+            }
+            break;
+          case kPgSetup:
+          case kPgHold:
+            if (q.timer_q == 0) n.pg_q = kPgIdle;
+            else n.timer_q = q.timer_q - 1;
+            break;
+          case kPgHigh:
+            if (q.timer_q == 0) {
+              n.step_q = false;
+              n.timer_q = (pulse - 1) & tmask;
+              n.pg_q = kPgLow;
+            } else {
+              n.timer_q = q.timer_q - 1;
+            }
+            break;
+          default:  // kPgLow
+            if (q.timer_q == 0) {
+              n.timer_q = hold_q_;
+              n.pg_q = kPgHold;
+            } else {
+              n.timer_q = q.timer_q - 1;
+            }
+            break;
+        }
+      }
+      const bool too_fast = load && (neg(q.nd_q) ? neg(q.nalt_q) : (!neg(q.nalt_q) && q.nalt_q != 0));
+      const bool due_ovf = ((q.due_q >> (DueWidth - 1)) & 1) != ((q.due_q >> (DueWidth - 2)) & 1);
+      err_in = err_in || too_fast || due_ovf;
+      if (!in.rst_n) {
+        n.up_q = false;
+        n.down_q = false;
+        n.due_q = 0;
+        n.pg_q = kPgIdle;
+        n.timer_q = 0;
+        n.step_q = false;
+        n.dir_q = true;
+      }
+    }
+
+    // shared control
+    bool prep_d = prep_q_, first_d = first_q_, reinit_d = reinit_q_, alt_st_d = alt_q_st_, nready_d = nready_q_;
+    int ax_d = ax_q_, bit_d = bit_q_;
+    if (take) {
+      prep_d = true;
+      ax_d = 0;
+      bit_d = 0;
+      reinit_d = period != cur_per_q_;
+    } else if (prep_q_) {
+      if (!last_bit) {
+        bit_d = bit_q_ + 1;
+      } else {
+        bit_d = 0;
+        ax_d = last_axis ? 0 : ax_next;
+        if (last_axis) {
+          prep_d = false;
+          first_d = false;
+          alt_st_d = !first_q_;
+        }
+      }
+    }
+    if (alt_q_st_) {
+      alt_st_d = false;
+      nready_d = true;
+    }
+    bool active_d = active_q_, last_d = last_q_;
+    uint32_t cnt_d = cnt_q_, cur_per_d = cur_per_q_;
+    if (load) {
+      nready_d = false;
+      active_d = true;
+      cnt_d = nper_q_;
+      cur_per_d = nper_q_;
+      last_d = nper_q_ == 1;
+    } else if (active_q_) {
+      cnt_d = (cnt_q_ - 1) & pmask;
+      last_d = cnt_q_ == 2;
+      if (last_q_) active_d = false;
+    }
+    // datapath of the pass
+    const uint32_t hold_d = setup > pulse ? setup - pulse : 0;
+    uint32_t nper_d = nper_q_;
+    int j_d = j_q_;
+    bool borrow_dd = borrow_q_;
+    if (take) {
+      nper_d = period;
+      j_d = shift_next - F;
+      borrow_dd = false;
+    } else if (prep_q_) {
+      if (last_bit) {
+        j_d = shift_next - F;
+        borrow_dd = false;
+      } else {
+        j_d = j_q_ + 1;
+        borrow_dd = borrow_d;
+      }
+    }
+
+    for (int a = 0; a < Axes; ++a) ax_[a] = nx[a];
+    prep_q_ = prep_d;
+    ax_q_ = ax_d;
+    bit_q_ = bit_d;
+    j_q_ = j_d;
+    borrow_q_ = borrow_dd;
+    first_q_ = first_d;
+    reinit_q_ = reinit_d;
+    alt_q_st_ = alt_st_d;
+    nready_q_ = nready_d;
+    nper_q_ = nper_d;
+    cur_per_q_ = cur_per_d;
+    active_q_ = active_d;
+    last_q_ = last_d;
+    cnt_q_ = cnt_d;
+    hold_q_ = hold_d;
+    en_q_ = in.enable;
+    err_q_ = err_q_ || err_in;
+    if (!in.rst_n) {
+      prep_q_ = false;
+      ax_q_ = 0;
+      bit_q_ = 0;
+      first_q_ = true;
+      reinit_q_ = false;
+      alt_q_st_ = false;
+      nready_q_ = false;
+      active_q_ = false;
+      last_q_ = false;
+      cnt_q_ = 0;
+      cur_per_q_ = 0;
+      en_q_ = false;
+      err_q_ = false;
+    }
+  }
+
+ private:
+  enum { kPgIdle, kPgSetup, kPgHigh, kPgLow, kPgHold };
+
+  static constexpr int aw() {  // axis counter width: clog2(Axes), at least 1
+    for (int w = 1; w < 3; ++w)
+      if ((1 << w) >= Axes) return w;
+    return 3;
+  }
+  static bool neg(u128 v) { return ((v >> (RW - 1)) & 1) != 0; }
+  static bool neg_due(uint64_t v) { return ((v >> (DueWidth - 1)) & 1) != 0; }
+
+  struct Axis {
+    u128 qprev_q = 0, nd_q = 0, nalt_q = 0;  // RW bits
+    u128 d_q = 0, alt_q = 0, r_q = 0;    // RW bits, two's complement
+    bool dpos_q = false, dnz_q = false;
+    bool up_q = false, down_q = false;   // the DDA's steps, one clock later
+    uint64_t due_q = 0;                  // DueWidth bits, two's complement
+    int pg_q = kPgIdle;
+    uint32_t timer_q = 0;
+    bool step_q = false, dir_q = true;
+  };
+
+  Axis ax_[Axes];
+  bool prep_q_ = false;
+  int ax_q_ = 0, bit_q_ = 0, j_q_ = 0;
+  bool borrow_q_ = false, first_q_ = true, reinit_q_ = false, alt_q_st_ = false, nready_q_ = false;
+  uint32_t nper_q_ = 0, cur_per_q_ = 0;
+  bool active_q_ = false, last_q_ = false;
+  uint32_t cnt_q_ = 0;
+  uint32_t hold_q_ = 0;
+  bool en_q_ = false, err_q_ = false;
+};
+
+}  // namespace traj

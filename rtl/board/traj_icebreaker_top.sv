@@ -1,0 +1,79 @@
+// trajcore: iCEBreaker (iCE40UP5K-SG48) board top. Pins: constraints/icebreaker.pcf.
+//
+//   12 MHz oscillator -> SB_PLL40_PAD -> ClkHz core clock (icepll -i 12 -o 36:
+//   DIVR 0, DIVF 47, DIVQ 4, FILTER_RANGE 1)
+//   reset: power-on, PLL lock, user button BTN_N (traj_reset_sync)
+//   UART to the FTDI FT2232H channel B: rx_i (2-flop synchroniser), tx_o
+//   PMOD1A: step/dir of 3 axes, the drivers' enable, the external tick input
+//   LEDs: green = playing (blinks with the ticks), red = tick or step error
+// Inputs have the iCE40 pull-ups on (SB_IO PULLUP): an unplugged PMOD tick
+// input stays high (no edges), the button and RX idle high.
+// The portable logic is traj_board (host link, segment FIFO in SPRAM, FD
+// engine in the main job's format, tick and step generators).
+`default_nettype none
+
+module traj_icebreaker_top #(
+  parameter int ClkHz = 36_000_000,  // must match the PLL settings below
+  parameter int Baud  = 1_000_000
+) (
+  input  logic       clk_i,       // 35: 12 MHz oscillator
+  input  logic       btn_ni,      // 10: user button BTN_N
+  input  logic       rx_i,        // 6: FTDI channel B TXD -> FPGA
+  output logic       tx_o,        // 9: FPGA -> FTDI channel B RXD
+  input  logic       tick_ext_i,  // PMOD1A pin 10
+  output logic [2:0] step_o,      // PMOD1A pins 1, 3, 7
+  output logic [2:0] dir_o,       // PMOD1A pins 2, 4, 8
+  output logic       enable_o,    // PMOD1A pin 9
+  output logic       led_red_no,  // 11: LEDR_N
+  output logic       led_green_no // 37: LEDG_N
+);
+
+  logic clk, lock, rst_n;
+  logic btn_pin, rx_pin, tick_pin;
+  logic [1:0] rx_q;
+  logic run, err, beat;
+
+  SB_PLL40_PAD #(
+    .FEEDBACK_PATH("SIMPLE"),
+    .DIVR(4'b0000),
+    .DIVF(7'b0101111),
+    .DIVQ(3'b100),
+    .FILTER_RANGE(3'b001)
+  ) u_pll (
+    .PACKAGEPIN(clk_i),
+    .PLLOUTGLOBAL(clk),
+    .EXTFEEDBACK(1'b0),
+    .DYNAMICDELAY(8'h00),
+    .LOCK(lock),
+    .BYPASS(1'b0),
+    .RESETB(1'b1),
+    .LATCHINPUTVALUE(1'b0),
+    .SDI(1'b0),
+    .SCLK(1'b0)
+  );
+
+  // inputs with pull-ups (PIN_TYPE 000001: simple input)
+  SB_IO #(.PIN_TYPE(6'b000001), .PULLUP(1'b1)) u_btn  (.PACKAGE_PIN(btn_ni),     .D_IN_0(btn_pin));
+  SB_IO #(.PIN_TYPE(6'b000001), .PULLUP(1'b1)) u_rx   (.PACKAGE_PIN(rx_i),       .D_IN_0(rx_pin));
+  SB_IO #(.PIN_TYPE(6'b000001), .PULLUP(1'b1)) u_tick (.PACKAGE_PIN(tick_ext_i), .D_IN_0(tick_pin));
+
+  traj_reset_sync u_rst (.clk_i(clk), .lock_i(lock), .btn_ni(btn_pin), .rst_no(rst_n));
+
+  always_ff @(posedge clk) rx_q <= {rx_q[0], rx_pin};  // synchroniser (settled before reset ends)
+
+  traj_board #(
+    .ClkHz(ClkHz), .Baud(Baud), .Axes(3), .Degree(5), .Width(96), .ChunkWidth(16), .GuardBits(48),
+    .FifoDepth(16384)
+  ) u_board (
+    .clk_i(clk), .rst_ni(rst_n), .rx_i(rx_q[1]), .tx_o,
+    .tick_ext_i(tick_pin),
+    .step_o, .dir_o, .enable_o,
+    .run_o(run), .err_o(err), .heartbeat_o(beat)
+  );
+
+  assign led_green_no = !(run && !beat);
+  assign led_red_no   = !err;
+
+endmodule
+
+`default_nettype wire

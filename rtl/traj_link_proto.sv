@@ -1,0 +1,556 @@
+// trajcore: the host-link protocol of rtl/board/LINK.md on a byte stream,
+// mirrored by hls/traj_link_proto.hpp cycle for cycle.
+//
+// Receive side, one byte per rx_valid_i (from traj_uart_rx):
+//   * HDLC unstuffing: 0x7E ends a body and starts the next (empty bodies are
+//     ignored; bytes before the first 0x7E after reset are ignored), 0x7D
+//     escapes the next byte (XOR 0x20; anything but 0x5E/0x5D after it makes
+//     the body bad), rx_err_i (framing error) makes the body bad.
+//   * header, length, CRC-32 (byte-serial, zlib's; a good body leaves the
+//     residue 0xDEBB20E3 in the register), command and content checks while
+//     the bytes arrive; the verdict is taken at the closing 0x7E, in one cycle.
+//   * a SEGMENT frame with seq == next_seq, the record size and a free slot
+//     (decided at its first payload byte) writes K and the registers as engine
+//     words into traj_seg_fifo as they arrive (tentative); the verdict commits
+//     them (stored, next_seq + 1, ACK) or rolls them back (every other outcome).
+// Answer side: ACK/NAK (the latest verdict; one pending answer, a newer one
+// replaces it: ACKs are cumulative) before STATUS (on STATUS_REQ or every
+// status period in ticks), each a stuffed frame with its CRC, byte by byte to
+// traj_uart_tx. Every u32 of a frame is read from the live state when its
+// first byte is sent (no torn values); the samples are taken once, when the
+// frame starts.
+// Playback: START sets playing; underrun_i while playing ends a STOP, or
+// reaches the end (END received, FIFO empty and idle), or is an underrun
+// (counted, halt until RESUME). release_o lets the FIFO start a segment:
+// playing, no halt, no STOP, and no tick in this or the two previous cycles
+// nor an underrun strobe now (underrun_i follows its tick by at most 2
+// cycles, as the FD engine's underrun_o does): so no segment is handed to the
+// engine after an underrun tick it could not serve.
+// Strobes (tick_i, seg_start_i, underrun_i, rx_valid_i, rx_err_i) are one
+// cycle each, rx_valid_i at most every other cycle (the UART gives one per
+// character); the tx stream holds its byte until tx_tready_i.
+`default_nettype none
+`include "traj_check.svh"
+
+module traj_link_proto #(
+  parameter int Axes          = 3,    // 1..8
+  parameter int Degree        = 3,    // FD degree, 1..7
+  parameter int Width         = 64,   // FD register width (bits, multiple of ChunkWidth)
+  parameter int ChunkWidth    = 16,   // engine word width: 16, 32 or 64
+  parameter int GuardBits     = 32,   // FD guard bits: OutWidth = Width - GuardBits <= 64
+  parameter int MinTickPeriod = 256,  // smallest CONFIG tick period in clocks (0 = external is allowed)
+  // derived, do not override
+  parameter int OutWidth      = Width - GuardBits
+) (
+  input  logic                     clk_i,
+  input  logic                     rst_ni,
+  // bytes from the UART receiver
+  input  logic [7:0]               rx_data_i,
+  input  logic                     rx_valid_i,
+  input  logic                     rx_err_i,
+  // bytes to the UART transmitter
+  output logic [7:0]               tx_tdata_o,
+  output logic                     tx_tvalid_o,
+  input  logic                     tx_tready_i,
+  // segment FIFO
+  output logic                     fifo_wr_o,
+  output logic [ChunkWidth-1:0]    fifo_wr_data_o,
+  output logic                     fifo_commit_o,
+  output logic                     fifo_rollback_o,
+  output logic                     fifo_clear_o,
+  output logic                     release_o,
+  input  logic [15:0]              fifo_level_i,
+  input  logic [15:0]              fifo_credits_i,
+  input  logic                     fifo_busy_i,
+  // board
+  input  logic                     tick_i,
+  input  logic                     seg_start_i,
+  input  logic                     underrun_i,
+  input  logic                     tick_err_i,
+  input  logic [Axes*OutWidth-1:0] sample_i,
+  output logic                     run_o,
+  output logic [31:0]              tick_period_o,
+  output logic [Axes*6-1:0]        step_shift_o,
+  output logic [15:0]              pulse_o,
+  output logic [15:0]              setup_o,
+  output logic                     enable_o
+);
+
+  localparam int RegBytes  = Axes * (Degree + 1) * Width / 8;
+  localparam int RecBytes  = 16 + RegBytes;                  // SEGMENT payload
+  localparam int ChunkB    = ChunkWidth / 8;
+  localparam int StatLen   = 40 + 8 * Axes;                  // STATUS payload
+  localparam int CrcWordA  = 3;                              // ACK/NAK: last body word
+  localparam int CrcWordS  = 2 + StatLen / 4;                // STATUS: last body word
+  localparam logic [31:0] Residue = 32'hDEBB20E3;
+
+  // frame types
+  localparam logic [7:0] TReset = 8'h01, TConfig = 8'h02, TStart = 8'h03, TStop = 8'h04;
+  localparam logic [7:0] TResume = 8'h05, TStatReq = 8'h06, TSegment = 8'h10, TEnd = 8'h11;
+  localparam logic [7:0] TAck = 8'h81, TNak = 8'h82, TStatus = 8'h83;
+
+  `TRAJ_PARAM_CHECK(g_bad_axes, Axes >= 1 && Axes <= 8, "traj_link_proto: Axes must be 1..8")
+  `TRAJ_PARAM_CHECK(g_bad_degree, Degree >= 1 && Degree <= 7, "traj_link_proto: Degree must be 1..7")
+  `TRAJ_PARAM_CHECK(g_bad_chunk, ChunkWidth == 16 || ChunkWidth == 32 || ChunkWidth == 64,
+                    "traj_link_proto: ChunkWidth must be 16, 32 or 64")
+  `TRAJ_PARAM_CHECK(g_bad_width, Width >= ChunkWidth && Width <= 128 && Width % ChunkWidth == 0,
+                    "traj_link_proto: Width must be a multiple of ChunkWidth, at most 128")
+  `TRAJ_PARAM_CHECK(g_bad_out, OutWidth >= 2 && OutWidth <= 64,
+                    "traj_link_proto: OutWidth (Width - GuardBits) must be 2..64")
+  `TRAJ_PARAM_CHECK(g_bad_rec, RecBytes <= 2048, "traj_link_proto: the record exceeds 2048 bytes")
+  `TRAJ_PARAM_CHECK(g_bad_derived, OutWidth == Width - GuardBits,
+                    "traj_link_proto: OutWidth is derived; do not override it")
+
+  // CRC-32 (zlib, reflected polynomial 0xEDB88320) of one byte, no final XOR.
+  function automatic logic [31:0] crc8(input logic [31:0] c, input logic [7:0] d);
+    logic [31:0] r;
+    r = c ^ {24'h0, d};
+    for (int k = 0; k < 8; k++) r = (r >> 1) ^ (r[0] ? 32'hEDB88320 : 32'h0);
+    crc8 = r;
+  endfunction
+
+  // -------------------------------------------------------------------
+  // Receive: unstuffing and body bytes.
+  // -------------------------------------------------------------------
+  logic        hunt_q, esc_q, bad_q, cbad_q, kz_q, wen_q;
+  logic [11:0] idx_q, len_q;
+  logic [7:0]  type_q;
+  logic [31:0] seq_q, crc_q;
+  logic [ChunkWidth-9:0] asm_q;  // the bytes of the word so far, top-aligned (the last byte completes it)
+  logic [3:0]  wb_q;
+
+  logic       is_flag, is_esc, dv;
+  logic [7:0] d;
+  assign is_flag = rx_valid_i && (rx_data_i == 8'h7E);
+  assign is_esc  = rx_valid_i && !is_flag && !esc_q && (rx_data_i == 8'h7D);
+  assign dv      = rx_valid_i && !is_flag && !is_esc && !hunt_q;
+  assign d       = esc_q ? (rx_data_i ^ 8'h20) : rx_data_i;
+
+  logic [11:0] p;         // payload offset of this byte (idx - 8)
+  logic        in_pay;    // a payload byte
+  logic        overlong;  // past the CRC
+  assign p        = idx_q - 12'd8;
+  assign in_pay   = (idx_q >= 12'd8) && (p < len_q);
+  assign overlong = (idx_q >= 12'd8) && (p >= len_q + 12'd4);
+
+  logic known;
+  always_comb begin
+    case (d)
+      TReset, TConfig, TStart, TStop, TResume, TStatReq, TSegment, TEnd: known = 1'b1;
+      default: known = 1'b0;
+    endcase
+  end
+
+  logic is_seg, is_cfg;
+  assign is_seg = (type_q == TSegment);
+  assign is_cfg = (type_q == TConfig);
+
+  // SEGMENT payload bytes that carry engine words: K and the registers.
+  logic wbyte, wdone;
+  logic [ChunkWidth-1:0] asm_d, wword;
+  assign wbyte = dv && in_pay && is_seg && ((p >= 12'd4 && p < 12'd8) || (p >= 12'd12 && p < 12'(RecBytes - 4)));
+  assign asm_d = {d, asm_q};
+  if (ChunkWidth > 32) begin : g_khalf
+    // K is half an engine word: the header word is K, zero-extended.
+    assign wdone = (32'(wb_q) == ChunkB - 1) || (p == 12'd7);
+    assign wword = (p == 12'd7) ? {{(ChunkWidth-32){1'b0}}, asm_d[ChunkWidth-1 -: 32]} : asm_d;
+  end else begin : g_kwhole
+    assign wdone = (32'(wb_q) == ChunkB - 1);
+    assign wword = asm_d;
+  end
+
+  // content check of one payload byte
+  logic cbad_byte;
+  logic [7:0] seq_byte;
+  assign seq_byte = seq_q[8*p[1:0] +: 8];
+  always_comb begin
+    cbad_byte = 1'b0;
+    if (is_seg) begin
+      if (p == 12'd0) cbad_byte = (d != 8'd1);
+      else if (p < 12'd4) cbad_byte = (d != 8'd0);
+      else if (p >= 12'd8 && p < 12'd12) cbad_byte = (d != seq_byte);
+    end else if (is_cfg) begin
+      if (p >= 12'd8 && p < 12'(8 + Axes)) cbad_byte = (d > 8'd63);
+      else if (p == 12'd20) cbad_byte = (d > 8'd1);
+      else if (p > 12'd20) cbad_byte = (d != 8'd0);
+    end
+  end
+
+  // CONFIG shadow registers (applied by a good CONFIG frame)
+  logic [31:0]       sh_tick_q, sh_stat_q;
+  logic [Axes*6-1:0] sh_shift_q;
+  logic [15:0]       sh_pulse_q, sh_setup_q;
+  logic              sh_en_q;
+
+  always_ff @(posedge clk_i) begin
+    if (dv && in_pay && is_cfg) begin
+      if (p < 12'd4) sh_tick_q <= {d, sh_tick_q[31:8]};
+      else if (p < 12'd8) sh_stat_q <= {d, sh_stat_q[31:8]};
+      else if (p == 12'd16 || p == 12'd17) sh_pulse_q <= {d, sh_pulse_q[15:8]};
+      else if (p == 12'd18 || p == 12'd19) sh_setup_q <= {d, sh_setup_q[15:8]};
+      else if (p == 12'd20) sh_en_q <= d[0];
+    end
+  end
+  for (genvar a = 0; a < Axes; a++) begin : g_sh_shift
+    always_ff @(posedge clk_i) begin
+      if (dv && in_pay && is_cfg && p == 12'(8 + a)) sh_shift_q[a*6 +: 6] <= d[5:0];
+    end
+  end
+
+  // -------------------------------------------------------------------
+  // Verdict at the closing flag.
+  // -------------------------------------------------------------------
+  logic        fend, good, cbad_end, playing_busy;
+  logic [31:0] next_seq_q, diff;
+  // Comparisons of the body so far, registered (timing): rx_valid_i comes at
+  // most every other cycle, so at a flag they describe every byte before it.
+  logic        seq_eq_q;   // seq == next_seq
+  logic        behind_q;   // seq below next_seq (mod 2^32): a re-send
+  logic        len_ok_q;   // idx == 12 + len
+  logic        crc_ok_q;   // the CRC residue of a good body
+  logic        cbad_end_q; // the length or a whole field is wrong for the type (cbad_end)
+  logic [2:0]  code;      // 0 ACK, 1..5 NAK reason
+  logic        answer, store, want_stat, do_reset, do_config, do_start, do_stop, do_resume, do_end, ooo;
+  logic        playing_q, halt_q, stop_q, end_q, ended_q;
+
+  assign fend         = is_flag && !hunt_q && (idx_q != '0);
+  assign good         = !bad_q && !esc_q && len_ok_q && crc_ok_q;
+  assign diff         = seq_q - next_seq_q;
+  assign playing_busy = playing_q || fifo_busy_i;
+  always_comb begin
+    case (type_q)
+      TSegment: cbad_end = (len_q != 12'(RecBytes)) || kz_q;
+      TConfig:  cbad_end = (len_q != 12'd24) || (sh_pulse_q == '0)
+                        || (sh_tick_q != '0 && sh_tick_q < 32'(MinTickPeriod));
+      default:  cbad_end = (len_q != '0);
+    endcase
+  end
+
+  always_comb begin
+    code = 3'd0; answer = 1'b0; store = 1'b0; want_stat = 1'b0; ooo = 1'b0;
+    do_reset = 1'b0; do_config = 1'b0; do_start = 1'b0; do_stop = 1'b0; do_resume = 1'b0; do_end = 1'b0;
+    if (fend) begin
+      answer = 1'b1;
+      if (!good) code = 3'd1;
+      else if (cbad_q || cbad_end_q) code = 3'd4;
+      else begin
+        case (type_q)
+          TReset:   if (playing_busy) code = 3'd5; else do_reset = 1'b1;
+          TConfig:  if (playing_busy) code = 3'd5; else do_config = 1'b1;
+          TStart:   do_start = 1'b1;
+          TStop:    do_stop = 1'b1;
+          TResume:  do_resume = 1'b1;
+          TStatReq: begin answer = 1'b0; want_stat = 1'b1; end
+          TSegment:
+            if (seq_eq_q) begin
+              if (wen_q) store = 1'b1; else code = 3'd3;
+            end else if (!behind_q) begin
+              code = 3'd2; ooo = 1'b1;
+            end
+          default:  // TEnd
+            if (seq_eq_q) do_end = 1'b1; else begin code = 3'd2; ooo = 1'b1; end
+        endcase
+      end
+    end
+  end
+
+  // -------------------------------------------------------------------
+  // Receive state.
+  // -------------------------------------------------------------------
+  always_ff @(posedge clk_i) begin
+    if (!rst_ni) begin
+      hunt_q <= 1'b1;
+      esc_q  <= 1'b0;
+      idx_q  <= '0;
+      wen_q  <= 1'b0;
+    end else begin
+      if (rx_valid_i) esc_q <= is_esc;
+      if (is_flag) begin
+        hunt_q <= 1'b0;
+        idx_q  <= '0;
+        wen_q  <= 1'b0;
+      end else if (dv) begin
+        if (idx_q != 12'hFFF) idx_q <= idx_q + 1'b1;
+        if (idx_q == 12'd8)
+          wen_q <= is_seg && !bad_q && (len_q == 12'(RecBytes)) && seq_eq_q && (fifo_credits_i != '0);
+      end
+    end
+  end
+
+  // Per-body flags and fields: set at the opening flag, so not reset.
+  always_ff @(posedge clk_i) begin
+    seq_eq_q <= (diff == '0);
+    behind_q <= diff[31];
+    len_ok_q <= (idx_q == len_q + 12'd12);
+    crc_ok_q <= (crc_q == Residue);
+    cbad_end_q <= cbad_end;
+    if (is_flag) begin
+      bad_q  <= 1'b0;
+      cbad_q <= 1'b0;
+      kz_q   <= 1'b1;
+      crc_q  <= 32'hFFFFFFFF;
+      wb_q   <= '0;
+    end else begin
+      if (rx_err_i || (rx_valid_i && esc_q && rx_data_i != 8'h5E && rx_data_i != 8'h5D)) bad_q <= 1'b1;
+      if (dv) begin
+        crc_q <= crc8(crc_q, d);
+        if (overlong) bad_q <= 1'b1;
+        case (idx_q)
+          12'd0: begin type_q <= d; if (!known) bad_q <= 1'b1; end
+          12'd1: if (d != 8'd0) bad_q <= 1'b1;
+          12'd2: len_q[7:0] <= d;
+          12'd3: begin
+            len_q[11:8] <= d[3:0];
+            if (d > 8'd8 || (d == 8'd8 && len_q[7:0] != 8'd0)) bad_q <= 1'b1;
+          end
+          12'd4, 12'd5, 12'd6, 12'd7: seq_q <= {d, seq_q[31:8]};
+          default: ;
+        endcase
+        if (in_pay && cbad_byte) cbad_q <= 1'b1;
+        if (in_pay && is_seg && p >= 12'd4 && p < 12'd8 && d != 8'd0) kz_q <= 1'b0;
+        if (wbyte) begin
+          asm_q <= asm_d[ChunkWidth-1:8];
+          wb_q  <= wdone ? 4'd0 : wb_q + 1'b1;
+        end
+      end
+    end
+  end
+
+  // -------------------------------------------------------------------
+  // Link, playback and configuration state; counters.
+  // -------------------------------------------------------------------
+  logic [31:0]       cfg_tick_q, cfg_stat_q, stat_cnt_q;
+  logic [Axes*6-1:0] cfg_shift_q;
+  logic [15:0]       cfg_pulse_q, cfg_setup_q;
+  logic              cfg_en_q;
+  logic [31:0]       n_played_q, n_ticks_q, n_under_q, n_bad_q, n_ooo_q, n_bytes_q;
+  logic              ans_pend_q, stat_pend_q, tick_d1_q, tick_d2_q;
+  logic [2:0]        ans_code_q;
+  logic              tx_take_ans, tx_take_stat, stat_due;
+
+  // stat_cnt_q: ticks left to the next STATUS, minus one
+  assign stat_due = tick_i && (cfg_stat_q != '0) && (stat_cnt_q == '0);
+
+  always_ff @(posedge clk_i) begin
+    if (!rst_ni) begin
+      next_seq_q  <= '0;
+      playing_q   <= 1'b0;
+      halt_q      <= 1'b0;
+      stop_q      <= 1'b0;
+      end_q       <= 1'b0;
+      ended_q     <= 1'b0;
+      cfg_tick_q  <= '0;
+      cfg_stat_q  <= '0;
+      cfg_shift_q <= '0;
+      cfg_pulse_q <= 16'd1;
+      cfg_setup_q <= '0;
+      cfg_en_q    <= 1'b0;
+      stat_cnt_q  <= '0;
+      n_played_q  <= '0;
+      n_ticks_q   <= '0;
+      n_under_q   <= '0;
+      n_bad_q     <= '0;
+      n_ooo_q     <= '0;
+      n_bytes_q   <= '0;
+      ans_pend_q  <= 1'b0;
+      ans_code_q  <= '0;
+      stat_pend_q <= 1'b0;
+      tick_d1_q   <= 1'b0;
+      tick_d2_q   <= 1'b0;
+    end else begin
+      tick_d1_q <= tick_i;
+      tick_d2_q <= tick_d1_q;
+      // verdicts
+      if (store) next_seq_q <= next_seq_q + 1'b1;
+      if (do_reset) begin
+        next_seq_q <= seq_q;
+        halt_q     <= 1'b0;
+        stop_q     <= 1'b0;
+        end_q      <= 1'b0;
+        ended_q    <= 1'b0;
+      end
+      if (do_config) begin
+        cfg_tick_q  <= sh_tick_q;
+        cfg_stat_q  <= sh_stat_q;
+        cfg_shift_q <= sh_shift_q;
+        cfg_pulse_q <= sh_pulse_q;
+        cfg_setup_q <= sh_setup_q;
+        cfg_en_q    <= sh_en_q;
+      end
+      if (do_start && !halt_q) begin
+        playing_q <= 1'b1;
+        stop_q    <= 1'b0;
+        ended_q   <= 1'b0;
+      end
+      if (do_stop) stop_q <= playing_q;
+      if (do_resume && halt_q) begin
+        halt_q    <= 1'b0;
+        playing_q <= 1'b1;
+      end
+      if (do_end) end_q <= 1'b1;
+      // playback: an engine tick found no segment
+      if (underrun_i && playing_q) begin
+        playing_q <= 1'b0;
+        stop_q    <= 1'b0;
+        if (stop_q) begin
+          // STOP reached the end of the current segment
+        end else if (end_q && fifo_level_i == '0 && !fifo_busy_i) begin
+          ended_q <= 1'b1;
+        end else begin
+          halt_q    <= 1'b1;
+          n_under_q <= n_under_q + 1'b1;
+        end
+      end
+      // counters
+      if (seg_start_i) n_played_q <= n_played_q + 1'b1;
+      if (tick_i && playing_q && !halt_q) n_ticks_q <= n_ticks_q + 1'b1;
+      if (fend && !good) n_bad_q <= n_bad_q + 1'b1;
+      if (ooo) n_ooo_q <= n_ooo_q + 1'b1;
+      if (rx_valid_i) n_bytes_q <= n_bytes_q + 1'b1;
+      // status period in ticks
+      if (do_config) stat_cnt_q <= sh_stat_q - 1'b1;
+      else if (tick_i && cfg_stat_q != '0) stat_cnt_q <= stat_due ? cfg_stat_q - 1'b1 : stat_cnt_q - 1'b1;
+      // answers
+      ans_pend_q  <= answer || (ans_pend_q && !tx_take_ans);
+      if (answer) ans_code_q <= code;
+      stat_pend_q <= want_stat || stat_due || (stat_pend_q && !tx_take_stat);
+    end
+  end
+
+  // -------------------------------------------------------------------
+  // Answer side: frame builder, word by word, byte-stuffed.
+  // -------------------------------------------------------------------
+  localparam logic [1:0] SIdle = 2'd0, SOpen = 2'd1, SBody = 2'd2, SClose = 2'd3;
+  logic [1:0]  tx_state_q;
+  logic        tx_stat_q;   // the frame is a STATUS (else ACK/NAK)
+  logic [2:0]  tx_code_q;   // ACK/NAK code of the frame
+  logic [7:0]  tx_idx_q;    // body byte
+  logic        tx_esc_q;    // the escape byte 0x7D was sent; the XORed byte follows
+  logic [31:0] tx_crc_q, tx_word_q;
+  logic [Axes*OutWidth-1:0] snap_q;
+
+  logic       tx_hs, tx_first, tx_need_esc, tx_adv, tx_last_byte;
+  logic [7:0] tx_cur;
+  logic [5:0] tx_w_next;
+  logic [31:0] tx_crc_d, word_next;
+
+  assign tx_take_ans  = (tx_state_q == SIdle) && ans_pend_q;
+  assign tx_take_stat = (tx_state_q == SIdle) && !ans_pend_q && stat_pend_q;
+  assign tx_hs        = (tx_state_q != SIdle) && tx_tready_i;
+  assign tx_cur       = tx_word_q[8*tx_idx_q[1:0] +: 8];
+  assign tx_need_esc  = (tx_cur == 8'h7E) || (tx_cur == 8'h7D);
+  assign tx_adv       = tx_hs && (tx_state_q == SBody) && (tx_esc_q || !tx_need_esc);
+  assign tx_crc_d     = crc8(tx_crc_q, tx_cur);
+  assign tx_first     = tx_hs && (tx_state_q == SOpen);
+  assign tx_w_next    = tx_first ? 6'd0 : 6'(tx_idx_q[7:2] + 6'd1);
+  assign tx_last_byte = tx_idx_q == (tx_stat_q ? 8'(4 * CrcWordS + 3) : 8'(4 * CrcWordA + 3));
+
+  // the body word tx_w_next of the frame being sent
+  logic [Axes*32-1:0] samp_lo, samp_hi;  // sample a sign-extended to 64 bits, halves
+  for (genvar a = 0; a < Axes; a++) begin : g_samp
+    logic [63:0] s64;
+    if (OutWidth < 64) begin : g_ext
+      assign s64 = {{(64-OutWidth){snap_q[a*OutWidth+OutWidth-1]}}, snap_q[a*OutWidth +: OutWidth]};
+    end else begin : g_full
+      assign s64 = snap_q[a*OutWidth +: 64];
+    end
+    assign samp_lo[a*32 +: 32] = s64[31:0];
+    assign samp_hi[a*32 +: 32] = s64[63:32];
+  end
+  logic [7:0] flags;
+  assign flags = {2'b00, fifo_level_i == '0, cfg_en_q, tick_err_i, ended_q, halt_q, playing_q};
+  always_comb begin
+    word_next = '0;
+    if (tx_w_next == 6'd0) begin
+      word_next = tx_stat_q ? {16'(StatLen), 8'h00, TStatus}
+                            : {16'd4, 8'h00, (tx_code_q == '0) ? TAck : TNak};
+    end else if (tx_w_next == 6'd1) begin
+      word_next = next_seq_q;
+    end else if (tx_w_next == (tx_stat_q ? 6'(CrcWordS) : 6'(CrcWordA))) begin
+      word_next = ~tx_crc_d;
+    end else if (!tx_stat_q) begin
+      word_next = (tx_code_q == '0) ? {16'h0, fifo_credits_i} : {fifo_credits_i, 8'h00, 5'h0, tx_code_q};
+    end else begin
+      case (tx_w_next)
+        6'd2:  word_next = {fifo_level_i, flags, 8'(Axes)};
+        6'd3:  word_next = n_played_q;
+        6'd4:  word_next = n_ticks_q;
+        6'd5:  word_next = n_under_q;
+        6'd6:  word_next = n_bad_q;
+        6'd7:  word_next = n_ooo_q;
+        6'd8:  word_next = n_bytes_q;
+        6'd9:  word_next = {16'h0, fifo_credits_i};
+        6'd10, 6'd11: word_next = '0;
+        default: begin
+          for (int a = 0; a < Axes; a++) begin
+            if (tx_w_next == 6'(12 + 2 * a)) word_next = samp_lo[a*32 +: 32];
+            if (tx_w_next == 6'(13 + 2 * a)) word_next = samp_hi[a*32 +: 32];
+          end
+        end
+      endcase
+    end
+  end
+
+  always_ff @(posedge clk_i) begin
+    if (!rst_ni) begin
+      tx_state_q <= SIdle;
+    end else begin
+      case (tx_state_q)
+        SIdle:  if (tx_take_ans || tx_take_stat) tx_state_q <= SOpen;
+        SOpen:  if (tx_hs) tx_state_q <= SBody;
+        SBody:  if (tx_adv && tx_last_byte) tx_state_q <= SClose;
+        default: if (tx_hs) tx_state_q <= SIdle;
+      endcase
+    end
+  end
+
+  // Frame datapath: loaded when a frame starts, so not reset.
+  always_ff @(posedge clk_i) begin
+    if (tx_state_q == SIdle) begin
+      tx_stat_q <= !ans_pend_q;
+      tx_code_q <= ans_code_q;
+      tx_idx_q  <= '0;
+      tx_esc_q  <= 1'b0;
+      tx_crc_q  <= 32'hFFFFFFFF;
+      snap_q    <= sample_i;
+    end
+    if (tx_first) tx_word_q <= word_next;
+    if (tx_hs && tx_state_q == SBody) begin
+      if (tx_adv) begin
+        tx_esc_q <= 1'b0;
+        tx_crc_q <= tx_crc_d;
+        tx_idx_q <= tx_idx_q + 1'b1;
+        if (tx_idx_q[1:0] == 2'd3) tx_word_q <= word_next;
+      end else begin
+        tx_esc_q <= 1'b1;
+      end
+    end
+  end
+
+  always_comb begin
+    case (tx_state_q)
+      SBody:   tx_tdata_o = tx_esc_q ? (tx_cur ^ 8'h20) : (tx_need_esc ? 8'h7D : tx_cur);
+      default: tx_tdata_o = 8'h7E;
+    endcase
+  end
+  assign tx_tvalid_o = (tx_state_q != SIdle);
+
+  // -------------------------------------------------------------------
+  // Outputs.
+  // -------------------------------------------------------------------
+  assign fifo_wr_o       = wbyte && wdone && wen_q;
+  assign fifo_wr_data_o  = wword;
+  assign fifo_commit_o   = store;
+  assign fifo_rollback_o = fend && !store;
+  assign fifo_clear_o    = do_reset;
+  assign release_o       = playing_q && !halt_q && !stop_q && !tick_i && !tick_d1_q && !tick_d2_q && !underrun_i;
+  assign run_o           = playing_q && !halt_q;
+  assign tick_period_o   = cfg_tick_q;
+  assign step_shift_o    = cfg_shift_q;
+  assign pulse_o         = cfg_pulse_q;
+  assign setup_o         = cfg_setup_q;
+  assign enable_o        = cfg_en_q;
+
+endmodule
+
+`default_nettype wire

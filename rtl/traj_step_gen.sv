@@ -1,0 +1,356 @@
+// trajcore: step/dir generator, all axes.
+//
+// Mirrors hls/traj_step_gen.hpp cycle for cycle. From the engine's samples
+// (OutWidth bits, two's complement, one per tick) it makes step, direction
+// and enable outputs for step-motor drivers:
+//   * one step = 2^shift output LSB (shift per axis, 0..63, runtime);
+//   * the commanded step count is floor(sample / 2^shift) at every tick,
+//     exactly: no lost or extra step, ever (below);
+//   * the steps of a tick are spread through the tick: a DDA along the chord
+//     between consecutive samples over the tick period P (clocks), one tick
+//     behind the samples.
+//
+// Exactness. Per axis q = floor(sample * 2^F / 2^shift) (F = FracBits: the
+// step position with F fraction bits; floor(q / 2^F) = floor(sample /
+// 2^shift)). An interval from q0 to q1 runs P clocks with D = q1 - q0 and a
+// remainder r in [0, T), T = P * 2^F: every clock r += D, with one step up
+// when r reaches T (r -= T) or one step down when r drops below 0 (r += T).
+// With X = floor(q / 2^F) * T + r (the step count times T plus r), an
+// interval that starts at X = q0 * P ends at X = q0 * P + P * D = q1 * P:
+// the step count is floor(q1 / 2^F) after every interval, and r continues
+// into the next one (|D| <= T: at most one step per clock). When P changes
+// (or at the first interval after reset) the interval restarts from the step
+// boundary: r = 0 and q0 with its fraction bits cleared (the same step
+// count; only that interval's chord starts at the boundary).
+//
+// Only q mod 2^RW is kept (RW = PeriodWidth + F + 2 bits): D = q1 - q0 is
+// exact modulo 2^RW because |D| <= T < 2^(RW-2).
+//
+// Preparation (one serial pass per sample, axis after axis, RW clocks per
+// axis, and one clock for D -/+ T: kPrepClocks = Axes * RW + 2): the bits of q, least significant
+// first, are read from sample_i (bit shift - F + i, sign-extended; 0 below
+// bit 0) and subtracted bit-serially from the previous q, which rotates
+// through the same shift register. sample_i must hold for kPrepClocks after
+// sample_valid_i (the FD engine holds its sample until its next tick). The
+// interval starts when the previous one ends (or at once when none runs):
+// with ticks every P >= kPrepClocks + 1 clocks the intervals follow each
+// other with no gap and a constant latency. The first sample after reset
+// only sets the position (no steps).
+//
+// Pulses. A signed per-axis count `due` collects the DDA's steps (one clock
+// after the DDA: a register between the remainder's carry chain and the
+// count's); the pulse
+// generator emits them one at a time: step high for pulse_i clocks, low for
+// pulse_i clocks, then (unless the next step goes the same way at once) a
+// hold of setup_i - pulse_i more clocks; a direction change (only after the
+// hold) waits setup_i + 1 clocks before the next rising edge. The direction
+// turns as soon as the DDA runs an interval the other way with nothing due.
+// dir_o = 1: steps count up (positive direction).
+//
+// err_o (sticky until reset): a sample arrived while the previous one was
+// still being prepared or waiting; more than one step per clock (|D| > T);
+// |due| reached 2^(DueWidth-2) (the pulses cannot keep up with the samples:
+// lower pulse_i or the speed).
+`default_nettype none
+`include "traj_check.svh"
+
+module traj_step_gen #(
+  parameter int Axes        = 3,   // 1..8
+  parameter int OutWidth    = 48,  // sample width, 8..64
+  parameter int FracBits    = 14,  // step fraction bits of the chord, 1..16
+  parameter int PeriodWidth = 18,  // tick period width (clocks), 8..32
+  parameter int DueWidth    = 8,   // steps waiting for their pulse, 4..32
+  parameter int TimeWidth   = 16   // pulse width and setup counters, 2..16
+) (
+  input  logic                     clk_i,
+  input  logic                     rst_ni,
+  // configuration (constant while samples come)
+  input  logic [Axes*6-1:0]        shift_i,    // axis a: one step = 2^shift LSB
+  input  logic [PeriodWidth-1:0]   period_i,   // tick period in clocks (>= 1, latched per sample)
+  input  logic [TimeWidth-1:0]     pulse_i,    // step high and low time, clocks, >= 1
+  input  logic [TimeWidth-1:0]     setup_i,    // direction setup and hold, clocks
+  input  logic                     enable_i,
+  // samples
+  input  logic                     sample_valid_i,
+  input  logic [Axes*OutWidth-1:0] sample_i,
+  // driver outputs (registered)
+  output logic [Axes-1:0]          step_o,
+  output logic [Axes-1:0]          dir_o,
+  output logic                     enable_o,
+  output logic                     err_o
+);
+
+  localparam int F  = FracBits;
+  localparam int RW = PeriodWidth + F + 2;   // q window, D, r, D -/+ T: signed
+  localparam int BW = $clog2(RW);            // bit counter
+  localparam int AW = (Axes > 1) ? $clog2(Axes) : 1;
+  localparam int JW = 8;                     // sample bit index, signed: -F .. 63+RW
+
+  `TRAJ_PARAM_CHECK(g_bad_axes, Axes >= 1 && Axes <= 8, "traj_step_gen: Axes must be 1..8")
+  `TRAJ_PARAM_CHECK(g_bad_out, OutWidth >= 8 && OutWidth <= 64, "traj_step_gen: OutWidth must be 8..64")
+  `TRAJ_PARAM_CHECK(g_bad_frac, FracBits >= 1 && FracBits <= 16, "traj_step_gen: FracBits must be 1..16")
+  `TRAJ_PARAM_CHECK(g_bad_period, PeriodWidth >= 8 && PeriodWidth <= 32,
+                    "traj_step_gen: PeriodWidth must be 8..32")
+  `TRAJ_PARAM_CHECK(g_bad_due, DueWidth >= 4 && DueWidth <= 32, "traj_step_gen: DueWidth must be 4..32")
+  `TRAJ_PARAM_CHECK(g_bad_time, TimeWidth >= 2 && TimeWidth <= 16, "traj_step_gen: TimeWidth must be 2..16")
+
+  // ---------------------------------------------------------------------
+  // Serial preparation (shared by all axes).
+  // ---------------------------------------------------------------------
+  logic                   prep_q;     // a pass is running
+  logic [AW-1:0]          ax_q;       // its axis
+  logic [BW-1:0]          bit_q;      // its bit of q
+  logic [JW-1:0]          j_q;        // sample bit read for it (signed)
+  logic                   borrow_q;
+  logic                   first_q;    // no sample since reset: the next one sets the position
+  logic                   reinit_q;   // this pass restarts from the step boundary
+  logic                   alt_q_st;   // the pass has ended: D -/+ T is being registered
+  logic                   nready_q;   // the next interval's D and D -/+ T are ready
+  logic [PeriodWidth-1:0] nper_q;     // its period
+  logic [PeriodWidth-1:0] cur_per_q;  // period of the last interval loaded
+  // DDA (shared interval counter)
+  logic                   active_q, last_q;  // last_q == (cnt_q == 1)
+  logic [PeriodWidth-1:0] cnt_q;
+  logic [TimeWidth-1:0]   hold_q;     // setup_i - pulse_i, at least 0
+  logic                   en_q, err_q;
+
+  logic take, load, last_bit, last_axis, sbit;
+  logic [Axes-1:0] err_axis;
+  logic [RW-1:0]   nt, nt_neg;        // T of the next interval, -T
+  logic [5:0]      shift_next;        // shift of the axis the pass goes to next
+  logic [AW-1:0]   ax_next;
+
+  assign take      = sample_valid_i && !prep_q && !alt_q_st && !nready_q;
+  assign load      = nready_q && (!active_q || last_q);
+  assign last_bit  = (bit_q == BW'(RW - 1));
+  assign last_axis = (ax_q == AW'(Axes - 1));
+  assign ax_next   = take ? '0 : ax_q + 1'b1;
+  assign shift_next = shift_i[32'(ax_next)*6 +: 6];
+  assign nt        = {2'b00, nper_q, {F{1'b0}}};
+  assign nt_neg    = -nt;
+
+  // the sample bit of q's bit bit_q of axis ax_q: sign-extended above, 0
+  // below; one OutWidth:1 multiplexer per axis, then the axis (a variable
+  // part-select over all axes would be a barrel shifter)
+  logic                      j_neg, j_above;
+  logic [Axes-1:0]           sbit_axis;
+  logic [$clog2(OutWidth)-1:0] j_idx;
+  assign j_neg   = j_q[JW-1];
+  assign j_above = (32'(j_q) >= 32'(OutWidth));
+  assign j_idx   = j_q[$clog2(OutWidth)-1:0];
+  for (genvar a = 0; a < Axes; a++) begin : g_sbit
+    logic [OutWidth-1:0] smp;
+    assign smp          = sample_i[a*OutWidth +: OutWidth];
+    assign sbit_axis[a] = j_neg ? 1'b0 : (j_above ? smp[OutWidth-1] : smp[j_idx]);
+  end
+  assign sbit = sbit_axis[ax_q];
+
+  always_ff @(posedge clk_i) begin
+    if (!rst_ni) begin
+      prep_q    <= 1'b0;
+      ax_q      <= '0;
+      bit_q     <= '0;
+      first_q   <= 1'b1;
+      reinit_q  <= 1'b0;
+      alt_q_st  <= 1'b0;
+      nready_q  <= 1'b0;
+      active_q  <= 1'b0;
+      last_q    <= 1'b0;
+      cnt_q     <= '0;
+      cur_per_q <= '0;
+      en_q      <= 1'b0;
+      err_q     <= 1'b0;
+    end else begin
+      en_q  <= enable_i;
+      err_q <= err_q || (sample_valid_i && !take) || (|err_axis);
+      if (take) begin
+        prep_q   <= 1'b1;
+        ax_q     <= '0;
+        bit_q    <= '0;
+        // restart from the step boundary when the period differs from the
+        // last interval's (0 after reset: the first interval)
+        reinit_q <= (period_i != cur_per_q);
+      end else if (prep_q) begin
+        if (!last_bit) begin
+          bit_q <= bit_q + 1'b1;
+        end else begin
+          bit_q <= '0;
+          ax_q  <= last_axis ? '0 : ax_next;
+          if (last_axis) begin
+            prep_q   <= 1'b0;
+            first_q  <= 1'b0;
+            alt_q_st <= !first_q;
+          end
+        end
+      end
+      if (alt_q_st) begin
+        alt_q_st <= 1'b0;
+        nready_q <= 1'b1;
+      end
+      if (load) begin
+        nready_q  <= 1'b0;
+        active_q  <= 1'b1;
+        cnt_q     <= nper_q;
+        cur_per_q <= nper_q;
+        last_q    <= (nper_q == PeriodWidth'(1));
+      end else if (active_q) begin
+        cnt_q  <= cnt_q - 1'b1;
+        last_q <= (cnt_q == PeriodWidth'(2));
+        if (last_q) active_q <= 1'b0;
+      end
+    end
+  end
+
+  // datapath of the pass (not reset)
+  always_ff @(posedge clk_i) begin
+    hold_q <= (setup_i > pulse_i) ? setup_i - pulse_i : '0;
+    if (take) begin
+      nper_q   <= period_i;
+      j_q      <= JW'(shift_next) - JW'(F);
+      borrow_q <= 1'b0;
+    end else if (prep_q) begin
+      if (last_bit) begin
+        j_q      <= JW'(shift_next) - JW'(F);
+        borrow_q <= 1'b0;
+      end else begin
+        j_q      <= j_q + 1'b1;
+        borrow_q <= borrow_d;
+      end
+    end
+  end
+
+  // serial subtraction q - q_prev, least significant bit first
+  logic pbit, dbit, borrow_d;
+  logic [Axes-1:0] qprev_lsb;
+  assign pbit     = qprev_lsb[ax_q] && !(reinit_q && 32'(bit_q) < 32'(F));
+  assign dbit     = sbit ^ pbit ^ borrow_q;
+  assign borrow_d = (!sbit && pbit) || (!sbit && borrow_q) || (pbit && borrow_q);
+
+  // ---------------------------------------------------------------------
+  // Per axis: q_prev and D shift registers, DDA, pulses.
+  // ---------------------------------------------------------------------
+  typedef enum logic [2:0] {PgIdle, PgSetup, PgHigh, PgLow, PgHold} pg_e;
+
+  for (genvar a = 0; a < Axes; a++) begin : g_axis
+    logic [RW-1:0]        qprev_q;   // q of the previous sample (rotates during its pass)
+    logic [RW-1:0]        nd_q;      // next interval's D (shifts in during the pass)
+    logic [RW-1:0]        nalt_q;    // next interval's D -/+ T
+    logic [RW-1:0]        d_q, alt_q, r_q;  // running interval: D, D -/+ T, remainder
+    logic                 dpos_q;    // running interval's D >= 0
+    logic                 dnz_q;     // running interval's D != 0
+    logic                 up_q, down_q;  // the DDA's steps, one clock later (timing)
+    logic [DueWidth-1:0]  due_q;
+    pg_e                  pg_q;
+    logic [TimeWidth-1:0] timer_q;
+    logic                 step_q, dir_q;
+    logic                 mine;
+
+    assign mine         = prep_q && (ax_q == AW'(a));
+    assign qprev_lsb[a] = qprev_q[0];
+
+    always_ff @(posedge clk_i) begin
+      if (mine) begin
+        qprev_q <= {sbit, qprev_q[RW-1:1]};
+        nd_q    <= {dbit, nd_q[RW-1:1]};
+      end
+    end
+
+    // DDA: at most one step per clock
+    logic [RW-1:0] sum_d, sum_alt, alt_d, r_next;
+    logic          up, down;
+    assign sum_d   = r_q + d_q;
+    assign sum_alt = r_q + alt_q;
+    assign up      = active_q && dpos_q && !sum_alt[RW-1];
+    assign down    = active_q && !dpos_q && sum_d[RW-1];
+    assign r_next  = !active_q ? r_q : ((up || down) ? sum_alt : sum_d);
+    // D + T for D < 0, D - T otherwise: one adder per axis (-T is shared)
+    assign alt_d   = nd_q + (nd_q[RW-1] ? nt : nt_neg);
+
+    always_ff @(posedge clk_i) begin
+      if (alt_q_st) nalt_q <= alt_d;
+    end
+
+    always_ff @(posedge clk_i) begin
+      if (load) begin
+        d_q    <= nd_q;
+        alt_q  <= nalt_q;
+        r_q    <= reinit_q ? '0 : r_next;
+        dpos_q <= !nd_q[RW-1];
+        dnz_q  <= (nd_q != '0);
+      end else begin
+        r_q    <= r_next;
+      end
+    end
+
+    // pulses
+    logic want_dir, can_emit, turn;
+    logic [DueWidth-1:0] due_d;
+    assign want_dir = (due_q != '0) ? !due_q[DueWidth-1]
+                    : ((active_q && dnz_q) ? dpos_q : dir_q);
+    assign can_emit = (due_q != '0) && (want_dir == dir_q)
+                    && (pg_q == PgIdle || pg_q == PgHold || (pg_q == PgLow && timer_q == '0));
+    assign turn     = (pg_q == PgIdle) && (want_dir != dir_q);
+    assign due_d    = due_q + DueWidth'(up_q) - DueWidth'(down_q)
+                    - (can_emit ? (dir_q ? DueWidth'(1) : '1) : '0);
+
+    always_ff @(posedge clk_i) begin
+      if (!rst_ni) begin
+        up_q    <= 1'b0;
+        down_q  <= 1'b0;
+        due_q   <= '0;
+        pg_q    <= PgIdle;
+        timer_q <= '0;
+        step_q  <= 1'b0;
+        dir_q   <= 1'b1;
+      end else begin
+        up_q   <= up;
+        down_q <= down;
+        due_q  <= due_d;
+        if (can_emit) begin
+          step_q  <= 1'b1;
+          timer_q <= pulse_i - 1'b1;
+          pg_q    <= PgHigh;
+        end else begin
+          case (pg_q)
+            PgIdle:  if (turn) begin
+                       dir_q   <= want_dir;
+                       timer_q <= setup_i;
+                       pg_q    <= PgSetup;
+                     end
+            PgSetup: if (timer_q == '0) pg_q <= PgIdle; else timer_q <= timer_q - 1'b1;
+            PgHigh:  if (timer_q == '0) begin
+                       step_q  <= 1'b0;
+                       timer_q <= pulse_i - 1'b1;
+                       pg_q    <= PgLow;
+                     end else begin
+                       timer_q <= timer_q - 1'b1;
+                     end
+            PgLow:   if (timer_q == '0) begin
+                       timer_q <= hold_q;
+                       pg_q    <= PgHold;
+                     end else begin
+                       timer_q <= timer_q - 1'b1;
+                     end
+            PgHold:  if (timer_q == '0) pg_q <= PgIdle; else timer_q <= timer_q - 1'b1;
+            default: pg_q <= PgIdle;
+          endcase
+        end
+      end
+    end
+
+    // errors: more than one step per clock, due overflow (flagged at
+    // |due| >= 2^(DueWidth-2), before it can wrap: it moves by <= 2 per clock)
+    logic too_fast;
+    assign too_fast    = load && (nd_q[RW-1] ? nalt_q[RW-1] : (!nalt_q[RW-1] && nalt_q != '0));
+    assign err_axis[a] = too_fast || (due_q[DueWidth-1] != due_q[DueWidth-2]);
+
+    assign step_o[a] = step_q;
+    assign dir_o[a]  = dir_q;
+  end
+
+  assign enable_o = en_q;
+  assign err_o    = err_q;
+
+endmodule
+
+`default_nettype wire
