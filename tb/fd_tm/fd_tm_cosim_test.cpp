@@ -351,11 +351,11 @@ TEST(FdTmCosim, EveryTickAsTheParallelEngine) {
     for (int i = 0; i < 2; ++i) ASSERT_TRUE(b.cycle({false, false, false}));
     int stall_left = 0;
     for (int t = 0; t < 3000; ++t) {
-      if (stall_left == 0 && rng() % 40 == 0) stall_left = static_cast<int>(1 + rng() % 5) * G;
       for (int c = 0; c < G; ++c) {
+        if (c == 1 && stall_left == 0 && rng() % 40 == 0) stall_left = static_cast<int>(1 + rng() % 5) * G;
         Stim s;
         s.tick = c == 0;
-        s.stall = c > 0 && stall_left > 0;
+        s.stall = stall_left > 0;
         if (s.stall) --stall_left;
         ASSERT_TRUE(b.cycle(s)) << "seed " << seed << " tick " << t;
       }
