@@ -118,11 +118,9 @@ class FdTm {
     const bool upd_wr = busy_q_ && ri_q_ != 0;
     const int rd_addr = addr(a_q_, c_q_, i_q_);
     const uint64_t rd_d = mem_[rd_addr];  // read before this edge's write
-    if (we_q_) mem_[waddr_q_] = wdata_q_;
-    // the registered write port
-    const bool we_d = load_shift || upd_wr;
-    const int waddr_d = load_shift ? addr(a_q_, c_q_, i_q_) : addr(ra_q_, rc_q_, ri_m1);
-    const uint64_t wdata_d = load_shift ? (in.tdata & cmask) : sum;
+    // write port: a load word at once, an update a clock after its slot
+    if (load_shift) mem_[addr(a_q_, c_q_, i_q_)] = in.tdata & cmask;
+    else if (wpend_q_) mem_[waddr_q_] = sum_q_;
 
     // carry queue: pop the head, push this slot's carry (0 after the top chunk)
     bool carry_d[Degree];
@@ -190,10 +188,9 @@ class FdTm {
     const bool seg_done_d = last1_q_ && last_tick_q_;
 
     // Commit.
-    we_q_ = we_d;
     wpend_q_ = upd_wr;
-    waddr_q_ = waddr_d;
-    wdata_q_ = wdata_d;
+    waddr_q_ = addr(ra_q_, rc_q_, ri_m1);
+    sum_q_ = sum;
     prev_q_ = rd_q_;
     rd_q_ = rd_d;
     ra_q_ = a_q_;
@@ -242,7 +239,6 @@ class FdTm {
 
   void reset() {
     for (int n = 0; n < Degree; ++n) carry_q_[n] = false;
-    we_q_ = false;
     wpend_q_ = false;
     a_q_ = c_q_ = i_q_ = 0;
     active_q_ = false;
@@ -263,9 +259,9 @@ class FdTm {
 
   uint64_t mem_[kMemWords] = {};
   uint64_t rd_q_ = 0, prev_q_ = 0;
-  bool we_q_ = false, wpend_q_ = false;  // registered write port; wpend: of a pass
+  bool wpend_q_ = false;  // an update write is in flight (registered)
   int waddr_q_ = 0;
-  uint64_t wdata_q_ = 0;
+  uint64_t sum_q_ = 0;
   bool carry_q_[Degree] = {};
   int a_q_ = 0, c_q_ = 0, i_q_ = 0;     // field counters
   int ra_q_ = 0, rc_q_ = 0, ri_q_ = 0;  // the slot of rd_q

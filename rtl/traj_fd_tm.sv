@@ -104,10 +104,9 @@ module traj_fd_tm #(
   logic [ChunkWidth-1:0] rd_q;    // RAM read data: the word read last cycle
   logic [ChunkWidth-1:0] prev_q;  // the word read the cycle before (r[i-1])
   logic [Degree-1:0]     carry_q; // carries out of the previous chunk, in use order (see below)
-  logic                  we_q;       // registered RAM write port
-  logic [AddrW-1:0]      waddr_q;
-  logic [ChunkWidth-1:0] wdata_q;
-  logic                  wpend_q;    // a pass's write is in flight (we_q of an update)
+  logic                  wpend_q;    // a pass's write is in flight (registered update write)
+  logic [AddrW-1:0]      waddr_q;    // its address
+  logic [ChunkWidth-1:0] sum_q;      // its data: the adder's sum
   logic [AxW-1:0]        a_q, ra_q;   // field counters; ra/rc/ri: the slot of rd_q
   logic [ChW-1:0]        c_q, rc_q;
   logic [RgB-1:0]        i_q, ri_q;
@@ -196,31 +195,31 @@ module traj_fd_tm #(
   assign carry_in  = carry_q[0];
   assign {carry_out, sum} = {1'b0, prev_q} + {1'b0, rd_q} + {{ChunkWidth{1'b0}}, carry_in};
   assign upd_wr    = busy_q && (ri_q != '0);
-  assign wr_en     = load_shift || upd_wr;
   assign rd_addr   = addr(a_q, c_q, i_q);
-  assign wr_addr   = load_shift ? addr(a_q, c_q, i_q) : addr(ra_q, rc_q, ri_m1);
-  assign wr_data   = load_shift ? s_axis_tdata : sum;
+  // RAM write port: a load word at once, an update a clock after its slot
+  // (the adder's carry chain ends at sum_q). They never meet: a load starts
+  // only with no segment active, and a pass that writes never ends one.
+  assign wr_en     = load_shift || wpend_q;
+  assign wr_addr   = load_shift ? addr(a_q, c_q, i_q) : waddr_q;
+  assign wr_data   = load_shift ? s_axis_tdata : sum_q;
 
-  // The write port is registered (the adder's carry chain ends at a flop):
-  // a word lands one clock after its slot. A pass never reads a word it has
-  // written, the next pass reads its first word (axis 0, chunk 0, r[0]) no
-  // sooner than the clock the last write lands (see wpend_q), and a pass
+  // An update lands one clock after its slot. A pass never reads a word it
+  // has written, the next pass reads its first word (axis 0, chunk 0, r[0])
+  // no sooner than the clock the last update lands (see wr_wait), and a pass
   // starts after the last load word: no read/write collision logic.
   always_ff @(posedge clk_i) begin
     if (!rst_ni) begin
-      we_q    <= 1'b0;
       wpend_q <= 1'b0;
     end else begin
-      we_q    <= wr_en;
       wpend_q <= upd_wr;
     end
-    waddr_q <= wr_addr;
-    wdata_q <= wr_data;
+    waddr_q <= addr(ra_q, rc_q, ri_m1);
+    sum_q   <= sum;
   end
 
   (* no_rw_check *) logic [ChunkWidth-1:0] mem [2**AddrW];
   always_ff @(posedge clk_i) begin
-    if (we_q) mem[waddr_q] <= wdata_q;
+    if (wr_en) mem[wr_addr] <= wr_data;
     rd_q   <= mem[rd_addr];
     prev_q <= rd_q;
     ra_q   <= a_q;
@@ -235,20 +234,23 @@ module traj_fd_tm #(
   // carry in is the head, a flop. After the top chunk 0 is pushed, so every
   // register starts the next axis (and pass) with 0.
   logic c_wrap_rd;  // rd_q holds a word of the top chunk
-  logic carry_push;
-  assign c_wrap_rd  = (32'(rc_q) == Chunks - 1);
-  assign carry_push = !c_wrap_rd && carry_out;
-  logic [Degree-1:0] carry_next;
-  if (Degree == 1) begin : g_carry_one
-    assign carry_next = carry_push;
-  end else begin : g_carry_queue
-    assign carry_next = {carry_push, carry_q[Degree-1:1]};
-  end
+  assign c_wrap_rd = (32'(rc_q) == Chunks - 1);
+  // The tail takes the carry out straight from the chain (its clear after
+  // the top chunk is the flop's synchronous reset: no LUT behind the chain).
   always_ff @(posedge clk_i) begin
-    if (!rst_ni) begin
-      carry_q <= '0;
+    if (!rst_ni || (upd_wr && c_wrap_rd)) begin
+      carry_q[Degree-1] <= 1'b0;
     end else if (upd_wr) begin
-      carry_q <= carry_next;
+      carry_q[Degree-1] <= carry_out;
+    end
+  end
+  if (Degree > 1) begin : g_carry_queue
+    always_ff @(posedge clk_i) begin
+      if (!rst_ni) begin
+        carry_q[Degree-2:0] <= '0;
+      end else if (upd_wr) begin
+        carry_q[Degree-2:0] <= carry_q[Degree-1:1];
+      end
     end
   end
 
@@ -428,8 +430,8 @@ module traj_fd_tm #(
         if (busy_q && 32'(rc_q) == Chunks - 1 && ri_q != '0 && n > Degree - 32'(ri_q)) assert (!carry_q[n]);
       end
       // the registered write port
-      if ($past(rst_ni)) assert (we_q == $past(wr_en) && wpend_q == $past(upd_wr));
-      if (wpend_q) assert (we_q);
+      if ($past(rst_ni)) assert (wpend_q == $past(upd_wr));
+      if (wpend_q) assert (!load_shift && active_q);
       assert (primed_q == f_emitted);
     end
   end
