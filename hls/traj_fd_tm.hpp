@@ -114,7 +114,6 @@ class FdTm {
     const bool carry_in = carry_q_[0];  // the head of the carry queue
     const uint64_t wide = prev_q_ + rd_q_ + (carry_in ? 1 : 0);
     const uint64_t sum = wide & cmask;
-    const bool carry_out = ((wide >> ChunkWidth) & 1) != 0;
     const bool upd_wr = busy_q_ && ri_q_ != 0;
     const int rd_addr = addr(a_q_, c_q_, i_q_);
     const uint64_t rd_d = mem_[rd_addr];  // read before this edge's write
@@ -122,13 +121,22 @@ class FdTm {
     if (load_shift) mem_[addr(a_q_, c_q_, i_q_)] = in.tdata & cmask;
     else if (wpend_q_) mem_[waddr_q_] = sum_q_;
 
-    // carry queue: pop the head, push this slot's carry (0 after the top chunk)
+    // carry queue: a slot pops the head; the carry out of the update in
+    // sum_q (0 after the top chunk) is pushed a clock late, derived from the
+    // operands' top bits and the sum's: a == b ? a : !s
+    const bool sa = ((sum_q_ >> (ChunkWidth - 1)) & 1) != 0;
+    const bool carry_late = !top_q_ && (pa_q_ == pb_q_ ? pa_q_ : !sa);
     bool carry_d[Degree];
     for (int n = 0; n < Degree; ++n) carry_d[n] = carry_q_[n];
     if (upd_wr) {
       for (int n = 0; n + 1 < Degree; ++n) carry_d[n] = carry_q_[n + 1];
-      carry_d[Degree - 1] = rc_q_ != kChunks - 1 && carry_out;
+      if (wpend_q_ && Degree > 1) carry_d[Degree - 2] = carry_late;
+    } else if (wpend_q_) {
+      carry_d[Degree - 1] = carry_late;
     }
+    const bool pa_d = ((prev_q_ >> (ChunkWidth - 1)) & 1) != 0;
+    const bool pb_d = ((rd_q_ >> (ChunkWidth - 1)) & 1) != 0;
+    const bool top_d = rc_q_ == kChunks - 1;
 
     // Sample capture: old r[0] chunks, bits GuardBits and above.
     u128 sample_d[Axes];
@@ -189,6 +197,9 @@ class FdTm {
 
     // Commit.
     wpend_q_ = upd_wr;
+    pa_q_ = pa_d;
+    pb_q_ = pb_d;
+    top_q_ = top_d;
     waddr_q_ = addr(ra_q_, rc_q_, ri_m1);
     sum_q_ = sum;
     prev_q_ = rd_q_;
@@ -260,6 +271,7 @@ class FdTm {
   uint64_t mem_[kMemWords] = {};
   uint64_t rd_q_ = 0, prev_q_ = 0;
   bool wpend_q_ = false;  // an update write is in flight (registered)
+  bool pa_q_ = false, pb_q_ = false, top_q_ = false;  // that update's operand top bits, top chunk
   int waddr_q_ = 0;
   uint64_t sum_q_ = 0;
   bool carry_q_[Degree] = {};

@@ -187,13 +187,13 @@ module traj_fd_tm #(
 
   logic [AddrW-1:0]      rd_addr, wr_addr;
   logic [ChunkWidth-1:0] wr_data;
-  logic                  wr_en, upd_wr, carry_in, carry_out;
+  logic                  wr_en, upd_wr, carry_in;
   logic [ChunkWidth-1:0] sum;
   logic [RgB-1:0]        ri_m1;  // the register written at this slot: ri_q - 1
 
   assign ri_m1     = ri_q - 1'b1;
   assign carry_in  = carry_q[0];
-  assign {carry_out, sum} = {1'b0, prev_q} + {1'b0, rd_q} + {{ChunkWidth{1'b0}}, carry_in};
+  assign sum       = prev_q + rd_q + ChunkWidth'(carry_in);
   assign upd_wr    = busy_q && (ri_q != '0);
   assign rd_addr   = addr(a_q, c_q, i_q);
   // RAM write port: a load word at once, an update a clock after its slot
@@ -229,27 +229,41 @@ module traj_fd_tm #(
 
   // The carries form a queue: the slots of registers 1..Degree of a chunk
   // use the carries of registers 0..Degree-1 out of the previous chunk, in
-  // that order, and each slot pushes its own carry out; after Degree slots
-  // the queue is in the same order again, for the next chunk. The adder's
-  // carry in is the head, a flop. After the top chunk 0 is pushed, so every
-  // register starts the next axis (and pass) with 0.
+  // that order (each slot pops the head: the adder's carry in is a flop),
+  // and each slot's own carry out is pushed to the tail one clock later,
+  // derived from flops (no path behind the carry chain): with the operands'
+  // top bits a, b and the sum's top bit s, the carry out is a when a == b,
+  // else !s. After the top chunk 0 is pushed, so every register starts the
+  // next axis (and pass) with 0. A push in a clock that also pops lands one
+  // place before the tail (the pop has moved the free place there).
   logic c_wrap_rd;  // rd_q holds a word of the top chunk
-  assign c_wrap_rd = (32'(rc_q) == Chunks - 1);
-  // The tail takes the carry out straight from the chain (its clear after
-  // the top chunk is the flop's synchronous reset: no LUT behind the chain).
+  logic pa_q, pb_q, top_q;  // the update in sum_q: operands' top bits, top chunk
+  logic carry_late;         // its carry out
+  assign c_wrap_rd  = (32'(rc_q) == Chunks - 1);
+  assign carry_late = !top_q && ((pa_q == pb_q) ? pa_q : !sum_q[ChunkWidth-1]);
   always_ff @(posedge clk_i) begin
-    if (!rst_ni || (upd_wr && c_wrap_rd)) begin
-      carry_q[Degree-1] <= 1'b0;
-    end else if (upd_wr) begin
-      carry_q[Degree-1] <= carry_out;
-    end
+    pa_q  <= prev_q[ChunkWidth-1];
+    pb_q  <= rd_q[ChunkWidth-1];
+    top_q <= c_wrap_rd;
   end
-  if (Degree > 1) begin : g_carry_queue
+  if (Degree == 1) begin : g_carry_one
+    // a pop and a push never meet (a chunk's slots are register 0, then 1)
     always_ff @(posedge clk_i) begin
       if (!rst_ni) begin
-        carry_q[Degree-2:0] <= '0;
+        carry_q <= '0;
+      end else if (wpend_q) begin
+        carry_q <= carry_late;
+      end
+    end
+  end else begin : g_carry_queue
+    always_ff @(posedge clk_i) begin
+      if (!rst_ni) begin
+        carry_q <= '0;
       end else if (upd_wr) begin
         carry_q[Degree-2:0] <= carry_q[Degree-1:1];
+        if (wpend_q) carry_q[Degree-2] <= carry_late;
+      end else if (wpend_q) begin
+        carry_q[Degree-1] <= carry_late;
       end
     end
   end
@@ -422,13 +436,8 @@ module traj_fd_tm #(
       if (busy_q) assert (f_cnt_valid && last_tick_q == (count_q == '0));
       if (active_q || primed_q || mid_q) assert (f_cnt_valid);
       if (!busy_q || last_tick_q) assert (carry_q == '0);
-      for (int n = 0; n < Degree; n++) begin
-        // queue entries from the chunk below chunk 0 are 0 (the head Degree-ri+1
-        // entries at register ri >= 1, all at register 0), and the entries
-        // pushed in the top chunk are 0
-        if (busy_q && rc_q == '0 && (ri_q == '0 || n <= Degree - 32'(ri_q))) assert (!carry_q[n]);
-        if (busy_q && 32'(rc_q) == Chunks - 1 && ri_q != '0 && n > Degree - 32'(ri_q)) assert (!carry_q[n]);
-      end
+      // a pass starts and ends with the carry queue cleared
+      if (busy_q && rc_q == '0 && ri_q == '0 && !wpend_q) assert (carry_q == '0);
       // the registered write port
       if ($past(rst_ni)) assert (wpend_q == $past(upd_wr));
       if (wpend_q) assert (!load_shift && active_q);
