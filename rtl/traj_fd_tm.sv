@@ -435,9 +435,21 @@ module traj_fd_tm #(
       // supporting invariants (make the properties inductive)
       if (busy_q) assert (f_cnt_valid && last_tick_q == (count_q == '0));
       if (active_q || primed_q || mid_q) assert (f_cnt_valid);
-      if (!busy_q || last_tick_q) assert (carry_q == '0);
-      // a pass starts and ends with the carry queue cleared
-      if (busy_q && rc_q == '0 && ri_q == '0 && !wpend_q) assert (carry_q == '0);
+      // the carry queue (see the datapath): entries from below chunk 0 and
+      // entries pushed in the top chunk are 0; the late push follows every
+      // update slot; between passes the queue is clear
+      if (busy_q && 32'(ri_q) >= 2) assert (wpend_q && top_q == c_wrap_rd);
+      if (busy_q && ri_q == 1) assert (!wpend_q);
+      if (busy_q && ri_q == '0 && wpend_q) assert (top_q == (rc_q == '0) && !last_tick_q);
+      if (!busy_q && wpend_q) assert (top_q);
+      if ((!busy_q && !wpend_q) || (busy_q && last_tick_q)) assert (carry_q == '0 && !wpend_q);
+      for (int n = 0; n < Degree; n++) begin
+        if (busy_q && rc_q == '0 && ri_q != '0 && n <= Degree - 32'(ri_q)) assert (!carry_q[n]);
+        if (busy_q && rc_q == '0 && ri_q == '0 && (n < Degree - 1 || !wpend_q)) assert (!carry_q[n]);
+        if (busy_q && c_wrap_rd && 32'(ri_q) >= 2 && n > Degree - 32'(ri_q) && n < Degree - 1)
+          assert (!carry_q[n]);
+        if (!busy_q && wpend_q && n < Degree - 1) assert (!carry_q[n]);
+      end
       // the registered write port
       if ($past(rst_ni)) assert (wpend_q == $past(upd_wr));
       if (wpend_q) assert (!load_shift && active_q);
