@@ -178,11 +178,11 @@ class FdTm {
                     ? static_cast<uint32_t>((count_q_ >> ChunkWidth) |
                                             (static_cast<uint32_t>(in.tdata) << (32 - ChunkWidth)))
                     : static_cast<uint32_t>(in.tdata);
-      cnt_one_d = count_d == 1;
     } else if (run) {
       count_d = count_q_ - 1;
       cnt_one_d = count_q_ == 2;
     }
+    if (load_shift && at_last) cnt_one_d = count_q_ == 1;  // decoded at the segment's last word
     if (run) last_tick_d = cnt_one_q_;
 
     const bool iss_d = walk && !at_last;

@@ -315,7 +315,7 @@ module traj_fd_tm #(
         if (at_last) begin
           mid_q    <= 1'b0;
           hdr_q    <= 1'b1;
-          active_q <= (count_q != '0);
+          active_q <= !cnt_zero;
         end
       end
       // Pass sequencing.
@@ -345,13 +345,21 @@ module traj_fd_tm #(
     assign count_hdr = s_axis_tdata[CountWidth-1:0];
   end
 
+  // The count's decodes share one comparison of its upper bits: K = 0 and
+  // K = 1 at the segment's last word, K = 2 at a tick.
+  logic cnt_hi_zero, cnt_zero;
+  assign cnt_hi_zero = (count_q[CountWidth-1:2] == '0);
+  assign cnt_zero    = cnt_hi_zero && (count_q[1:0] == 2'd0);
+
   always_ff @(posedge clk_i) begin
     if (header) begin
       count_q   <= count_hdr;
-      cnt_one_q <= (count_hdr == CountWidth'(1));
     end else if (run) begin
       count_q   <= count_q - 1'b1;
-      cnt_one_q <= (count_q == CountWidth'(2));
+      cnt_one_q <= cnt_hi_zero && (count_q[1:0] == 2'd2);
+    end
+    if (load_shift && at_last) begin
+      cnt_one_q <= cnt_hi_zero && (count_q[1:0] == 2'd1);
     end
     if (run) begin
       last_tick_q <= cnt_one_q;
@@ -413,7 +421,7 @@ module traj_fd_tm #(
     end
     if (f_past_valid) begin
       // registered decodes equal what they stand for (the timing fixes)
-      if (f_cnt_valid) assert (cnt_one_q == (count_q == CountWidth'(1)));
+      if (active_q || busy_q) assert (cnt_one_q == (count_q == CountWidth'(1)));
       // state bounds and consistency
       assert (32'(a_q) < Axes && 32'(c_q) < Chunks && 32'(i_q) <= Degree);
       if (busy_q) assert (32'(ra_q) < Axes && 32'(rc_q) < Chunks && 32'(ri_q) <= Degree);
