@@ -23,13 +23,11 @@
 
 namespace traj {
 
-namespace detail {
-constexpr int clog2(int n) {
+constexpr int fd_tm_clog2(int n) {
   int b = 0;
   while ((1 << b) < n) ++b;
   return b;
 }
-}  // namespace detail
 
 template <int Axes, int Degree, int Width, int ChunkWidth, int GuardBits>
 class FdTm {
@@ -56,9 +54,9 @@ class FdTm {
   // per clock when asked: the last tick's pass (r[0] words only, Axes*Chunks),
   // the clock after it, and the next segment's load (kWords).
   static constexpr int kMinTickClocks = Axes * kChunks + 1 + kWords;
-  static constexpr int kAxB = detail::clog2(Axes);
-  static constexpr int kChB = detail::clog2(kChunks);
-  static constexpr int kRgB = detail::clog2(Degree + 1);
+  static constexpr int kAxB = fd_tm_clog2(Axes);
+  static constexpr int kChB = fd_tm_clog2(kChunks);
+  static constexpr int kRgB = fd_tm_clog2(Degree + 1);
   static constexpr int kMemWords = 1 << (kAxB + kChB + kRgB);
 
   struct In {

@@ -11,15 +11,15 @@
 //     the word of register i (i >= 1) the adder writes
 //     r[i-1] <- r[i-1] + r[i] + carry[i-1] for that chunk: r[i-1] was read one
 //     slot earlier, r[i] is still the old value (it is written one slot later),
-//     so every register advances from the old values. carry[i-1] is the carry
-//     of register i-1 out of the previous chunk (cleared after the top chunk);
+//     so every register advances from the old values. The sum is written a
+//     clock later (sum_q). carry[i-1] is the carry of register i-1 out of the
+//     chunk below (0 for chunk 0), kept in a queue of Degree flops;
 //   * the old r[0] chunks, read in the pass, are captured into the sample
 //     register (the bits at GuardBits and above), so sample_o changes during
 //     a pass and sample_valid_o pulses once the pass is done;
 //   * segment words are written to the RAM as they arrive (stream order:
 //     axis, register, chunk): the same field counters walk the RAM in the
-//     load order and in the pass order.
-//
+//     load order and in the pass order;
 //   * the pass of a segment's last tick reads the r[0] words only
 //     (Axes*Chunks slots, no writes): the next segment replaces the
 //     registers, and its load starts that much sooner.
@@ -118,7 +118,7 @@ module traj_fd_tm #(
   logic                  mid_q;      // a segment is partly loaded
   logic                  hdr_q;      // the next word is a header word
   logic                  hword_q;    // header word index (two header words at ChunkWidth 16)
-  logic                  cnt_one_q;  // == (count_q == 1), kept as a flop for timing
+  logic                  cnt_one_q;  // == (count_q == 1) while a segment is active (timing)
   logic                  tick_q, tick_in_q, tick_err_q;
   logic                  sample_valid_q, underrun_q, seg_done_q;
   logic [Axes*OutWidth-1:0] sample_q;
