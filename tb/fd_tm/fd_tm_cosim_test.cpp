@@ -57,12 +57,16 @@ class Source {
   // raw_k >= 0: every raw segment has K = raw_k; -1: K in 0..20; -2: K in 1..20
   Source(uint64_t seed, int raw_in_4, int raw_k) : rng_(seed), comp_(format()), raw_in_4_(raw_in_4), raw_k_(raw_k) {}
 
-  static traj::fd::Format format() { return {FD_AXES, FD_DEGREE, FD_WIDTH, FD_CHUNK, FD_GUARD, 4}; }
+  // GuardBits = 0 (every register bit in the sample, so an error in any bit
+  // of r[0] shows): the compiler refuses it, so such a build streams raw
+  // segments only and keeps a compiler of 1 guard bit that is never used.
+  static constexpr bool kRawOnly = FD_GUARD == 0;
+  static traj::fd::Format format() { return {FD_AXES, FD_DEGREE, FD_WIDTH, FD_CHUNK, kRawOnly ? 1 : FD_GUARD, 4}; }
   const traj::fd::Compiler& compiler() const { return comp_; }
 
   Seg next() {
     Seg s;
-    if (std::uniform_int_distribution<int>(0, 3)(rng_) < raw_in_4_) {
+    if (kRawOnly || std::uniform_int_distribution<int>(0, 3)(rng_) < raw_in_4_) {
       s.K = raw_k_ >= 0 ? raw_k_ : std::uniform_int_distribution<uint32_t>(raw_k_ == -2, 20)(rng_);
       for (int b = 0; b < 32; b += FD_CHUNK) s.words.push_back((uint64_t(s.K) >> b) & traj::mask(FD_CHUNK));
       for (int n = 0; n < Par::kRegs * Par::kChunks; ++n)
@@ -301,7 +305,7 @@ void run_random(uint64_t seed, int lo, int hi, double p_valid, uint64_t cycles, 
   }
   std::printf("    %llu cycles, %zu events, %zu samples checked against the prediction\n",
               static_cast<unsigned long long>(b.cycles()), b.tm_events().size(), b.predicted_samples());
-  EXPECT_GT(b.predicted_samples(), 0u);
+  if (!Source::kRawOnly) EXPECT_GT(b.predicted_samples(), 0u);
 }
 
 }  // namespace
@@ -388,7 +392,7 @@ TEST(FdTmCosim, CompiledStreamAtMinimumSpacing) {
       for (int c = 0; c < kMinTick; ++c) ASSERT_TRUE(b.cycle({true, c == 0, false}));
     EXPECT_FALSE(b.tm_tick_err()) << "ticks MinTickClocks apart";
     ASSERT_TRUE(b.samples_agree());
-    EXPECT_GT(b.predicted_samples(), 10u);
+    if (!Source::kRawOnly) EXPECT_GT(b.predicted_samples(), 10u);
   }
 }
 
