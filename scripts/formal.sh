@@ -19,6 +19,8 @@ case $unit in
   # traj_seg_fifo: the word-level model takes z3 about 10 minutes for 10 BMC
   # steps (pointer arithmetic modulo the slot count); bit-blasted, seconds.
   traj_seg_fifo) blast="memory_map; opt -fast; techmap; opt -fast; abc -g AND; opt_clean;" ;;
+  # traj_fd_tm: z3 does not finish step 0 on the word-level model either
+  traj_fd_tm) blast="memory_map; opt -fast; techmap; opt -fast; abc -g AND; opt_clean;"; DEPTH=${DEPTH:-16} ;;
 esac
 DEPTH=${DEPTH:-24}
 files=$("$root/scripts/unit_files.sh" "$unit")

@@ -59,7 +59,7 @@ chparam_cmd() {
 }
 
 # last "<cell>: used/avail" figure of a nextpnr log, "used" only
-cell_count() { grep -E "$1:" "$2" | tail -1 | sed -E "s/.*$1: *([0-9]+)\/.*/\1/"; }
+cell_count() { grep -E "$1: *[0-9]+/" "$2" | tail -1 | sed -E "s/.*$1: *([0-9]+)\/.*/\1/"; }
 
 files=$("$root/scripts/unit_files.sh" "$unit")
 pcf=$(board_pcf "$unit" "$device")
