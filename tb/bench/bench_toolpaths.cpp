@@ -383,6 +383,20 @@ double deviation_from(const input::Toolpath& programmed, const std::vector<std::
   return std::sqrt(worst2);
 }
 
+// --dump PREFIX: every tick's t, s, v, a_t and curve (with its kind) to PREFIX_<case>_<limits>.txt.
+std::string g_dump, g_case;
+
+void dump_ticks(const std::string& prefix, const job::JobResult& r, const job::ToolpathPlan& tpp) {
+  FILE* f = std::fopen((prefix + "_" + g_case + ".txt").c_str(), "w");
+  if (!f) return;
+  for (const auto& tk : r.ticks) {
+    const std::string& w = tpp.path.entry(tk.curve).where;
+    const char* kind = w.find("run of") != std::string::npos ? "run" : w.find("blend") != std::string::npos ? "blend" : "move";
+    std::fprintf(f, "%.6f %.6f %.4f %.1f %zu %s\n", tk.t, tk.s, tk.v, tk.a, tk.curve, kind);
+  }
+  std::fclose(f);
+}
+
 struct TrajResult {
   bool ok = false;
   std::string error;
@@ -410,6 +424,7 @@ TrajResult run_trajcore(const input::Toolpath& programmed, const input::Toolpath
     for (size_t k = 0; k < x.size(); ++k)
       for (int a = 0; a < 3; ++a) x[k][a] = static_cast<double>(s.v[k][a]) * lsb;
     t.dev_prog = deviation_from(programmed, x, tpp.path.dim(), cfg.limits.tol);
+    if (!g_dump.empty()) dump_ticks(g_dump, r, tpp);
     if (probe) {
       double best = std::numeric_limits<double>::infinity();
       for (const auto& tk : r.ticks) {
@@ -454,6 +469,7 @@ struct Row {
 Row run_case(const char* name, const LimitSet& ls, const input::Toolpath& programmed, const Preparation& prep,
              const VectorXd* probe = nullptr) {
   Row row;
+  g_case = std::string(name) + "_" + ls.name;
   row.ref = grbl_reference(programmed, ls.cfg);
   input::Toolpath prepared = programmed;
   try {
@@ -570,6 +586,7 @@ int main(int argc, char** argv) {
     if (a == "--short") small = true;
     else if (a == "--prepare" && i + 1 < argc) prep_name = argv[++i];
     else if (a == "--only" && i + 1 < argc) only = argv[++i];
+    else if (a == "--dump" && i + 1 < argc) g_dump = argv[++i];
     else {
       std::fprintf(stderr, "usage: bench_toolpaths [--short] [--prepare NAME] [--only SUBSTRING]\n");
       return 2;
