@@ -395,16 +395,27 @@ double deviation_from(const input::Toolpath& programmed, const std::vector<std::
   return std::sqrt(worst2);
 }
 
-// --dump PREFIX: every tick's t, s, v, a_t and curve (with its kind) to PREFIX_<case>_<limits>.txt.
+// --dump PREFIX: every tick's t, s, v, a_t, curve (with its kind), the speed bound v_lim there, the
+// local tangential acceleration A(s) and the curvature, to PREFIX_<case>_<limits>.txt.
 std::string g_dump, g_case;
 
 void dump_ticks(const std::string& prefix, const job::JobResult& r, const job::ToolpathPlan& tpp) {
   FILE* f = std::fopen((prefix + "_" + g_case + ".txt").c_str(), "w");
   if (!f) return;
+  const plan::Limits& L = tpp.cfg.limits;
+  const plan::PlanOptions& o = tpp.cfg.plan;
+  const int dim = tpp.path.dim();
+  double jmin = L.j_axis[0];
+  for (int a = 1; a < dim; ++a) jmin = std::min(jmin, L.j_axis[a]);
+  const double A_t = o.tan_a_share * L.a_tan, J_t = o.tan_j_share * std::min(L.j_tan, jmin);
   for (const auto& tk : r.ticks) {
     const std::string& w = tpp.path.entry(tk.curve).where;
     const char* kind = w.find("run of") != std::string::npos ? "run" : w.find("blend") != std::string::npos ? "blend" : "move";
-    std::fprintf(f, "%.6f %.6f %.4f %.1f %zu %s\n", tk.t, tk.s, tk.v, tk.a, tk.curve, kind);
+    const plan::Frame fr = plan::frame_at(tpp.path, tk.curve, tk.u, tk.s);
+    double A_loc = 0;
+    const double vlim = plan::speed_limit(fr, L, o, A_t, J_t, dim, &A_loc);
+    std::fprintf(f, "%.6f %.6f %.4f %.1f %zu %s %.3f %.1f %.4f\n", tk.t, tk.s, tk.v, tk.a, tk.curve, kind, vlim, A_loc,
+                 fr.kappa);
   }
   std::fclose(f);
 }
