@@ -425,14 +425,14 @@ std::vector<double> chord_lengths(const std::vector<Vec>& poly) {
   return S;
 }
 
-// A run smoothed instead of interpolated (README.md, "Runs"): a clamped cubic B-spline with uniform
-// knots in chord length, spans of about `span` mm, fitted by least squares to points along the
-// polygon poly = entry, vertices..., exit (parameter: chord length). The first three control points
-// lie on the entry line and the last three on the exit line at the spacing of a straight line run at
-// constant speed (C1 = E + L/(3N) t_in, C2 = E + L/N t_in), so the joins are G2 with curvature 0; the
-// inner ones are free. A small second-difference penalty keeps the system definite. The normal
-// equations are banded (a point sees 4 control points): linear in the run's length. Returns an empty
-// spline where the run is too short for a free control point.
+// A run smoothed instead of interpolated (README.md, "Smoothed runs"): a clamped cubic B-spline
+// parameterised by chord length over the polygon poly = entry, vertices..., exit, with interior knots
+// at the first and last vertex and uniform between them (spans of at most `span` mm), fitted by least
+// squares to points along the polygon. The first three control points lie on the entry line and the
+// last three on the exit line, at the Greville abscissae of a straight line run at constant speed, so
+// the joins are G2 with curvature 0; the inner ones are free. A light second-difference penalty keeps
+// the system definite. The normal equations are banded (a point sees 4 control points): linear in the
+// run's length. Returns an empty spline where the run is too short for a free control point.
 geo::BSpline fit_run(const std::vector<Vec>& poly, const Vec& t_in, const Vec& t_out, double span) {
   geo::BSpline b;
   const std::vector<double> S = chord_lengths(poly);
