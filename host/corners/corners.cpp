@@ -6,6 +6,8 @@
 #include <memory>
 #include <stdexcept>
 
+#include <Eigen/SparseCholesky>
+
 #include "geometry/curve.hpp"
 
 namespace traj::corners {
@@ -325,6 +327,8 @@ double move_tol(const input::Move& m, double default_tol) { return m.tolerance <
 // What happens at the join between elements k and k+1 (d left 0 for blends; set later).
 // Largest height of a vertex above the chord of its neighbours, in tolerances, for it to join a run.
 constexpr double kRunHeight = 7;
+// Fewest corners a smoothed run takes (shorter runs interpolate their vertices).
+constexpr size_t kMinSmoothedRun = 4;
 
 Join classify(const input::Toolpath& tp, const Element& l, const Element& r, const BlendOptions& o,
               BlendResult& res) {
@@ -410,6 +414,175 @@ double run_deviation(const geo::BSpline& s, const std::vector<Vec>& poly, int sa
   for (int i = 2; i <= n - 3; ++i) {
     worst = std::max(worst, dist_curve(poly[i], greville(i - 1), greville(i + 1)));
     if (i < n - 3) worst = std::max(worst, dist_curve(0.5 * (poly[i] + poly[i + 1]), greville(i - 1), greville(i + 2)));
+  }
+  return worst;
+}
+
+// Cumulative chord length along a polygon.
+std::vector<double> chord_lengths(const std::vector<Vec>& poly) {
+  std::vector<double> S(poly.size(), 0.0);
+  for (size_t i = 1; i < poly.size(); ++i) S[i] = S[i - 1] + (poly[i] - poly[i - 1]).norm();
+  return S;
+}
+
+// A run smoothed instead of interpolated (README.md, "Smoothed runs"): a clamped cubic B-spline
+// parameterised by chord length over the polygon poly = entry, vertices..., exit, with interior knots
+// at the first and last vertex and uniform between them (spans of at most `span` mm), fitted by least
+// squares to points along the polygon. The first three control points lie on the entry line and the
+// last three on the exit line, at the Greville abscissae of a straight line run at constant speed, so
+// the joins are G2 with curvature 0; the inner ones are free. A light second-difference penalty keeps
+// the system definite. The normal equations are banded (a point sees 4 control points): linear in the
+// run's length. Returns an empty spline where the run is too short for a free control point.
+geo::BSpline fit_run(const std::vector<Vec>& poly, const Vec& t_in, const Vec& t_out, double span) {
+  geo::BSpline b;
+  const std::vector<double> S = chord_lengths(poly);
+  const double L = S.back();
+  if (poly.size() < 4 || !(L > 0)) return b;
+  // knots (chord length / L): the first and last at the run's first and last vertex, uniform between
+  const double a = S[1], z = S[S.size() - 2];
+  const int inner = static_cast<int>(std::ceil((z - a) / span));
+  const int N = inner + 2;  // knot spans
+  const int n = N + 3;
+  if (inner < 2) return b;
+  const int dim = static_cast<int>(poly[0].size());
+  b.degree = 3;
+  b.knots.resize(n + 4);
+  for (int i = 0; i < 4; ++i) b.knots[i] = 0, b.knots[n + i] = 1;
+  for (int i = 0; i <= inner; ++i) b.knots[4 + i] = (a + (z - a) * i / inner) / L;
+  b.ctrl.resize(n, dim);
+  const Vec& E = poly.front();
+  const Vec& X = poly.back();
+  // a straight line at unit speed has its control points at the Greville abscissae
+  auto greville = [&](int i) { return L * (b.knots[i + 1] + b.knots[i + 2] + b.knots[i + 3]) / 3; };
+  b.ctrl.row(0) = E.transpose();
+  b.ctrl.row(1) = (E + greville(1) * t_in).transpose();
+  b.ctrl.row(2) = (E + greville(2) * t_in).transpose();
+  b.ctrl.row(n - 3) = (X - (L - greville(n - 3)) * t_out).transpose();
+  b.ctrl.row(n - 2) = (X - (L - greville(n - 2)) * t_out).transpose();
+  b.ctrl.row(n - 1) = X.transpose();
+  const int F = n - 6;  // free control points 3 .. n-4
+  // Data: the vertices and points along each edge at most span/8 apart.
+  std::vector<double> us;
+  std::vector<Vec> ps;
+  for (size_t e = 0; e + 1 < poly.size(); ++e) {
+    const double len = S[e + 1] - S[e];
+    const int k = std::max(2, static_cast<int>(std::ceil(8 * len / span)));
+    for (int i = 0; i < k; ++i) {
+      us.push_back((S[e] + len * i / k) / L);
+      ps.push_back(poly[e] + (poly[e + 1] - poly[e]) * (double(i) / k));
+    }
+  }
+  us.push_back(1.0);
+  ps.push_back(X);
+  using Trip = Eigen::Triplet<double>;
+  std::vector<Trip> trips;
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(F, dim);
+  auto add_row = [&](int first, const double* w, const Vec& target) {
+    // one residual sum_k w_k C_{first+k} - target: fixed points move to the right-hand side
+    Vec t = target;
+    for (int a = 0; a < 4; ++a) {
+      const int i = first + a;
+      if (i < 3 || i > n - 4) t -= w[a] * b.ctrl.row(i).transpose();
+    }
+    for (int a = 0; a < 4; ++a) {
+      const int i = first + a;
+      if (i < 3 || i > n - 4) continue;
+      rhs.row(i - 3) += w[a] * t.transpose();
+      for (int c = 0; c < 4; ++c) {
+        const int k = first + c;
+        if (k < 3 || k > n - 4) continue;
+        trips.emplace_back(i - 3, k - 3, w[a] * w[c]);
+      }
+    }
+  };
+  for (size_t q = 0; q < us.size(); ++q) {
+    // knot span mu (knots[mu] <= u < knots[mu + 1]) and the cubic basis there (Cox-de Boor)
+    const int mu = std::min(n - 1, static_cast<int>(std::upper_bound(b.knots.data() + 3, b.knots.data() + n, us[q]) -
+                                                     b.knots.data()) - 1);
+    const int j = mu - 3;
+    double Nb[4] = {1, 0, 0, 0};
+    double left[4], right[4];
+    const double u = us[q];
+    for (int r = 1; r <= 3; ++r) {
+      left[r] = u - b.knots[mu + 1 - r];
+      right[r] = b.knots[mu + r] - u;
+      double saved = 0;
+      for (int k = 0; k < r; ++k) {
+        const double tmp = Nb[k] / (right[k + 1] + left[r - k]);
+        Nb[k] = saved + right[k + 1] * tmp;
+        saved = left[r - k] * tmp;
+      }
+      Nb[r] = saved;
+    }
+    add_row(j, Nb, ps[q]);
+  }
+  // smoothing: second differences of the control points, weighted lightly against the data
+  const double lambda = 1e-3;
+  const double w2[4] = {lambda, -2 * lambda, lambda, 0};
+  for (int i = 1; i + 1 < n; ++i) add_row(i - 1, w2, Vec::Zero(dim));
+  Eigen::SparseMatrix<double> A(F, F);
+  A.setFromTriplets(trips.begin(), trips.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
+  if (ldlt.info() != Eigen::Success) return geo::BSpline{};
+  const Eigen::MatrixXd x = ldlt.solve(rhs);
+  if (ldlt.info() != Eigen::Success || !x.allFinite()) return geo::BSpline{};
+  b.ctrl.block(3, 0, F, dim) = x;
+  b.name = "corner run";
+  return b;
+}
+
+// Hausdorff distance between a curve and a polygon whose chord-length parameter the curve follows
+// (fit_run): each curve point is compared with the edges within `window` mm of chord length of its
+// own (sampled per knot span, golden section at the worst sample), each vertex and edge midpoint with
+// the curve near its parameter (sampled, golden section at the nearest). Linear in the run's length.
+double fitted_run_deviation(const geo::BSpline& s, const std::vector<Vec>& poly, int samples, double window) {
+  const geo::Curve c(s, "run");
+  const std::vector<double> S = chord_lengths(poly);
+  const double L = S.back();
+  auto edges_near = [&](double at, size_t& lo, size_t& hi) {
+    lo = std::lower_bound(S.begin(), S.end(), at - window) - S.begin();
+    lo = lo > 0 ? lo - 1 : 0;
+    hi = std::upper_bound(S.begin(), S.end(), at + window) - S.begin();
+    hi = std::min(hi, poly.size() - 1);
+  };
+  auto dist_poly = [&](double u) {
+    const Vec p = c.point(u);
+    size_t lo, hi;
+    edges_near(u * L, lo, hi);
+    double best = INFINITY;
+    for (size_t e = lo; e < hi; ++e) best = std::min(best, dist_to_segment(p, poly[e], poly[e + 1]));
+    return best;
+  };
+  double worst = 0;
+  const int spans = s.n_ctrl() - 3;
+  for (int j = 0; j < spans; ++j) {
+    const double u0 = s.knots[j + 3], u1 = s.knots[j + 4];
+    int arg = 0;
+    double w = -1;
+    for (int i = 0; i <= samples; ++i) {
+      const double d = dist_poly(u0 + (u1 - u0) * i / samples);
+      if (d > w) w = d, arg = i;
+    }
+    const double h = (u1 - u0) / samples;
+    worst = std::max({worst, w, -golden_min([&](double u) { return -dist_poly(u); }, u0 + h * std::max(0, arg - 1),
+                                            u0 + h * std::min(samples, arg + 1))});
+  }
+  auto dist_curve = [&](const Vec& p, double at) {
+    const double ua = std::max(0.0, (at - window) / L), ub = std::min(1.0, (at + window) / L);
+    const int k = std::max(8, static_cast<int>(std::ceil(samples * spans * (ub - ua))));
+    double best = INFINITY, arg = ua;
+    for (int i = 0; i <= k; ++i) {
+      const double u = ua + (ub - ua) * i / k;
+      const double d = (c.point(u) - p).norm();
+      if (d < best) best = d, arg = u;
+    }
+    const double h = (ub - ua) / k;
+    return std::min(best, golden_min([&](double u) { return (c.point(u) - p).norm(); }, std::max(ua, arg - h),
+                                     std::min(ub, arg + h)));
+  };
+  for (size_t i = 1; i + 1 < poly.size(); ++i) {
+    worst = std::max(worst, dist_curve(poly[i], S[i]));
+    worst = std::max(worst, dist_curve(0.5 * (poly[i] + poly[i + 1]), 0.5 * (S[i] + S[i + 1])));
   }
   return worst;
 }
@@ -556,7 +729,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
     return m;
   };
   // Emit joins k .. k+m-1 as one curve, if it measures within tolerance.
-  auto emit_run = [&](size_t k, size_t m) {
+  auto emit_run = [&](size_t k, size_t m, bool smoothed) {
     std::vector<Vec> v;
     double tol = INFINITY, feed = INFINITY;
     for (size_t i = 0; i < m; ++i) {
@@ -565,13 +738,31 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       feed = std::min(feed, tp.moves[el[k + i].move].feed);
     }
     feed = std::min(feed, tp.moves[el[k + m].move].feed);
-    geo::BSpline rs = run_spline(v, el[k].t_end, joins[k].d, el[k + m].t_start, joins[k + m - 1].d, o.run_shape);
-    rs.ctrl.row(0) = last_end.transpose();
-    std::vector<Vec> poly{last_end, v[0] - joins[k].d * el[k].t_end};
-    poly.insert(poly.end(), v.begin(), v.end());
-    poly.push_back(v[m - 1] + joins[k + m - 1].d * el[k + m].t_start);
-    poly.push_back(v[m - 1] + 2 * joins[k + m - 1].d * el[k + m].t_start);
-    const double dev = run_deviation(rs, poly, o.run_samples);
+    const Vec exit = v[m - 1] + 2 * joins[k + m - 1].d * el[k + m].t_start;
+    // smoothed first (its spans longer than the chords, the CAM chords' curvature wobble averages out)
+    geo::BSpline rs;
+    double dev = INFINITY;
+    if (smoothed) {
+      std::vector<Vec> poly{last_end};
+      poly.insert(poly.end(), v.begin(), v.end());
+      poly.push_back(exit);
+      rs = fit_run(poly, el[k].t_end, el[k + m].t_start, o.run_shape.fit_span);
+      if (rs.n_ctrl() > 0) {
+        double longest = 0;
+        for (size_t i = 1; i < poly.size(); ++i) longest = std::max(longest, (poly[i] - poly[i - 1]).norm());
+        dev = fitted_run_deviation(rs, poly, o.run_samples, 2 * o.run_shape.fit_span + longest);
+      }
+    }
+    if (smoothed && !(dev <= tol)) return false;
+    if (!smoothed) {
+      rs = run_spline(v, el[k].t_end, joins[k].d, el[k + m].t_start, joins[k + m - 1].d, o.run_shape);
+      rs.ctrl.row(0) = last_end.transpose();
+      std::vector<Vec> poly{last_end, v[0] - joins[k].d * el[k].t_end};
+      poly.insert(poly.end(), v.begin(), v.end());
+      poly.push_back(v[m - 1] + joins[k + m - 1].d * el[k + m].t_start);
+      poly.push_back(exit);
+      dev = run_deviation(rs, poly, o.run_samples);
+    }
     if (!(dev <= tol)) return false;
     Run run{blend_of[k], m, dev};
     for (size_t i = 0; i < m; ++i) {
@@ -630,7 +821,22 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
     if (blend_after && o.merge_runs) {
       // the longest run from here that measures within the tolerance (halved until one does)
       size_t m = run_length(k);
-      while (m >= 2 && !emit_run(k, m)) m /= 2;
+      // smoothed where it fits (the longest prefix, shrinking by a quarter), else interpolated
+      bool done = false;
+      if (o.run_shape.fit_span > 0) {
+        // A smoothed run spreads each vertex's turn over about a span, which moves the curve by about
+        // turn * span / 8 from the vertex: a sharper vertex ends it (and is interpolated with the
+        // vertices up to the next smooth one).
+        const double sharp = 8 * res.blends[blend_of[k]].tol / o.run_shape.fit_span;
+        size_t smooth = 0, leading_sharp = 0;
+        while (smooth < m && joins[k + smooth].turn <= sharp) ++smooth;
+        while (leading_sharp < m && joins[k + leading_sharp].turn > sharp) ++leading_sharp;
+        for (size_t mm = smooth; mm >= kMinSmoothedRun && !done; mm = mm * 3 / 4)
+          if (emit_run(k, mm, true)) done = true, m = mm;
+        if (!done && smooth < kMinSmoothedRun) m = std::min(m, std::max<size_t>(2, leading_sharp + 1));
+      }
+      if (!done)
+        while (m >= 2 && !emit_run(k, m, false)) m /= 2;
       if (m >= 2) {
         k += m - 1;  // segments k+1 .. k+m-1 are replaced; segment k+m starts at the run's end
         continue;

@@ -31,6 +31,9 @@ struct RunShape {
   // then passes between the vertices and the edges (on a regular polygon, 5/8 leaves 1/16 of the
   // vertex's second difference to either side instead of 1/6 inside).
   double pull = 0.625;
+  // Spans (mm of chord length) of the smoothed run (README.md, "Runs"): a least-squares cubic over the
+  // polygon, tried first; 0: runs interpolate their vertices.
+  double fit_span = 2.0;
 };
 
 struct BlendOptions {

@@ -172,7 +172,7 @@ double speed_with(const Frame& f, const Limits& L, const PlanOptions& o, double 
   for (int a = 0; a < dim; ++a) {
     const double T = std::fabs(f.T[a]), K = std::fabs(f.K[a]), Q = std::fabs(f.Q[a]);
     const double ab = o.axis_a_share * L.a_axis[a], jb = o.axis_j_share * L.j_axis[a];
-    if (T > 0) cap(L.v_axis[a] / T);
+    if (T > 0) cap(o.axis_v_share * L.v_axis[a] / T);
     if (K > 0) cap(std::sqrt(std::max(0.0, ab - T * A) / K));
     cap(cubic_speed(Q, 3 * K * A, jb - T * J_t));
   }

@@ -82,6 +82,10 @@ struct PlanOptions {
   // Shares of each per-axis acceleration and jerk (and of j_cen) that the
   // sums of speed_limit may fill: headroom for the grid and the fit.
   double axis_a_share = 0.95, axis_j_share = 0.95;
+  // Share of each per-axis velocity the speed bound may fill: a quintic fitted between ticks
+  // overshoots a speed held exactly at the limit by ~1e-7 of it (a straight move along an axis whose
+  // v_axis equals the feed would otherwise fail the fit and be capped far below).
+  double axis_v_share = 0.999;
   // Share of j_axis a curvature jump may take in the tick that steps the
   // acceleration (jump_speed in planner.cpp).
   double jump_j_share = 0.5;

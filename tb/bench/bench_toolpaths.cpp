@@ -281,14 +281,24 @@ double along(const double* axis_limit, const VectorXd& u) {
   return v;
 }
 
-double junction_speed_sq(const VectorXd& u_in, const VectorXd& u_out, const plan::Limits& L) {
+// jerk > 0: the junction speed is also capped by a jerk-limited turn (jerk_turn_speed).
+double junction_speed_sq(const VectorXd& u_in, const VectorXd& u_out, const plan::Limits& L, double jerk = 0) {
   const double cos_theta = -u_in.dot(u_out);
   if (cos_theta > 0.999999) return 0;                                         // reversal
   if (cos_theta < -0.999999) return std::numeric_limits<double>::infinity();  // straight on
   const VectorXd ju = (u_out - u_in).normalized();
   const double a = std::min(L.a_cen, along(L.a_axis, ju));
   const double sin_half = std::sqrt(0.5 * (1 - cos_theta));
-  return a * L.tol * sin_half / (1 - sin_half);
+  const double v2 = a * L.tol * sin_half / (1 - sin_half);
+  if (!(jerk > 0)) return v2;
+  // The velocity changes by dw = |u_out - u_in| v across the corner. Done as one bang-bang jerk
+  // pulse of jerk J along u_out - u_in (duration 2 sqrt(dw / J), the speed along the bisector
+  // unchanged), the path leaves the corner by dw^1.5 / (6 sqrt J) at its middle (integrate the
+  // velocity change w(t) = J t^2 / 2 over the first half: dw/2 (T/2) / 3). Within the tolerance:
+  // dw <= (6 tol sqrt J)^(2/3).
+  const double dw = std::pow(6 * L.tol * std::sqrt(jerk), 2.0 / 3.0);
+  const double vj = dw / (u_out - u_in).norm();
+  return std::min(v2, vj * vj);
 }
 
 // Time over a block from v0 to v1 under nominal speed vn and acceleration a
@@ -300,7 +310,9 @@ double trapezoid_time(double len, double v0, double v1, double vn, double a) {
   return (vp - v0) / a + (vp - v1) / a;
 }
 
-RefResult grbl_reference(const input::Toolpath& tp, const job::JobConfig& cfg) {
+// jerk > 0: every junction also within a jerk-limited turn (junction_speed_sq); still no jerk on
+// the blocks' speed changes.
+RefResult grbl_reference(const input::Toolpath& tp, const job::JobConfig& cfg, double jerk = 0) {
   const plan::Limits& L = cfg.limits;
   std::vector<RefBlock> blocks;
   std::vector<double> vmax_sq{0};  // allowed speed^2 at each vertex; the start is a stop
@@ -322,7 +334,7 @@ RefResult grbl_reference(const input::Toolpath& tp, const job::JobConfig& cfg) {
       if (!blocks.empty()) {
         const RefBlock& in = blocks.back();
         const double cap = std::min(in.v_nom, b.v_nom);
-        vmax_sq.back() = std::min({vmax_sq.back(), junction_speed_sq(in.u, b.u, L), cap * cap});
+        vmax_sq.back() = std::min({vmax_sq.back(), junction_speed_sq(in.u, b.u, L, jerk), cap * cap});
       }
       blocks.push_back(b);
       vmax_sq.push_back(std::numeric_limits<double>::infinity());
@@ -383,6 +395,31 @@ double deviation_from(const input::Toolpath& programmed, const std::vector<std::
   return std::sqrt(worst2);
 }
 
+// --dump PREFIX: every tick's t, s, v, a_t, curve (with its kind), the speed bound v_lim there, the
+// local tangential acceleration A(s) and the curvature, to PREFIX_<case>_<limits>.txt.
+std::string g_dump, g_case;
+
+void dump_ticks(const std::string& prefix, const job::JobResult& r, const job::ToolpathPlan& tpp) {
+  FILE* f = std::fopen((prefix + "_" + g_case + ".txt").c_str(), "w");
+  if (!f) return;
+  const plan::Limits& L = tpp.cfg.limits;
+  const plan::PlanOptions& o = tpp.cfg.plan;
+  const int dim = tpp.path.dim();
+  double jmin = L.j_axis[0];
+  for (int a = 1; a < dim; ++a) jmin = std::min(jmin, L.j_axis[a]);
+  const double A_t = o.tan_a_share * L.a_tan, J_t = o.tan_j_share * std::min(L.j_tan, jmin);
+  for (const auto& tk : r.ticks) {
+    const std::string& w = tpp.path.entry(tk.curve).where;
+    const char* kind = w.find("run of") != std::string::npos ? "run" : w.find("blend") != std::string::npos ? "blend" : "move";
+    const plan::Frame fr = plan::frame_at(tpp.path, tk.curve, tk.u, tk.s);
+    double A_loc = 0;
+    const double vlim = plan::speed_limit(fr, L, o, A_t, J_t, dim, &A_loc);
+    std::fprintf(f, "%.6f %.6f %.4f %.1f %zu %s %.3f %.1f %.4f\n", tk.t, tk.s, tk.v, tk.a, tk.curve, kind, vlim, A_loc,
+                 fr.kappa);
+  }
+  std::fclose(f);
+}
+
 struct TrajResult {
   bool ok = false;
   std::string error;
@@ -410,6 +447,7 @@ TrajResult run_trajcore(const input::Toolpath& programmed, const input::Toolpath
     for (size_t k = 0; k < x.size(); ++k)
       for (int a = 0; a < 3; ++a) x[k][a] = static_cast<double>(s.v[k][a]) * lsb;
     t.dev_prog = deviation_from(programmed, x, tpp.path.dim(), cfg.limits.tol);
+    if (!g_dump.empty()) dump_ticks(g_dump, r, tpp);
     if (probe) {
       double best = std::numeric_limits<double>::infinity();
       for (const auto& tk : r.ticks) {
@@ -438,23 +476,35 @@ void print_header(const Preparation& prep) {
       "columns: moves = feed moves after preparation; corners = junctions whose tangent turns (trajcore\n"
       "  stops there); traj_s = trajcore's motion time (output samples); ref_s = the reference's time on the\n"
       "  programmed toolpath (same feed, accelerations, delta = path tolerance); ratio = traj_s / ref_s;\n"
+      "  refj_s = the reference with every junction speed also capped by a bang-bang jerk turn within the\n"
+      "  tolerance (jerk min(j_cen, j_axis); still no jerk on the speed changes), ratio_j = traj_s / refj_s;\n"
       "  host_s = toolpath_plan + run_job wall time (plan, ticks, fit, compile; until the error if it\n"
       "  fails); dev_mm = report.max_deviation (output to the planned path); prog_dev_mm = output to the\n"
       "  programmed toolpath (curves as chords within 1e-4 tol); worst = largest output peak / limit\n",
       prep.name, prep.what);
-  std::printf("%-10s %-5s %6s %7s %9s %9s %7s %8s %11s %11s %s\n", "case", "lims", "moves", "corners", "traj_s",
-              "ref_s", "ratio", "host_s", "dev_mm", "prog_dev_mm", "worst (what)");
+  std::printf("%-10s %-5s %6s %7s %9s %9s %7s %9s %7s %8s %11s %11s %s\n", "case", "lims", "moves", "corners", "traj_s",
+              "ref_s", "ratio", "refj_s", "ratio_j", "host_s", "dev_mm", "prog_dev_mm", "worst (what)");
 }
 
 struct Row {
   TrajResult traj;
   RefResult ref;
+  double ref_jerk_time = 0;  // the reference with jerk-limited junction turns (junction_speed_sq)
 };
+
+// The jerk that bounds a turn across the path: the centripetal limit and every axis's.
+double turn_jerk(const job::JobConfig& cfg, int axes) {
+  double j = cfg.limits.j_cen;
+  for (int a = 0; a < axes && a < plan::kMaxAxes; ++a) j = std::min(j, cfg.limits.j_axis[a]);
+  return j;
+}
 
 Row run_case(const char* name, const LimitSet& ls, const input::Toolpath& programmed, const Preparation& prep,
              const VectorXd* probe = nullptr) {
   Row row;
+  g_case = std::string(name) + "_" + ls.name;
   row.ref = grbl_reference(programmed, ls.cfg);
+  row.ref_jerk_time = grbl_reference(programmed, ls.cfg, turn_jerk(ls.cfg, programmed.axes)).time;
   input::Toolpath prepared = programmed;
   try {
     prepared = prep.fn(programmed, ls.cfg.limits.tol);
@@ -466,12 +516,13 @@ Row run_case(const char* name, const LimitSet& ls, const input::Toolpath& progra
   }
   const int corners = count_corners(prepared, ls.cfg.plan.corner_tol);
   if (row.traj.ok)
-    std::printf("%-10s %-5s %6zu %7d %9.3f %9.3f %7.2f %8.3f %11.3g %11.3g %.3f (%s)\n", name, ls.name,
+    std::printf("%-10s %-5s %6zu %7d %9.3f %9.3f %7.2f %9.3f %7.2f %8.3f %11.3g %11.3g %.3f (%s)\n", name, ls.name,
                 prepared.moves.size(), corners, row.traj.motion, row.ref.time, row.traj.motion / row.ref.time,
-                row.traj.host, row.traj.dev, row.traj.dev_prog, row.traj.worst_out, row.traj.worst_what.c_str());
+                row.ref_jerk_time, row.traj.motion / row.ref_jerk_time, row.traj.host, row.traj.dev, row.traj.dev_prog, row.traj.worst_out, row.traj.worst_what.c_str());
   else
-    std::printf("%-10s %-5s %6zu %7d %9s %9.3f %7s %8.3f   trajcore failed: %s\n", name, ls.name,
-                prepared.moves.size(), corners, "-", row.ref.time, "-", row.traj.host, row.traj.error.c_str());
+    std::printf("%-10s %-5s %6zu %7d %9s %9.3f %7s %9.3f %7s %8.3f   trajcore failed: %s\n", name, ls.name,
+                prepared.moves.size(), corners, "-", row.ref.time, "-", row.ref_jerk_time, "-", row.traj.host,
+                row.traj.error.c_str());
   std::fflush(stdout);
   return row;
 }
@@ -570,6 +621,7 @@ int main(int argc, char** argv) {
     if (a == "--short") small = true;
     else if (a == "--prepare" && i + 1 < argc) prep_name = argv[++i];
     else if (a == "--only" && i + 1 < argc) only = argv[++i];
+    else if (a == "--dump" && i + 1 < argc) g_dump = argv[++i];
     else {
       std::fprintf(stderr, "usage: bench_toolpaths [--short] [--prepare NAME] [--only SUBSTRING]\n");
       return 2;

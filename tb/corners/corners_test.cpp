@@ -493,6 +493,81 @@ TEST(CornerBlend, Circle360Gon) {
   EXPECT_LT(t_run, t_sep);
 }
 
+// Largest |dkappa/ds| of a curve between parameters u0 and u1 (reference curvature, finite
+// differences over n steps).
+double max_curvature_slope(const geo::BSpline& b, double u0, double u1, int n = 4000) {
+  const ref::Spline s = to_ref(b);
+  double worst = 0;
+  Eval prev = eval_ref(s, u0);
+  for (int i = 1; i <= n; ++i) {
+    const Eval e = eval_ref(s, u0 + (u1 - u0) * i / n);
+    const double ds = (e.c - prev.c).norm();
+    if (ds > 0) worst = std::max(worst, std::abs(curvature_ref(e) - curvature_ref(prev)) / ds);
+    prev = e;
+  }
+  return worst;
+}
+
+// A CAM-like polyline of an ellipse (chords alternating about 0.3 and 1 mm, as a CAM system's chord
+// tolerance gives where the curvature changes): the run is smoothed, not interpolated. Every output
+// curve stays within the tolerance of the polyline and every vertex within it of the chain (reference
+// evaluation, dense sampling); inside the run the curvature stays near the ellipse's (b/a^2 .. a/b^2)
+// and its slope is far below the interpolating run's, whose curvature follows the chords.
+TEST(CornerBlend, CamPolylineRunIsSmoothed) {
+  const double a = 20, b = 12, tol = 0.045;
+  std::vector<Vec> pts{v2(a, -5)};  // a straight lead-in
+  for (double phi = 0; phi < 1.6 * kPi;) {
+    pts.push_back(v2(a * std::cos(phi), b * std::sin(phi)));
+    const double speed = std::hypot(a * std::sin(phi), b * std::cos(phi));
+    phi += (pts.size() % 2 ? 0.3 : 1.0) / speed;
+  }
+  const Toolpath tp = polyline(pts);
+  const BlendResult smooth = traj::corners::blend_corners(tp, tol);
+  BlendOptions interp_opts;
+  interp_opts.run_shape.fit_span = 0;
+  const BlendResult interp = traj::corners::blend_corners(tp, tol, interp_opts);
+  auto longest_run = [](const BlendResult& r) {
+    const traj::corners::ChainCurve* best = nullptr;
+    for (const auto& c : r.curves)
+      if (c.blend && (!best || c.curve.n_ctrl() > best->curve.n_ctrl())) best = &c;
+    return best;
+  };
+  ASSERT_FALSE(smooth.runs.empty());
+  size_t most = 0;
+  for (const auto& run : smooth.runs) most = std::max(most, run.corners);
+  EXPECT_GE(most, pts.size() / 2);
+  double worst = 0;
+  std::vector<ref::Spline> curves;
+  for (const auto& c : smooth.curves) {
+    curves.push_back(to_ref(c.curve));
+    const double off = max_dist_curve_to_polyline(curves.back(), pts, 40 * (c.curve.n_ctrl() - 1));
+    EXPECT_LE(off, tol * (1 + 1e-9));
+    worst = std::max(worst, off);
+  }
+  for (size_t i = 1; i + 1 < pts.size(); ++i) {
+    double d = INFINITY;
+    for (const auto& s : curves) d = std::min(d, dist_point_to_curve(s, pts[i]));
+    EXPECT_LE(d, tol * (1 + 1e-9)) << "vertex " << i;
+    worst = std::max(worst, d);
+  }
+  // curvature inside the run (its first and last tenth ramp from 0 at the joins)
+  const auto* run = longest_run(smooth);
+  const ref::Spline rs = to_ref(run->curve);
+  double k_lo = INFINITY, k_hi = 0;
+  for (int i = 0; i <= 4000; ++i) {
+    const double k = curvature_ref(eval_ref(rs, 0.1 + 0.8 * i / 4000));
+    k_lo = std::min(k_lo, k), k_hi = std::max(k_hi, k);
+  }
+  EXPECT_GE(k_lo, 0.8 * b / (a * a));
+  EXPECT_LE(k_hi, 1.2 * a / (b * b));
+  const double slope_smooth = max_curvature_slope(run->curve, 0.1, 0.9);
+  const double slope_interp = max_curvature_slope(longest_run(interp)->curve, 0.1, 0.9);
+  std::printf("CAM ellipse polyline (%zu vertices), tol %.3f: smoothed run of %zu corners, worst deviation %.4f mm; "
+              "curvature %.4f .. %.4f (ellipse %.4f .. %.4f); max |dk/ds| %.4f smoothed, %.4f interpolated\n",
+              pts.size(), tol, most, worst, k_lo, k_hi, b / (a * a), a / (b * b), slope_smooth, slope_interp);
+  EXPECT_LT(slope_smooth, 0.25 * slope_interp);
+}
+
 // The chain goes into a planner path (its join check) and plans on a random polyline.
 TEST(CornerBlend, ChainPlansThroughThePlanner) {
   std::mt19937 g(7);
