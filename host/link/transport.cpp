@@ -59,6 +59,9 @@ class FdTransport : public Transport {
     const ssize_t k = ::read(fd_, p, n);
     if (k > 0) return static_cast<size_t>(k);
     if (k < 0 && (errno == EINTR || errno == EAGAIN)) return 0;
+    // A raw tty (VMIN 0) reads 0 bytes with nothing to read, not only at a
+    // hang-up: only POLLHUP says the other end is gone.
+    if (k == 0 && !(pf.revents & POLLHUP) && ::isatty(fd_)) return 0;
     if (k == 0) throw LinkError(name_ + ": closed by the other end");
     throw LinkError(errno_text(name_ + ": read"));
   }

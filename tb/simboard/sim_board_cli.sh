@@ -37,11 +37,15 @@ clean | faults | restart)
   faults) start_board --once --corrupt 0.001 --drop 0.001 --dup-frames 0.05 --seed 3 ;;
   esac
   if [ "$mode" = restart ]; then
-    upload &
+    # the tool itself in the background (a function would fork a shell, and
+    # SIGKILL would leave the tool running)
+    "$T" upload plan.trj --port "$(cat port)" --clock-hz 36e6 --step-shift 26 --timeout-ms 3000 > upload.txt \
+      2> upload.err &
     tool=$!
     sleep 0.4
     kill -KILL "$tool"
     wait "$tool" 2> /dev/null && { echo "the first upload ended before it was killed"; exit 1; }
+    grep -v '^\[upload' upload.err || true
     upload --resume || { cat upload.err board.txt; exit 1; }
   else
     upload || { cat upload.err board.txt; exit 1; }
