@@ -21,8 +21,9 @@ class LinkError : public std::runtime_error {
 constexpr uint8_t kFlag = 0x7E, kEscape = 0x7D, kEscapeXor = 0x20;
 constexpr size_t kMaxPayload = 2048;
 constexpr size_t kHeaderBytes = 8, kCrcBytes = 4;
-// The board top's core clock (tick period in clocks); a build at another clock passes --clock-hz.
-constexpr double kDefaultBoardClockHz = 48e6;
+// The core clock of the iCEBreaker top and the simulated board (tick period in
+// clocks); the HX8K top runs at 60 MHz (--clock-hz 60e6).
+constexpr double kDefaultBoardClockHz = 36e6;
 
 enum class Type : uint8_t {
   kReset = 0x01,
