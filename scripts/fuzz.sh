@@ -48,12 +48,15 @@ run_target() {
   local t=$1 secs=$2
   local corpus=$build/corpus/$t findings=$build/findings/$t
   mkdir -p "$corpus" "$findings"
+  local seeds=("$root/tb/fuzz/corpus/$t")
+  # a target with no failed input yet has no regressions folder (git keeps no empty folder)
+  [ -d "$root/tb/fuzz/regressions/$t" ] && seeds+=("$root/tb/fuzz/regressions/$t")
   echo "fuzz: $t for ${secs} s"
   # detect_leaks: the readers must not leak on refusal either; -timeout: a hang is a finding.
   ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1} UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1} \
     "$build/tb/fuzz/fuzz_$t" -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
     -dict="$root/tb/fuzz/dict/$t.dict" -artifact_prefix="$findings/" -print_final_stats=1 \
-    "$corpus" "$root/tb/fuzz/corpus/$t" "$root/tb/fuzz/regressions/$t"
+    "$corpus" "${seeds[@]}"
 }
 
 case "${1:-all}" in

@@ -192,6 +192,9 @@ class Interpreter {
     std::vector<std::pair<int, std::string>> gs;
     std::vector<std::pair<int, std::string>> ms;
     for (const Word& w : b.words) {
+      // codes beyond 1e6 are refused before any conversion to int (which would overflow)
+      if ((w.letter == 'G' || w.letter == 'M') && !(std::abs(w.value) < 1e6))
+        fail(w.text, std::string("unknown or unsupported ") + w.letter + " code");
       if (w.letter == 'G') {
         if (std::abs(w.value * 10 - tenths(w.value)) > 1e-6) fail(w.text, "unknown or unsupported G code");
         gs.emplace_back(tenths(w.value), w.text);
