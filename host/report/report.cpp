@@ -207,10 +207,11 @@ std::string report_text(const JobConfig& cfg, const Report& rep, const JobResult
     << rep.k_max << " needs " << rep.guard_needed << "), output " << (r.header.width - r.header.guard_bits)
     << " bits, 1 LSB = 2^-" << r.header.frac_bits << " " << cfg.machine.units << "\n";
   {
-    const long long rec = 12LL + static_cast<long long>(r.header.axes) * (r.header.degree + 1) * r.header.width / 8;
-    const long long bytes = 48 + static_cast<long long>(rep.segments) * rec + 16;
+    const long long rec = static_cast<long long>(stream::record_size(r.header, stream::RecordKind::kFd));
+    const long long bytes = stream::kHeaderBytes + static_cast<long long>(rep.segments) * rec + stream::kEndBytes;
     o << "  segment stream       " << bytes << " bytes (" << rec << " per segment: " << r.header.axes << " axes x "
-      << (r.header.degree + 1) << " registers x " << r.header.width << " bits + 96 bits of type, K and CRC; "
+      << (r.header.degree + 1) << " registers x " << r.header.width
+      << " bits + 128 bits of type, K, sequence number and CRC; "
       << fmt("%.1f", 8.0 * bytes / std::max(1.0, rep.motion_time)) << " bit/s of motion)\n";
   }
   o << "Accuracy (output samples of the core)\n";
