@@ -332,6 +332,16 @@ struct Grid {
   std::vector<char> corner;  // forced stop
 };
 
+// The grid of one plan is held in memory: beyond kMaxGridPoints points
+// (about 1 GB) the path is refused naming the curve where the count passes it,
+// before the points are built.
+void check_grid_size(double points, const std::string& where, double len, double ds_max) {
+  if (points <= kMaxGridPoints) return;
+  throw PlanError(where + ": the arc-length grid would pass " + num(kMaxGridPoints) + " points (this curve is " +
+                  num(len) + " units long, a grid step is at most " + num(ds_max) +
+                  " units and shorter where the curve turns); split the path (plan --window plans it in parts)");
+}
+
 Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t, double J_t) {
   Grid g;
   const int d = p.dim();
@@ -390,6 +400,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
     double s = 0, u = c.u_begin();
     size_t mi = 0;
     const double ds_max = std::min(o.max_grid_ds, len / 8);
+    check_grid_size(g.s.size() + len / ds_max, p.entry(ci).where, len, ds_max);
     while (true) {
       const Frame f = frame_at(p, ci, u, s_off + s, tab.span_of(hint));
       double A_here = A_t;
@@ -443,6 +454,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
         vl = std::min(vl, knot_bound[kb].second);
         corner = true;  // a station, like a corner
       }
+      if (g.s.size() >= kMaxGridPoints) check_grid_size(g.s.size() + 1.0, p.entry(ci).where, len, ds_max);
       g.s.push_back(s_off + s);
       g.vlim.push_back(vl);
       g.A.push_back(A_here);

@@ -51,6 +51,10 @@ class PlanError : public std::runtime_error {
 };
 
 constexpr int kMaxAxes = 3;
+// Arc-length grid points one plan may hold (PlanOptions::max_grid_ds apart at
+// most, closer where the curve turns): about 1 GB; a path needing more is
+// refused naming the curve (split it: plan --window).
+constexpr double kMaxGridPoints = 4e7;
 
 struct Limits {
   double feed = 50;                        // commanded feed, units/s
