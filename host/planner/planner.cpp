@@ -57,8 +57,8 @@ const std::vector<double>& PathCurve::split_s() const {
 // Interior points where the curve's speed |C'(u)| falls to zero (to 1e-7 of
 // the span's largest sampled speed): the tangent turns back there, so the
 // machine must stop. Each span's speed is sampled at kSamples + 1 points and
-// each interior local minimum refined by golden-section search (|C'| is
-// V-shaped at a cusp).
+// each interior local minimum below a quarter of the largest sample refined
+// by golden-section search (|C'| is V-shaped at a cusp).
 const std::vector<double>& PathCurve::cusp_s() const {
   constexpr int kSamples = 32;
   if (cusp_done_) return cusp_s_;
@@ -77,7 +77,9 @@ const std::vector<double>& PathCurve::cusp_s() const {
     double vmax = 0;
     for (int j = 0; j <= kSamples; ++j) vmax = std::max(vmax, v[j] = speed(sp.u0 + (sp.u1 - sp.u0) * j / kSamples));
     for (int j = 1; j < kSamples; ++j) {
-      if (!(v[j] <= v[j - 1] && v[j] <= v[j + 1])) continue;
+      // a cusp's V leaves a sample within 1/32 of the span's speed range;
+      // a flat speed (a line) is no minimum to refine
+      if (!(v[j] <= v[j - 1] && v[j] <= v[j + 1] && v[j] < 0.25 * vmax)) continue;
       double a = sp.u0 + (sp.u1 - sp.u0) * (j - 1) / kSamples, b = sp.u0 + (sp.u1 - sp.u0) * (j + 1) / kSamples;
       double best = sp.u0 + (sp.u1 - sp.u0) * j / kSamples, vbest = v[j];
       for (int it = 0; it < 100 && b - a > 1e-15 * (1 + std::fabs(a)); ++it) {
