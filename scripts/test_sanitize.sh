@@ -7,8 +7,11 @@
 #           co-simulations, compiled with -fsanitize=address,undefined; runs every CTest test
 #           except those left out below
 #     host  the host libraries and their unit tests only (geometry, fd unit tests, stream, input,
-#           corners, fuzz replay, the link's frame codec and the upload client against the
-#           loopback board with faults): no Verilated model is built; the CI step (.ci/run)
+#           corners, the planner's streaming, arc-length table, plot and JSON Lines tests, the
+#           job's toolpath streaming, fuzz replay, the link's frame codec and the upload client
+#           against the loopback board with faults): no Verilated model is built; the CI step
+#           (.ci/run). Left out: planner_test (planner.unit.{PlannerCore,PlannerInput,Profile,
+#           Segments}: it links the Verilated engines) and the *.cli.* tests (the trajcore tool)
 #
 # Left out in both: rtl.* (lint, elaboration, synthesis and formal runs of external tools: no code
 # of ours runs under the sanitizers there), fuzz.build / fuzz.short.* (the fuzz targets have
@@ -48,8 +51,10 @@ case "$scope" in
   host)
     cmake --build "$build" -j "$(nproc)" --target host/util/all host/geometry/all host/planner/all host/input/all \
       host/corners/all trajcore_fd trajcore_stream tb/geometry/all tb/stream/all tb/input/all tb/corners/all \
-      tb/fuzz/all fd_recurrence_test fd_model_test fd_compiler_speed_test fd_compiler_report_test link_test upload_test
-    select='^(geometry|fd\.unit|stream|input|corners|fuzz\.unit|link\.host|upload\.e2e)\.'
+      tb/fuzz/all fd_recurrence_test fd_model_test fd_compiler_speed_test fd_compiler_report_test link_test upload_test \
+      streaming_test arc_table_test plots_test jsonl_test toolpath_stream_test
+    select='^(geometry|fd\.unit|stream|input|corners|fuzz\.unit|link\.host|upload\.e2e|job\.unit)\.'
+    select="$select|^planner\.unit\.(Streaming|ArcTable|Plots|Jsonl)\."
     skip="$skip|^stream\.cli\."  # they run the trajcore tool, which carries the Verilated engines
     ;;
   *) echo "usage: $0 [all|host]"; exit 2 ;;

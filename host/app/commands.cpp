@@ -230,6 +230,26 @@ struct Staging {
   }
 };
 
+// The folders that create() makes for `dir` (it and its missing parents);
+// removed again, innermost first and only if empty, unless kept: a run that
+// fails leaves no empty output folder of its own making.
+struct CreatedFolders {
+  std::vector<fs::path> made;  // innermost first
+  bool keep = false;
+  void create(const std::string& dir) {
+    for (fs::path p = fs::path(dir).lexically_normal(); !p.empty() && !fs::exists(p); p = p.parent_path()) {
+      made.push_back(p);
+      if (p == p.parent_path()) break;
+    }
+    fs::create_directories(dir);
+  }
+  ~CreatedFolders() {
+    std::error_code ec;
+    if (!keep)
+      for (const auto& p : made) fs::remove(p, ec);  // fails (kept) if not empty
+  }
+};
+
 std::string core_line(const sim::SimResult& sr) {
   char b[256];
   std::snprintf(b, sizeof b,
@@ -243,6 +263,7 @@ std::string core_line(const sim::SimResult& sr) {
 }  // namespace
 
 int plan_command(const PlanArgs& a) {
+  util::check_output_path(a.output);
   const bool jsonl = !a.input.empty() && a.raster == 0 && input::file_kind(a.input, a.format) == input::FileKind::kJsonl;
   if (jsonl && a.window_given && a.window == 0)
     throw PlanError("plan: a JSON Lines path is always streamed: --window must be at least 2");
@@ -263,7 +284,8 @@ int run_command(const RunArgs& a) {
   // everything is written into a staging folder inside out_dir and moved
   // into place only when all of it is written (nothing half-written)
   const std::vector<std::string> names = {"plan.trj", "samples.csv", "report.txt", "path_feed.svg", "profile.svg"};
-  fs::create_directories(a.out_dir);
+  CreatedFolders out_dir;
+  out_dir.create(a.out_dir);
   for (const auto& n : names)
     if (fs::exists(a.out_dir + "/" + n) && !fs::is_regular_file(a.out_dir + "/" + n))
       throw PlanError(a.out_dir + "/" + n + ": exists and is not a regular file; nothing written");
@@ -285,6 +307,7 @@ int run_command(const RunArgs& a) {
     f.commit();
   }
   for (const auto& n : names) fs::rename(stage.dir + "/" + n, a.out_dir + "/" + n);
+  out_dir.keep = true;
   std::fputs(text.c_str(), stdout);
   std::printf("Wrote %s/{plan.trj, samples.csv, report.txt, path_feed.svg, profile.svg}\n", a.out_dir.c_str());
   const bool ok = sr.mismatches == 0 && !sr.tick_err && passes(cfg, rep);
@@ -293,6 +316,7 @@ int run_command(const RunArgs& a) {
 }
 
 int sim_command(const SimArgs& a) {
+  util::check_output_path(a.csv);
   const auto rd = stream::read_file(a.input);
   if (!rd.complete) {
     std::fprintf(stderr, "trajcore: error: %s (%zu segments before it were valid; nothing simulated)\n",

@@ -17,6 +17,7 @@
 #include "commands.hpp"
 #include "demo.hpp"
 #include "link_cmds.hpp"
+#include "util/atomic_file.hpp"
 
 namespace fd = traj::fd;
 
@@ -62,6 +63,8 @@ void apply_axes(JobConfig& cfg, const std::vector<double>& v, const std::vector<
 }  // namespace
 
 int main(int argc, char** argv) {
+  // an interrupted command leaves no "<output>.tmp" behind (SIGKILL excepted)
+  traj::util::remove_temporaries_on_signals();
   CLI::App app{"trajcore: FPGA motion-trajectory core, host toolchain"};
   app.require_subcommand(1);
 

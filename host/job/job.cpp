@@ -40,6 +40,10 @@ void check_tick_count(double duration, double period, const std::string& what) {
                     " (plan --window splits a path only between curves)");
 }
 
+void check_path_range(const plan::Path& p, const Machine& m) {
+  for (size_t i = 0; i < p.size(); ++i) m.check_range(p.curve(i).spline(), p.entry(i).where);
+}
+
 SegmentCompiler::SegmentCompiler(const Machine& m) : comp_(m.format()) {
   const fd::Format f = m.format();
   ps_.h = m.period;
@@ -72,6 +76,7 @@ JobResult run_job(const plan::Path& p, const JobConfig& cfg, const Progress& pro
   using Clock = std::chrono::steady_clock;
   cfg.validate();
   const Machine& m = cfg.machine;
+  check_path_range(p, m);  // before the planner's arc-length grid, whose size grows with the extent
   JobResult r;
   PlanFitRequest req;
   req.path = &p;

@@ -45,6 +45,8 @@ using Progress = std::function<void(const std::string& stage, double fraction)>;
 // in memory: at most kMaxPlanTicks ticks (PlanError naming `what` beyond).
 constexpr double kMaxPlanTicks = 1e7;
 void check_tick_count(double duration, double period, const std::string& what);
+// Machine::check_range on every curve of `p` (run_job and every streaming window, before planning).
+void check_path_range(const plan::Path& p, const Machine& m);
 
 JobResult run_job(const plan::Path& p, const JobConfig& cfg, const Progress& progress = {});
 std::vector<stream::Record> records_of(const JobResult& r);

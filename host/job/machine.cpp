@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "geometry/curve.hpp"
 #include "planner/planner.hpp"
 #include "util/format.hpp"
 #include "util/tick_period.hpp"
@@ -23,6 +24,37 @@ fd::Format Machine::format() const {
   if (degree == 5) return {3, 5, 96, 16, 48, 32};
   if (degree == 3) return {3, 3, 64, 16, 32, 16};
   throw PlanError("segment degree " + std::to_string(degree) + ": the tool carries engines for degree 3 and 5");
+}
+
+double Machine::output_range() const {
+  const fd::Format f = format();
+  return std::ldexp(1.0, f.out_width() - 1 - f.frac_bits);
+}
+
+void Machine::check_range(const geo::BSpline& c, const std::string& where) const {
+  const double range = output_range();
+  if (!(c.ctrl.size() > 0) || c.ctrl.cwiseAbs().maxCoeff() < range) return;
+  const geo::Curve curve(c, where);
+  std::vector<double> us;
+  for (const auto& sp : curve.spans()) us.insert(us.end(), {sp.u0, 0.5 * (sp.u0 + sp.u1)});
+  us.push_back(curve.u_end());
+  int axis = -1;
+  double worst = 0, at = 0;
+  for (double u : us) {
+    const Eigen::VectorXd x = curve.point(u);
+    for (int a = 0; a < x.size(); ++a)
+      if (!(std::fabs(x[a]) < range) && !(std::fabs(x[a]) <= worst)) {
+        axis = a;
+        worst = std::fabs(x[a]);
+        at = u;
+      }
+  }
+  if (axis < 0) return;
+  const fd::Format f = format();
+  throw PlanError(where + ": axis " + std::to_string(axis) + " leaves the output range: |x| reaches " +
+                  fmt("%.6g", worst) + " " + units + " (at u = " + fmt("%.6g", at) + "), the format holds |x| < " +
+                  fmt("%.6g", range) + " (out_width=" + std::to_string(f.out_width()) +
+                  ", frac_bits=" + std::to_string(f.frac_bits) + "); move the origin or split the path");
 }
 
 double Machine::lsb() const { return std::ldexp(1.0, -format().frac_bits); }

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "fd/fd_compiler.hpp"
+#include "geometry/bspline.hpp"
 #include "stream/segment_stream.hpp"
 
 namespace traj::job {
@@ -32,6 +33,17 @@ struct Machine {
   // The longest segment (ticks) the compiler accepts in this format.
   uint32_t longest_segment() const;
   stream::Header header() const;
+  // The largest |coordinate| the output holds: 2^(out_width-1-frac_bits) units
+  // (32768 mm for the quintic engine).
+  double output_range() const;
+  // Refuses, before any planning, a curve that reaches outside the output
+  // range: plan::PlanError("<where>: axis A leaves the output range: |x|
+  // reaches X units, the format holds |x| < R (...)"), the compiler's message
+  // for a segment. The curve lies in the hull of its control points, so only
+  // a curve with a control point outside is evaluated (at its span ends and
+  // midpoints); one that stays inside although a control point does not is
+  // left to the compiler's exact check.
+  void check_range(const geo::BSpline& c, const std::string& where) const;
 };
 
 }  // namespace traj::job

@@ -200,6 +200,7 @@ WindowPlan plan_window(Window& win, const Carry& in, size_t commit_max, bool las
   const double h = cfg.machine.period;
   WindowPlan wp;
   Path path = win.path();
+  check_path_range(path, cfg.machine);
   size_t ncommit = last ? win.curves.size() : std::min(commit_max, win.curves.size() - 1);
   if (!last) ncommit = choose_commit(win, path, ncommit, cfg.plan.corner_tol);
   wp.ncommit = ncommit;

@@ -54,6 +54,48 @@ const std::vector<double>& PathCurve::split_s() const {
   return split_s_;
 }
 
+// Interior points where the curve's speed |C'(u)| falls to zero (to 1e-7 of
+// the span's largest sampled speed): the tangent turns back there, so the
+// machine must stop. Each span's speed is sampled at kSamples + 1 points and
+// each interior local minimum below a quarter of the largest sample refined
+// by golden-section search (|C'| is V-shaped at a cusp).
+const std::vector<double>& PathCurve::cusp_s() const {
+  constexpr int kSamples = 32;
+  if (cusp_done_) return cusp_s_;
+  cusp_done_ = true;
+  const int d = curve->dim();
+  const double u_lo = curve->u_begin(), u_hi = curve->u_end(), margin = 1e-9 * (u_hi - u_lo);
+  auto speed = [&](double u) {
+    double buf[2 * kMaxAxes];
+    curve->eval(u, 1, buf);
+    double ss = 0;
+    for (int a = 0; a < d; ++a) ss += buf[d + a] * buf[d + a];
+    return std::sqrt(ss);
+  };
+  for (const auto& sp : curve->spans()) {
+    std::array<double, kSamples + 1> v{};
+    double vmax = 0;
+    for (int j = 0; j <= kSamples; ++j) vmax = std::max(vmax, v[j] = speed(sp.u0 + (sp.u1 - sp.u0) * j / kSamples));
+    for (int j = 1; j < kSamples; ++j) {
+      // a cusp's V leaves a sample within 1/32 of the span's speed range;
+      // a flat speed (a line) is no minimum to refine
+      if (!(v[j] <= v[j - 1] && v[j] <= v[j + 1] && v[j] < 0.25 * vmax)) continue;
+      double a = sp.u0 + (sp.u1 - sp.u0) * (j - 1) / kSamples, b = sp.u0 + (sp.u1 - sp.u0) * (j + 1) / kSamples;
+      double best = sp.u0 + (sp.u1 - sp.u0) * j / kSamples, vbest = v[j];
+      for (int it = 0; it < 100 && b - a > 1e-15 * (1 + std::fabs(a)); ++it) {
+        const double m1 = b - 0.618033988749895 * (b - a), m2 = a + 0.618033988749895 * (b - a);
+        const double v1 = speed(m1), v2 = speed(m2);
+        if (v1 < vbest) vbest = v1, best = m1;
+        if (v2 < vbest) vbest = v2, best = m2;
+        (v1 < v2 ? b : a) = v1 < v2 ? m2 : m1;
+      }
+      if (vbest <= 1e-7 * vmax && best > u_lo + margin && best < u_hi - margin) cusp_s_.push_back(al->s(best));
+    }
+  }
+  std::sort(cusp_s_.begin(), cusp_s_.end());
+  return cusp_s_;
+}
+
 void check_join(const Eigen::VectorXd& a, const Eigen::VectorXd& b, const std::string& where) {
   if (b.size() != a.size())
     throw PlanError(where + ": " + std::to_string(b.size()) + " axes, the path so far has " + std::to_string(a.size()));
@@ -110,6 +152,9 @@ Frame frame_at(const Path& p, size_t ci, double u, double s, int span) {
     const double du = 1e-9 * (sp.u1 - sp.u0);
     if (u <= c.u_begin() && du > 0) return frame_at(p, ci, u + du, s, span);
     if (u >= c.u_end() && du > 0) return frame_at(p, ci, u - du, s, span);
+    // Inside, a cusp (PathCurve::cusp_s): the planner stops there, and the
+    // frame is the incoming one.
+    if (du > 0 && u - du > c.u_begin()) return frame_at(p, ci, u - du, s, span);
     throw PlanError(p.entry(ci).where + ": zero parametric speed at u = " + num(u) +
                     " (a cusp: the tangent turns back; split the curve there)");
   }
@@ -332,6 +377,16 @@ struct Grid {
   std::vector<char> corner;  // forced stop
 };
 
+// The grid of one plan is held in memory: beyond kMaxGridPoints points
+// (about 1 GB) the path is refused naming the curve where the count passes it,
+// before the points are built.
+void check_grid_size(double points, const std::string& where, double len, double ds_max) {
+  if (points <= kMaxGridPoints) return;
+  throw PlanError(where + ": the arc-length grid would pass " + num(kMaxGridPoints) + " points (this curve is " +
+                  num(len) + " units long, a grid step is at most " + num(ds_max) +
+                  " units and shorter where the curve turns); split the path (plan --window plans it in parts)");
+}
+
 Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t, double J_t) {
   Grid g;
   const int d = p.dim();
@@ -372,6 +427,11 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
         must.push_back(al.s(uk));
       }
     }
+    for (double sc : p.entry(ci).cusp_s()) {  // a stop, like a corner
+      knot_bound.push_back({sc, 0.0});
+      must.push_back(sc);
+    }
+    std::sort(knot_bound.begin(), knot_bound.end());
     for (const auto& cp : caps) {
       const double mid = 0.5 * (cp.s0 + cp.s1) - s_off;
       if (mid > 0 && mid < len) must.push_back(mid);
@@ -390,6 +450,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
     double s = 0, u = c.u_begin();
     size_t mi = 0;
     const double ds_max = std::min(o.max_grid_ds, len / 8);
+    check_grid_size(g.s.size() + len / ds_max, p.entry(ci).where, len, ds_max);
     while (true) {
       const Frame f = frame_at(p, ci, u, s_off + s, tab.span_of(hint));
       double A_here = A_t;
@@ -443,6 +504,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
         vl = std::min(vl, knot_bound[kb].second);
         corner = true;  // a station, like a corner
       }
+      if (g.s.size() >= kMaxGridPoints) check_grid_size(g.s.size() + 1.0, p.entry(ci).where, len, ds_max);
       g.s.push_back(s_off + s);
       g.vlim.push_back(vl);
       g.A.push_back(A_here);

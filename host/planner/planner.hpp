@@ -51,6 +51,10 @@ class PlanError : public std::runtime_error {
 };
 
 constexpr int kMaxAxes = 3;
+// Arc-length grid points one plan may hold (PlanOptions::max_grid_ds apart at
+// most, closer where the curve turns): about 1 GB; a path needing more is
+// refused naming the curve (split it: plan --window).
+constexpr double kMaxGridPoints = 4e7;
 
 struct Limits {
   double feed = 50;                        // commanded feed, units/s
@@ -113,9 +117,12 @@ struct PathCurve {
   std::unique_ptr<ArcTable> table;  // fast arc-length inverse for marching (ticks, grid)
   std::string where;
   const std::vector<double>& split_s() const;  // s of geo::split_params, ascending (computed once)
+  // s of the interior cusps (zero speed: the tangent turns back), ascending (computed once);
+  // the planner stops there.
+  const std::vector<double>& cusp_s() const;
  private:
-  mutable std::vector<double> split_s_;
-  mutable bool split_done_ = false;
+  mutable std::vector<double> split_s_, cusp_s_;
+  mutable bool split_done_ = false, cusp_done_ = false;
 };
 
 // The join check of Path::add (so of load_path and of every streaming window):

@@ -13,9 +13,23 @@
 
 namespace traj::util {
 
+// Installs handlers for SIGINT, SIGTERM, SIGHUP and SIGPIPE that remove the
+// temporary files of the AtomicFiles open at that moment, then end the
+// process by the same signal. Call once at the start of main (it replaces
+// earlier handlers of those signals; a command that catches them itself
+// installs its own afterwards). SIGKILL cannot be caught: a killed process
+// leaves its "<path>.tmp" (never a half-written file under the final name).
+void remove_temporaries_on_signals();
+
+// Throws std::runtime_error if `path` cannot name an output file: empty, or
+// an existing directory. AtomicFile checks it; a command checks it first too,
+// so that a bad -o is refused before any work.
+void check_output_path(const std::string& path);
+
 class AtomicFile {
  public:
-  // Throws std::runtime_error("cannot write <path>.tmp") if it cannot be opened.
+  // Throws std::runtime_error("cannot write <path>.tmp") if it cannot be opened,
+  // and before creating anything if `path` is empty or names a directory.
   // "-" is standard output, written as it comes (no temporary, no rename).
   explicit AtomicFile(const std::string& path, std::ios::openmode mode = std::ios::out);
   ~AtomicFile();

@@ -4,6 +4,7 @@
 // butterfly length, and the Verilated core (RTL) for the output checks.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -363,4 +364,25 @@ TEST(PlannerInput, BadInputGetsOneClearError) {
   } catch (const PlanError& e) {
     EXPECT_NE(std::string(e.what()).find(bad), std::string::npos);
   }
+}
+
+// The planner's own guard (whatever the output format): a line of 1e12 units
+// would need 4e12 grid points 0.25 apart; it is refused naming the curve,
+// before any point is built (a fraction of a second, not 17 GB).
+TEST(PlannerCore, GridBeyondItsBoundRefusedNamingTheCurve) {
+  Eigen::VectorXd a(2), b(2);
+  a << 0, 0;
+  b << 1e12, 0;
+  Path p;
+  p.add(geo::make_line(a, b), "far line");
+  JobConfig cfg;
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    (void)traj::plan::plan_path(p, cfg.limits, cfg.plan_options());
+    ADD_FAILURE() << "a grid of 4e12 points accepted";
+  } catch (const PlanError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("far line: the arc-length grid would pass"), std::string::npos) << m;
+  }
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
 }
