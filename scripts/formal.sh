@@ -16,6 +16,8 @@ unit=$1 work=$2; shift 2
 blast=""
 case $unit in
   traj_bcu_gen) blast="memory_map; opt -fast; techmap; opt -fast; abc -g AND; opt_clean;"; DEPTH=${DEPTH:-8} ;;
+  # traj_fd_tm: z3 does not finish step 0 on the word-level model either
+  traj_fd_tm) blast="memory_map; opt -fast; techmap; opt -fast; abc -g AND; opt_clean;"; DEPTH=${DEPTH:-16} ;;
 esac
 DEPTH=${DEPTH:-24}
 files=$("$root/scripts/unit_files.sh" "$unit")
