@@ -23,7 +23,7 @@ class StepGen {
 
   static constexpr int F = FracBits;
   static constexpr int RW = PeriodWidth + F + 2;
-  static constexpr int kPrepClocks = Axes * RW + 2;  // sample -> next interval's D ready
+  static constexpr int kPrepClocks = Axes * RW + 3;  // sample -> next interval's D ready
 
   struct In {
     bool rst_n = true;
@@ -58,22 +58,25 @@ class StepGen {
     const uint32_t tmask = static_cast<uint32_t>(mask(TimeWidth));
     const uint32_t period = in.period & pmask;
     const uint32_t pulse = in.pulse & tmask, setup = in.setup & tmask;
-    const bool take = in.sample_valid && !prep_q_ && !alt_q_st_ && !nready_q_;
+    const bool take = in.sample_valid && !fetch_q_ && !prep_q_ && !alt_q_st_ && !nready_q_;
     const bool load = nready_q_ && (!active_q_ || last_q_);
     const bool last_bit = bit_q_ == RW - 1;
     const bool last_axis = ax_q_ == Axes - 1;
-    const int ax_next = take ? 0 : (ax_q_ + 1) % (1 << aw());
+    const bool f_last_bit = fbit_q_ == RW - 1;
+    const bool f_last_axis = fax_q_ == Axes - 1;
+    const int ax_next = take ? 0 : (fax_q_ + 1) % (1 << aw());
     const int shift_next = ax_next < Axes ? (in.shift[ax_next] & 63) : 0;
     const u128 nt = static_cast<u128>(nper_q_) << F;
+    const u128 ct = static_cast<u128>(cur_per_q_) << F;  // T of the running interval
 
-    // the sample bit of q's bit bit_q of axis ax_q (0 below bit 0, sign above)
-    const u128 s = ax_q_ < Axes ? in.sample[ax_q_] : 0;
+    // the sample bit of q's bit fbit_q of axis fax_q (0 below bit 0, sign above)
+    const u128 s = fax_q_ < Axes ? in.sample[fax_q_] : 0;
     const int j = j_q_;
     const bool sbit = j < 0 ? false : (j >= OutWidth ? ((s >> (OutWidth - 1)) & 1) != 0 : ((s >> j) & 1) != 0);
-    // serial subtraction q - q_prev
+    // serial subtraction q - q_prev, on the bit read one clock earlier
     const bool pbit = (ax_q_ < Axes && (ax_[ax_q_].qprev_q & 1) != 0) && !(reinit_q_ && bit_q_ < F);
-    const bool dbit = sbit ^ pbit ^ borrow_q_;
-    const bool borrow_d = (!sbit && pbit) || (!sbit && borrow_q_) || (pbit && borrow_q_);
+    const bool dbit = sbit_q_ ^ pbit ^ borrow_q_;
+    const bool borrow_d = (!sbit_q_ && pbit) || (!sbit_q_ && borrow_q_) || (pbit && borrow_q_);
 
     bool err_in = in.sample_valid && !take;
     Axis nx[Axes];
@@ -82,19 +85,18 @@ class StepGen {
       Axis& n = nx[a];
       n = q;
       if (prep_q_ && ax_q_ == a) {
-        n.qprev_q = (q.qprev_q >> 1) | (static_cast<u128>(sbit) << (RW - 1));
+        n.qprev_q = (q.qprev_q >> 1) | (static_cast<u128>(sbit_q_) << (RW - 1));
         n.nd_q = (q.nd_q >> 1) | (static_cast<u128>(dbit) << (RW - 1));
       }
       // DDA
-      const u128 sum_d = wrap(q.r_q + q.d_q, RW), sum_alt = wrap(q.r_q + q.alt_q, RW);
+      const u128 sum_d = wrap(q.r_q + q.d_q, RW);
+      const u128 sum_alt = q.dpos_q ? wrap(sum_d - ct, RW) : wrap(sum_d + ct, RW);
       const bool up = active_q_ && q.dpos_q && !neg(sum_alt);
       const bool down = active_q_ && !q.dpos_q && neg(sum_d);
       const u128 r_next = !active_q_ ? q.r_q : ((up || down) ? sum_alt : sum_d);
       const u128 alt_d = neg(q.nd_q) ? wrap(q.nd_q + nt, RW) : wrap(q.nd_q - nt, RW);
-      if (alt_q_st_) n.nalt_q = alt_d;
       if (load) {
         n.d_q = q.nd_q;
-        n.alt_q = q.nalt_q;
         n.r_q = reinit_q_ ? 0 : r_next;
         n.dpos_q = !neg(q.nd_q);
         n.dnz_q = q.nd_q != 0;
@@ -150,7 +152,7 @@ class StepGen {
             break;
         }
       }
-      const bool too_fast = load && (neg(q.nd_q) ? neg(q.nalt_q) : (!neg(q.nalt_q) && q.nalt_q != 0));
+      const bool too_fast = load && (neg(q.nd_q) ? neg(alt_d) : (!neg(alt_d) && alt_d != 0));
       const bool due_ovf = ((q.due_q >> (DueWidth - 1)) & 1) != ((q.due_q >> (DueWidth - 2)) & 1);
       err_in = err_in || too_fast || due_ovf;
       if (!in.rst_n) {
@@ -165,25 +167,25 @@ class StepGen {
     }
 
     // shared control
-    bool prep_d = prep_q_, first_d = first_q_, reinit_d = reinit_q_, alt_st_d = alt_q_st_, nready_d = nready_q_;
-    int ax_d = ax_q_, bit_d = bit_q_;
+    bool fetch_d = fetch_q_, first_d = first_q_, reinit_d = reinit_q_, alt_st_d = alt_q_st_, nready_d = nready_q_;
+    int fax_d = fax_q_, fbit_d = fbit_q_;
     if (take) {
-      prep_d = true;
-      ax_d = 0;
-      bit_d = 0;
+      fetch_d = true;
+      fax_d = 0;
+      fbit_d = 0;
       reinit_d = period != cur_per_q_;
-    } else if (prep_q_) {
-      if (!last_bit) {
-        bit_d = bit_q_ + 1;
+    } else if (fetch_q_) {
+      if (!f_last_bit) {
+        fbit_d = fbit_q_ + 1;
       } else {
-        bit_d = 0;
-        ax_d = last_axis ? 0 : ax_next;
-        if (last_axis) {
-          prep_d = false;
-          first_d = false;
-          alt_st_d = !first_q_;
-        }
+        fbit_d = 0;
+        fax_d = f_last_axis ? 0 : ax_next;
+        if (f_last_axis) fetch_d = false;
       }
+    }
+    if (prep_q_ && last_bit && last_axis) {
+      first_d = false;
+      alt_st_d = !first_q_;
     }
     if (alt_q_st_) {
       alt_st_d = false;
@@ -210,22 +212,24 @@ class StepGen {
     if (take) {
       nper_d = period;
       j_d = shift_next - F;
+    } else if (fetch_q_) {
+      j_d = f_last_bit ? shift_next - F : j_q_ + 1;
+    }
+    if (take) {
       borrow_dd = false;
     } else if (prep_q_) {
-      if (last_bit) {
-        j_d = shift_next - F;
-        borrow_dd = false;
-      } else {
-        j_d = j_q_ + 1;
-        borrow_dd = borrow_d;
-      }
+      borrow_dd = last_bit ? false : borrow_d;
     }
 
     for (int a = 0; a < Axes; ++a) ax_[a] = nx[a];
-    prep_q_ = prep_d;
-    ax_q_ = ax_d;
-    bit_q_ = bit_d;
+    prep_q_ = fetch_q_;
+    ax_q_ = fax_q_;
+    bit_q_ = fbit_q_;
+    fetch_q_ = fetch_d;
+    fax_q_ = fax_d;
+    fbit_q_ = fbit_d;
     j_q_ = j_d;
+    sbit_q_ = sbit;
     borrow_q_ = borrow_dd;
     first_q_ = first_d;
     reinit_q_ = reinit_d;
@@ -240,6 +244,9 @@ class StepGen {
     en_q_ = in.enable;
     err_q_ = err_q_ || err_in;
     if (!in.rst_n) {
+      fetch_q_ = false;
+      fax_q_ = 0;
+      fbit_q_ = 0;
       prep_q_ = false;
       ax_q_ = 0;
       bit_q_ = 0;
@@ -268,8 +275,8 @@ class StepGen {
   static bool neg_due(uint64_t v) { return ((v >> (DueWidth - 1)) & 1) != 0; }
 
   struct Axis {
-    u128 qprev_q = 0, nd_q = 0, nalt_q = 0;  // RW bits
-    u128 d_q = 0, alt_q = 0, r_q = 0;    // RW bits, two's complement
+    u128 qprev_q = 0, nd_q = 0;  // RW bits
+    u128 d_q = 0, r_q = 0;       // RW bits, two's complement
     bool dpos_q = false, dnz_q = false;
     bool up_q = false, down_q = false;   // the DDA's steps, one clock later
     uint64_t due_q = 0;                  // DueWidth bits, two's complement
@@ -279,8 +286,11 @@ class StepGen {
   };
 
   Axis ax_[Axes];
+  bool fetch_q_ = false;
+  int fax_q_ = 0, fbit_q_ = 0, j_q_ = 0;
+  bool sbit_q_ = false;
   bool prep_q_ = false;
-  int ax_q_ = 0, bit_q_ = 0, j_q_ = 0;
+  int ax_q_ = 0, bit_q_ = 0;
   bool borrow_q_ = false, first_q_ = true, reinit_q_ = false, alt_q_st_ = false, nready_q_ = false;
   uint32_t nper_q_ = 0, cur_per_q_ = 0;
   bool active_q_ = false, last_q_ = false;

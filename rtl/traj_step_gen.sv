@@ -27,10 +27,14 @@
 // exact modulo 2^RW because |D| <= T < 2^(RW-2).
 //
 // Preparation (one serial pass per sample, axis after axis, RW clocks per
-// axis, and one clock for D -/+ T: kPrepClocks = Axes * RW + 2): the bits of q, least significant
-// first, are read from sample_i (bit shift - F + i, sign-extended; 0 below
-// bit 0) and subtracted bit-serially from the previous q, which rotates
-// through the same shift register. sample_i must hold for kPrepClocks after
+// axis, one clock ahead of it to fetch the first bit, and one clock to finish:
+// kPrepClocks = Axes * RW + 3): the bits of q, least significant first, are
+// read from sample_i (bit shift - F + i, sign-extended; 0 below bit 0) into a
+// flop one clock before they are used (the read is a wide multiplexer; the
+// flop keeps it off the subtraction's path) and subtracted bit-serially from
+// the previous q, which rotates through the same shift register. The running
+// interval's D -/+ T is its D plus -/+ T of its period (T has F zero bits:
+// a PeriodWidth + 2 bit adder on the DDA's sum). sample_i must hold for kPrepClocks after
 // sample_valid_i (the FD engine holds its sample until its next tick). The
 // interval starts when the previous one ends (or at once when none runs):
 // with ticks every P >= kPrepClocks + 1 clocks the intervals follow each
@@ -97,15 +101,19 @@ module traj_step_gen #(
   // ---------------------------------------------------------------------
   // Serial preparation (shared by all axes).
   // ---------------------------------------------------------------------
-  logic                   prep_q;     // a pass is running
-  logic [AW-1:0]          ax_q;       // its axis
-  logic [BW-1:0]          bit_q;      // its bit of q
+  logic                   fetch_q;    // the pass's sample bits are being read
+  logic [AW-1:0]          fax_q;      // axis of the bit being read
+  logic [BW-1:0]          fbit_q;     // its bit of q
   logic [JW-1:0]          j_q;        // sample bit read for it (signed)
+  logic                   sbit_q;     // the bit read: the bit of q in use
+  logic                   prep_q;     // the pass is running: fetch_q one clock later
+  logic [AW-1:0]          ax_q;       // its axis (fax_q one clock later)
+  logic [BW-1:0]          bit_q;      // its bit of q (fbit_q one clock later)
   logic                   borrow_q;
   logic                   first_q;    // no sample since reset: the next one sets the position
   logic                   reinit_q;   // this pass restarts from the step boundary
-  logic                   alt_q_st;   // the pass has ended: D -/+ T is being registered
-  logic                   nready_q;   // the next interval's D and D -/+ T are ready
+  logic                   alt_q_st;   // the pass has ended: one clock to nready_q
+  logic                   nready_q;   // the next interval's D is ready
   logic [PeriodWidth-1:0] nper_q;     // its period
   logic [PeriodWidth-1:0] cur_per_q;  // period of the last interval loaded
   // DDA (shared interval counter)
@@ -114,22 +122,27 @@ module traj_step_gen #(
   logic [TimeWidth-1:0]   hold_q;     // setup_i - pulse_i, at least 0
   logic                   en_q, err_q;
 
-  logic take, load, last_bit, last_axis, sbit;
+  logic take, load, last_bit, last_axis, f_last_bit, f_last_axis, sbit;
   logic [Axes-1:0] err_axis;
   logic [RW-1:0]   nt, nt_neg;        // T of the next interval, -T
-  logic [5:0]      shift_next;        // shift of the axis the pass goes to next
+  logic [PeriodWidth+1:0] cper, cper_neg;  // the running interval's T / 2^F, its negation
+  logic [5:0]      shift_next;        // shift of the axis the read goes to next
   logic [AW-1:0]   ax_next;
 
-  assign take      = sample_valid_i && !prep_q && !alt_q_st && !nready_q;
-  assign load      = nready_q && (!active_q || last_q);
-  assign last_bit  = (bit_q == BW'(RW - 1));
-  assign last_axis = (ax_q == AW'(Axes - 1));
-  assign ax_next   = take ? '0 : ax_q + 1'b1;
-  assign shift_next = shift_i[32'(ax_next)*6 +: 6];
-  assign nt        = {2'b00, nper_q, {F{1'b0}}};
-  assign nt_neg    = -nt;
+  assign take        = sample_valid_i && !fetch_q && !prep_q && !alt_q_st && !nready_q;
+  assign load        = nready_q && (!active_q || last_q);
+  assign last_bit    = (bit_q == BW'(RW - 1));
+  assign last_axis   = (ax_q == AW'(Axes - 1));
+  assign f_last_bit  = (fbit_q == BW'(RW - 1));
+  assign f_last_axis = (fax_q == AW'(Axes - 1));
+  assign ax_next     = take ? '0 : fax_q + 1'b1;
+  assign shift_next  = shift_i[32'(ax_next)*6 +: 6];
+  assign nt          = {2'b00, nper_q, {F{1'b0}}};
+  assign nt_neg      = -nt;
+  assign cper        = {2'b00, cur_per_q};
+  assign cper_neg    = -cper;
 
-  // the sample bit of q's bit bit_q of axis ax_q: sign-extended above, 0
+  // the sample bit of q's bit fbit_q of axis fax_q: sign-extended above, 0
   // below; one OutWidth:1 multiplexer per axis, then the axis (a variable
   // part-select over all axes would be a barrel shifter)
   logic                      j_neg, j_above;
@@ -143,10 +156,13 @@ module traj_step_gen #(
     assign smp          = sample_i[a*OutWidth +: OutWidth];
     assign sbit_axis[a] = j_neg ? 1'b0 : (j_above ? smp[OutWidth-1] : smp[j_idx]);
   end
-  assign sbit = sbit_axis[ax_q];
+  assign sbit = sbit_axis[fax_q];
 
   always_ff @(posedge clk_i) begin
     if (!rst_ni) begin
+      fetch_q   <= 1'b0;
+      fax_q     <= '0;
+      fbit_q    <= '0;
       prep_q    <= 1'b0;
       ax_q      <= '0;
       bit_q     <= '0;
@@ -164,24 +180,27 @@ module traj_step_gen #(
       en_q  <= enable_i;
       err_q <= err_q || (sample_valid_i && !take) || (|err_axis);
       if (take) begin
-        prep_q   <= 1'b1;
-        ax_q     <= '0;
-        bit_q    <= '0;
+        fetch_q  <= 1'b1;
+        fax_q    <= '0;
+        fbit_q   <= '0;
         // restart from the step boundary when the period differs from the
         // last interval's (0 after reset: the first interval)
         reinit_q <= (period_i != cur_per_q);
-      end else if (prep_q) begin
-        if (!last_bit) begin
-          bit_q <= bit_q + 1'b1;
+      end else if (fetch_q) begin
+        if (!f_last_bit) begin
+          fbit_q <= fbit_q + 1'b1;
         end else begin
-          bit_q <= '0;
-          ax_q  <= last_axis ? '0 : ax_next;
-          if (last_axis) begin
-            prep_q   <= 1'b0;
-            first_q  <= 1'b0;
-            alt_q_st <= !first_q;
-          end
+          fbit_q <= '0;
+          fax_q  <= f_last_axis ? '0 : ax_next;
+          if (f_last_axis) fetch_q <= 1'b0;
         end
+      end
+      prep_q <= fetch_q;
+      ax_q   <= fax_q;
+      bit_q  <= fbit_q;
+      if (prep_q && last_bit && last_axis) begin
+        first_q  <= 1'b0;
+        alt_q_st <= !first_q;
       end
       if (alt_q_st) begin
         alt_q_st <= 1'b0;
@@ -204,18 +223,17 @@ module traj_step_gen #(
   // datapath of the pass (not reset)
   always_ff @(posedge clk_i) begin
     hold_q <= (setup_i > pulse_i) ? setup_i - pulse_i : '0;
+    sbit_q <= sbit;
     if (take) begin
-      nper_q   <= period_i;
-      j_q      <= JW'(shift_next) - JW'(F);
+      nper_q <= period_i;
+      j_q    <= JW'(shift_next) - JW'(F);
+    end else if (fetch_q) begin
+      j_q    <= f_last_bit ? JW'(shift_next) - JW'(F) : j_q + 1'b1;
+    end
+    if (take) begin
       borrow_q <= 1'b0;
     end else if (prep_q) begin
-      if (last_bit) begin
-        j_q      <= JW'(shift_next) - JW'(F);
-        borrow_q <= 1'b0;
-      end else begin
-        j_q      <= j_q + 1'b1;
-        borrow_q <= borrow_d;
-      end
+      borrow_q <= last_bit ? 1'b0 : borrow_d;
     end
   end
 
@@ -223,8 +241,8 @@ module traj_step_gen #(
   logic pbit, dbit, borrow_d;
   logic [Axes-1:0] qprev_lsb;
   assign pbit     = qprev_lsb[ax_q] && !(reinit_q && 32'(bit_q) < 32'(F));
-  assign dbit     = sbit ^ pbit ^ borrow_q;
-  assign borrow_d = (!sbit && pbit) || (!sbit && borrow_q) || (pbit && borrow_q);
+  assign dbit     = sbit_q ^ pbit ^ borrow_q;
+  assign borrow_d = (!sbit_q && pbit) || (!sbit_q && borrow_q) || (pbit && borrow_q);
 
   // ---------------------------------------------------------------------
   // Per axis: q_prev and D shift registers, DDA, pulses.
@@ -234,8 +252,7 @@ module traj_step_gen #(
   for (genvar a = 0; a < Axes; a++) begin : g_axis
     logic [RW-1:0]        qprev_q;   // q of the previous sample (rotates during its pass)
     logic [RW-1:0]        nd_q;      // next interval's D (shifts in during the pass)
-    logic [RW-1:0]        nalt_q;    // next interval's D -/+ T
-    logic [RW-1:0]        d_q, alt_q, r_q;  // running interval: D, D -/+ T, remainder
+    logic [RW-1:0]        d_q, r_q;  // running interval: D, remainder
     logic                 dpos_q;    // running interval's D >= 0
     logic                 dnz_q;     // running interval's D != 0
     logic                 up_q, down_q;  // the DDA's steps, one clock later (timing)
@@ -250,7 +267,7 @@ module traj_step_gen #(
 
     always_ff @(posedge clk_i) begin
       if (mine) begin
-        qprev_q <= {sbit, qprev_q[RW-1:1]};
+        qprev_q <= {sbit_q, qprev_q[RW-1:1]};
         nd_q    <= {dbit, nd_q[RW-1:1]};
       end
     end
@@ -259,21 +276,18 @@ module traj_step_gen #(
     logic [RW-1:0] sum_d, sum_alt, alt_d, r_next;
     logic          up, down;
     assign sum_d   = r_q + d_q;
-    assign sum_alt = r_q + alt_q;
+    // r + D -/+ T: T's low F bits are 0
+    assign sum_alt = {sum_d[RW-1:F] + (dpos_q ? cper_neg : cper), sum_d[F-1:0]};
     assign up      = active_q && dpos_q && !sum_alt[RW-1];
     assign down    = active_q && !dpos_q && sum_d[RW-1];
     assign r_next  = !active_q ? r_q : ((up || down) ? sum_alt : sum_d);
-    // D + T for D < 0, D - T otherwise: one adder per axis (-T is shared)
+    // the next interval's D + T for D < 0, D - T otherwise (for the step
+    // rate check; -T is shared)
     assign alt_d   = nd_q + (nd_q[RW-1] ? nt : nt_neg);
-
-    always_ff @(posedge clk_i) begin
-      if (alt_q_st) nalt_q <= alt_d;
-    end
 
     always_ff @(posedge clk_i) begin
       if (load) begin
         d_q    <= nd_q;
-        alt_q  <= nalt_q;
         r_q    <= reinit_q ? '0 : r_next;
         dpos_q <= !nd_q[RW-1];
         dnz_q  <= (nd_q != '0);
@@ -341,7 +355,7 @@ module traj_step_gen #(
     // errors: more than one step per clock, due overflow (flagged at
     // |due| >= 2^(DueWidth-2), before it can wrap: it moves by <= 2 per clock)
     logic too_fast;
-    assign too_fast    = load && (nd_q[RW-1] ? nalt_q[RW-1] : (!nalt_q[RW-1] && nalt_q != '0));
+    assign too_fast    = load && (nd_q[RW-1] ? alt_d[RW-1] : (!alt_d[RW-1] && alt_d != '0));
     assign err_axis[a] = too_fast || (due_q[DueWidth-1] != due_q[DueWidth-2]);
 
     assign step_o[a] = step_q;
