@@ -67,7 +67,6 @@ class StepGen {
     const int ax_next = take ? 0 : (fax_q_ + 1) % (1 << aw());
     const int shift_next = ax_next < Axes ? (in.shift[ax_next] & 63) : 0;
     const u128 nt = static_cast<u128>(nper_q_) << F;
-    const u128 ct = static_cast<u128>(cur_per_q_) << F;  // T of the running interval
 
     // the sample bit of q's bit fbit_q of axis fax_q (0 below bit 0, sign above)
     const u128 s = fax_q_ < Axes ? in.sample[fax_q_] : 0;
@@ -89,14 +88,14 @@ class StepGen {
         n.nd_q = (q.nd_q >> 1) | (static_cast<u128>(dbit) << (RW - 1));
       }
       // DDA
-      const u128 sum_d = wrap(q.r_q + q.d_q, RW);
-      const u128 sum_alt = q.dpos_q ? wrap(sum_d - ct, RW) : wrap(sum_d + ct, RW);
+      const u128 sum_d = wrap(q.r_q + q.d_q, RW), sum_alt = wrap(q.r_q + q.alt_q, RW);
       const bool up = active_q_ && q.dpos_q && !neg(sum_alt);
       const bool down = active_q_ && !q.dpos_q && neg(sum_d);
       const u128 r_next = !active_q_ ? q.r_q : ((up || down) ? sum_alt : sum_d);
-      const u128 alt_d = neg(q.nd_q) ? wrap(q.nd_q + nt, RW) : wrap(q.nd_q - nt, RW);
+      const u128 alt_d = neg(q.nd_q) ? wrap(q.nd_q + nt, RW) : wrap(q.nd_q + (ntn_q_ << F), RW);
       if (load) {
         n.d_q = q.nd_q;
+        n.alt_q = alt_d;
         n.r_q = reinit_q_ ? 0 : r_next;
         n.dpos_q = !neg(q.nd_q);
         n.dnz_q = q.nd_q != 0;
@@ -152,7 +151,7 @@ class StepGen {
             break;
         }
       }
-      const bool too_fast = load && (neg(q.nd_q) ? neg(alt_d) : (!neg(alt_d) && alt_d != 0));
+      const bool too_fast = loaded_q_ && (neg(q.d_q) ? neg(q.alt_q) : (!neg(q.alt_q) && q.alt_q != 0));
       const bool due_ovf = ((q.due_q >> (DueWidth - 1)) & 1) != ((q.due_q >> (DueWidth - 2)) & 1);
       err_in = err_in || too_fast || due_ovf;
       if (!in.rst_n) {
@@ -192,6 +191,7 @@ class StepGen {
       nready_d = true;
     }
     bool active_d = active_q_, last_d = last_q_;
+    const bool loaded_d = load;
     uint32_t cnt_d = cnt_q_, cur_per_d = cur_per_q_;
     if (load) {
       nready_d = false;
@@ -238,9 +238,11 @@ class StepGen {
     nper_q_ = nper_d;
     cur_per_q_ = cur_per_d;
     active_q_ = active_d;
+    loaded_q_ = loaded_d;
     last_q_ = last_d;
     cnt_q_ = cnt_d;
     hold_q_ = hold_d;
+    ntn_q_ = wrap(-static_cast<u128>(nper_q_), PeriodWidth + 2);
     en_q_ = in.enable;
     err_q_ = err_q_ || err_in;
     if (!in.rst_n) {
@@ -255,6 +257,7 @@ class StepGen {
       alt_q_st_ = false;
       nready_q_ = false;
       active_q_ = false;
+      loaded_q_ = false;
       last_q_ = false;
       cnt_q_ = 0;
       cur_per_q_ = 0;
@@ -276,7 +279,7 @@ class StepGen {
 
   struct Axis {
     u128 qprev_q = 0, nd_q = 0;  // RW bits
-    u128 d_q = 0, r_q = 0;       // RW bits, two's complement
+    u128 d_q = 0, alt_q = 0, r_q = 0;  // RW bits, two's complement
     bool dpos_q = false, dnz_q = false;
     bool up_q = false, down_q = false;   // the DDA's steps, one clock later
     uint64_t due_q = 0;                  // DueWidth bits, two's complement
@@ -293,7 +296,8 @@ class StepGen {
   int ax_q_ = 0, bit_q_ = 0;
   bool borrow_q_ = false, first_q_ = true, reinit_q_ = false, alt_q_st_ = false, nready_q_ = false;
   uint32_t nper_q_ = 0, cur_per_q_ = 0;
-  bool active_q_ = false, last_q_ = false;
+  u128 ntn_q_ = 0;  // PeriodWidth + 2 bits: -T / 2^F of the next interval
+  bool active_q_ = false, loaded_q_ = false, last_q_ = false;
   uint32_t cnt_q_ = 0;
   uint32_t hold_q_ = 0;
   bool en_q_ = false, err_q_ = false;

@@ -32,9 +32,8 @@
 // read from sample_i (bit shift - F + i, sign-extended; 0 below bit 0) into a
 // flop one clock before they are used (the read is a wide multiplexer; the
 // flop keeps it off the subtraction's path) and subtracted bit-serially from
-// the previous q, which rotates through the same shift register. The running
-// interval's D -/+ T is its D plus -/+ T of its period (T has F zero bits:
-// a PeriodWidth + 2 bit adder on the DDA's sum). sample_i must hold for kPrepClocks after
+// the previous q, which rotates through the same shift register. D -/+ T is
+// formed when the interval starts. sample_i must hold for kPrepClocks after
 // sample_valid_i (the FD engine holds its sample until its next tick). The
 // interval starts when the previous one ends (or at once when none runs):
 // with ticks every P >= kPrepClocks + 1 clocks the intervals follow each
@@ -119,13 +118,14 @@ module traj_step_gen #(
   // DDA (shared interval counter)
   logic                   active_q, last_q;  // last_q == (cnt_q == 1)
   logic [PeriodWidth-1:0] cnt_q;
+  logic [PeriodWidth+1:0] ntn_q;      // -T / 2^F of the next interval (nper_q holds from take to load)
+  logic                   loaded_q;   // an interval started in the last clock (its step-rate check)
   logic [TimeWidth-1:0]   hold_q;     // setup_i - pulse_i, at least 0
   logic                   en_q, err_q;
 
   logic take, load, last_bit, last_axis, f_last_bit, f_last_axis, sbit;
   logic [Axes-1:0] err_axis;
   logic [RW-1:0]   nt, nt_neg;        // T of the next interval, -T
-  logic [PeriodWidth+1:0] cper, cper_neg;  // the running interval's T / 2^F, its negation
   logic [5:0]      shift_next;        // shift of the axis the read goes to next
   logic [AW-1:0]   ax_next;
 
@@ -138,9 +138,7 @@ module traj_step_gen #(
   assign ax_next     = take ? '0 : fax_q + 1'b1;
   assign shift_next  = shift_i[32'(ax_next)*6 +: 6];
   assign nt          = {2'b00, nper_q, {F{1'b0}}};
-  assign nt_neg      = -nt;
-  assign cper        = {2'b00, cur_per_q};
-  assign cper_neg    = -cper;
+  assign nt_neg      = {ntn_q, {F{1'b0}}};
 
   // the sample bit of q's bit fbit_q of axis fax_q: sign-extended above, 0
   // below; one OutWidth:1 multiplexer per axis, then the axis (a variable
@@ -171,6 +169,7 @@ module traj_step_gen #(
       alt_q_st  <= 1'b0;
       nready_q  <= 1'b0;
       active_q  <= 1'b0;
+      loaded_q  <= 1'b0;
       last_q    <= 1'b0;
       cnt_q     <= '0;
       cur_per_q <= '0;
@@ -206,6 +205,7 @@ module traj_step_gen #(
         alt_q_st <= 1'b0;
         nready_q <= 1'b1;
       end
+      loaded_q <= load;
       if (load) begin
         nready_q  <= 1'b0;
         active_q  <= 1'b1;
@@ -223,6 +223,7 @@ module traj_step_gen #(
   // datapath of the pass (not reset)
   always_ff @(posedge clk_i) begin
     hold_q <= (setup_i > pulse_i) ? setup_i - pulse_i : '0;
+    ntn_q  <= -{2'b00, nper_q};
     sbit_q <= sbit;
     if (take) begin
       nper_q <= period_i;
@@ -252,7 +253,7 @@ module traj_step_gen #(
   for (genvar a = 0; a < Axes; a++) begin : g_axis
     logic [RW-1:0]        qprev_q;   // q of the previous sample (rotates during its pass)
     logic [RW-1:0]        nd_q;      // next interval's D (shifts in during the pass)
-    logic [RW-1:0]        d_q, r_q;  // running interval: D, remainder
+    logic [RW-1:0]        d_q, alt_q, r_q;  // running interval: D, D -/+ T, remainder
     logic                 dpos_q;    // running interval's D >= 0
     logic                 dnz_q;     // running interval's D != 0
     logic                 up_q, down_q;  // the DDA's steps, one clock later (timing)
@@ -276,18 +277,17 @@ module traj_step_gen #(
     logic [RW-1:0] sum_d, sum_alt, alt_d, r_next;
     logic          up, down;
     assign sum_d   = r_q + d_q;
-    // r + D -/+ T: T's low F bits are 0
-    assign sum_alt = {sum_d[RW-1:F] + (dpos_q ? cper_neg : cper), sum_d[F-1:0]};
+    assign sum_alt = r_q + alt_q;
     assign up      = active_q && dpos_q && !sum_alt[RW-1];
     assign down    = active_q && !dpos_q && sum_d[RW-1];
     assign r_next  = !active_q ? r_q : ((up || down) ? sum_alt : sum_d);
-    // the next interval's D + T for D < 0, D - T otherwise (for the step
-    // rate check; -T is shared)
+    // the next interval's D + T for D < 0, D - T otherwise (-T is shared)
     assign alt_d   = nd_q + (nd_q[RW-1] ? nt : nt_neg);
 
     always_ff @(posedge clk_i) begin
       if (load) begin
         d_q    <= nd_q;
+        alt_q  <= alt_d;
         r_q    <= reinit_q ? '0 : r_next;
         dpos_q <= !nd_q[RW-1];
         dnz_q  <= (nd_q != '0);
@@ -352,10 +352,11 @@ module traj_step_gen #(
       end
     end
 
-    // errors: more than one step per clock, due overflow (flagged at
+    // errors: more than one step per clock (checked the clock after the
+    // interval starts), due overflow (flagged at
     // |due| >= 2^(DueWidth-2), before it can wrap: it moves by <= 2 per clock)
     logic too_fast;
-    assign too_fast    = load && (nd_q[RW-1] ? alt_d[RW-1] : (!alt_d[RW-1] && alt_d != '0));
+    assign too_fast    = loaded_q && (d_q[RW-1] ? alt_q[RW-1] : (!alt_q[RW-1] && alt_q != '0));
     assign err_axis[a] = too_fast || (due_q[DueWidth-1] != due_q[DueWidth-2]);
 
     assign step_o[a] = step_q;
