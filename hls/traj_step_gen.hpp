@@ -67,6 +67,7 @@ class StepGen {
     const int ax_next = take ? 0 : (fax_q_ + 1) % (1 << aw());
     const int shift_next = ax_next < Axes ? (in.shift[ax_next] & 63) : 0;
     const u128 nt = static_cast<u128>(nper_q_) << F;
+    const bool pulse_one = pulse == 1, setup_zero = setup == 0, hold_zero = hold_q_ == 0;
 
     // the sample bit of q's bit fbit_q of axis fax_q (0 below bit 0, sign above)
     const u128 s = fax_q_ < Axes ? in.sample[fax_q_] : 0;
@@ -106,8 +107,9 @@ class StepGen {
       const bool due_nz = q.due_q != 0;
       const bool want_dir = due_nz ? !neg_due(q.due_q) : ((active_q_ && q.dnz_q) ? q.dpos_q : q.dir_q);
       const bool can_emit = due_nz && want_dir == q.dir_q &&
-                            (q.pg_q == kPgIdle || q.pg_q == kPgHold || (q.pg_q == kPgLow && q.timer_q == 0));
+                            (q.pg_q == kPgIdle || q.pg_q == kPgHold || (q.pg_q == kPgLow && q.tz_q));
       const bool turn = q.pg_q == kPgIdle && want_dir != q.dir_q;
+      const bool t_one = q.timer_q == 1;
       const uint64_t dm = mask(DueWidth);
       const uint64_t due_d =
           (q.due_q + (q.up_q ? 1 : 0) - (q.down_q ? 1 : 0) - (can_emit ? (q.dir_q ? 1 : dm) : 0)) & dm;
@@ -117,6 +119,7 @@ class StepGen {
       if (can_emit) {
         n.step_q = true;
         n.timer_q = (pulse - 1) & tmask;
+        n.tz_q = pulse_one;
         n.pg_q = kPgHigh;
       } else {
         switch (q.pg_q) {
@@ -124,29 +127,38 @@ class StepGen {
             if (turn) {
               n.dir_q = want_dir;
               n.timer_q = setup;
+              n.tz_q = setup_zero;
               n.pg_q = kPgSetup;
             }
             break;
           case kPgSetup:
           case kPgHold:
-            if (q.timer_q == 0) n.pg_q = kPgIdle;
-            else n.timer_q = q.timer_q - 1;
+            if (q.tz_q) {
+              n.pg_q = kPgIdle;
+            } else {
+              n.timer_q = q.timer_q - 1;
+              n.tz_q = t_one;
+            }
             break;
           case kPgHigh:
-            if (q.timer_q == 0) {
+            if (q.tz_q) {
               n.step_q = false;
               n.timer_q = (pulse - 1) & tmask;
+              n.tz_q = pulse_one;
               n.pg_q = kPgLow;
             } else {
               n.timer_q = q.timer_q - 1;
+              n.tz_q = t_one;
             }
             break;
           default:  // kPgLow
-            if (q.timer_q == 0) {
+            if (q.tz_q) {
               n.timer_q = hold_q_;
+              n.tz_q = hold_zero;
               n.pg_q = kPgHold;
             } else {
               n.timer_q = q.timer_q - 1;
+              n.tz_q = t_one;
             }
             break;
         }
@@ -160,6 +172,7 @@ class StepGen {
         n.due_q = 0;
         n.pg_q = kPgIdle;
         n.timer_q = 0;
+        n.tz_q = true;
         n.step_q = false;
         n.dir_q = true;
       }
@@ -285,6 +298,7 @@ class StepGen {
     uint64_t due_q = 0;                  // DueWidth bits, two's complement
     int pg_q = kPgIdle;
     uint32_t timer_q = 0;
+    bool tz_q = true;  // timer_q == 0
     bool step_q = false, dir_q = true;
   };
 

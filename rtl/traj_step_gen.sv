@@ -122,6 +122,7 @@ module traj_step_gen #(
   logic                   loaded_q;   // an interval started in the last clock (its step-rate check)
   logic [TimeWidth-1:0]   hold_q;     // setup_i - pulse_i, at least 0
   logic                   en_q, err_q;
+  logic                   pulse_one, setup_zero, hold_zero;  // the timer's loads that are 0
 
   logic take, load, last_bit, last_axis, f_last_bit, f_last_axis, sbit;
   logic [Axes-1:0] err_axis;
@@ -139,6 +140,9 @@ module traj_step_gen #(
   assign shift_next  = shift_i[32'(ax_next)*6 +: 6];
   assign nt          = {2'b00, nper_q, {F{1'b0}}};
   assign nt_neg      = {ntn_q, {F{1'b0}}};
+  assign pulse_one   = (pulse_i == TimeWidth'(1));
+  assign setup_zero  = (setup_i == '0);
+  assign hold_zero   = (hold_q == '0);
 
   // the sample bit of q's bit fbit_q of axis fax_q: sign-extended above, 0
   // below; one OutWidth:1 multiplexer per axis, then the axis (a variable
@@ -260,6 +264,7 @@ module traj_step_gen #(
     logic [DueWidth-1:0]  due_q;
     pg_e                  pg_q;
     logic [TimeWidth-1:0] timer_q;
+    logic                 tz_q;      // timer_q == 0 (a flop: off the pulse decision's path)
     logic                 step_q, dir_q;
     logic                 mine;
 
@@ -297,12 +302,13 @@ module traj_step_gen #(
     end
 
     // pulses
-    logic want_dir, can_emit, turn;
+    logic want_dir, can_emit, turn, t_one;
+    assign t_one    = (timer_q == TimeWidth'(1));
     logic [DueWidth-1:0] due_d;
     assign want_dir = (due_q != '0) ? !due_q[DueWidth-1]
                     : ((active_q && dnz_q) ? dpos_q : dir_q);
     assign can_emit = (due_q != '0) && (want_dir == dir_q)
-                    && (pg_q == PgIdle || pg_q == PgHold || (pg_q == PgLow && timer_q == '0));
+                    && (pg_q == PgIdle || pg_q == PgHold || (pg_q == PgLow && tz_q));
     assign turn     = (pg_q == PgIdle) && (want_dir != dir_q);
     assign due_d    = due_q + DueWidth'(up_q) - DueWidth'(down_q)
                     - (can_emit ? (dir_q ? DueWidth'(1) : '1) : '0);
@@ -314,6 +320,7 @@ module traj_step_gen #(
         due_q   <= '0;
         pg_q    <= PgIdle;
         timer_q <= '0;
+        tz_q    <= 1'b1;
         step_q  <= 1'b0;
         dir_q   <= 1'b1;
       end else begin
@@ -323,29 +330,45 @@ module traj_step_gen #(
         if (can_emit) begin
           step_q  <= 1'b1;
           timer_q <= pulse_i - 1'b1;
+          tz_q    <= pulse_one;
           pg_q    <= PgHigh;
         end else begin
           case (pg_q)
             PgIdle:  if (turn) begin
                        dir_q   <= want_dir;
                        timer_q <= setup_i;
+                       tz_q    <= setup_zero;
                        pg_q    <= PgSetup;
                      end
-            PgSetup: if (timer_q == '0) pg_q <= PgIdle; else timer_q <= timer_q - 1'b1;
-            PgHigh:  if (timer_q == '0) begin
+            PgSetup: if (tz_q) begin
+                       pg_q    <= PgIdle;
+                     end else begin
+                       timer_q <= timer_q - 1'b1;
+                       tz_q    <= t_one;
+                     end
+            PgHigh:  if (tz_q) begin
                        step_q  <= 1'b0;
                        timer_q <= pulse_i - 1'b1;
+                       tz_q    <= pulse_one;
                        pg_q    <= PgLow;
                      end else begin
                        timer_q <= timer_q - 1'b1;
+                       tz_q    <= t_one;
                      end
-            PgLow:   if (timer_q == '0) begin
+            PgLow:   if (tz_q) begin
                        timer_q <= hold_q;
+                       tz_q    <= hold_zero;
                        pg_q    <= PgHold;
                      end else begin
                        timer_q <= timer_q - 1'b1;
+                       tz_q    <= t_one;
                      end
-            PgHold:  if (timer_q == '0) pg_q <= PgIdle; else timer_q <= timer_q - 1'b1;
+            PgHold:  if (tz_q) begin
+                       pg_q    <= PgIdle;
+                     end else begin
+                       timer_q <= timer_q - 1'b1;
+                       tz_q    <= t_one;
+                     end
             default: pg_q <= PgIdle;
           endcase
         end
