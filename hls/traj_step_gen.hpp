@@ -64,8 +64,7 @@ class StepGen {
     const bool last_axis = ax_q_ == Axes - 1;
     const bool f_last_bit = fbit_q_ == RW - 1;
     const bool f_last_axis = fax_q_ == Axes - 1;
-    const int ax_next = take ? 0 : (fax_q_ + 1) % (1 << aw());
-    const int shift_next = ax_next < Axes ? (in.shift[ax_next] & 63) : 0;
+    const int fax_inc = f_last_axis ? 0 : fax_q_ + 1;
     const u128 nt = static_cast<u128>(nper_q_) << F;
     const bool pulse_one = pulse == 1, setup_zero = setup == 0, hold_zero = hold_q_ == 0;
 
@@ -191,7 +190,7 @@ class StepGen {
         fbit_d = fbit_q_ + 1;
       } else {
         fbit_d = 0;
-        fax_d = f_last_axis ? 0 : ax_next;
+        fax_d = fax_inc;
         if (f_last_axis) fetch_d = false;
       }
     }
@@ -224,9 +223,9 @@ class StepGen {
     bool borrow_dd = borrow_q_;
     if (take) {
       nper_d = period;
-      j_d = shift_next - F;
+      j_d = jst_q_[0];
     } else if (fetch_q_) {
-      j_d = f_last_bit ? shift_next - F : j_q_ + 1;
+      j_d = f_last_bit ? jst_q_[fax_inc] : j_q_ + 1;
     }
     if (take) {
       borrow_dd = false;
@@ -242,6 +241,7 @@ class StepGen {
     fax_q_ = fax_d;
     fbit_q_ = fbit_d;
     j_q_ = j_d;
+    for (int a = 0; a < Axes; ++a) jst_q_[a] = (in.shift[a] & 63) - F;
     sbit_q_ = sbit;
     borrow_q_ = borrow_dd;
     first_q_ = first_d;
@@ -282,11 +282,6 @@ class StepGen {
  private:
   enum { kPgIdle, kPgSetup, kPgHigh, kPgLow, kPgHold };
 
-  static constexpr int aw() {  // axis counter width: clog2(Axes), at least 1
-    for (int w = 1; w < 3; ++w)
-      if ((1 << w) >= Axes) return w;
-    return 3;
-  }
   static bool neg(u128 v) { return ((v >> (RW - 1)) & 1) != 0; }
   static bool neg_due(uint64_t v) { return ((v >> (DueWidth - 1)) & 1) != 0; }
 
@@ -305,6 +300,7 @@ class StepGen {
   Axis ax_[Axes];
   bool fetch_q_ = false;
   int fax_q_ = 0, fbit_q_ = 0, j_q_ = 0;
+  int jst_q_[Axes] = {};  // axis a: its first sample bit, shift - F
   bool sbit_q_ = false;
   bool prep_q_ = false;
   int ax_q_ = 0, bit_q_ = 0;

@@ -127,8 +127,8 @@ module traj_step_gen #(
   logic take, load, last_bit, last_axis, f_last_bit, f_last_axis, sbit;
   logic [Axes-1:0] err_axis;
   logic [RW-1:0]   nt, nt_neg;        // T of the next interval, -T
-  logic [5:0]      shift_next;        // shift of the axis the read goes to next
-  logic [AW-1:0]   ax_next;
+  logic [AW-1:0]   fax_inc;           // the axis the read goes to after fax_q
+  logic [Axes*JW-1:0] jst_q;          // axis a: its first sample bit, shift - F (a flop of shift_i)
 
   assign take        = sample_valid_i && !fetch_q && !prep_q && !alt_q_st && !nready_q;
   assign load        = nready_q && (!active_q || last_q);
@@ -136,8 +136,7 @@ module traj_step_gen #(
   assign last_axis   = (ax_q == AW'(Axes - 1));
   assign f_last_bit  = (fbit_q == BW'(RW - 1));
   assign f_last_axis = (fax_q == AW'(Axes - 1));
-  assign ax_next     = take ? '0 : fax_q + 1'b1;
-  assign shift_next  = shift_i[32'(ax_next)*6 +: 6];
+  assign fax_inc     = f_last_axis ? '0 : fax_q + 1'b1;
   assign nt          = {2'b00, nper_q, {F{1'b0}}};
   assign nt_neg      = {ntn_q, {F{1'b0}}};
   assign pulse_one   = (pulse_i == TimeWidth'(1));
@@ -194,7 +193,7 @@ module traj_step_gen #(
           fbit_q <= fbit_q + 1'b1;
         end else begin
           fbit_q <= '0;
-          fax_q  <= f_last_axis ? '0 : ax_next;
+          fax_q  <= fax_inc;
           if (f_last_axis) fetch_q <= 1'b0;
         end
       end
@@ -231,10 +230,11 @@ module traj_step_gen #(
     sbit_q <= sbit;
     if (take) begin
       nper_q <= period_i;
-      j_q    <= JW'(shift_next) - JW'(F);
+      j_q    <= jst_q[0 +: JW];
     end else if (fetch_q) begin
-      j_q    <= f_last_bit ? JW'(shift_next) - JW'(F) : j_q + 1'b1;
+      j_q    <= f_last_bit ? jst_q[32'(fax_inc)*JW +: JW] : j_q + 1'b1;
     end
+    for (int a = 0; a < Axes; a++) jst_q[a*JW +: JW] <= JW'(shift_i[a*6 +: 6]) - JW'(F);
     if (take) begin
       borrow_q <= 1'b0;
     end else if (prep_q) begin
