@@ -77,7 +77,7 @@ module traj_board #(
   logic                     seg_start, new_seg_q;
   // tick and step generators
   logic [31:0]              period_used;
-  logic [StepPeriodWidth-1:0] step_period;
+  logic [StepPeriodWidth-1:0] step_period_q;  // a flop: the clamp off the generator's paths
   logic                     step_err;
   logic [9:0]               beat_q;
 
@@ -131,16 +131,19 @@ module traj_board #(
     .tick_o(tick), .period_o(period_used)
   );
 
-  // 0 (an external tick not measured yet): 1, all steps of a tick at once
-  assign step_period = (period_used[31:StepPeriodWidth] != '0) ? '1
-                     : (period_used == '0) ? StepPeriodWidth'(1) : period_used[StepPeriodWidth-1:0];
+  // 0 (an external tick not measured yet): 1, all steps of a tick at once;
+  // datapath, not reset (the generator takes it with a sample, long after)
+  always_ff @(posedge clk_i) begin
+    step_period_q <= (period_used[31:StepPeriodWidth] != '0) ? '1
+                   : (period_used == '0) ? StepPeriodWidth'(1) : period_used[StepPeriodWidth-1:0];
+  end
 
   traj_step_gen #(
     .Axes(Axes), .OutWidth(OutWidth), .FracBits(14), .PeriodWidth(StepPeriodWidth),
     .DueWidth(8), .TimeWidth(16)
   ) u_step (
     .clk_i, .rst_ni,
-    .shift_i(step_shift), .period_i(step_period), .pulse_i(pulse), .setup_i(setup),
+    .shift_i(step_shift), .period_i(step_period_q), .pulse_i(pulse), .setup_i(setup),
     .enable_i(enable),
     .sample_valid_i(sample_valid), .sample_i(sample),
     .step_o, .dir_o, .enable_o, .err_o(step_err)
