@@ -279,13 +279,16 @@ module traj_step_gen #(
     end
 
     // DDA: at most one step per clock
-    logic [RW-1:0] sum_d, sum_alt, alt_d, r_next;
-    logic          up, down;
+    // (r_q's update is written as enable / clear / a 2:1 multiplexer so the
+    // flop's enable and reset take the control, not the remainder's path)
+    logic [RW-1:0] sum_d, sum_alt, alt_d, r_step;
+    logic          up, down, steps_now;
     assign sum_d   = r_q + d_q;
     assign sum_alt = r_q + alt_q;
-    assign up      = active_q && dpos_q && !sum_alt[RW-1];
-    assign down    = active_q && !dpos_q && sum_d[RW-1];
-    assign r_next  = !active_q ? r_q : ((up || down) ? sum_alt : sum_d);
+    assign steps_now = active_q && (dpos_q ? !sum_alt[RW-1] : sum_d[RW-1]);  // a step this clock
+    assign up      = steps_now && dpos_q;
+    assign down    = steps_now && !dpos_q;
+    assign r_step  = steps_now ? sum_alt : sum_d;
     // the next interval's D + T for D < 0, D - T otherwise (-T is shared)
     assign alt_d   = nd_q + (nd_q[RW-1] ? nt : nt_neg);
 
@@ -293,12 +296,11 @@ module traj_step_gen #(
       if (load) begin
         d_q    <= nd_q;
         alt_q  <= alt_d;
-        r_q    <= reinit_q ? '0 : r_next;
         dpos_q <= !nd_q[RW-1];
         dnz_q  <= (nd_q != '0);
-      end else begin
-        r_q    <= r_next;
       end
+      if (load && reinit_q) r_q <= '0;
+      else if (active_q)    r_q <= r_step;
     end
 
     // pulses
