@@ -23,7 +23,7 @@ class StepGen {
 
   static constexpr int F = FracBits;
   static constexpr int RW = PeriodWidth + F + 2;
-  static constexpr int kPrepClocks = Axes * RW + 2;  // sample -> next interval's D ready
+  static constexpr int kPrepClocks = Axes * RW + 3;  // sample -> next interval's D ready
 
   struct In {
     bool rst_n = true;
@@ -58,22 +58,24 @@ class StepGen {
     const uint32_t tmask = static_cast<uint32_t>(mask(TimeWidth));
     const uint32_t period = in.period & pmask;
     const uint32_t pulse = in.pulse & tmask, setup = in.setup & tmask;
-    const bool take = in.sample_valid && !prep_q_ && !alt_q_st_ && !nready_q_;
+    const bool take = in.sample_valid && !fetch_q_ && !prep_q_ && !alt_q_st_ && !nready_q_;
     const bool load = nready_q_ && (!active_q_ || last_q_);
     const bool last_bit = bit_q_ == RW - 1;
     const bool last_axis = ax_q_ == Axes - 1;
-    const int ax_next = take ? 0 : (ax_q_ + 1) % (1 << aw());
-    const int shift_next = ax_next < Axes ? (in.shift[ax_next] & 63) : 0;
+    const bool f_last_bit = fbit_q_ == RW - 1;
+    const bool f_last_axis = fax_q_ == Axes - 1;
+    const int fax_inc = f_last_axis ? 0 : fax_q_ + 1;
     const u128 nt = static_cast<u128>(nper_q_) << F;
+    const bool pulse_one = pulse == 1, setup_zero = setup == 0, hold_zero = hold_q_ == 0;
 
-    // the sample bit of q's bit bit_q of axis ax_q (0 below bit 0, sign above)
-    const u128 s = ax_q_ < Axes ? in.sample[ax_q_] : 0;
+    // the sample bit of q's bit fbit_q of axis fax_q (0 below bit 0, sign above)
+    const u128 s = fax_q_ < Axes ? in.sample[fax_q_] : 0;
     const int j = j_q_;
     const bool sbit = j < 0 ? false : (j >= OutWidth ? ((s >> (OutWidth - 1)) & 1) != 0 : ((s >> j) & 1) != 0);
-    // serial subtraction q - q_prev
+    // serial subtraction q - q_prev, on the bit read one clock earlier
     const bool pbit = (ax_q_ < Axes && (ax_[ax_q_].qprev_q & 1) != 0) && !(reinit_q_ && bit_q_ < F);
-    const bool dbit = sbit ^ pbit ^ borrow_q_;
-    const bool borrow_d = (!sbit && pbit) || (!sbit && borrow_q_) || (pbit && borrow_q_);
+    const bool dbit = sbit_q_ ^ pbit ^ borrow_q_;
+    const bool borrow_d = (!sbit_q_ && pbit) || (!sbit_q_ && borrow_q_) || (pbit && borrow_q_);
 
     bool err_in = in.sample_valid && !take;
     Axis nx[Axes];
@@ -82,7 +84,7 @@ class StepGen {
       Axis& n = nx[a];
       n = q;
       if (prep_q_ && ax_q_ == a) {
-        n.qprev_q = (q.qprev_q >> 1) | (static_cast<u128>(sbit) << (RW - 1));
+        n.qprev_q = (q.qprev_q >> 1) | (static_cast<u128>(sbit_q_) << (RW - 1));
         n.nd_q = (q.nd_q >> 1) | (static_cast<u128>(dbit) << (RW - 1));
       }
       // DDA
@@ -90,11 +92,10 @@ class StepGen {
       const bool up = active_q_ && q.dpos_q && !neg(sum_alt);
       const bool down = active_q_ && !q.dpos_q && neg(sum_d);
       const u128 r_next = !active_q_ ? q.r_q : ((up || down) ? sum_alt : sum_d);
-      const u128 alt_d = neg(q.nd_q) ? wrap(q.nd_q + nt, RW) : wrap(q.nd_q - nt, RW);
-      if (alt_q_st_) n.nalt_q = alt_d;
+      const u128 alt_d = neg(q.nd_q) ? wrap(q.nd_q + nt, RW) : wrap(q.nd_q + (ntn_q_ << F), RW);
       if (load) {
         n.d_q = q.nd_q;
-        n.alt_q = q.nalt_q;
+        n.alt_q = alt_d;
         n.r_q = reinit_q_ ? 0 : r_next;
         n.dpos_q = !neg(q.nd_q);
         n.dnz_q = q.nd_q != 0;
@@ -105,8 +106,9 @@ class StepGen {
       const bool due_nz = q.due_q != 0;
       const bool want_dir = due_nz ? !neg_due(q.due_q) : ((active_q_ && q.dnz_q) ? q.dpos_q : q.dir_q);
       const bool can_emit = due_nz && want_dir == q.dir_q &&
-                            (q.pg_q == kPgIdle || q.pg_q == kPgHold || (q.pg_q == kPgLow && q.timer_q == 0));
+                            (q.pg_q == kPgIdle || q.pg_q == kPgHold || (q.pg_q == kPgLow && q.tz_q));
       const bool turn = q.pg_q == kPgIdle && want_dir != q.dir_q;
+      const bool t_one = q.timer_q == 1;
       const uint64_t dm = mask(DueWidth);
       const uint64_t due_d =
           (q.due_q + (q.up_q ? 1 : 0) - (q.down_q ? 1 : 0) - (can_emit ? (q.dir_q ? 1 : dm) : 0)) & dm;
@@ -116,6 +118,7 @@ class StepGen {
       if (can_emit) {
         n.step_q = true;
         n.timer_q = (pulse - 1) & tmask;
+        n.tz_q = pulse_one;
         n.pg_q = kPgHigh;
       } else {
         switch (q.pg_q) {
@@ -123,34 +126,43 @@ class StepGen {
             if (turn) {
               n.dir_q = want_dir;
               n.timer_q = setup;
+              n.tz_q = setup_zero;
               n.pg_q = kPgSetup;
             }
             break;
           case kPgSetup:
           case kPgHold:
-            if (q.timer_q == 0) n.pg_q = kPgIdle;
-            else n.timer_q = q.timer_q - 1;
+            if (q.tz_q) {
+              n.pg_q = kPgIdle;
+            } else {
+              n.timer_q = q.timer_q - 1;
+              n.tz_q = t_one;
+            }
             break;
           case kPgHigh:
-            if (q.timer_q == 0) {
+            if (q.tz_q) {
               n.step_q = false;
               n.timer_q = (pulse - 1) & tmask;
+              n.tz_q = pulse_one;
               n.pg_q = kPgLow;
             } else {
               n.timer_q = q.timer_q - 1;
+              n.tz_q = t_one;
             }
             break;
           default:  // kPgLow
-            if (q.timer_q == 0) {
+            if (q.tz_q) {
               n.timer_q = hold_q_;
+              n.tz_q = hold_zero;
               n.pg_q = kPgHold;
             } else {
               n.timer_q = q.timer_q - 1;
+              n.tz_q = t_one;
             }
             break;
         }
       }
-      const bool too_fast = load && (neg(q.nd_q) ? neg(q.nalt_q) : (!neg(q.nalt_q) && q.nalt_q != 0));
+      const bool too_fast = loaded_q_ && (neg(q.d_q) ? neg(q.alt_q) : (!neg(q.alt_q) && q.alt_q != 0));
       const bool due_ovf = ((q.due_q >> (DueWidth - 1)) & 1) != ((q.due_q >> (DueWidth - 2)) & 1);
       err_in = err_in || too_fast || due_ovf;
       if (!in.rst_n) {
@@ -159,37 +171,39 @@ class StepGen {
         n.due_q = 0;
         n.pg_q = kPgIdle;
         n.timer_q = 0;
+        n.tz_q = true;
         n.step_q = false;
         n.dir_q = true;
       }
     }
 
     // shared control
-    bool prep_d = prep_q_, first_d = first_q_, reinit_d = reinit_q_, alt_st_d = alt_q_st_, nready_d = nready_q_;
-    int ax_d = ax_q_, bit_d = bit_q_;
+    bool fetch_d = fetch_q_, first_d = first_q_, reinit_d = reinit_q_, alt_st_d = alt_q_st_, nready_d = nready_q_;
+    int fax_d = fax_q_, fbit_d = fbit_q_;
     if (take) {
-      prep_d = true;
-      ax_d = 0;
-      bit_d = 0;
+      fetch_d = true;
+      fax_d = 0;
+      fbit_d = 0;
       reinit_d = period != cur_per_q_;
-    } else if (prep_q_) {
-      if (!last_bit) {
-        bit_d = bit_q_ + 1;
+    } else if (fetch_q_) {
+      if (!f_last_bit) {
+        fbit_d = fbit_q_ + 1;
       } else {
-        bit_d = 0;
-        ax_d = last_axis ? 0 : ax_next;
-        if (last_axis) {
-          prep_d = false;
-          first_d = false;
-          alt_st_d = !first_q_;
-        }
+        fbit_d = 0;
+        fax_d = fax_inc;
+        if (f_last_axis) fetch_d = false;
       }
+    }
+    if (prep_q_ && last_bit && last_axis) {
+      first_d = false;
+      alt_st_d = !first_q_;
     }
     if (alt_q_st_) {
       alt_st_d = false;
       nready_d = true;
     }
     bool active_d = active_q_, last_d = last_q_;
+    const bool loaded_d = load;
     uint32_t cnt_d = cnt_q_, cur_per_d = cur_per_q_;
     if (load) {
       nready_d = false;
@@ -209,23 +223,26 @@ class StepGen {
     bool borrow_dd = borrow_q_;
     if (take) {
       nper_d = period;
-      j_d = shift_next - F;
+      j_d = jst_q_[0];
+    } else if (fetch_q_) {
+      j_d = f_last_bit ? jst_q_[fax_inc] : j_q_ + 1;
+    }
+    if (take) {
       borrow_dd = false;
     } else if (prep_q_) {
-      if (last_bit) {
-        j_d = shift_next - F;
-        borrow_dd = false;
-      } else {
-        j_d = j_q_ + 1;
-        borrow_dd = borrow_d;
-      }
+      borrow_dd = last_bit ? false : borrow_d;
     }
 
     for (int a = 0; a < Axes; ++a) ax_[a] = nx[a];
-    prep_q_ = prep_d;
-    ax_q_ = ax_d;
-    bit_q_ = bit_d;
+    prep_q_ = fetch_q_;
+    ax_q_ = fax_q_;
+    bit_q_ = fbit_q_;
+    fetch_q_ = fetch_d;
+    fax_q_ = fax_d;
+    fbit_q_ = fbit_d;
     j_q_ = j_d;
+    for (int a = 0; a < Axes; ++a) jst_q_[a] = (in.shift[a] & 63) - F;
+    sbit_q_ = sbit;
     borrow_q_ = borrow_dd;
     first_q_ = first_d;
     reinit_q_ = reinit_d;
@@ -234,12 +251,17 @@ class StepGen {
     nper_q_ = nper_d;
     cur_per_q_ = cur_per_d;
     active_q_ = active_d;
+    loaded_q_ = loaded_d;
     last_q_ = last_d;
     cnt_q_ = cnt_d;
     hold_q_ = hold_d;
+    ntn_q_ = wrap(-static_cast<u128>(nper_q_), PeriodWidth + 2);
     en_q_ = in.enable;
     err_q_ = err_q_ || err_in;
     if (!in.rst_n) {
+      fetch_q_ = false;
+      fax_q_ = 0;
+      fbit_q_ = 0;
       prep_q_ = false;
       ax_q_ = 0;
       bit_q_ = 0;
@@ -248,6 +270,7 @@ class StepGen {
       alt_q_st_ = false;
       nready_q_ = false;
       active_q_ = false;
+      loaded_q_ = false;
       last_q_ = false;
       cnt_q_ = 0;
       cur_per_q_ = 0;
@@ -259,31 +282,32 @@ class StepGen {
  private:
   enum { kPgIdle, kPgSetup, kPgHigh, kPgLow, kPgHold };
 
-  static constexpr int aw() {  // axis counter width: clog2(Axes), at least 1
-    for (int w = 1; w < 3; ++w)
-      if ((1 << w) >= Axes) return w;
-    return 3;
-  }
   static bool neg(u128 v) { return ((v >> (RW - 1)) & 1) != 0; }
   static bool neg_due(uint64_t v) { return ((v >> (DueWidth - 1)) & 1) != 0; }
 
   struct Axis {
-    u128 qprev_q = 0, nd_q = 0, nalt_q = 0;  // RW bits
-    u128 d_q = 0, alt_q = 0, r_q = 0;    // RW bits, two's complement
+    u128 qprev_q = 0, nd_q = 0;  // RW bits
+    u128 d_q = 0, alt_q = 0, r_q = 0;  // RW bits, two's complement
     bool dpos_q = false, dnz_q = false;
     bool up_q = false, down_q = false;   // the DDA's steps, one clock later
     uint64_t due_q = 0;                  // DueWidth bits, two's complement
     int pg_q = kPgIdle;
     uint32_t timer_q = 0;
+    bool tz_q = true;  // timer_q == 0
     bool step_q = false, dir_q = true;
   };
 
   Axis ax_[Axes];
+  bool fetch_q_ = false;
+  int fax_q_ = 0, fbit_q_ = 0, j_q_ = 0;
+  int jst_q_[Axes] = {};  // axis a: its first sample bit, shift - F
+  bool sbit_q_ = false;
   bool prep_q_ = false;
-  int ax_q_ = 0, bit_q_ = 0, j_q_ = 0;
+  int ax_q_ = 0, bit_q_ = 0;
   bool borrow_q_ = false, first_q_ = true, reinit_q_ = false, alt_q_st_ = false, nready_q_ = false;
   uint32_t nper_q_ = 0, cur_per_q_ = 0;
-  bool active_q_ = false, last_q_ = false;
+  u128 ntn_q_ = 0;  // PeriodWidth + 2 bits: -T / 2^F of the next interval
+  bool active_q_ = false, loaded_q_ = false, last_q_ = false;
   uint32_t cnt_q_ = 0;
   uint32_t hold_q_ = 0;
   bool en_q_ = false, err_q_ = false;

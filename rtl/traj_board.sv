@@ -3,7 +3,7 @@
 // generator and the step/dir generator. The tops add the PLL, the resets,
 // the input synchronisers and the pins.
 //
-//   rx_i (synchronised) -> traj_link -> segment words -> traj_fd_engine
+//   rx_i (synchronised) -> traj_link -> segment words -> FD engine
 //   traj_link CONFIG (tick period, run) -> traj_tick_gen -> tick -> engine, link
 //   engine samples -> traj_step_gen (CONFIG shift, pulse, setup, enable) -> pins
 //   engine status (underrun, tick_err, samples, segment starts) -> traj_link STATUS
@@ -19,6 +19,12 @@
 //   longer tick come in its first 2^18-1 clocks; the count stays exact), an
 //   external tick not measured yet counts as 1 clock (the steps of a tick at
 //   once).
+// * FD engine (FdTimeMux): 1 = traj_fd_tm (one adder, registers in block RAM;
+//   the UP5K's size), 0 = traj_fd_engine (all registers in flops). Both take
+//   the same stream and give the same samples per tick. traj_fd_tm's sample_o
+//   changes during its pass, so the link's STATUS reads a copy registered at
+//   sample_valid (the step generator reads sample_o while it holds: from
+//   sample_valid until the next tick).
 // * enable_o is high when CONFIG enables the outputs (drivers with an
 //   active-low enable need an inverter or the top's inversion).
 `default_nettype none
@@ -34,6 +40,7 @@ module traj_board #(
   parameter int GuardBits     = 48,
   parameter int FifoDepth     = 16384,
   parameter int MinTickPeriod = 256,
+  parameter bit FdTimeMux     = 1'b1,
   // derived, do not override
   parameter int OutWidth      = Width - GuardBits
 ) (
@@ -54,7 +61,7 @@ module traj_board #(
 
   `TRAJ_PARAM_CHECK(g_bad_derived, OutWidth == Width - GuardBits,
                     "traj_board: OutWidth is derived; do not override it")
-  `TRAJ_PARAM_CHECK(g_bad_min_tick, MinTickPeriod >= Axes * (StepPeriodWidth + 14 + 2) + 2,
+  `TRAJ_PARAM_CHECK(g_bad_min_tick, MinTickPeriod >= Axes * (StepPeriodWidth + 14 + 2) + 3,
                     "traj_board: MinTickPeriod must cover the step generator's preparation")
 
   // link <-> engine
@@ -66,11 +73,11 @@ module traj_board #(
   logic [15:0]              pulse, setup;
   // engine
   logic                     tick, sample_valid, underrun, seg_done, tick_err;
-  logic [Axes*OutWidth-1:0] sample;
+  logic [Axes*OutWidth-1:0] sample, status_sample;
   logic                     seg_start, new_seg_q;
   // tick and step generators
   logic [31:0]              period_used;
-  logic [StepPeriodWidth-1:0] step_period;
+  logic [StepPeriodWidth-1:0] step_period_q;  // a flop: the clamp off the generator's paths
   logic                     step_err;
   logic [9:0]               beat_q;
 
@@ -82,36 +89,61 @@ module traj_board #(
     .clk_i, .rst_ni, .rx_i, .tx_o,
     .m_axis_tdata(seg_tdata), .m_axis_tvalid(seg_tvalid), .m_axis_tready(seg_tready),
     .tick_i(tick), .seg_start_i(seg_start), .underrun_i(underrun),
-    .tick_err_i(tick_err || step_err), .sample_i(sample),
+    .tick_err_i(tick_err || step_err), .sample_i(status_sample),
     .run_o(run), .tick_period_o(tick_period), .step_shift_o(step_shift),
     .pulse_o(pulse), .setup_o(setup), .enable_o(enable)
   );
 
-  traj_fd_engine #(
-    .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits)
-  ) u_engine (
-    .clk_i, .rst_ni,
-    .s_axis_tdata(seg_tdata), .s_axis_tvalid(seg_tvalid), .s_axis_tready(seg_tready),
-    .tick_i(tick),
-    .sample_valid_o(sample_valid), .sample_o(sample),
-    .underrun_o(underrun), .seg_done_o(seg_done), .tick_err_o(tick_err)
-  );
+  if (FdTimeMux) begin : g_fd_tm
+    logic [Axes*OutWidth-1:0] sample_hold_q;
+
+    traj_fd_tm #(
+      .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits),
+      .TickClocks(MinTickPeriod)
+    ) u_engine (
+      .clk_i, .rst_ni,
+      .s_axis_tdata(seg_tdata), .s_axis_tvalid(seg_tvalid), .s_axis_tready(seg_tready),
+      .tick_i(tick),
+      .sample_valid_o(sample_valid), .sample_o(sample),
+      .underrun_o(underrun), .seg_done_o(seg_done), .tick_err_o(tick_err)
+    );
+
+    // datapath, not reset (as the engines' sample_o)
+    always_ff @(posedge clk_i) begin
+      if (sample_valid) sample_hold_q <= sample;
+    end
+    assign status_sample = sample_hold_q;
+  end else begin : g_fd_par
+    traj_fd_engine #(
+      .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits)
+    ) u_engine (
+      .clk_i, .rst_ni,
+      .s_axis_tdata(seg_tdata), .s_axis_tvalid(seg_tvalid), .s_axis_tready(seg_tready),
+      .tick_i(tick),
+      .sample_valid_o(sample_valid), .sample_o(sample),
+      .underrun_o(underrun), .seg_done_o(seg_done), .tick_err_o(tick_err)
+    );
+    assign status_sample = sample;
+  end
 
   traj_tick_gen #(.PeriodWidth(32)) u_tick (
     .clk_i, .rst_ni, .run_i(run), .period_i(tick_period), .tick_ext_i,
     .tick_o(tick), .period_o(period_used)
   );
 
-  // 0 (an external tick not measured yet): 1, all steps of a tick at once
-  assign step_period = (period_used[31:StepPeriodWidth] != '0) ? '1
-                     : (period_used == '0) ? StepPeriodWidth'(1) : period_used[StepPeriodWidth-1:0];
+  // 0 (an external tick not measured yet): 1, all steps of a tick at once;
+  // datapath, not reset (the generator takes it with a sample, long after)
+  always_ff @(posedge clk_i) begin
+    step_period_q <= (period_used[31:StepPeriodWidth] != '0) ? '1
+                   : (period_used == '0) ? StepPeriodWidth'(1) : period_used[StepPeriodWidth-1:0];
+  end
 
   traj_step_gen #(
     .Axes(Axes), .OutWidth(OutWidth), .FracBits(14), .PeriodWidth(StepPeriodWidth),
     .DueWidth(8), .TimeWidth(16)
   ) u_step (
     .clk_i, .rst_ni,
-    .shift_i(step_shift), .period_i(step_period), .pulse_i(pulse), .setup_i(setup),
+    .shift_i(step_shift), .period_i(step_period_q), .pulse_i(pulse), .setup_i(setup),
     .enable_i(enable),
     .sample_valid_i(sample_valid), .sample_i(sample),
     .step_o, .dir_o, .enable_o, .err_o(step_err)

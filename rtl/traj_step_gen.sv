@@ -27,10 +27,13 @@
 // exact modulo 2^RW because |D| <= T < 2^(RW-2).
 //
 // Preparation (one serial pass per sample, axis after axis, RW clocks per
-// axis, and one clock for D -/+ T: kPrepClocks = Axes * RW + 2): the bits of q, least significant
-// first, are read from sample_i (bit shift - F + i, sign-extended; 0 below
-// bit 0) and subtracted bit-serially from the previous q, which rotates
-// through the same shift register. sample_i must hold for kPrepClocks after
+// axis, one clock ahead of it to fetch the first bit, and one clock to finish:
+// kPrepClocks = Axes * RW + 3): the bits of q, least significant first, are
+// read from sample_i (bit shift - F + i, sign-extended; 0 below bit 0) into a
+// flop one clock before they are used (the read is a wide multiplexer; the
+// flop keeps it off the subtraction's path) and subtracted bit-serially from
+// the previous q, which rotates through the same shift register. D -/+ T is
+// formed when the interval starts. sample_i must hold for kPrepClocks after
 // sample_valid_i (the FD engine holds its sample until its next tick). The
 // interval starts when the previous one ends (or at once when none runs):
 // with ticks every P >= kPrepClocks + 1 clocks the intervals follow each
@@ -97,39 +100,50 @@ module traj_step_gen #(
   // ---------------------------------------------------------------------
   // Serial preparation (shared by all axes).
   // ---------------------------------------------------------------------
-  logic                   prep_q;     // a pass is running
-  logic [AW-1:0]          ax_q;       // its axis
-  logic [BW-1:0]          bit_q;      // its bit of q
+  logic                   fetch_q;    // the pass's sample bits are being read
+  logic [AW-1:0]          fax_q;      // axis of the bit being read
+  logic [BW-1:0]          fbit_q;     // its bit of q
   logic [JW-1:0]          j_q;        // sample bit read for it (signed)
+  logic                   sbit_q;     // the bit read: the bit of q in use
+  logic                   prep_q;     // the pass is running: fetch_q one clock later
+  logic [AW-1:0]          ax_q;       // its axis (fax_q one clock later)
+  logic [BW-1:0]          bit_q;      // its bit of q (fbit_q one clock later)
   logic                   borrow_q;
   logic                   first_q;    // no sample since reset: the next one sets the position
   logic                   reinit_q;   // this pass restarts from the step boundary
-  logic                   alt_q_st;   // the pass has ended: D -/+ T is being registered
-  logic                   nready_q;   // the next interval's D and D -/+ T are ready
+  logic                   alt_q_st;   // the pass has ended: one clock to nready_q
+  logic                   nready_q;   // the next interval's D is ready
   logic [PeriodWidth-1:0] nper_q;     // its period
   logic [PeriodWidth-1:0] cur_per_q;  // period of the last interval loaded
   // DDA (shared interval counter)
   logic                   active_q, last_q;  // last_q == (cnt_q == 1)
   logic [PeriodWidth-1:0] cnt_q;
+  logic [PeriodWidth+1:0] ntn_q;      // -T / 2^F of the next interval (nper_q holds from take to load)
+  logic                   loaded_q;   // an interval started in the last clock (its step-rate check)
   logic [TimeWidth-1:0]   hold_q;     // setup_i - pulse_i, at least 0
   logic                   en_q, err_q;
+  logic                   pulse_one, setup_zero, hold_zero;  // the timer's loads that are 0
 
-  logic take, load, last_bit, last_axis, sbit;
+  logic take, load, last_bit, last_axis, f_last_bit, f_last_axis, sbit;
   logic [Axes-1:0] err_axis;
   logic [RW-1:0]   nt, nt_neg;        // T of the next interval, -T
-  logic [5:0]      shift_next;        // shift of the axis the pass goes to next
-  logic [AW-1:0]   ax_next;
+  logic [AW-1:0]   fax_inc;           // the axis the read goes to after fax_q
+  logic [Axes*JW-1:0] jst_q;          // axis a: its first sample bit, shift - F (a flop of shift_i)
 
-  assign take      = sample_valid_i && !prep_q && !alt_q_st && !nready_q;
-  assign load      = nready_q && (!active_q || last_q);
-  assign last_bit  = (bit_q == BW'(RW - 1));
-  assign last_axis = (ax_q == AW'(Axes - 1));
-  assign ax_next   = take ? '0 : ax_q + 1'b1;
-  assign shift_next = shift_i[32'(ax_next)*6 +: 6];
-  assign nt        = {2'b00, nper_q, {F{1'b0}}};
-  assign nt_neg    = -nt;
+  assign take        = sample_valid_i && !fetch_q && !prep_q && !alt_q_st && !nready_q;
+  assign load        = nready_q && (!active_q || last_q);
+  assign last_bit    = (bit_q == BW'(RW - 1));
+  assign last_axis   = (ax_q == AW'(Axes - 1));
+  assign f_last_bit  = (fbit_q == BW'(RW - 1));
+  assign f_last_axis = (fax_q == AW'(Axes - 1));
+  assign fax_inc     = f_last_axis ? '0 : fax_q + 1'b1;
+  assign nt          = {2'b00, nper_q, {F{1'b0}}};
+  assign nt_neg      = {ntn_q, {F{1'b0}}};
+  assign pulse_one   = (pulse_i == TimeWidth'(1));
+  assign setup_zero  = (setup_i == '0);
+  assign hold_zero   = (hold_q == '0);
 
-  // the sample bit of q's bit bit_q of axis ax_q: sign-extended above, 0
+  // the sample bit of q's bit fbit_q of axis fax_q: sign-extended above, 0
   // below; one OutWidth:1 multiplexer per axis, then the axis (a variable
   // part-select over all axes would be a barrel shifter)
   logic                      j_neg, j_above;
@@ -143,10 +157,13 @@ module traj_step_gen #(
     assign smp          = sample_i[a*OutWidth +: OutWidth];
     assign sbit_axis[a] = j_neg ? 1'b0 : (j_above ? smp[OutWidth-1] : smp[j_idx]);
   end
-  assign sbit = sbit_axis[ax_q];
+  assign sbit = sbit_axis[fax_q];
 
   always_ff @(posedge clk_i) begin
     if (!rst_ni) begin
+      fetch_q   <= 1'b0;
+      fax_q     <= '0;
+      fbit_q    <= '0;
       prep_q    <= 1'b0;
       ax_q      <= '0;
       bit_q     <= '0;
@@ -155,6 +172,7 @@ module traj_step_gen #(
       alt_q_st  <= 1'b0;
       nready_q  <= 1'b0;
       active_q  <= 1'b0;
+      loaded_q  <= 1'b0;
       last_q    <= 1'b0;
       cnt_q     <= '0;
       cur_per_q <= '0;
@@ -164,29 +182,33 @@ module traj_step_gen #(
       en_q  <= enable_i;
       err_q <= err_q || (sample_valid_i && !take) || (|err_axis);
       if (take) begin
-        prep_q   <= 1'b1;
-        ax_q     <= '0;
-        bit_q    <= '0;
+        fetch_q  <= 1'b1;
+        fax_q    <= '0;
+        fbit_q   <= '0;
         // restart from the step boundary when the period differs from the
         // last interval's (0 after reset: the first interval)
         reinit_q <= (period_i != cur_per_q);
-      end else if (prep_q) begin
-        if (!last_bit) begin
-          bit_q <= bit_q + 1'b1;
+      end else if (fetch_q) begin
+        if (!f_last_bit) begin
+          fbit_q <= fbit_q + 1'b1;
         end else begin
-          bit_q <= '0;
-          ax_q  <= last_axis ? '0 : ax_next;
-          if (last_axis) begin
-            prep_q   <= 1'b0;
-            first_q  <= 1'b0;
-            alt_q_st <= !first_q;
-          end
+          fbit_q <= '0;
+          fax_q  <= fax_inc;
+          if (f_last_axis) fetch_q <= 1'b0;
         end
+      end
+      prep_q <= fetch_q;
+      ax_q   <= fax_q;
+      bit_q  <= fbit_q;
+      if (prep_q && last_bit && last_axis) begin
+        first_q  <= 1'b0;
+        alt_q_st <= !first_q;
       end
       if (alt_q_st) begin
         alt_q_st <= 1'b0;
         nready_q <= 1'b1;
       end
+      loaded_q <= load;
       if (load) begin
         nready_q  <= 1'b0;
         active_q  <= 1'b1;
@@ -204,18 +226,19 @@ module traj_step_gen #(
   // datapath of the pass (not reset)
   always_ff @(posedge clk_i) begin
     hold_q <= (setup_i > pulse_i) ? setup_i - pulse_i : '0;
+    ntn_q  <= -{2'b00, nper_q};
+    sbit_q <= sbit;
     if (take) begin
-      nper_q   <= period_i;
-      j_q      <= JW'(shift_next) - JW'(F);
+      nper_q <= period_i;
+      j_q    <= jst_q[0 +: JW];
+    end else if (fetch_q) begin
+      j_q    <= f_last_bit ? jst_q[32'(fax_inc)*JW +: JW] : j_q + 1'b1;
+    end
+    for (int a = 0; a < Axes; a++) jst_q[a*JW +: JW] <= JW'(shift_i[a*6 +: 6]) - JW'(F);
+    if (take) begin
       borrow_q <= 1'b0;
     end else if (prep_q) begin
-      if (last_bit) begin
-        j_q      <= JW'(shift_next) - JW'(F);
-        borrow_q <= 1'b0;
-      end else begin
-        j_q      <= j_q + 1'b1;
-        borrow_q <= borrow_d;
-      end
+      borrow_q <= last_bit ? 1'b0 : borrow_d;
     end
   end
 
@@ -223,8 +246,8 @@ module traj_step_gen #(
   logic pbit, dbit, borrow_d;
   logic [Axes-1:0] qprev_lsb;
   assign pbit     = qprev_lsb[ax_q] && !(reinit_q && 32'(bit_q) < 32'(F));
-  assign dbit     = sbit ^ pbit ^ borrow_q;
-  assign borrow_d = (!sbit && pbit) || (!sbit && borrow_q) || (pbit && borrow_q);
+  assign dbit     = sbit_q ^ pbit ^ borrow_q;
+  assign borrow_d = (!sbit_q && pbit) || (!sbit_q && borrow_q) || (pbit && borrow_q);
 
   // ---------------------------------------------------------------------
   // Per axis: q_prev and D shift registers, DDA, pulses.
@@ -234,7 +257,6 @@ module traj_step_gen #(
   for (genvar a = 0; a < Axes; a++) begin : g_axis
     logic [RW-1:0]        qprev_q;   // q of the previous sample (rotates during its pass)
     logic [RW-1:0]        nd_q;      // next interval's D (shifts in during the pass)
-    logic [RW-1:0]        nalt_q;    // next interval's D -/+ T
     logic [RW-1:0]        d_q, alt_q, r_q;  // running interval: D, D -/+ T, remainder
     logic                 dpos_q;    // running interval's D >= 0
     logic                 dnz_q;     // running interval's D != 0
@@ -242,6 +264,7 @@ module traj_step_gen #(
     logic [DueWidth-1:0]  due_q;
     pg_e                  pg_q;
     logic [TimeWidth-1:0] timer_q;
+    logic                 tz_q;      // timer_q == 0 (a flop: off the pulse decision's path)
     logic                 step_q, dir_q;
     logic                 mine;
 
@@ -250,45 +273,44 @@ module traj_step_gen #(
 
     always_ff @(posedge clk_i) begin
       if (mine) begin
-        qprev_q <= {sbit, qprev_q[RW-1:1]};
+        qprev_q <= {sbit_q, qprev_q[RW-1:1]};
         nd_q    <= {dbit, nd_q[RW-1:1]};
       end
     end
 
     // DDA: at most one step per clock
-    logic [RW-1:0] sum_d, sum_alt, alt_d, r_next;
-    logic          up, down;
+    // (r_q's update is written as enable / clear / a 2:1 multiplexer so the
+    // flop's enable and reset take the control, not the remainder's path)
+    logic [RW-1:0] sum_d, sum_alt, alt_d, r_step;
+    logic          up, down, steps_now;
     assign sum_d   = r_q + d_q;
     assign sum_alt = r_q + alt_q;
-    assign up      = active_q && dpos_q && !sum_alt[RW-1];
-    assign down    = active_q && !dpos_q && sum_d[RW-1];
-    assign r_next  = !active_q ? r_q : ((up || down) ? sum_alt : sum_d);
-    // D + T for D < 0, D - T otherwise: one adder per axis (-T is shared)
+    assign steps_now = active_q && (dpos_q ? !sum_alt[RW-1] : sum_d[RW-1]);  // a step this clock
+    assign up      = steps_now && dpos_q;
+    assign down    = steps_now && !dpos_q;
+    assign r_step  = steps_now ? sum_alt : sum_d;
+    // the next interval's D + T for D < 0, D - T otherwise (-T is shared)
     assign alt_d   = nd_q + (nd_q[RW-1] ? nt : nt_neg);
-
-    always_ff @(posedge clk_i) begin
-      if (alt_q_st) nalt_q <= alt_d;
-    end
 
     always_ff @(posedge clk_i) begin
       if (load) begin
         d_q    <= nd_q;
-        alt_q  <= nalt_q;
-        r_q    <= reinit_q ? '0 : r_next;
+        alt_q  <= alt_d;
         dpos_q <= !nd_q[RW-1];
         dnz_q  <= (nd_q != '0);
-      end else begin
-        r_q    <= r_next;
       end
+      if (load && reinit_q) r_q <= '0;
+      else if (active_q)    r_q <= r_step;
     end
 
     // pulses
-    logic want_dir, can_emit, turn;
+    logic want_dir, can_emit, turn, t_one;
+    assign t_one    = (timer_q == TimeWidth'(1));
     logic [DueWidth-1:0] due_d;
     assign want_dir = (due_q != '0) ? !due_q[DueWidth-1]
                     : ((active_q && dnz_q) ? dpos_q : dir_q);
     assign can_emit = (due_q != '0) && (want_dir == dir_q)
-                    && (pg_q == PgIdle || pg_q == PgHold || (pg_q == PgLow && timer_q == '0));
+                    && (pg_q == PgIdle || pg_q == PgHold || (pg_q == PgLow && tz_q));
     assign turn     = (pg_q == PgIdle) && (want_dir != dir_q);
     assign due_d    = due_q + DueWidth'(up_q) - DueWidth'(down_q)
                     - (can_emit ? (dir_q ? DueWidth'(1) : '1) : '0);
@@ -300,6 +322,7 @@ module traj_step_gen #(
         due_q   <= '0;
         pg_q    <= PgIdle;
         timer_q <= '0;
+        tz_q    <= 1'b1;
         step_q  <= 1'b0;
         dir_q   <= 1'b1;
       end else begin
@@ -309,39 +332,56 @@ module traj_step_gen #(
         if (can_emit) begin
           step_q  <= 1'b1;
           timer_q <= pulse_i - 1'b1;
+          tz_q    <= pulse_one;
           pg_q    <= PgHigh;
         end else begin
           case (pg_q)
             PgIdle:  if (turn) begin
                        dir_q   <= want_dir;
                        timer_q <= setup_i;
+                       tz_q    <= setup_zero;
                        pg_q    <= PgSetup;
                      end
-            PgSetup: if (timer_q == '0) pg_q <= PgIdle; else timer_q <= timer_q - 1'b1;
-            PgHigh:  if (timer_q == '0) begin
+            PgSetup: if (tz_q) begin
+                       pg_q    <= PgIdle;
+                     end else begin
+                       timer_q <= timer_q - 1'b1;
+                       tz_q    <= t_one;
+                     end
+            PgHigh:  if (tz_q) begin
                        step_q  <= 1'b0;
                        timer_q <= pulse_i - 1'b1;
+                       tz_q    <= pulse_one;
                        pg_q    <= PgLow;
                      end else begin
                        timer_q <= timer_q - 1'b1;
+                       tz_q    <= t_one;
                      end
-            PgLow:   if (timer_q == '0) begin
+            PgLow:   if (tz_q) begin
                        timer_q <= hold_q;
+                       tz_q    <= hold_zero;
                        pg_q    <= PgHold;
                      end else begin
                        timer_q <= timer_q - 1'b1;
+                       tz_q    <= t_one;
                      end
-            PgHold:  if (timer_q == '0) pg_q <= PgIdle; else timer_q <= timer_q - 1'b1;
+            PgHold:  if (tz_q) begin
+                       pg_q    <= PgIdle;
+                     end else begin
+                       timer_q <= timer_q - 1'b1;
+                       tz_q    <= t_one;
+                     end
             default: pg_q <= PgIdle;
           endcase
         end
       end
     end
 
-    // errors: more than one step per clock, due overflow (flagged at
+    // errors: more than one step per clock (checked the clock after the
+    // interval starts), due overflow (flagged at
     // |due| >= 2^(DueWidth-2), before it can wrap: it moves by <= 2 per clock)
     logic too_fast;
-    assign too_fast    = load && (nd_q[RW-1] ? nalt_q[RW-1] : (!nalt_q[RW-1] && nalt_q != '0));
+    assign too_fast    = loaded_q && (d_q[RW-1] ? alt_q[RW-1] : (!alt_q[RW-1] && alt_q != '0));
     assign err_axis[a] = too_fast || (due_q[DueWidth-1] != due_q[DueWidth-2]);
 
     assign step_o[a] = step_q;

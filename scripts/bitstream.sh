@@ -6,8 +6,10 @@
 #   usage: scripts/bitstream.sh BOARD
 #     BOARD  icebreaker (iCE40UP5K-SG48, rtl/board/traj_icebreaker_top.sv, SPRAM FIFO)
 #            hx8k       (iCE40HX8K-CT256 breakout, rtl/board/traj_hx8k_top.sv, BRAM FIFO)
-#   env: SEEDS  nextpnr placement seeds ("1 2 3 4 5")
-#        OUT    work directory (build/bitstreams/work_BOARD)
+#   env: SEEDS          nextpnr placement seeds ("1 2 3 4 5")
+#        OUT            work directory (build/bitstreams/work_BOARD)
+#        YOSYS_EXTRA    more synth_ice40 options (e.g. "-abc9 -device u")
+#        NEXTPNR_EXTRA  more nextpnr-ice40 options (e.g. "--opt-timing")
 #
 # Output: build/bitstreams/BOARD.bin from the first seed in SEEDS; one line per
 # seed: logic cells, block RAM, SPRAM, Fmax of the core clock. Exit status 0
@@ -15,7 +17,7 @@
 # misses timing.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-[ $# -eq 1 ] || { sed -n '6,10p' "$0" | sed 's/^# \{0,1\}//' >&2; exit 1; }
+[ $# -eq 1 ] || { sed -n '6,12p' "$0" | sed 's/^# \{0,1\}//' >&2; exit 1; }
 board=$1
 SEEDS=${SEEDS:-"1 2 3 4 5"}
 
@@ -35,7 +37,7 @@ cell_count() { { grep -E "$1:" "$2" || true; } | tail -1 | sed -E "s/.*$1: *([0-
 
 files=$("$root/scripts/unit_files.sh" "$top")
 json=$out/$top.json
-if ! yosys -q -l "$out/yosys.log" -p "read_verilog -sv -I$root/rtl $files; synth_ice40 $synth_opts -top $top -json $json" \
+if ! yosys -q -l "$out/yosys.log" -p "read_verilog -sv -I$root/rtl $files; synth_ice40 $synth_opts ${YOSYS_EXTRA:-} -top $top -json $json" \
      >/dev/null 2>&1; then
   echo "bitstream.sh: yosys failed, see $out/yosys.log" >&2; exit 1
 fi
@@ -46,7 +48,7 @@ status=0 shipped=""
 for seed in $SEEDS; do
   log=$out/nextpnr_s$seed.log
   asc=$out/${board}_s$seed.asc
-  if ! nextpnr-ice40 --"$device" --package $package --pcf "$pcf" --freq $mhz --timing-allow-fail \
+  if ! nextpnr-ice40 --"$device" --package $package --pcf "$pcf" --freq $mhz --timing-allow-fail ${NEXTPNR_EXTRA:-} \
         --seed "$seed" --json "$json" --asc "$asc" >"$log" 2>&1; then
     echo "seed $seed: nextpnr-ice40 failed ($(grep -m1 ERROR "$log" || echo "no ERROR line")), see $log" >&2
     status=1; continue

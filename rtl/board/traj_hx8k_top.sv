@@ -11,7 +11,8 @@
 // Inputs on header J2 have the iCE40 pull-ups on (SB_IO PULLUP): nothing on
 // the board pulls them.
 // The portable logic is traj_board (host link, segment FIFO in block RAM,
-// FD engine in the main job's format, tick and step generators).
+// parallel FD engine traj_fd_engine in the main job's format, tick and step
+// generators).
 `default_nettype none
 
 module traj_hx8k_top #(
@@ -63,7 +64,7 @@ module traj_hx8k_top #(
 
   traj_board #(
     .ClkHz(ClkHz), .Baud(Baud), .Axes(3), .Degree(5), .Width(96), .ChunkWidth(16), .GuardBits(48),
-    .FifoDepth(4096)
+    .FifoDepth(4096), .FdTimeMux(1'b0)
   ) u_board (
     .clk_i(clk), .rst_ni(rst_n), .rx_i(rx_q[1]), .tx_o,
     .tick_ext_i(tick_pin),

@@ -8,8 +8,9 @@
 //   LEDs: green = playing (blinks with the ticks), red = tick or step error
 // Inputs have the iCE40 pull-ups on (SB_IO PULLUP): an unplugged PMOD tick
 // input stays high (no edges), the button and RX idle high.
-// The portable logic is traj_board (host link, segment FIFO in SPRAM, FD
-// engine in the main job's format, tick and step generators).
+// The portable logic is traj_board (host link, segment FIFO in SPRAM, the
+// time-multiplexed FD engine traj_fd_tm in the main job's format, tick and
+// step generators).
 `default_nettype none
 
 module traj_icebreaker_top #(
@@ -63,7 +64,7 @@ module traj_icebreaker_top #(
 
   traj_board #(
     .ClkHz(ClkHz), .Baud(Baud), .Axes(3), .Degree(5), .Width(96), .ChunkWidth(16), .GuardBits(48),
-    .FifoDepth(16384)
+    .FifoDepth(16384), .FdTimeMux(1'b1)
   ) u_board (
     .clk_i(clk), .rst_ni(rst_n), .rx_i(rx_q[1]), .tx_o,
     .tick_ext_i(tick_pin),
