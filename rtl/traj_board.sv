@@ -15,7 +15,7 @@
 //   rate above one per clock, pulses that cannot keep up).
 // * The step generator interpolates over the tick period in use: the CONFIG
 //   period, or the measured period of the external tick; periods of 2^18
-//   clocks and more are clamped to 2^18-1 (7.2 ms at 36 MHz: the steps of a
+//   clocks and more are clamped to 2^18-1 (8.7 ms at 30 MHz: the steps of a
 //   longer tick come in its first 2^18-1 clocks; the count stays exact), an
 //   external tick not measured yet counts as 1 clock (the steps of a tick at
 //   once).
@@ -31,7 +31,7 @@
 `include "traj_check.svh"
 
 module traj_board #(
-  parameter int ClkHz         = 36_000_000,
+  parameter int ClkHz         = 30_000_000,
   parameter int Baud          = 1_000_000,
   parameter int Axes          = 3,
   parameter int Degree        = 5,

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
-# plan -> upload -> simulated board (rtl/traj_board.sv Verilated, 36 MHz,
+# plan -> upload -> simulated board (rtl/traj_board.sv Verilated, 30 MHz,
 # 1 Mbaud, UART pins driven bit by bit, step/dir pins decoded) on a
 # pseudo-terminal, checked against the stream's exact prediction: the main
 # job (the butterfly), then a streamed raster of N pieces
@@ -18,7 +18,7 @@ shift || true
 dir=$(mktemp -d)
 board=
 trap '[ -n "$board" ] && kill "$board" 2>/dev/null; rm -rf "$dir"' EXIT
-upload_opts=(--clock-hz 36e6 --step-shift 26 --timeout-ms 3000)
+upload_opts=(--clock-hz 30e6 --step-shift 26 --timeout-ms 3000)
 
 run() {  # run NAME EXPECT-FILE UPLOAD-INPUT [PLAN-COMMAND...]
   local name=$1 expect=$2 input=$3
@@ -43,7 +43,7 @@ run() {  # run NAME EXPECT-FILE UPLOAD-INPUT [PLAN-COMMAND...]
   awk -v a="$start" -v b="$end" -v f="$dir/$name.board" 'BEGIN {
     while ((getline l < f) > 0) if (match(l, /; ([0-9.]+) s simulated/, m)) s = m[1]
     printf "wall %.1f s for %.3f s simulated: %.3f x real time, %.2f million cycles/s\n", b - a, s, s / (b - a),
-      s * 36 / (b - a) }'
+      s * 30 / (b - a) }'
   [ "$rc" -eq 0 ] || { echo "$name: the board's pins differ from the prediction"; exit 1; }
 }
 

@@ -23,7 +23,7 @@ constexpr size_t kMaxPayload = 2048;
 constexpr size_t kHeaderBytes = 8, kCrcBytes = 4;
 // The core clock of the iCEBreaker top and the simulated board (tick period in
 // clocks); the HX8K top runs at 60 MHz (--clock-hz 60e6).
-constexpr double kDefaultBoardClockHz = 36e6;
+constexpr double kDefaultBoardClockHz = 30e6;
 
 enum class Type : uint8_t {
   kReset = 0x01,

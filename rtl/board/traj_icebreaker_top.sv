@@ -1,7 +1,7 @@
 // trajcore: iCEBreaker (iCE40UP5K-SG48) board top. Pins: constraints/icebreaker.pcf.
 //
-//   12 MHz oscillator -> SB_PLL40_PAD -> ClkHz core clock (icepll -i 12 -o 36:
-//   DIVR 0, DIVF 47, DIVQ 4, FILTER_RANGE 1)
+//   12 MHz oscillator -> SB_PLL40_PAD -> ClkHz core clock (icepll -i 12 -o 30:
+//   DIVR 0, DIVF 79, DIVQ 5, FILTER_RANGE 1)
 //   reset: power-on, PLL lock, user button BTN_N (traj_reset_sync)
 //   UART to the FTDI FT2232H channel B: rx_i (2-flop synchroniser), tx_o
 //   PMOD1A: step/dir of 3 axes, the drivers' enable, the external tick input
@@ -14,7 +14,7 @@
 `default_nettype none
 
 module traj_icebreaker_top #(
-  parameter int ClkHz = 36_000_000,  // must match the PLL settings below
+  parameter int ClkHz = 30_000_000,  // must match the PLL settings below
   parameter int Baud  = 1_000_000
 ) (
   input  logic       clk_i,       // 35: 12 MHz oscillator
@@ -37,8 +37,8 @@ module traj_icebreaker_top #(
   SB_PLL40_PAD #(
     .FEEDBACK_PATH("SIMPLE"),
     .DIVR(4'b0000),
-    .DIVF(7'b0101111),
-    .DIVQ(3'b100),
+    .DIVF(7'b1001111),
+    .DIVQ(3'b101),
     .FILTER_RANGE(3'b001)
   ) u_pll (
     .PACKAGEPIN(clk_i),

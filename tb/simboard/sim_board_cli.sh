@@ -26,7 +26,7 @@ start_board() {  # start_board OPTIONS...
   for _ in $(seq 100); do [ -s port ] && break; sleep 0.1; done
 }
 upload() {
-  "$T" upload plan.trj --port "$(cat port)" --clock-hz 36e6 --step-shift 26 --timeout-ms 3000 "$@" > upload.txt \
+  "$T" upload plan.trj --port "$(cat port)" --clock-hz 30e6 --step-shift 26 --timeout-ms 3000 "$@" > upload.txt \
     2> upload.err
 }
 
@@ -39,7 +39,7 @@ clean | faults | restart)
   if [ "$mode" = restart ]; then
     # the tool itself in the background (a function would fork a shell, and
     # SIGKILL would leave the tool running)
-    "$T" upload plan.trj --port "$(cat port)" --clock-hz 36e6 --step-shift 26 --timeout-ms 3000 > upload.txt \
+    "$T" upload plan.trj --port "$(cat port)" --clock-hz 30e6 --step-shift 26 --timeout-ms 3000 > upload.txt \
       2> upload.err &
     tool=$!
     sleep 0.4
