@@ -23,7 +23,7 @@ SEEDS=${SEEDS:-"1 2 3 4 5"}
 
 # device, package, top, pin file, core clock (MHz, the top's ClkHz / PLL), Yosys options
 case $board in
-  icebreaker) device=up5k package=sg48  top=traj_icebreaker_top pcf=icebreaker.pcf    mhz=36 synth_opts="-spram" ;;
+  icebreaker) device=up5k package=sg48  top=traj_icebreaker_top pcf=icebreaker.pcf    mhz=30 synth_opts="-spram" ;;
   hx8k)       device=hx8k package=ct256 top=traj_hx8k_top       pcf=hx8k_breakout.pcf mhz=60 synth_opts="" ;;
   *) echo "bitstream.sh: unknown board '$board' (icebreaker or hx8k)" >&2; exit 1 ;;
 esac
