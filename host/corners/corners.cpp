@@ -478,17 +478,19 @@ geo::BSpline fit_run(const std::vector<Vec>& poly, const Vec& t_in, const Vec& t
   std::vector<Trip> trips;
   Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(F, dim);
   auto add_row = [&](int first, const double* w, const Vec& target) {
-    // one residual sum_k w_k C_{first+k} - target: fixed points move to the right-hand side
+    // one residual sum_k w_k C_{first+k} - target: fixed points move to the right-hand side; a row
+    // may reach past the last control point with weight 0 (the smoothing stencil at the end)
+    const int count = std::min(4, n - first);
     Vec t = target;
-    for (int a = 0; a < 4; ++a) {
+    for (int a = 0; a < count; ++a) {
       const int i = first + a;
       if (i < 3 || i > n - 4) t -= w[a] * b.ctrl.row(i).transpose();
     }
-    for (int a = 0; a < 4; ++a) {
+    for (int a = 0; a < count; ++a) {
       const int i = first + a;
       if (i < 3 || i > n - 4) continue;
       rhs.row(i - 3) += w[a] * t.transpose();
-      for (int c = 0; c < 4; ++c) {
+      for (int c = 0; c < count; ++c) {
         const int k = first + c;
         if (k < 3 || k > n - 4) continue;
         trips.emplace_back(i - 3, k - 3, w[a] * w[c]);
