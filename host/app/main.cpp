@@ -169,11 +169,13 @@ int main(int argc, char** argv) {
 #endif
     if (*pl) {
       apply_axes(pa.cfg, v_axis, a_axis, j_axis);
+      pa.cfg.machine.choose_format(pa.cfg.limits);
       pa.window_given = window_opt->count() > 0;
       return traj::app::plan_command(pa);
     }
     if (*rn) {
       apply_axes(ra.cfg, v_axis, a_axis, j_axis);
+      ra.cfg.machine.choose_format(ra.cfg.limits);
       return traj::app::run_command(ra);
     }
     if (*sm) return traj::app::sim_command(sa);

@@ -19,11 +19,61 @@ void Machine::validate() const {
   (void)format();
 }
 
-fd::Format Machine::format() const {
+Allowance sample_allowance(double q, double h) { return {2 * q / h, 4 * q / (h * h), 8 * q / (h * h * h)}; }
+
+AllowanceShare allowance_share(const Allowance& al, const plan::Limits& l, int axes, int degree) {
+  AllowanceShare w;
+  auto take = [&](double allowance, double limit, const std::string& name) {
+    if (allowance / limit > w.share) w = {allowance / limit, name};
+  };
+  const double sd = std::sqrt(static_cast<double>(axes));
+  const bool jerk = degree != 3;
+  for (int a = 0; a < axes && a < plan::kMaxAxes; ++a) {
+    const std::string ax(1, "xyzabcuvw"[a]);
+    take(al.v, l.v_axis[a], "v_" + ax);
+    take(al.a, l.a_axis[a], "a_" + ax);
+    if (jerk) take(al.j, l.j_axis[a], "j_" + ax);
+  }
+  take(sd * al.v, l.feed, "feed");
+  take(sd * al.a, l.a_tan, "a_tan");
+  take(sd * al.a, l.a_cen, "a_cen");
+  if (jerk) {
+    take(sd * al.j, l.j_tan, "j_tan");
+    take(sd * al.j, l.j_cen, "j_cen");
+  }
+  return w;
+}
+
+std::vector<fd::Format> Machine::carried_formats(int degree) {
   // {axes, degree, width, chunk_width, guard_bits, frac_bits}
-  if (degree == 5) return {3, 5, 96, 16, 48, 32};
-  if (degree == 3) return {3, 3, 64, 16, 32, 16};
+  if (degree == 5) return {{3, 5, 96, 16, 48, 32}};
+  if (degree == 3) return {{3, 3, 64, 16, 32, 16}, {3, 3, 96, 16, 48, 32}};
   throw PlanError("segment degree " + std::to_string(degree) + ": the tool carries engines for degree 3 and 5");
+}
+
+fd::Format Machine::format() const {
+  const std::vector<fd::Format> f = carried_formats(degree);
+  if (build < 0 || build >= static_cast<int>(f.size()))
+    throw PlanError("engine build " + std::to_string(build) + " of degree " + std::to_string(degree) +
+                    ": the tool carries " + std::to_string(f.size()));
+  return f[build];
+}
+
+namespace {
+
+AllowanceShare share_of(const fd::Format& f, double period, const plan::Limits& l) {
+  const double q = (0.5 + f.tol_lsb) * std::ldexp(1.0, -f.frac_bits);
+  return allowance_share(sample_allowance(q, period), l, f.axes, f.degree);
+}
+
+}  // namespace
+
+void Machine::choose_format(const plan::Limits& l) {
+  l.validate();
+  validate();
+  const std::vector<fd::Format> fs = carried_formats(degree);
+  for (build = 0; build + 1 < static_cast<int>(fs.size()); ++build)
+    if (share_of(fs[build], period, l).share <= kAllowanceShare) return;
 }
 
 double Machine::output_range() const {

@@ -6,25 +6,73 @@
 #pragma once
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "fd/fd_compiler.hpp"
 #include "geometry/bspline.hpp"
 #include "stream/segment_stream.hpp"
 
+namespace traj::plan {
+struct Limits;
+}
+
 namespace traj::job {
+
+// The quantisation allowance on the differences of samples that are each
+// within q units of a smooth trajectory, at tick period h: the first, second
+// and third differences over h, h^2, h^3 move by at most 2q/h, 4q/h^2, 8q/h^3
+// (coefficient sums 2, 4, 8). Per axis; sqrt(axes) x for path quantities
+// (vector norms).
+struct Allowance {
+  double v = 0, a = 0, j = 0;
+};
+Allowance sample_allowance(double q, double h);
+
+// The largest allowance of a format, as a share of the limit it is compared
+// with (every per-axis v, a, j and the path's feed, a_tan, a_cen, j_tan,
+// j_cen; no jerk for cubic segments, which do not limit it), with q the
+// format's worst sample error (1/2 LSB + tol_lsb LSB).
+struct AllowanceShare {
+  double share = 0;
+  std::string limit;  // the limit it is largest against, e.g. "j_tan"
+};
+AllowanceShare allowance_share(const Allowance& al, const plan::Limits& l, int axes, int degree);
 
 struct Machine {
   double period = 1e-3;      // servo tick period h, s
   int degree = 5;            // segment degree: 5 (quintic, C2 joins) or 3 (cubic, C1)
   std::string units = "mm";  // units of the path and of the output LSB
+  // Which of the degree's carried engine builds (carried_formats): 0 the
+  // narrowest; set by choose_format.
+  int build = 0;
+
+  // The output format should be fine enough that the quantisation allowance
+  // on sample differences is at most this share of every limit; where no
+  // carried format is, the report states the guarantee in its exact form
+  // (host/report/README.md).
+  static constexpr double kAllowanceShare = 0.01;
 
   // plan::PlanError naming the field if the period is not positive and
   // finite or the tool carries no engine of this degree.
   void validate() const;
-  // The engine format of the build the tool carries for `degree`:
-  //   quintic: Axes 3, Degree 5, Width 96, Chunk 16, Guard 48, F 32 (1 LSB = 2^-32 units)
-  //   cubic:   Axes 3, Degree 3, Width 64, Chunk 16, Guard 32, F 16
+  // The engine formats of the builds the tool carries for `degree`
+  // (host/sim/CMakeLists.txt, TRAJ_SIM_BUILDS), narrowest first; each keeps
+  // 16 integer bits (|x| < 32768 units):
+  //   quintic: Axes 3, Width 96, Chunk 16, Guard 48, F 32 (1 LSB = 2^-32 units)
+  //   cubic:   Axes 3, Width 64, Chunk 16, Guard 32, F 16
+  //            Axes 3, Width 96, Chunk 16, Guard 48, F 32
+  // The fit works in double precision on absolute coordinates, so F stays
+  // at 32: at 2^-48 a position of a few mm is already only a few ulp from
+  // the next LSB and the compiler's continuity check (tol/2 LSB) fails.
+  // PlanError if the tool carries no engine of this degree.
+  static std::vector<fd::Format> carried_formats(int degree);
+  // The format of the chosen build.
   fd::Format format() const;
+  // Sets `build` to the narrowest carried format whose allowance share
+  // (allowance_share with q = (1/2 + tol_lsb) LSB) is at most
+  // kAllowanceShare, else to the finest. Validates the limits and the
+  // machine first.
+  void choose_format(const plan::Limits& l);
   double lsb() const;  // one output LSB, units
   // The deviation the fit may use out of the path tolerance `tol`: what is
   // left after the output rounding (1/2 LSB) and the register error bound

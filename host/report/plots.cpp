@@ -348,7 +348,8 @@ void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, co
   double bound = 0;
   for (const auto& c : r.compiled) bound = std::max(bound, c.bound_lsb);
   const double quant = (0.5 + bound) * lsb, sd = std::sqrt(static_cast<double>(d));
-  const double allow_v = 2 * quant / h, allow_a = 4 * quant / (h * h), allow_j = 8 * quant / (h * h * h);
+  const job::Allowance al = job::sample_allowance(quant, h);
+  const double allow_v = al.v, allow_a = al.a, allow_j = al.j;
   const std::string u1 = u + "/s", u2 = u + "/s\xC2\xB2", u3 = u + "/s\xC2\xB3";
   const std::string not_limited = "not limited (cubic, C1 joins)";
 

@@ -27,6 +27,32 @@ Samples predicted_samples(const JobResult& r) {
   return s;
 }
 
+namespace {
+
+// The largest distance of a sample from its fitted polynomial, evaluated in
+// long double (64-bit significand: a rounding error below 1e-3 LSB at 2^-48
+// and |x| < 2^15), and the bound the compiler proves for it: 1/2 LSB of
+// output rounding plus the register error bound of the segment.
+void sample_to_fit(const JobResult& r, const Samples& s, double h, double lsb, Report& rep) {
+  size_t k = 0;
+  const int axes = std::min(3, r.header.axes);
+  for (size_t i = 0; i < r.segments.size() && i < r.compiled.size(); ++i) {
+    const plan::TimeSegment& sg = r.segments[i];
+    for (uint32_t t = 0; t < sg.K && k < s.v.size(); ++t, ++k)
+      for (int a = 0; a < axes; ++a) {
+        const long double tau = static_cast<long double>(t) * h;
+        long double x = 0;
+        for (int j = sg.degree; j >= 0; --j) x = x * tau + sg.coef[a][j];
+        const long double e = std::fabs(static_cast<long double>(s.v[k][a]) * lsb - x);
+        rep.sample_to_fit = std::max(rep.sample_to_fit, static_cast<double>(e));
+      }
+    // + 1e-6 LSB: the long double evaluation's rounding, far above its size
+    rep.sample_bound = std::max(rep.sample_bound, (0.5 + r.compiled[i].bound_lsb + 1e-6) * lsb);
+  }
+}
+
+}  // namespace
+
 Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, const Samples& s) {
   Report rep;
   const int d = p.dim();
@@ -123,10 +149,18 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
     rep.out_path_a = std::max(rep.out_path_a, std::sqrt(a2));
     rep.out_path_j = std::max(rep.out_path_j, std::sqrt(j2));
   }
-  rep.allow_v = 2 * rep.quant / h;
-  rep.allow_a = 4 * rep.quant / (h * h);
-  rep.allow_j = 8 * rep.quant / (h * h * h);
+  const job::Allowance al = job::sample_allowance(rep.quant, h);
+  rep.allow_v = al.v;
+  rep.allow_a = al.a;
+  rep.allow_j = al.j;
   rep.allow_path_v = std::sqrt(static_cast<double>(d)) * rep.allow_v;
+  {
+    const job::AllowanceShare sh = job::allowance_share(al, cfg.limits, d, r.header.degree);
+    rep.allow_share = sh.share;
+    rep.allow_share_what = sh.limit;
+    rep.exact_form = sh.share > job::Machine::kAllowanceShare;
+  }
+  sample_to_fit(r, s, h, lsb, rep);
   // tangential and normal (centripetal) quantities of the samples, and of the
   // fitted polynomials at the same ticks (sampled.hpp)
   const bool jerk_claimed = r.header.degree == 5;
@@ -247,10 +281,19 @@ std::string report_text(const JobConfig& cfg, const Report& rep, const JobResult
   o << "  |a|, |j| of the path (output, for information; the per-axis limits apply) " << fmt("%.4g", rep.out_path_a)
     << ", " << fmt("%.4g", rep.out_path_j) << "\n";
   o << "  quantisation allowance on sample differences (per axis; sqrt(axes) x for path quantities): v "
-    << fmt("%.3g", rep.allow_v) << ", a " << fmt("%.3g", rep.allow_a) << ", j " << fmt("%.3g", rep.allow_j) << "\n";
+    << fmt("%.3g", rep.allow_v) << ", a " << fmt("%.3g", rep.allow_a) << ", j " << fmt("%.3g", rep.allow_j) << " ("
+    << fmt("%.2g", 100 * rep.allow_share) << " % of the " << rep.allow_share_what << " limit, the largest share)\n";
+  o << "  samples to the fitted polynomials  " << fmt("%.3g", rep.sample_to_fit) << " " << cfg.machine.units
+    << " (bound " << fmt("%.3g", rep.sample_bound) << ": 1/2 LSB + the register error bound)\n";
+  if (rep.exact_form)
+    o << "  guarantee (exact form): the allowance is above " << fmt("%g", 100 * job::Machine::kAllowanceShare)
+      << " % of a limit at this tick period and output LSB,\n"
+         "   so the output column is not checked against the limits. Instead: every sample is within the bound\n"
+         "   above of the fitted polynomials (checked), whose per-axis v, a, j are the fit column (exact maxima\n"
+         "   over each segment; tangential and centripetal at the ticks), within the limits (checked)\n";
   o << "  worst peak/limit: plan " << fmt("%.4f", rep.worst_plan) << " (" << rep.worst_plan_what << "), fit "
     << fmt("%.4f", rep.worst_fit) << " (" << rep.worst_fit_what << "), output " << fmt("%.4f", rep.worst_out) << " ("
-    << rep.worst_out_what << ", after the allowance)\n";
+    << rep.worst_out_what << (rep.exact_form ? ", after the allowance; not checked: exact form)\n" : ", after the allowance)\n");
   o << "Host time: plan " << fmt("%.1f", r.t_plan * 1e3) << " ms, ticks " << fmt("%.1f", r.t_ticks * 1e3)
     << " ms, fit " << fmt("%.1f", r.t_fit * 1e3) << " ms, compile " << fmt("%.1f", r.t_compile * 1e3) << " ms\n";
   return o.str();

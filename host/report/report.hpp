@@ -28,6 +28,14 @@ struct Report {
   double out_path_v = 0, out_path_a = 0, out_path_j = 0;  // from sample differences (vector norms)
   double allow_v = 0, allow_a = 0, allow_j = 0;           // quantisation allowance on sample differences, per axis
   double allow_path_v = 0;                                // the same for the path speed (vector norm): sqrt(dim) allow_v
+  // The largest allowance as a share of its limit. Above Machine::kAllowanceShare
+  // the sample-difference check says nothing useful and the report gives the
+  // guarantee in its exact form: every sample within sample_bound of the fitted
+  // polynomials (sample_to_fit measured), whose per-axis maxima are the fit column.
+  double allow_share = 0;
+  std::string allow_share_what;
+  bool exact_form = false;
+  double sample_to_fit = 0, sample_bound = 0;  // units
   double worst_plan = 0, worst_fit = 0, worst_out = 0;
   std::string worst_plan_what, worst_fit_what, worst_out_what;
   int guard_needed = 0;

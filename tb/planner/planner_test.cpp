@@ -2,6 +2,7 @@
 // Planner tests. References: exact polynomial identities, dense brute-force
 // sampling, numerical integration of the S-curve pieces, the published
 // butterfly length, and the Verilated core (RTL) for the output checks.
+#include <gmpxx.h>
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -198,6 +199,86 @@ TEST(PlannerCore, ButterflyThroughVerilatedCore) {
   std::printf("  butterfly: %.3f s, %zu segments, deviation %.3g mm, worst plan/fit/out %.4f/%.4f/%.4f\n",
               o.rep.motion_time, o.rep.segments, o.rep.max_deviation, o.rep.worst_plan, o.rep.worst_fit,
               o.rep.worst_out);
+}
+
+// The engine format is the narrowest carried one whose quantisation
+// allowance on sample differences is at most 1 % of every limit; the shares
+// here are worked by hand from 2q/h, 4q/h^2, 8q/h^3 with q = 1 LSB (1/2 LSB
+// of rounding + tol_lsb 1/2) and sqrt(3) for the path quantities.
+TEST(PlannerInput, FormatChosenSoTheAllowanceIsAtMostOnePercent) {
+  JobConfig cfg;  // the main job's limits: j_tan 2e4, a_tan 1000
+  cfg.machine.period = 1e-3;
+  cfg.machine.degree = 5;
+  cfg.machine.choose_format(cfg.limits);
+  // quintic, 2^-32 mm: j_tan share sqrt(3) 8 2^-32 / 1e-9 / 2e4 = 1.6e-4 %
+  EXPECT_EQ(cfg.machine.format().width, 96);
+  EXPECT_EQ(cfg.machine.format().frac_bits, 32);
+  cfg.machine.degree = 3;
+  cfg.machine.choose_format(cfg.limits);
+  // cubic, 2^-16 mm: a_tan share sqrt(3) 4 2^-16 / 1e-6 / 1000 = 10.6 % > 1 %; at 2^-32: 1.6e-4 %
+  EXPECT_EQ(cfg.machine.format().width, 96);
+  EXPECT_EQ(cfg.machine.format().frac_bits, 32);
+  const double q16 = std::ldexp(1.0, -16);
+  const AllowanceShare s16 = allowance_share(sample_allowance(q16, 1e-3), cfg.limits, 3, 3);
+  EXPECT_NEAR(s16.share, std::sqrt(3.0) * 4 * q16 / 1e-6 / 1000, 1e-12);
+  EXPECT_EQ(s16.limit, "a_tan");
+  // a long tick: the narrowest cubic engine is fine enough (a_tan: sqrt(3) 4 2^-16 / 0.1^2 / 1000 = 1e-5)
+  cfg.machine.period = 0.1;
+  cfg.machine.choose_format(cfg.limits);
+  EXPECT_EQ(cfg.machine.format().width, 64);
+  // bad limits are refused before a format is chosen
+  cfg.limits.j_tan = std::nan("");
+  EXPECT_THROW(cfg.machine.choose_format(cfg.limits), PlanError);
+}
+
+// At 20 us ticks the allowance on the third differences (8 LSB / h^3 = 2.3e5
+// mm/s^3 at 2^-32 mm) is above the jerk limits, so the report states the
+// guarantee in its exact form: every core sample within the bound of the
+// fitted polynomials, checked here again with the polynomials evaluated in
+// 256-bit GMP floats, and the polynomials within the limits.
+TEST(PlannerCore, FineTicksGiveTheExactFormGuarantee) {
+  const Path p = load_path(std::string(TRAJ_ASSETS) + "/butterfly_nurbs.json");
+  JobConfig cfg;
+  cfg.machine.period = 20e-6;
+  cfg.machine.choose_format(cfg.limits);
+  const RunOut o = run_through_core(p, cfg);
+  EXPECT_EQ(o.sim.mismatches, 0u);
+  EXPECT_TRUE(o.rep.exact_form);
+  EXPECT_GT(o.rep.allow_share, 0.01);
+  EXPECT_LE(o.rep.worst_fit, 1 + 1e-9) << o.rep.worst_fit_what;
+  EXPECT_LE(o.rep.max_deviation, cfg.limits.tol);
+  EXPECT_LE(o.rep.sample_to_fit, o.rep.sample_bound);
+  const std::string text = report_text(cfg, o.rep, o.job);
+  EXPECT_NE(text.find("guarantee (exact form)"), std::string::npos) << text;
+  EXPECT_NE(text.find("not checked: exact form"), std::string::npos) << text;
+  // independent: the samples against the polynomials in 256-bit floats
+  const double lsb = std::ldexp(1.0, -o.job.header.frac_bits);
+  double worst = 0, bound = 0;
+  size_t k = 0;
+  for (size_t i = 0; i < o.job.segments.size(); ++i) {
+    const TimeSegment& sg = o.job.segments[i];
+    bound = std::max(bound, (0.5 + o.job.compiled[i].bound_lsb) * lsb);
+    for (uint32_t t = 0; t < sg.K; ++t, ++k)
+      for (int a = 0; a < p.dim(); ++a) {
+        mpf_class tau(0, 256), x(0, 256), c(0, 256);
+        tau = cfg.machine.period;
+        tau *= t;
+        for (int j = sg.degree; j >= 0; --j) {
+          c = sg.coef[a][j];
+          x = x * tau + c;
+        }
+        mpf_class sample(0, 256);
+        sample = static_cast<double>(o.sim.samples.v[k][a]);
+        sample *= lsb;
+        const mpf_class e = abs(sample - x);
+        worst = std::max(worst, e.get_d());
+      }
+  }
+  ASSERT_EQ(k, o.sim.samples.v.size());
+  EXPECT_LE(worst, bound);
+  EXPECT_GT(worst, 0.25 * bound);  // the bound is not slack by orders of magnitude
+  std::printf("  20 us: allowance %.3g of %s, samples to polynomials %.3g mm (bound %.3g)\n", o.rep.allow_share,
+              o.rep.allow_share_what.c_str(), worst, bound);
 }
 
 TEST(PlannerCore, RandomSplinesThroughVerilatedCore) {
