@@ -20,7 +20,7 @@ class Link {
   static constexpr int kSegWords = kHdrWords + Axes * (Degree + 1) * Width / ChunkWidth;
   using Rx = UartRx<ClkHz, Baud>;
   using Tx = UartTx<ClkHz, Baud>;
-  using Proto = LinkProto<Axes, Degree, Width, ChunkWidth, GuardBits, MinTickPeriod>;
+  using Proto = LinkProto<Axes, Degree, Width, ChunkWidth, GuardBits, MinTickPeriod, ClkHz>;
   using Fifo = SegFifo<ChunkWidth, kSegWords, FifoDepth>;
   static constexpr int kDiv = Rx::kDiv;
   static constexpr int kCap = Fifo::kCap;

@@ -12,7 +12,7 @@ inline uint32_t crc32_byte(uint32_t c, uint8_t d) {
   return r;
 }
 
-template <int Axes, int Degree, int Width, int ChunkWidth, int GuardBits, int MinTickPeriod>
+template <int Axes, int Degree, int Width, int ChunkWidth, int GuardBits, int MinTickPeriod, int ClkHz>
 class LinkProto {
  public:
   static constexpr int kOutWidth = Width - GuardBits;
@@ -29,6 +29,7 @@ class LinkProto {
   static_assert(Width >= ChunkWidth && Width <= 128 && Width % ChunkWidth == 0, "Width");
   static_assert(kOutWidth >= 2 && kOutWidth <= 64, "OutWidth (Width - GuardBits) must be 2..64");
   static_assert(kRecBytes <= 2048, "the record exceeds 2048 bytes");
+  static_assert(ClkHz >= 1, "ClkHz must be positive");
 
   enum : uint8_t {
     kReset = 0x01, kConfig = 0x02, kStart = 0x03, kStop = 0x04, kResume = 0x05, kStatReq = 0x06,
@@ -445,7 +446,8 @@ class LinkProto {
       case 7: return n_ooo_q_;
       case 8: return n_bytes_q_;
       case 9: return in.fifo_credits;
-      case 10: case 11: return 0;
+      case 10: return uint32_t(ClkHz);
+      case 11: return 0;
       default: {
         for (int a = 0; a < Axes; ++a) {
           uint64_t s = snap_q_[a];

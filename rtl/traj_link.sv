@@ -79,7 +79,7 @@ module traj_link #(
 
   traj_link_proto #(
     .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits),
-    .MinTickPeriod(MinTickPeriod)
+    .MinTickPeriod(MinTickPeriod), .ClkHz(ClkHz)
   ) u_proto (
     .clk_i, .rst_ni,
     .rx_data_i(rx_data), .rx_valid_i(rx_valid), .rx_err_i(rx_err),

@@ -39,6 +39,7 @@ module traj_link_proto #(
   parameter int ChunkWidth    = 16,   // engine word width: 16, 32 or 64
   parameter int GuardBits     = 32,   // FD guard bits: OutWidth = Width - GuardBits <= 64
   parameter int MinTickPeriod = 256,  // smallest CONFIG tick period in clocks (0 = external is allowed)
+  parameter int ClkHz         = 48_000_000,  // clk_i in Hz, reported in STATUS (the host's clocks -> seconds)
   // derived, do not override
   parameter int OutWidth      = Width - GuardBits
 ) (
@@ -98,6 +99,7 @@ module traj_link_proto #(
   `TRAJ_PARAM_CHECK(g_bad_out, OutWidth >= 2 && OutWidth <= 64,
                     "traj_link_proto: OutWidth (Width - GuardBits) must be 2..64")
   `TRAJ_PARAM_CHECK(g_bad_rec, RecBytes <= 2048, "traj_link_proto: the record exceeds 2048 bytes")
+  `TRAJ_PARAM_CHECK(g_bad_clk, ClkHz >= 1, "traj_link_proto: ClkHz must be positive")
   `TRAJ_PARAM_CHECK(g_bad_derived, OutWidth == Width - GuardBits,
                     "traj_link_proto: OutWidth is derived; do not override it")
 
@@ -544,7 +546,8 @@ module traj_link_proto #(
         6'd7:  word_next = n_ooo_q;
         6'd8:  word_next = n_bytes_q;
         6'd9:  word_next = {16'h0, fifo_credits_i};
-        6'd10, 6'd11: word_next = '0;
+        6'd10: word_next = 32'(ClkHz);
+        6'd11: word_next = '0;
         default: begin
           for (int a = 0; a < Axes; a++) begin
             if (tx_w_q == 6'(12 + 2 * a)) word_next = samp_lo[a*32 +: 32];

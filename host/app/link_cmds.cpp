@@ -76,8 +76,10 @@ void add_upload(CLI::App& app, LinkCommands& lc) {
   c->add_option("--port", a.port, "serial port (/dev/ttyUSB1), pseudo-terminal (/dev/pts/N) or tcp:HOST:PORT")
       ->required();
   c->add_option("--baud", a.opt.baud, "serial baud rate (8N1, no flow control)")->capture_default_str();
-  c->add_option("--clock-hz", a.opt.clock_hz, "the board's core clock, Hz: tick period in clocks")
-      ->capture_default_str();
+  c->add_option("--clock-hz", a.opt.clock_hz,
+                "the board's core clock, Hz (tick period and pulse times in clocks); default: as the board's "
+                "STATUS reports it; given: checked against it")
+      ->check(CLI::PositiveNumber);
   c->add_option("--step-shift", a.opt.step_shift, "per axis: one step = 2^shift output LSB (one value: all axes)")
       ->delimiter(',')
       ->check(CLI::Range(0, 63));

@@ -38,6 +38,7 @@ void LoopbackBoard::nak(NakReason r, Bytes& out) const {
 
 Status LoopbackBoard::status() const {
   Status s = st_;
+  s.clock_hz = static_cast<uint32_t>(std::lround(o_.clock_hz));
   s.next_seq = next_seq_;
   s.flags = static_cast<uint8_t>((playing_ ? status_flag::kPlaying : 0) | (halted_ ? status_flag::kUnderrunHalt : 0) |
                                  (end_reached_ ? status_flag::kEndReached : 0) |

@@ -59,6 +59,7 @@ class LoopbackBoard : public Board {
   void reset() override;
 
   Status status() const;
+  const Config& config() const { return cfg_; }  // the last CONFIG taken
   bool playing() const override { return playing_; }
   bool end_reached() const override { return end_reached_; }
   uint64_t stored_total() const override { return stored_total_; }

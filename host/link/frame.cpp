@@ -178,7 +178,7 @@ Bytes encode_status(const Status& s) {
   Bytes b{s.axes, s.flags};
   put_u16(b, s.fifo_level);
   for (uint32_t v : {s.segments_played, s.ticks_played, s.underruns, s.bad_frames, s.out_of_order, s.bytes_received,
-                     s.credits, 0u, 0u})
+                     s.credits, s.clock_hz, 0u})
     put_u32(b, v);
   for (int a = 0; a < s.axes; ++a) {
     const uint64_t v = static_cast<uint64_t>(a < static_cast<int>(s.sample.size()) ? s.sample[a] : 0);
@@ -223,6 +223,7 @@ Status decode_status(const Frame& f) {
   s.out_of_order = get_u32(p + 20);
   s.bytes_received = get_u32(p + 24);
   s.credits = get_u32(p + 28);
+  s.clock_hz = get_u32(p + 32);
   for (int a = 0; a < s.axes; ++a)
     s.sample.push_back(static_cast<int64_t>(get_u32(p + 40 + 8 * a) | uint64_t(get_u32(p + 44 + 8 * a)) << 32));
   return s;

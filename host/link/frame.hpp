@@ -21,8 +21,9 @@ class LinkError : public std::runtime_error {
 constexpr uint8_t kFlag = 0x7E, kEscape = 0x7D, kEscapeXor = 0x20;
 constexpr size_t kMaxPayload = 2048;
 constexpr size_t kHeaderBytes = 8, kCrcBytes = 4;
-// The core clock of the iCEBreaker top and the simulated board (tick period in
-// clocks); the HX8K top runs at 60 MHz (--clock-hz 60e6).
+// The core clock of the iCEBreaker top and the simulated board, and the
+// loopback board's default; the HX8K top runs at 60 MHz. Each board reports
+// its clock in STATUS, which `trajcore upload` uses.
 constexpr double kDefaultBoardClockHz = 30e6;
 
 enum class Type : uint8_t {
@@ -110,7 +111,7 @@ struct Status {
   uint8_t axes = 0, flags = 0;
   uint16_t fifo_level = 0;
   uint32_t segments_played = 0, ticks_played = 0, underruns = 0, bad_frames = 0, out_of_order = 0, bytes_received = 0,
-           credits = 0;
+           credits = 0, clock_hz = 0;
   std::vector<int64_t> sample;  // per axis, output LSB
 };
 

@@ -21,7 +21,7 @@ class Uploader {
 
   UploadResult run() {
     const auto t0 = Clock::now();
-    config_ = make_config();  // refused options before the board is touched
+    config_ = make_config(o_.clock_hz > 0 ? o_.clock_hz : kDefaultBoardClockHz);  // refused options before the board is touched
     drain_input();
     const Status s = query_status();
     if (o_.resume && !(s.next_seq == 0 && s.segments_played == 0)) {
@@ -312,6 +312,7 @@ class Uploader {
     if (s.next_seq != 0 || s.fifo_level != 0 || (s.flags & (status_flag::kPlaying | status_flag::kUnderrunHalt)))
       fail("the board did not reset (next_seq " + std::to_string(s.next_seq) + ", FIFO level " +
            std::to_string(s.fifo_level) + ")");
+    config_ = make_config(board_clock(s));
     command(Type::kConfig, 0, encode_config(config_));
     underruns_at_start_ = s.underruns;
     base_ = send_next_ = sent_end_ = 0;
@@ -344,11 +345,25 @@ class Uploader {
     start_playback((s.flags & status_flag::kUnderrunHalt) ? Type::kResume : Type::kStart);
   }
 
-  Config make_config() const {
+  // The core clock CONFIG's clock counts are in: the board's (STATUS), which
+  // --clock-hz, if given, must match.
+  double board_clock(const Status& s) const {
+    if (s.clock_hz == 0) {
+      if (o_.clock_hz > 0) return o_.clock_hz;
+      fail("the board does not report its core clock (STATUS offset 32 is 0: a build before LINK.md gave it); "
+           "give --clock-hz");
+    }
+    if (o_.clock_hz > 0 && std::fabs(o_.clock_hz / s.clock_hz - 1) > 1e-6)
+      fail("--clock-hz " + std::to_string(o_.clock_hz) + " but the board reports a core clock of " +
+           std::to_string(s.clock_hz) + " Hz (leave --clock-hz out to use the board's)");
+    return s.clock_hz;
+  }
+
+  Config make_config(double clock_hz) const {
     Config c;
-    const double tick_clocks = std::round(src_.header().period * o_.clock_hz);
+    const double tick_clocks = std::round(src_.header().period * clock_hz);
     if (tick_clocks < 1 || tick_clocks > 4294967295.0)
-      fail("tick period " + std::to_string(src_.header().period) + " s at " + std::to_string(o_.clock_hz) +
+      fail("tick period " + std::to_string(src_.header().period) + " s at " + std::to_string(clock_hz) +
            " Hz is not a 32-bit clock count");
     c.tick_clocks = static_cast<uint32_t>(tick_clocks);
     c.status_ticks = o_.status_period_s > 0
@@ -364,9 +379,9 @@ class Uploader {
                                                  : o_.step_shift.at(static_cast<size_t>(a));
       c.step_shift[a] = static_cast<uint8_t>(sh);
     }
-    c.pulse_clocks = static_cast<uint16_t>(std::clamp(std::round(o_.pulse_us * 1e-6 * o_.clock_hz), 1.0, 65535.0));
+    c.pulse_clocks = static_cast<uint16_t>(std::clamp(std::round(o_.pulse_us * 1e-6 * clock_hz), 1.0, 65535.0));
     c.dir_setup_clocks =
-        static_cast<uint16_t>(std::clamp(std::round(o_.dir_setup_us * 1e-6 * o_.clock_hz), 0.0, 65535.0));
+        static_cast<uint16_t>(std::clamp(std::round(o_.dir_setup_us * 1e-6 * clock_hz), 0.0, 65535.0));
     c.enable = 1;
     return c;
   }

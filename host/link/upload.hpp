@@ -17,7 +17,7 @@
 namespace traj::link {
 
 struct UploadOptions {
-  double clock_hz = kDefaultBoardClockHz;
+  double clock_hz = 0;             // the board's core clock, Hz; 0: as its STATUS reports (given: checked against it)
   std::vector<int> step_shift;     // per axis (one value: every axis); empty: 0
   double pulse_us = 2.0, dir_setup_us = 2.0;
   double status_period_s = 0.1;    // the board's periodic STATUS (0: on request only)

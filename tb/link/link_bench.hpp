@@ -87,7 +87,7 @@ struct Record {
   }
   std::vector<uint64_t> words() const {
     std::vector<uint64_t> w;
-    if (kChunk < 32) {
+    if constexpr (kChunk < 32) {
       for (int s = 0; s < 32; s += kChunk) w.push_back((K >> s) & ((1u << kChunk) - 1));
     } else {
       w.push_back(K);

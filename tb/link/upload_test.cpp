@@ -315,6 +315,33 @@ TEST(Upload, BoardOfAnotherFormatIsNamed) {
   EXPECT_TRUE(rig.played().empty());
 }
 
+// The tick period goes to the board in its own clocks, the clock it reports
+// in STATUS: 1 ms at 60 MHz (the HX8K top) is 60000 clocks, pulse 2 us 120.
+// A --clock-hz that disagrees with the board is refused before CONFIG.
+TEST(Upload, TickPeriodInTheClockTheBoardReports) {
+  const auto& path = raster_stream(10);
+  BoardOptions bo = fast_board();
+  bo.clock_hz = 60e6;
+  {
+    Rig rig(bo, {});
+    run(rig, path);
+    rig.disconnect();
+    EXPECT_EQ(rig.board().config().tick_clocks, 60000u);
+    EXPECT_EQ(rig.board().config().pulse_clocks, 120u);
+    EXPECT_EQ(rig.played().size(), file_records(path).size());
+  }
+  Rig rig(bo, {});
+  UploadOptions o = tool();
+  o.clock_hz = 30e6;
+  try {
+    run(rig, path, o);
+    FAIL() << "a --clock-hz that disagrees with the board was taken";
+  } catch (const UploadError& e) {
+    EXPECT_NE(std::string(e.what()).find("reports a core clock of 60000000"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(rig.played().empty());
+}
+
 // A board playing a job is not reset by a second upload without --resume.
 TEST(Upload, PlayingBoardIsNotTakenOver) {
   const auto& path = raster_stream(40);

@@ -25,9 +25,10 @@ start_board() {  # start_board OPTIONS...
   board=$!
   for _ in $(seq 100); do [ -s port ] && break; sleep 0.1; done
 }
+# the tick period in clocks of the clock the board reports in STATUS (the
+# restart case gives --clock-hz, which is checked against it)
 upload() {
-  "$T" upload plan.trj --port "$(cat port)" --clock-hz 30e6 --step-shift 26 --timeout-ms 3000 "$@" > upload.txt \
-    2> upload.err
+  "$T" upload plan.trj --port "$(cat port)" --step-shift 26 --timeout-ms 3000 "$@" > upload.txt 2> upload.err
 }
 
 case "$mode" in
