@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <set>
 #include <vector>
@@ -253,12 +254,21 @@ struct CreatedFolders {
   }
 };
 
+// The simulation's speed, for the summary lines.
+std::string sim_speed(const sim::SimResult& sr) {
+  const double t = std::max(sr.seconds, 1e-9);
+  char b[128];
+  std::snprintf(b, sizeof b, "%.2f s, %.1f M cycles/s, %.0f k ticks/s", sr.seconds, sr.cycles / t / 1e6,
+                sr.sample_count / t / 1e3);
+  return b;
+}
+
 std::string core_line(const sim::SimResult& sr) {
   char b[256];
   std::snprintf(b, sizeof b,
-                "Core (Verilated traj_fd_engine): %llu cycles in %.2f s, RTL == hls on every cycle: %s, "
+                "Core (Verilated traj_fd_engine): %llu cycles in %s, RTL == hls on every cycle: %s, "
                 "underruns %llu, tick_err %s\n",
-                static_cast<unsigned long long>(sr.cycles), sr.seconds, sr.mismatches ? "NO" : "yes",
+                static_cast<unsigned long long>(sr.cycles), sim_speed(sr).c_str(), sr.mismatches ? "NO" : "yes",
                 static_cast<unsigned long long>(sr.underruns), sr.tick_err ? "SET" : "clear");
   return b;
 }
@@ -318,39 +328,81 @@ int run_command(const RunArgs& a) {
   return ok ? 0 : 1;
 }
 
-int sim_command(const SimArgs& a) {
-  util::check_output_path(a.csv);
-  const auto rd = stream::read_file(a.input);
-  if (!rd.complete) {
-    std::fprintf(stderr, "trajcore: error: %s (%zu segments before it were valid; nothing simulated)\n",
-                 rd.error.c_str(), rd.records.size());
-    return 1;
+namespace {
+
+// A stream file's records, one at a time.
+struct FileRecords {
+  explicit FileRecords(const std::string& path) : in(path, std::ios::binary), reader(open(in, path), path) {}
+  static std::ifstream& open(std::ifstream& in, const std::string& path) {
+    if (!in) throw stream::StreamError(path + ": cannot open");
+    return in;
   }
-  // the samples go to the CSV as the core emits them (memory bounded whatever K is)
-  CsvWriter csv(a.csv, rd.header);
-  const auto sr = sim::simulate(rd.header, rd.records, a.tick_gap, [](double f) { progress("sim", f); },
-                                [&](uint64_t k, const std::array<long long, 3>& v) { csv.row(k, v); });
-  end_progress();
-  if (sr.engine == "traj_core") {
-    // a BCU format: both engines; every sample also against the exact prediction from the records
+  std::ifstream in;
+  stream::StreamReader reader;
+};
+
+}  // namespace
+
+int sim_command(const SimArgs& a) {
+  if (!a.csv.empty()) util::check_output_path(a.csv);
+  // A first pass checks the whole stream, keeping nothing, so that a bad
+  // stream simulates nothing; the second feeds the core record by record
+  // (memory bounded however long the stream).
+  uint64_t records = 0;
+  stream::Header header;
+  {
+    FileRecords f(a.input);
+    stream::Record rec;
+    while (f.reader.next(rec)) ++records;
+    if (!f.reader.complete()) {
+      std::fprintf(stderr, "trajcore: error: %s (%llu segments before it were valid; nothing simulated)\n",
+                   f.reader.error().c_str(), static_cast<unsigned long long>(records));
+      return 1;
+    }
+    header = f.reader.header();
+  }
+  std::unique_ptr<CsvWriter> csv;
+  if (!a.csv.empty()) csv = std::make_unique<CsvWriter>(a.csv, header);
+  const sim::SampleSink sink = [&](uint64_t k, const std::array<long long, 3>& v) {
+    if (csv) csv->row(k, v);
+  };
+  const auto prog = [](double f) { progress("sim", f); };
+  const std::string to = csv ? a.csv : std::string("(no samples written: --csv FILE writes them)");
+  if (header.has_bcu()) {
+    // a BCU format: both engines, every sample also against the exact
+    // prediction from the records (held in memory: BCU streams are short)
+    const auto rd = stream::read_file(a.input);
+    const auto sr = sim::simulate(rd.header, rd.records, a.tick_gap, prog, sink);
+    end_progress();
     const bool ok = sr.mismatches == 0 && sr.prediction_mismatches == 0 && !sr.tick_err && sr.underruns == 0;
-    if (ok) csv.commit();
+    if (ok && csv) csv->commit();
     std::printf("%s: %zu segments (%llu FD, %llu BCU, %llu kind switches), %llu samples, %llu cycles on traj_core "
-                "(tick every %d), RTL == hls: %s, == host prediction: %s, tick_err %s, underruns %llu -> %s\n",
+                "(tick every %d) in %s, RTL == hls: %s, == host prediction: %s, tick_err %s, underruns %llu -> %s\n",
                 a.input.c_str(), rd.records.size(), static_cast<unsigned long long>(sr.fd_segments),
                 static_cast<unsigned long long>(sr.bcu_segments), static_cast<unsigned long long>(sr.switches),
                 static_cast<unsigned long long>(sr.sample_count), static_cast<unsigned long long>(sr.cycles),
-                sr.tick_gap, sr.mismatches ? "NO" : "yes", sr.prediction_mismatches ? "NO" : "yes",
-                sr.tick_err ? "SET" : "clear", static_cast<unsigned long long>(sr.underruns),
-                ok ? a.csv.c_str() : "(no CSV written)");
+                sr.tick_gap, sim_speed(sr).c_str(), sr.mismatches ? "NO" : "yes",
+                sr.prediction_mismatches ? "NO" : "yes", sr.tick_err ? "SET" : "clear",
+                static_cast<unsigned long long>(sr.underruns), ok ? to.c_str() : "(no CSV written)");
     if (!ok) std::fprintf(stderr, "trajcore sim: a check FAILED (see above)\n");
     return ok ? 0 : 1;
   }
-  csv.commit();
-  std::printf("%s: %zu segments, %llu samples, %llu cycles, RTL == hls: %s -> %s\n", a.input.c_str(),
-              rd.records.size(), static_cast<unsigned long long>(sr.sample_count),
-              static_cast<unsigned long long>(sr.cycles), sr.mismatches ? "NO" : "yes", a.csv.c_str());
-  return sr.mismatches ? 1 : 0;
+  FileRecords f(a.input);
+  const sim::RecordPull pull = [&](stream::Record& r) { return f.reader.next(r); };
+  const auto sr = sim::simulate_pulled(header, pull, records, a.tick_gap, prog, sink);
+  end_progress();
+  if (!f.reader.complete())  // the file changed between the passes
+    throw stream::StreamError(f.reader.error().empty() ? a.input + ": changed while simulated" : f.reader.error());
+  const bool ok = sr.mismatches == 0 && !sr.tick_err;
+  if (ok && csv) csv->commit();
+  std::printf("%s: %llu segments, %llu samples, %llu cycles (tick every %d) in %s, RTL == hls: %s, tick_err %s, "
+              "underruns %llu -> %s\n",
+              a.input.c_str(), static_cast<unsigned long long>(records),
+              static_cast<unsigned long long>(sr.sample_count), static_cast<unsigned long long>(sr.cycles), sr.tick_gap,
+              sim_speed(sr).c_str(), sr.mismatches ? "NO" : "yes", sr.tick_err ? "SET" : "clear",
+              static_cast<unsigned long long>(sr.underruns), ok ? to.c_str() : "(no CSV written)");
+  if (!ok) std::fprintf(stderr, "trajcore sim: a check FAILED (see above)\n");
+  return ok ? 0 : 1;
 }
 
 }  // namespace traj::app

@@ -32,7 +32,7 @@ int run_command(const RunArgs& a);
 
 struct SimArgs {
   std::string input;
-  std::string csv = "out/samples.csv";
+  std::string csv;  // empty: no samples written
   int tick_gap = 0;
 };
 int sim_command(const SimArgs& a);

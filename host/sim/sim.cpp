@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "sim/sim.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <stdexcept>
 #include <string>
@@ -16,12 +17,72 @@
 namespace traj::sim {
 namespace {
 
-// The stream words in order, with the kind on tuser (traj_core only).
+// The stream words in order, with the kind on tuser (traj_core only): all of
+// them in memory (the traj_core path, whose prediction holds the records).
 struct Feed {
   std::vector<uint64_t> words;
   std::vector<bool> bcu;  // per word; empty for traj_fd_engine
   size_t first_len = 0;   // words of the first segment
   uint64_t ticks = 0;     // samples the stream holds
+  size_t next = 0;        // the word on the bus
+
+  bool valid() { return next < words.size(); }
+  uint64_t data() const { return words[next]; }
+  bool tuser() const { return !bcu.empty() && bcu[next]; }
+  void pop() { ++next; }
+  size_t consumed() const { return next; }
+  uint64_t ticks_known() const { return ticks; }
+  bool all_read() const { return true; }
+  uint64_t longest_segment_words() const { return words.size(); }
+  double fraction(uint64_t samples) const { return ticks ? double(samples) / ticks : 0; }
+};
+
+// The words of an FD stream pulled a segment at a time: one segment's words in
+// memory whatever the stream's length.
+class PulledFeed {
+ public:
+  PulledFeed(const stream::Header& h, const RecordPull& pull, uint64_t records)
+      : comp_(h.format()), pull_(pull), records_(records) {}
+  bool valid() {
+    if (next_ == words_.size() && !all_read_) refill();
+    return next_ < words_.size();
+  }
+  uint64_t data() const { return words_[next_]; }
+  bool tuser() const { return false; }
+  void pop() {
+    ++next_;
+    ++consumed_;
+  }
+  size_t consumed() const { return consumed_; }
+  uint64_t ticks_known() const { return ticks_; }
+  bool all_read() const { return all_read_; }
+  uint64_t longest_segment_words() const { return longest_; }
+  double fraction(uint64_t) const { return records_ ? double(pulled_) / records_ : 0; }
+
+ private:
+  void refill() {
+    stream::Record r;
+    if (!pull_(r)) {
+      all_read_ = true;
+      return;
+    }
+    if (r.is_bcu()) throw std::runtime_error("BCU segment in a stream without a BCU format");
+    c_.ticks = r.ticks;
+    c_.regs = std::move(r.regs);
+    words_ = comp_.words(c_);
+    next_ = 0;
+    longest_ = std::max<uint64_t>(longest_, words_.size());
+    ticks_ += r.ticks;
+    ++pulled_;
+  }
+  fd::Compiler comp_;
+  RecordPull pull_;
+  uint64_t records_;
+  fd::Compiled c_;
+  std::vector<uint64_t> words_;
+  size_t next_ = 0, consumed_ = 0;
+  uint64_t ticks_ = 0, pulled_ = 0, longest_ = 0;
+  bool all_read_ = false;
 };
 
 Feed fd_feed(const stream::Header& h, const std::vector<stream::Record>& recs) {
@@ -63,9 +124,12 @@ struct GapAfterFirstSegment {
 };
 
 // The stream through the build's RTL and hls model in lockstep (two reset
-// cycles first); on_sample(sample, seg_done) for every real sample.
-template <class B, class Ticks, class OnSample>
-void clock_stream(const Feed& f, Ticks ticks, SimResult& res, const std::function<void(double)>& progress,
+// cycles first); on_sample(sample, seg_done) for every real sample. It ends
+// when the feed has given all its words and the core every sample they hold;
+// "stalled" if neither a word nor a sample moves for far longer than a
+// segment's load and a tick gap take.
+template <class B, class F, class Ticks, class OnSample>
+void clock_stream(F& f, Ticks ticks, SimResult& res, const std::function<void(double)>& progress,
                   const SampleSink& sink, OnSample on_sample) {
   using M = builds::ModelOf<B>;
   static_assert(B::Axes == 3, "report::Samples holds three axes");
@@ -76,19 +140,23 @@ void clock_stream(const Feed& f, Ticks ticks, SimResult& res, const std::functio
   ls.step(in);
   ls.step(in);
   in.rst_n = true;
-  if (!sink) res.samples.v.reserve(f.ticks);
-  const uint64_t limit = (f.ticks + 4) * static_cast<uint64_t>(res.tick_gap) * 4 + f.words.size() * 4 + 10000;
-  size_t wi = 0;
+  if (!sink) res.samples.v.reserve(f.ticks_known());
   uint64_t& n = res.sample_count;
-  while (n < f.ticks) {
-    if (ls.cycles() > limit) throw std::runtime_error("simulation stalled");
-    in.tvalid = wi < f.words.size();
-    in.tdata = in.tvalid ? f.words[wi] : 0;
-    if constexpr (builds::kIsCore<B>) in.tuser = in.tvalid && f.bcu[wi];
+  uint64_t moved = ls.cycles();
+  for (;;) {
+    in.tvalid = f.valid();
+    if (!in.tvalid && f.all_read() && n >= f.ticks_known()) break;
+    const uint64_t quiet = 4 * (static_cast<uint64_t>(res.tick_gap) + f.longest_segment_words()) + 10000;
+    if (ls.cycles() - moved > quiet) throw std::runtime_error("simulation stalled");
+    in.tdata = in.tvalid ? f.data() : 0;
+    if constexpr (builds::kIsCore<B>) in.tuser = in.tvalid && f.tuser();
     in.tick = ticks.tick(ls.cycles());
     const auto& o = ls.step(in);
-    if (in.tvalid && o.tready) ++wi;
-    ticks.fed(wi, ls.cycles() - 1);
+    if (in.tvalid && o.tready) {
+      f.pop();
+      moved = ls.cycles();
+    }
+    ticks.fed(f.consumed(), ls.cycles() - 1);
     if (o.underrun) ++res.underruns;
     res.tick_err |= o.tick_err;
     if (o.sample_valid && !o.underrun) {
@@ -100,7 +168,8 @@ void clock_stream(const Feed& f, Ticks ticks, SimResult& res, const std::functio
       else
         res.samples.v.push_back(s);
       ++n;
-      if (progress && (n % 100000 == 0)) progress(double(n) / f.ticks);
+      moved = ls.cycles();
+      if (progress && (n % 100000 == 0)) progress(f.fraction(n));
     }
   }
   res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -182,9 +251,16 @@ Feed core_feed(const stream::Header& h, const std::vector<stream::Record>& recs,
 }
 #endif
 
+// The records of a run: all in memory, or pulled one at a time (FD streams).
+struct Source {
+  const std::vector<stream::Record>& records;
+  RecordPull pull;        // set: records is empty and unused
+  uint64_t expected = 0;  // records the pull will give (0: unknown), for the progress
+};
+
 template <class B>
-SimResult run(const stream::Header& h, const std::vector<stream::Record>& recs, int tick_gap,
-              const std::function<void(double)>& progress, const SampleSink& sink) {
+SimResult run(const stream::Header& h, const Source& src, int tick_gap, const std::function<void(double)>& progress,
+              const SampleSink& sink) {
   using M = builds::ModelOf<B>;
   using U = typename B::Unit;
   constexpr int kMin = U::template kMinGap<M>;
@@ -197,16 +273,21 @@ SimResult run(const stream::Header& h, const std::vector<stream::Record>& recs, 
   res.tick_gap = tick_gap;
   if constexpr (builds::kIsCore<B>) {
 #if TRAJ_APP_CORE
-    const Feed f = core_feed<B>(h, recs, res);
-    Prediction<B> expect(recs, h.bcu_format());
+    Feed f = core_feed<B>(h, src.records, res);
+    Prediction<B> expect(src.records, h.bcu_format());
     clock_stream<B>(f, GapAfterFirstSegment{static_cast<uint64_t>(tick_gap), f.first_len}, res, progress, sink,
                     [&](const std::array<long long, 3>& s, bool done) {
                       const Expect e = expect.next();
                       if (s != e.v || done != e.done) ++res.prediction_mismatches;
                     });
 #endif
+  } else if (src.pull) {
+    PulledFeed f(h, src.pull, src.expected);
+    clock_stream<B>(f, EveryGap{static_cast<uint64_t>(tick_gap)}, res, progress, sink,
+                    [](const std::array<long long, 3>&, bool) {});
   } else {
-    clock_stream<B>(fd_feed(h, recs), EveryGap{static_cast<uint64_t>(tick_gap)}, res, progress, sink,
+    Feed f = fd_feed(h, src.records);
+    clock_stream<B>(f, EveryGap{static_cast<uint64_t>(tick_gap)}, res, progress, sink,
                     [](const std::array<long long, 3>&, bool) {});
   }
   return res;
@@ -276,15 +357,15 @@ std::string describe_carried() {
 }
 
 template <class... B>
-SimResult dispatch(builds::List<B...>, const stream::Header& h, const std::vector<stream::Record>& recs,
-                   int tick_gap, const std::function<void(double)>& progress, const SampleSink& sink) {
+SimResult dispatch(builds::List<B...>, const stream::Header& h, const Source& src, int tick_gap,
+                   const std::function<void(double)>& progress, const SampleSink& sink) {
   SimResult res;
   bool found = false;
   auto try_one = [&](auto tag) {
     using One = typename decltype(tag)::type;
     if (found || !matches(describe<One>(), h)) return;
     found = true;
-    res = run<One>(h, recs, tick_gap, progress, sink);
+    res = run<One>(h, src, tick_gap, progress, sink);
   };
   (try_one(std::common_type<B>{}), ...);
   if (!found)
@@ -338,7 +419,14 @@ SimResult simulate(const stream::Header& h, const std::vector<stream::Record>& r
   if (h.has_bcu() && !has_core())
     throw std::runtime_error("this stream carries a BCU format and this trajcore was built without "
                              "host/bcu (TRAJ_SKIP): no traj_core to run it on");
-  return dispatch(builds::Carried{}, h, recs, tick_gap, progress, sink);
+  return dispatch(builds::Carried{}, h, Source{recs, {}, 0}, tick_gap, progress, sink);
+}
+
+SimResult simulate_pulled(const stream::Header& h, const RecordPull& pull, uint64_t records, int tick_gap,
+                          const std::function<void(double)>& progress, const SampleSink& sink) {
+  if (h.has_bcu()) throw std::runtime_error("simulate_pulled: a stream with a BCU format runs through simulate()");
+  static const std::vector<stream::Record> none;
+  return dispatch(builds::Carried{}, h, Source{none, pull, records}, tick_gap, progress, sink);
 }
 
 }  // namespace traj::sim

@@ -38,9 +38,17 @@ struct SimResult {
 // simulation then holds nothing per tick (memory bounded whatever K is).
 using SampleSink = std::function<void(uint64_t tick, const std::array<long long, 3>& sample)>;
 
+// Pulls the next record of a stream: false at its end.
+using RecordPull = std::function<bool(stream::Record&)>;
+
 // Throws std::runtime_error if no carried build matches the stream's format.
 SimResult simulate(const stream::Header& h, const std::vector<stream::Record>& recs, int tick_gap = 0,
                    const std::function<void(double)>& progress = {}, const SampleSink& sink = {});
+// The same for a stream without a BCU format, its records pulled one at a
+// time: with a sink, memory is bounded by one segment whatever the stream's
+// length. `records` (0: unknown) scales the progress.
+SimResult simulate_pulled(const stream::Header& h, const RecordPull& pull, uint64_t records, int tick_gap = 0,
+                          const std::function<void(double)>& progress = {}, const SampleSink& sink = {});
 
 // One engine build the tool carries.
 struct Build {
