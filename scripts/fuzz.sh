@@ -2,7 +2,7 @@
 # The libFuzzer targets of the readers (tb/fuzz): build them with clang
 # (-fsanitize=fuzzer,address,undefined) in ${TRAJ_FUZZ_BUILD_DIR:-build-fuzz} and run them.
 #
-#   scripts/fuzz.sh [target|all] [seconds]   run one target (stream json jsonl gcode svg dxf) or all,
+#   scripts/fuzz.sh [target|all] [seconds]   run one target (stream json jsonl gcode svg dxf link) or all,
 #                                            each for `seconds` (default 60): the soak
 #   scripts/fuzz.sh --build-only             build only (the test suite's fuzz.build fixture)
 #
@@ -16,7 +16,7 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${TRAJ_FUZZ_BUILD_DIR:-$root/build-fuzz}
-targets=(stream json jsonl gcode svg dxf)
+targets=(stream json jsonl gcode svg dxf link)
 
 clangxx=$(command -v clang++ || command -v clang++-14 || true)
 clangc=$(command -v clang || command -v clang-14 || true)

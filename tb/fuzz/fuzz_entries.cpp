@@ -13,6 +13,8 @@
 #include "input/jsonl_source.hpp"
 #include "input/path_json.hpp"
 #include "input/svg.hpp"
+#include "link/board.hpp"
+#include "link/frame.hpp"
 #include "stream/segment_stream.hpp"
 
 namespace traj::fuzz {
@@ -94,9 +96,64 @@ int dxf(const uint8_t* data, std::size_t size) {
   return r;
 }
 
+namespace {
+
+std::vector<link::FrameDecoder::Event> frames_of(const link::Bytes& b) {
+  link::FrameDecoder d;
+  std::vector<link::FrameDecoder::Event> ev;
+  d.feed(b.data(), b.size(), ev);
+  return ev;
+}
+
+// A good frame decodes by its type (or is refused with a LinkError) and
+// re-encodes to a frame that decodes to itself.
+void check_good_frame(const link::Frame& f) {
+  guarded([&] {
+    switch (f.type) {
+      case link::Type::kAck: link::decode_ack(f); break;
+      case link::Type::kNak: link::decode_nak(f); break;
+      case link::Type::kStatus: link::decode_status(f); break;
+      case link::Type::kConfig: link::decode_config(f.payload); break;
+      default: break;
+    }
+  });
+  const auto again = frames_of(link::encode_frame(f));
+  if (again.size() != 1 || !again[0].good || again[0].frame.type != f.type || again[0].frame.seq != f.seq ||
+      again[0].frame.payload != f.payload)
+    finding("a good frame does not re-encode to itself");
+}
+
+}  // namespace
+
+int link(const uint8_t* data, std::size_t size) {
+  const link::Bytes bytes(data, data + size);
+  for (const auto& e : frames_of(bytes)) {
+    if (e.good) check_good_frame(e.frame);
+    else if (e.why.empty() || e.why.size() > kMaxMessage) finding("a bad body without a short reason");
+  }
+  // The loopback board takes the bytes as a host's: it must never throw
+  // (a board answers garbage with NAK or silence), and every byte it sends
+  // back is a good frame.
+  link::BoardOptions bo;
+  bo.fifo_segments = 4;
+  bo.speed = 0;
+  link::Bytes out;
+  try {
+    link::LoopbackBoard board(bo);
+    board.receive(data, size, out);
+    board.advance(1.0, out);
+  } catch (const std::exception& e) {
+    finding(std::string("the loopback board threw: ") + e.what());
+  }
+  for (const auto& e : frames_of(out))
+    if (!e.good) finding("the board sent a bad frame: " + e.why);
+  return 0;
+}
+
 const std::vector<Target>& targets() {
   static const std::vector<Target> t = {{"stream", stream}, {"json", json}, {"jsonl", jsonl},
-                                        {"gcode", gcode},   {"svg", svg},   {"dxf", dxf}};
+                                        {"gcode", gcode},   {"svg", svg},   {"dxf", dxf},
+                                        {"link", link}};
   return t;
 }
 

@@ -23,6 +23,8 @@ int jsonl(const uint8_t* data, std::size_t size);   // JSON Lines path
 int gcode(const uint8_t* data, std::size_t size);   // G-code (RS274NGC subset)
 int svg(const uint8_t* data, std::size_t size);     // SVG (tinyxml2)
 int dxf(const uint8_t* data, std::size_t size);     // DXF (dxflib; through a temporary file)
+int link(const uint8_t* data, std::size_t size);    // link frames (LINK.md) at both ends: the host's
+                                                    // decoder, the loopback board taking them as a host's
 
 struct Target {
   const char* name;
