@@ -58,10 +58,11 @@ module traj_board #(
 );
 
   localparam int StepPeriodWidth = 18;
+  localparam int StepSubBits     = 3;   // up to 8 quadratic sub-chords per tick
 
   `TRAJ_PARAM_CHECK(g_bad_derived, OutWidth == Width - GuardBits,
                     "traj_board: OutWidth is derived; do not override it")
-  `TRAJ_PARAM_CHECK(g_bad_min_tick, MinTickPeriod >= Axes * (StepPeriodWidth + 14 + 2) + 3,
+  `TRAJ_PARAM_CHECK(g_bad_min_tick, MinTickPeriod >= Axes * (StepPeriodWidth + 14 + StepSubBits + 3) + 3,
                     "traj_board: MinTickPeriod must cover the step generator's preparation")
 
   // link <-> engine
@@ -140,7 +141,7 @@ module traj_board #(
 
   traj_step_gen #(
     .Axes(Axes), .OutWidth(OutWidth), .FracBits(14), .PeriodWidth(StepPeriodWidth),
-    .DueWidth(8), .TimeWidth(16)
+    .DueWidth(8), .TimeWidth(16), .SubBits(StepSubBits)
   ) u_step (
     .clk_i, .rst_ni,
     .shift_i(step_shift), .period_i(step_period_q), .pulse_i(pulse), .setup_i(setup),

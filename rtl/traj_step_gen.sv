@@ -63,7 +63,8 @@ module traj_step_gen #(
   parameter int FracBits    = 14,  // step fraction bits of the chord, 1..16
   parameter int PeriodWidth = 18,  // tick period width (clocks), 8..32
   parameter int DueWidth    = 8,   // steps waiting for their pulse, 4..32
-  parameter int TimeWidth   = 16   // pulse width and setup counters, 2..16
+  parameter int TimeWidth   = 16,  // pulse width and setup counters, 2..16
+  parameter int SubBits     = 3    // up to 2^SubBits quadratic sub-chords per tick, 0..4
 ) (
   input  logic                     clk_i,
   input  logic                     rst_ni,
@@ -84,7 +85,11 @@ module traj_step_gen #(
 );
 
   localparam int F  = FracBits;
-  localparam int RW = PeriodWidth + F + 2;   // q window, D, r, D -/+ T: signed
+  localparam int RW = PeriodWidth + F + SubBits + 3;  // q window, D1, D2, D, r, D -/+ T: signed
+  localparam int NW = PeriodWidth + SubBits + 3;      // T / 2^F, signed
+  localparam int DW2 = (SubBits > 0) ? SubBits : 1;   // D2 delay line
+  localparam int MW = 3;                              // m, 0..4
+  localparam int PrepClocks = Axes * RW + 3;          // take (or load) -> next interval ready
   localparam int BW = $clog2(RW);            // bit counter
   localparam int AW = (Axes > 1) ? $clog2(Axes) : 1;
   localparam int JW = 8;                     // sample bit index, signed: -F .. 63+RW
@@ -96,6 +101,7 @@ module traj_step_gen #(
                     "traj_step_gen: PeriodWidth must be 8..32")
   `TRAJ_PARAM_CHECK(g_bad_due, DueWidth >= 4 && DueWidth <= 32, "traj_step_gen: DueWidth must be 4..32")
   `TRAJ_PARAM_CHECK(g_bad_time, TimeWidth >= 2 && TimeWidth <= 16, "traj_step_gen: TimeWidth must be 2..16")
+  `TRAJ_PARAM_CHECK(g_bad_sub, SubBits >= 0 && SubBits <= 4, "traj_step_gen: SubBits must be 0..4")
 
   // ---------------------------------------------------------------------
   // Serial preparation (shared by all axes).
@@ -108,9 +114,14 @@ module traj_step_gen #(
   logic                   prep_q;     // the pass is running: fetch_q one clock later
   logic [AW-1:0]          ax_q;       // its axis (fax_q one clock later)
   logic [BW-1:0]          bit_q;      // its bit of q (fbit_q one clock later)
-  logic                   borrow_q;
+  logic                   borrow_q, borrow2_q, c1_q, b2_q;  // the pass's serial carries
+  logic [SubBits:0]       dl1_q;      // the axis's last D1 bits in the pass, newest in bit 0
+  logic [DW2-1:0]         dl2_q;      // its last D2 bits
   logic                   first_q;    // no sample since reset: the next one sets the position
-  logic                   reinit_q;   // this pass restarts from the step boundary
+  logic                   reinit_q;   // this tick restarts from the step boundary
+  logic                   tickp_q;    // the pass (or the last one) is a tick pass, else a sub pass
+  logic [MW-1:0]          nm_q;       // m of the tick: 2^m sub-chords
+  logic [SubBits:0]       subs_q;     // sub-chords of the tick still to prepare
   logic                   alt_q_st;   // the pass has ended: one clock to nready_q
   logic                   nready_q;   // the next interval's D is ready
   logic [PeriodWidth-1:0] nper_q;     // its period
@@ -118,26 +129,30 @@ module traj_step_gen #(
   // DDA (shared interval counter)
   logic                   active_q, last_q;  // last_q == (cnt_q == 1)
   logic [PeriodWidth-1:0] cnt_q;
-  logic [PeriodWidth+1:0] ntn_q;      // -T / 2^F of the next interval (nper_q holds from take to load)
+  logic [NW-1:0]          ntq_q, ntn_q;  // T / 2^F, -T / 2^F of the next interval (nper_q and nm_q
+                                         // hold from take to the loads)
+  logic [PeriodWidth-1:0] nlen_q;     // its length, clocks: P / 2^m
   logic                   loaded_q;   // an interval started in the last clock (its step-rate check)
   logic [TimeWidth-1:0]   hold_q;     // setup_i - pulse_i, at least 0
   logic                   en_q, err_q;
   logic                   pulse_one, setup_zero, hold_zero;  // the timer's loads that are 0
 
-  logic take, load, last_bit, last_axis, f_last_bit, f_last_axis, sbit;
+  logic take, load, subgo, last_bit, last_axis, f_last_bit, f_last_axis, sbit;
+  logic pbit, dbit, borrow_d, ppbit, ddbit_t, borrow2_d, ddbit, add_a, add_c, sub_b, s1, c1_d, ndbit, b2_d;
   logic [Axes-1:0] err_axis;
   logic [RW-1:0]   nt, nt_neg;        // T of the next interval, -T
   logic [AW-1:0]   fax_inc;           // the axis the read goes to after fax_q
   logic [Axes*JW-1:0] jst_q;          // axis a: its first sample bit, shift - F (a flop of shift_i)
 
-  assign take        = sample_valid_i && !fetch_q && !prep_q && !alt_q_st && !nready_q;
+  assign take        = sample_valid_i && !fetch_q && !prep_q && !alt_q_st && !nready_q && (subs_q == '0);
   assign load        = nready_q && (!active_q || last_q);
+  assign subgo       = load && (subs_q != '0);  // the next sub-chord's pass
   assign last_bit    = (bit_q == BW'(RW - 1));
   assign last_axis   = (ax_q == AW'(Axes - 1));
   assign f_last_bit  = (fbit_q == BW'(RW - 1));
   assign f_last_axis = (fax_q == AW'(Axes - 1));
   assign fax_inc     = f_last_axis ? '0 : fax_q + 1'b1;
-  assign nt          = {2'b00, nper_q, {F{1'b0}}};
+  assign nt          = {ntq_q, {F{1'b0}}};
   assign nt_neg      = {ntn_q, {F{1'b0}}};
   assign pulse_one   = (pulse_i == TimeWidth'(1));
   assign setup_zero  = (setup_i == '0);
@@ -159,6 +174,18 @@ module traj_step_gen #(
   end
   assign sbit = sbit_axis[fax_q];
 
+  // sub-chords per tick = 2^m: the most (m <= SubBits) that divide the period
+  // into intervals of at least 2 PrepClocks clocks
+  function automatic logic [MW-1:0] sub_bits(input logic [PeriodWidth-1:0] p);
+    logic ok;
+    sub_bits = '0;
+    ok = 1'b1;
+    for (int k = 1; k <= SubBits; k++) begin
+      ok = ok && (p[k-1] == 1'b0) && ((32'(p) >> k) >= 32'(2 * PrepClocks));
+      if (ok) sub_bits = MW'(k);
+    end
+  endfunction
+
   always_ff @(posedge clk_i) begin
     if (!rst_ni) begin
       fetch_q   <= 1'b0;
@@ -169,6 +196,8 @@ module traj_step_gen #(
       bit_q     <= '0;
       first_q   <= 1'b1;
       reinit_q  <= 1'b0;
+      tickp_q   <= 1'b0;
+      subs_q    <= '0;
       alt_q_st  <= 1'b0;
       nready_q  <= 1'b0;
       active_q  <= 1'b0;
@@ -188,6 +217,14 @@ module traj_step_gen #(
         // restart from the step boundary when the period differs from the
         // last interval's (0 after reset: the first interval)
         reinit_q <= (period_i != cur_per_q);
+        tickp_q  <= 1'b1;
+        subs_q   <= first_q ? '0 : (SubBits+1)'((1 << sub_bits(period_i)) - 1);
+      end else if (subgo) begin
+        fetch_q  <= 1'b1;
+        fax_q    <= '0;
+        fbit_q   <= '0;
+        tickp_q  <= 1'b0;
+        subs_q   <= subs_q - 1'b1;
       end else if (fetch_q) begin
         if (!f_last_bit) begin
           fbit_q <= fbit_q + 1'b1;
@@ -212,9 +249,9 @@ module traj_step_gen #(
       if (load) begin
         nready_q  <= 1'b0;
         active_q  <= 1'b1;
-        cnt_q     <= nper_q;
+        cnt_q     <= nlen_q;
         cur_per_q <= nper_q;
-        last_q    <= (nper_q == PeriodWidth'(1));
+        last_q    <= (nlen_q == PeriodWidth'(1));
       end else if (active_q) begin
         cnt_q  <= cnt_q - 1'b1;
         last_q <= (cnt_q == PeriodWidth'(2));
@@ -226,28 +263,77 @@ module traj_step_gen #(
   // datapath of the pass (not reset)
   always_ff @(posedge clk_i) begin
     hold_q <= (setup_i > pulse_i) ? setup_i - pulse_i : '0;
-    ntn_q  <= -{2'b00, nper_q};
+    ntq_q  <= NW'({nper_q, 1'b0}) << nm_q;
+    ntn_q  <= -(NW'({nper_q, 1'b0}) << nm_q);
+    nlen_q <= nper_q >> nm_q;
     sbit_q <= sbit;
     if (take) begin
       nper_q <= period_i;
+      nm_q   <= sub_bits(period_i);
       j_q    <= jst_q[0 +: JW];
     end else if (fetch_q) begin
       j_q    <= f_last_bit ? jst_q[32'(fax_inc)*JW +: JW] : j_q + 1'b1;
     end
     for (int a = 0; a < Axes; a++) jst_q[a*JW +: JW] <= JW'(shift_i[a*6 +: 6]) - JW'(F);
-    if (take) begin
-      borrow_q <= 1'b0;
+    // carries and delay lines: cleared at each axis's bit 0
+    if (take || subgo || (prep_q && last_bit)) begin
+      borrow_q  <= 1'b0;
+      borrow2_q <= 1'b0;
+      c1_q      <= 1'b0;
+      b2_q      <= 1'b0;
+      dl1_q     <= '0;
+      dl2_q     <= '0;
     end else if (prep_q) begin
-      borrow_q <= last_bit ? 1'b0 : borrow_d;
+      borrow_q  <= borrow_d;
+      borrow2_q <= borrow2_d;
+      c1_q      <= c1_d;
+      b2_q      <= b2_d;
+      dl1_q     <= (SubBits+1)'({dl1_q, dbit});
+      dl2_q     <= DW2'({dl2_q, ddbit});
     end
   end
 
-  // serial subtraction q - q_prev, least significant bit first
-  logic pbit, dbit, borrow_d;
-  logic [Axes-1:0] qprev_lsb;
-  assign pbit     = qprev_lsb[ax_q] && !(reinit_q && 32'(bit_q) < 32'(F));
-  assign dbit     = sbit_q ^ pbit ^ borrow_q;
-  assign borrow_d = (!sbit_q && pbit) || (!sbit_q && borrow_q) || (pbit && borrow_q);
+  // The pass, least significant bit first, on the bit read one clock earlier:
+  //   tick pass: D1 = q - q_prev, D2 = D1 - D1_prev (0 on a restart),
+  //              D = 2M D1 - (M - 1) D2 (M = 2^m; shifted bits from the delay lines);
+  //   sub pass:  D = D + 2 D2.
+  logic [Axes-1:0] nd_lsb;
+
+  // q_prev (the previous sample's q), D1_prev (the last tick's D1) and D2 (the
+  // tick's) of every axis, bit by bit in block RAM (they are only ever used
+  // bit-serially): word {axis, bit} = {D2, D1_prev, q_prev}. Read at the
+  // fetch position (fax_q, fbit_q), so the word of the pass position (ax_q,
+  // bit_q) is in prd_q; written back at the pass position (a tick pass
+  // writes q and D1 there, a sub pass keeps them).
+  localparam int RA = AW + BW;
+  logic [2:0] pram [0:(1<<RA)-1];
+  logic [2:0] prd_q;
+  always_ff @(posedge clk_i) begin
+    prd_q <= pram[{fax_q, fbit_q}];
+    if (prep_q) pram[{ax_q, bit_q}] <= {ddbit, tickp_q ? dbit : prd_q[1], tickp_q ? sbit_q : prd_q[0]};
+  end
+
+  assign pbit      = prd_q[0] && !(reinit_q && 32'(bit_q) < 32'(F));
+  assign dbit      = sbit_q ^ pbit ^ borrow_q;
+  assign borrow_d  = (!sbit_q && pbit) || (!sbit_q && borrow_q) || (pbit && borrow_q);
+  assign ppbit     = prd_q[1];
+  assign ddbit_t   = !reinit_q && (dbit ^ ppbit ^ borrow2_q);
+  assign borrow2_d = !reinit_q && ((!dbit && ppbit) || (!dbit && borrow2_q) || (ppbit && borrow2_q));
+  assign ddbit     = tickp_q ? ddbit_t : prd_q[2];
+  // D1 at bit j-m-1 and D2 at bit j-m (nm_q <= SubBits)
+  logic [7:0] d1_line, d2_line;
+  logic       d1_shifted, d2_shifted;
+  assign d1_line    = 8'(dl1_q);             // bit k: D1 at bit j-1-k
+  assign d2_line    = 8'({dl2_q, ddbit_t});  // bit k: D2 at bit j-k
+  assign d1_shifted = d1_line[nm_q];
+  assign d2_shifted = d2_line[nm_q];
+  assign add_a     = tickp_q ? d1_shifted : nd_lsb[ax_q];
+  assign add_c     = tickp_q ? ddbit_t : dl2_q[0];
+  assign sub_b     = tickp_q && d2_shifted;
+  assign s1        = add_a ^ add_c ^ c1_q;
+  assign c1_d      = (add_a && add_c) || (add_a && c1_q) || (add_c && c1_q);
+  assign ndbit     = s1 ^ sub_b ^ b2_q;
+  assign b2_d      = (!s1 && sub_b) || (!s1 && b2_q) || (sub_b && b2_q);
 
   // ---------------------------------------------------------------------
   // Per axis: q_prev and D shift registers, DDA, pulses.
@@ -255,8 +341,7 @@ module traj_step_gen #(
   typedef enum logic [2:0] {PgIdle, PgSetup, PgHigh, PgLow, PgHold} pg_e;
 
   for (genvar a = 0; a < Axes; a++) begin : g_axis
-    logic [RW-1:0]        qprev_q;   // q of the previous sample (rotates during its pass)
-    logic [RW-1:0]        nd_q;      // next interval's D (shifts in during the pass)
+    logic [RW-1:0]        nd_q;      // next interval's D (rotates during the pass)
     logic [RW-1:0]        d_q, alt_q, r_q;  // running interval: D, D -/+ T, remainder
     logic                 dpos_q;    // running interval's D >= 0
     logic                 dnz_q;     // running interval's D != 0
@@ -269,13 +354,10 @@ module traj_step_gen #(
     logic                 mine;
 
     assign mine         = prep_q && (ax_q == AW'(a));
-    assign qprev_lsb[a] = qprev_q[0];
+    assign nd_lsb[a]     = nd_q[0];
 
     always_ff @(posedge clk_i) begin
-      if (mine) begin
-        qprev_q <= {sbit_q, qprev_q[RW-1:1]};
-        nd_q    <= {dbit, nd_q[RW-1:1]};
-      end
+      if (mine) nd_q <= {ndbit, nd_q[RW-1:1]};
     end
 
     // DDA: at most one step per clock
@@ -299,7 +381,7 @@ module traj_step_gen #(
         dpos_q <= !nd_q[RW-1];
         dnz_q  <= (nd_q != '0);
       end
-      if (load && reinit_q) r_q <= '0;
+      if (load && reinit_q && tickp_q) r_q <= '0;  // a tick's first sub-chord after a period change
       else if (active_q)    r_q <= r_step;
     end
 

@@ -6,11 +6,17 @@
 #include <cstdio>
 
 #include "fd/fd_ticker.hpp"
+#include "traj_step_gen.hpp"
 
 namespace traj::board {
 namespace {
 
 int64_t floor_shift(int64_t v, int sh) { return v >= 0 ? v >> sh : -((-v - 1) >> sh) - 1; }
+int64_t floor_div(__int128 v, __int128 d) { return static_cast<int64_t>(v >= 0 ? v / d : -((-v - 1) / d) - 1); }
+
+// rtl/traj_board.sv's step generator (its sub-chord count for a period)
+using BoardStepGen = traj::StepGen<3, 48, 14, 18, 8, 16, 3>;
+constexpr int kFrac = 14;
 
 // Every tick's sample of one axis, in order, from the records.
 std::vector<int64_t> predicted_samples(const stream::ReadResult& r, int axis) {
@@ -30,11 +36,10 @@ class AxisChecker {
 
   void run(const std::vector<int64_t>& s) {
     const size_t n_max = std::min(s.size(), ticks_.size());
-    for (size_t n = 1; n < n_max; ++n) {
-      const int64_t e0 = floor_shift(s[n - 1], sh_), e1 = floor_shift(s[n], sh_);
-      for (int64_t b = e0 + 1; b <= e1; ++b) expect(n, s, b, true);
-      for (int64_t b = e0; b > e1; --b) expect(n, s, b, false);
-    }
+    std::vector<int64_t> q(n_max);
+    for (size_t n = 0; n < n_max; ++n)
+      q[n] = sh_ >= kFrac ? floor_shift(s[n], sh_ - kFrac) : s[n] * (int64_t{1} << (kFrac - sh_));
+    for (size_t n = 1; n < n_max; ++n) tick(n, q);
     if (!s.empty()) a_.final_expected = floor_shift(s[n_max - 1], sh_) - floor_shift(s[0], sh_);
     a_.decoded = edges_.size();
     for (const auto& e : edges_) a_.final_decoded += e.up ? 1 : -1;
@@ -43,18 +48,44 @@ class AxisChecker {
   }
 
  private:
-  void expect(size_t n, const std::vector<int64_t>& s, int64_t boundary, bool up) {
+  // The steps between ticks n-1 and n: the generator's path is 2^m
+  // sub-chords through Y_i / (2 M^2) (M = 2^m, i = 0..M), Y_i = 2 M^2 q0 +
+  // 2 M i D1 + i (i - M) D2 (q: the samples with kFrac fraction bits of a
+  // step; D1 = q_n - q_n-1, D2 = D1 - D1 of the tick before; the first tick
+  // starts from q_0's step boundary with D2 = 0). Each sub-chord takes
+  // P / M clocks; every boundary it crosses is one step.
+  void tick(size_t n, const std::vector<int64_t>& q) {
+    const uint64_t p = n + 1 < ticks_.size() ? ticks_[n + 1] - ticks_[n] : ticks_[n] - ticks_[n - 1];
+    const int m = BoardStepGen::sub_bits(static_cast<uint32_t>(std::min<uint64_t>(p, (1u << 18) - 1)));
+    const int64_t M = int64_t{1} << m;
+    const int64_t q0 = n == 1 ? floor_shift(q[0], kFrac) << kFrac : q[n - 1];
+    const int64_t d1 = q[n] - q0, d2 = n >= 2 ? d1 - (q[n - 1] - (n == 2 ? floor_shift(q[0], kFrac) << kFrac : q[n - 2])) : 0;
+    const __int128 scale = static_cast<__int128>(2 * M * M) << kFrac;  // one step in Y
+    auto y = [&](int64_t i) {
+      return static_cast<__int128>(2 * M * M) * q0 + static_cast<__int128>(2 * M * i) * d1 + static_cast<__int128>(i * (i - M)) * d2;
+    };
+    for (int64_t i = 0; i < M; ++i) {
+      const __int128 ya = y(i), yb = y(i + 1);
+      const int64_t e0 = floor_div(ya, scale), e1 = floor_div(yb, scale);
+      const double len = static_cast<double>(p) / static_cast<double>(M);
+      auto at = [&](int64_t b) {  // clocks after tick n where the sub-chord reaches boundary b
+        const double f = static_cast<double>(static_cast<__int128>(b) * scale - ya) / static_cast<double>(yb - ya);
+        return (static_cast<double>(i) + f) * len;
+      };
+      for (int64_t b = e0 + 1; b <= e1; ++b) expect(n, at(b), true);
+      for (int64_t b = e0; b > e1; --b) expect(n, at(b), false);
+    }
+  }
+
+  void expect(size_t n, double clocks, bool up) {
     const size_t i = a_.expected++;
     if (i >= edges_.size() || edges_[i].up != up) {
       problem("tick " + std::to_string(n) + ": predicted step " + std::to_string(i) + (up ? " up" : " down") +
               (i >= edges_.size() ? " not on the pins" : " decoded in the other direction"));
       return;
     }
-    const double p = static_cast<double>(n + 1 < ticks_.size() ? ticks_[n + 1] - ticks_[n] : ticks_[n] - ticks_[n - 1]);
-    const double cross = static_cast<double>(boundary) * std::ldexp(1.0, sh_);
-    const double f = (cross - static_cast<double>(s[n - 1])) / static_cast<double>(s[n] - s[n - 1]);
-    const double delay = (static_cast<double>(edges_[i].cycle) - (static_cast<double>(ticks_[n]) + f * p)) /
-                         BoardBuild::kClkHz * 1e6;
+    const double delay =
+        (static_cast<double>(edges_[i].cycle) - (static_cast<double>(ticks_[n]) + clocks)) / BoardBuild::kClkHz * 1e6;
     if (i == 0 || delay < a_.delay_min_us) a_.delay_min_us = delay;
     if (i == 0 || delay > a_.delay_max_us) a_.delay_max_us = delay;
   }
@@ -97,7 +128,7 @@ std::string describe(const StepCheck& c) {
   for (size_t a = 0; a < c.axes.size(); ++a) {
     const auto& x = c.axes[a];
     char line[256];
-    std::snprintf(line, sizeof line, "  axis %zu: %llu steps predicted, %llu decoded, net %lld / %lld; edge after its chord crossing "
+    std::snprintf(line, sizeof line, "  axis %zu: %llu steps predicted, %llu decoded, net %lld / %lld; edge after its path crossing "
                    "%.3f .. %.3f us\n",
                    a, static_cast<unsigned long long>(x.expected), static_cast<unsigned long long>(x.decoded),
                    static_cast<long long>(x.final_expected), static_cast<long long>(x.final_decoded), x.delay_min_us,

@@ -5,16 +5,20 @@
 // by the exact register recurrence (fd::FdTicker). One step is 2^shift output
 // LSB, so after tick n an axis has made floor(s_n / 2^shift) - floor(s_0 /
 // 2^shift) steps (the first sample sets the position, no steps). Each
-// boundary the samples cross between ticks n-1 and n is one expected step,
-// in order and direction; the decoded rising edges of the step pin must be
-// exactly these, one for one (no step lost, none extra, none reversed).
+// boundary the generator's path (below) crosses between ticks n-1 and n is
+// one expected step, in order and direction; the decoded rising edges of the
+// step pin must be exactly these, one for one (no step lost, none extra, none
+// reversed).
 //
-// Timing: the step generator spreads a tick's steps along the chord between
-// the two samples over the tick period P, one tick behind the samples. An
-// expected step crosses its boundary at the chord time t_n + f·P (t_n: the
-// cycle of tick n, f: the fraction of the chord); its edge's delay from that
-// time is reported (minimum and maximum, µs): a constant latency plus the
-// pulse generator's queueing.
+// The path: the step generator (rtl/traj_step_gen.sv) runs, one tick behind
+// the samples, 2^m sub-chords per tick through the quadratic that passes
+// the samples n-2, n-1, n (m from the tick period; the first tick a single
+// chord from the first sample's step boundary). Its steps are the boundaries
+// this path crosses, recomputed here in exact integer arithmetic from the
+// samples (not from the RTL), with the time each is crossed; an edge's delay
+// from that time is reported (minimum and maximum, µs): a constant latency
+// plus the pulse generator's queueing. (How close the path's crossings are
+// to the polynomial's: tb/board/bench_step_timing.)
 #pragma once
 #include <cstdint>
 #include <string>

@@ -9,7 +9,9 @@
 //     after a falling one;
 //   * no error flag on a feasible stream.
 // Random smooth motion (velocity random walk with pauses), random shifts,
-// tick periods, pulse widths and setup times. TRAJ_SEED=<n> reruns one seed.
+// tick periods (odd seeds: multiples of 2..8 long enough for 2..8 sub-chords),
+// a period change halfway, pulse widths and setup times. TRAJ_SEED=<n> reruns
+// one seed.
 #include <gtest/gtest.h>
 #include <verilated.h>
 
@@ -137,7 +139,12 @@ void run_seed(uint64_t seed, int ticks) {
   std::mt19937_64 rng(seed);
   auto uni = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
   Model::In in;
-  in.period = static_cast<uint32_t>(uni(Model::kPrepClocks + 2, 600));
+  auto random_period = [&] {
+    if (seed % 2 == 0) return static_cast<uint32_t>(uni(Model::kPrepClocks + 2, 600));
+    return static_cast<uint32_t>(uni(2 * Model::kPrepClocks, 2 * Model::kPrepClocks + 40) << uni(1, 3));
+  };
+  in.period = random_period();
+  const uint32_t period2 = std::max(random_period(), in.period / 2);
   in.pulse = static_cast<uint32_t>(uni(1, 4));
   in.setup = static_cast<uint32_t>(uni(0, 6));
   in.enable = true;
@@ -145,9 +152,10 @@ void run_seed(uint64_t seed, int ticks) {
   for (int a = 0; a < kAxes; ++a) in.shift[a] = static_cast<uint8_t>(shift[a] = uni(0, 24));
   // at most this many steps per tick keeps the pulses ahead of the samples
   const int pulse_clocks = 2 * static_cast<int>(in.pulse) + 2 * static_cast<int>(in.setup) + 6;
-  const double max_steps = std::max(1.0, 0.4 * in.period / pulse_clocks);
-  std::printf("    period %u, pulse %u, setup %u, shifts %d %d %d, <= %.1f steps/tick\n", in.period, in.pulse,
-              in.setup, shift[0], shift[1], shift[2], max_steps);
+  const double max_steps = std::max(1.0, 0.4 * std::min(in.period, period2) / pulse_clocks);
+  std::printf("    period %u (%d sub-chords) then %u (%d), pulse %u, setup %u, shifts %d %d %d, <= %.1f steps/tick\n",
+              in.period, 1 << Model::sub_bits(in.period), period2, 1 << Model::sub_bits(period2), in.pulse, in.setup,
+              shift[0], shift[1], shift[2], max_steps);
 
   Bench b;
   Decoder dec[kAxes];
@@ -161,6 +169,7 @@ void run_seed(uint64_t seed, int ticks) {
   std::normal_distribution<double> N(0, 1);
   int checks = 0, pause = 0;
   for (int k = 0; k < ticks; ++k) {
+    if (k == ticks / 2) in.period = period2;
     // motion: pauses of 4 ticks every now and then, else a smooth velocity walk
     if (pause == 0 && uni(0, 60) == 0) pause = 6;
     for (int a = 0; a < kAxes; ++a) {
@@ -201,7 +210,7 @@ TEST(StepGen, RandomMotionExactCountsAndPulseTiming) {
     run_seed(traj::test::env_seed(0), 3000);
     return;
   }
-  for (uint64_t seed : {1, 2, 3, 4}) run_seed(seed, 1500);
+  for (uint64_t seed : {1, 2, 3, 4, 5, 6, 7, 8}) run_seed(seed, 1500);
 }
 
 TEST(StepGen, SampleBeforePrepDoneIsAnError) {
