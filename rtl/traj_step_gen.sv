@@ -6,39 +6,51 @@
 //   * one step = 2^shift output LSB (shift per axis, 0..63, runtime);
 //   * the commanded step count is floor(sample / 2^shift) at every tick,
 //     exactly: no lost or extra step, ever (below);
-//   * the steps of a tick are spread through the tick: a DDA along the chord
-//     between consecutive samples over the tick period P (clocks), one tick
-//     behind the samples.
+//   * the steps of a tick are spread through the tick along quadratic
+//     sub-chords, one tick behind the samples (below).
 //
-// Exactness. Per axis q = floor(sample * 2^F / 2^shift) (F = FracBits: the
-// step position with F fraction bits; floor(q / 2^F) = floor(sample /
-// 2^shift)). An interval from q0 to q1 runs P clocks with D = q1 - q0 and a
-// remainder r in [0, T), T = P * 2^F: every clock r += D, with one step up
-// when r reaches T (r -= T) or one step down when r drops below 0 (r += T).
-// With X = floor(q / 2^F) * T + r (the step count times T plus r), an
-// interval that starts at X = q0 * P ends at X = q0 * P + P * D = q1 * P:
-// the step count is floor(q1 / 2^F) after every interval, and r continues
-// into the next one (|D| <= T: at most one step per clock). When P changes
-// (or at the first interval after reset) the interval restarts from the step
-// boundary: r = 0 and q0 with its fraction bits cleared (the same step
-// count; only that interval's chord starts at the boundary).
+// Path. Per axis q = floor(sample * 2^F / 2^shift) (F = FracBits: the step
+// position with F fraction bits; floor(q / 2^F) = floor(sample / 2^shift)).
+// Between the samples of ticks k-1 and k the path is the parabola through
+// the samples k-2, k-1, k, as M = 2^m straight sub-chords of P / M clocks
+// (P: the tick period; m <= SubBits, the most for which 2^m divides P and
+// P / 2^m >= 2 PrepClocks). With D1 = q_k - q_k-1 and D2 = D1 - D1 of the
+// tick before, the parabola scaled by 2 M^2 is Y_i = 2 M^2 q_k-1 + 2 M i D1
+// + i (i - M) D2 at sub-chord ends i = 0..M: integers; sub-chord i rises by
+// dY_i = 2 M D1 + (2 i + 1 - M) D2.
 //
-// Only q mod 2^RW is kept (RW = PeriodWidth + F + 2 bits): D = q1 - q0 is
-// exact modulo 2^RW because |D| <= T < 2^(RW-2).
+// Exactness. A DDA per axis: a remainder r in [0, T), T = P * 2^(F+m+1);
+// every clock r += dY_i, with one step up when r reaches T (r -= T) or one
+// step down when r drops below 0 (r += T). With X = (steps) * T + r, the
+// M sub-chords of a tick add (P / M) * (Y_M - Y_0) = P * 2M * D1 to X: the
+// step count is floor(q_k / 2^F) after every tick, whatever D2 is, and r
+// continues into the next tick (|dY| <= T: at most one step per clock).
+// When P changes (or at the first interval after reset) the tick restarts
+// from the step boundary: r = 0, q_k-1 with its fraction bits cleared,
+// D2 = 0 (the same step count; only that tick's path starts at the
+// boundary).
 //
-// Preparation (one serial pass per sample, axis after axis, RW clocks per
-// axis, one clock ahead of it to fetch the first bit, and one clock to finish:
-// kPrepClocks = Axes * RW + 3): the bits of q, least significant first, are
-// read from sample_i (bit shift - F + i, sign-extended; 0 below bit 0) into a
-// flop one clock before they are used (the read is a wide multiplexer; the
-// flop keeps it off the subtraction's path) and subtracted bit-serially from
-// the previous q, which rotates through the same shift register. D -/+ T is
-// formed when the interval starts. sample_i must hold for kPrepClocks after
-// sample_valid_i (the FD engine holds its sample until its next tick). The
-// interval starts when the previous one ends (or at once when none runs):
-// with ticks every P >= kPrepClocks + 1 clocks the intervals follow each
-// other with no gap and a constant latency. The first sample after reset
-// only sets the position (no steps).
+// Only q mod 2^RW is kept (RW = PeriodWidth + F + SubBits + 3 bits): all
+// differences are exact modulo 2^RW because their magnitudes stay below
+// 2^(RW-2).
+//
+// Preparation: one serial pass per sample (a tick pass) and one per later
+// sub-chord (a sub pass), axis after axis, RW clocks per axis, one clock
+// ahead of it to fetch the first bit, and one clock to finish:
+// PrepClocks = Axes * RW + 3. The tick pass reads the bits of q, least
+// significant first, from sample_i (bit shift - F + i, sign-extended; 0
+// below bit 0) into a flop one clock before they are used (the read is a
+// wide multiplexer; the flop keeps it off the subtraction's path) and forms
+// D1 = q - q_prev, D2 = D1 - D1_prev and dY_0 = (D1 << m+1) - (D2 << m) + D2
+// bit-serially (delay lines give the shifted bits); a sub pass forms
+// dY += 2 D2. q_prev, D1_prev and D2 live bit by bit in block RAM (read at
+// the fetch position, written back at the pass position); dY is a shift
+// register per axis. dY -/+ T is formed when the sub-chord starts.
+// sample_i must hold for PrepClocks after sample_valid (the FD engine holds
+// its sample until its next tick). A sub-chord starts when the previous one
+// ends (or at once when none runs): with ticks every P >= PrepClocks + 1
+// clocks the intervals follow each other with no gap and a constant latency.
+// The first sample after reset only sets the position (no steps).
 //
 // Pulses. A signed per-axis count `due` collects the DDA's steps (one clock
 // after the DDA: a register between the remainder's carry chain and the
@@ -50,8 +62,9 @@
 // turns as soon as the DDA runs an interval the other way with nothing due.
 // dir_o = 1: steps count up (positive direction).
 //
-// err_o (sticky until reset): a sample arrived while the previous one was
-// still being prepared or waiting; more than one step per clock (|D| > T);
+// err_o (sticky until reset): a sample arrived while the previous one (or
+// one of its sub-chords) was still being prepared or waiting; more than one
+// step per clock (|dY| > T);
 // |due| reached 2^(DueWidth-2) (the pulses cannot keep up with the samples:
 // lower pulse_i or the speed).
 `default_nettype none

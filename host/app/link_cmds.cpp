@@ -153,6 +153,11 @@ int upload_command(const UploadArgs& a) {
   link::UploadOptions o = a.opt;
   o.interrupted = &g_interrupted;
   const auto& h = src.header();
+  if (h.period > 1e-3)  // the step generator's timing bound (rtl/README.md, step-edge timing)
+    std::fprintf(stderr,
+                 "upload: note: tick period %g ms: the board's step edges are within 10 us of the motion's "
+                 "boundary crossings only for ticks up to 1 ms (plan for step outputs with --period 0.001 or finer)\n",
+                 h.period * 1e3);
   StatusLine line(std::ldexp(1.0, -h.frac_bits), h.units);
   const auto r = link::upload(*port, src, o, [&](const link::UploadProgress& p) { line.show(p, false); });
   line.show(r.progress, true);

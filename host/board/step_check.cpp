@@ -86,8 +86,8 @@ class AxisChecker {
     }
     const double delay =
         (static_cast<double>(edges_[i].cycle) - (static_cast<double>(ticks_[n]) + clocks)) / BoardBuild::kClkHz * 1e6;
-    if (i == 0 || delay < a_.delay_min_us) a_.delay_min_us = delay;
-    if (i == 0 || delay > a_.delay_max_us) a_.delay_max_us = delay;
+    if (i == 0 || delay < a_.delay_min_us) a_.delay_min_us = delay, a_.delay_min_tick = n;
+    if (i == 0 || delay > a_.delay_max_us) a_.delay_max_us = delay, a_.delay_max_tick = n;
   }
   void problem(const std::string& what) {
     if (c_.mismatches++ == 0) c_.first_problem = what;
@@ -129,10 +129,11 @@ std::string describe(const StepCheck& c) {
     const auto& x = c.axes[a];
     char line[256];
     std::snprintf(line, sizeof line, "  axis %zu: %llu steps predicted, %llu decoded, net %lld / %lld; edge after its path crossing "
-                   "%.3f .. %.3f us\n",
+                   "%.3f .. %.3f us (ticks %llu, %llu)\n",
                    a, static_cast<unsigned long long>(x.expected), static_cast<unsigned long long>(x.decoded),
                    static_cast<long long>(x.final_expected), static_cast<long long>(x.final_decoded), x.delay_min_us,
-                   x.delay_max_us);
+                   x.delay_max_us, static_cast<unsigned long long>(x.delay_min_tick),
+                   static_cast<unsigned long long>(x.delay_max_tick));
     s += line;
   }
   if (!c.first_problem.empty()) s += "  first problem: " + c.first_problem + "\n";

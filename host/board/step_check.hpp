@@ -33,6 +33,7 @@ struct AxisSteps {
   uint64_t expected = 0, decoded = 0;  // steps (edges)
   int64_t final_expected = 0, final_decoded = 0;  // net position, steps
   double delay_min_us = 0, delay_max_us = 0;
+  uint64_t delay_min_tick = 0, delay_max_tick = 0;  // where they are
 };
 
 struct StepCheck {
