@@ -14,9 +14,10 @@
 //   generator's err (a sample before the previous one was prepared, a step
 //   rate above one per clock, pulses that cannot keep up).
 // * The step generator interpolates over the tick period in use: the CONFIG
-//   period, or the measured period of the external tick; periods of 2^18
-//   clocks and more are clamped to 2^18-1 (8.7 ms at 30 MHz: the steps of a
-//   longer tick come in its first 2^18-1 clocks; the count stays exact), an
+//   period, or the measured period of the external tick; periods of 2^16
+//   clocks and more are clamped to 2^16-1 (2.18 ms at 30 MHz, 1.09 ms at
+//   60 MHz: the steps of a longer tick come in its first 2^16-1 clocks; the
+//   count stays exact; the edge timing bound holds to 1 ms ticks), an
 //   external tick not measured yet counts as 1 clock (the steps of a tick at
 //   once).
 // * FD engine (FdTimeMux): 1 = traj_fd_tm (one adder, registers in block RAM;
@@ -57,12 +58,13 @@ module traj_board #(
   output logic            heartbeat_o   // toggles every 1024 ticks (status LED)
 );
 
-  localparam int StepPeriodWidth = 18;
+  localparam int StepPeriodWidth = 16;
+  localparam int StepFracBits    = 12;  // 1/4096 step: edges within 4.5 us at 1 ms (rtl/README.md)
   localparam int StepSubBits     = 3;   // up to 8 quadratic sub-chords per tick
 
   `TRAJ_PARAM_CHECK(g_bad_derived, OutWidth == Width - GuardBits,
                     "traj_board: OutWidth is derived; do not override it")
-  `TRAJ_PARAM_CHECK(g_bad_min_tick, MinTickPeriod >= Axes * (StepPeriodWidth + 14 + StepSubBits + 3) + 3,
+  `TRAJ_PARAM_CHECK(g_bad_min_tick, MinTickPeriod >= Axes * (StepPeriodWidth + StepFracBits + StepSubBits + 3) + 3,
                     "traj_board: MinTickPeriod must cover the step generator's preparation")
 
   // link <-> engine
@@ -140,7 +142,7 @@ module traj_board #(
   end
 
   traj_step_gen #(
-    .Axes(Axes), .OutWidth(OutWidth), .FracBits(14), .PeriodWidth(StepPeriodWidth),
+    .Axes(Axes), .OutWidth(OutWidth), .FracBits(StepFracBits), .PeriodWidth(StepPeriodWidth),
     .DueWidth(8), .TimeWidth(16), .SubBits(StepSubBits)
   ) u_step (
     .clk_i, .rst_ni,

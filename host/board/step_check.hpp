@@ -8,7 +8,10 @@
 // boundary the generator's path (below) crosses between ticks n-1 and n is
 // one expected step, in order and direction; the decoded rising edges of the
 // step pin must be exactly these, one for one (no step lost, none extra, none
-// reversed).
+// reversed), with one exception: the generator nets its steps before it
+// pulses them, so a step and the opposite step across the same boundary
+// within a pulse and a direction turn (the path touching a boundary) may make
+// no edge; such pairs are counted and reported.
 //
 // The path: the step generator (rtl/traj_step_gen.sv) runs, one tick behind
 // the samples, 2^m sub-chords per tick through the quadratic that passes
@@ -31,6 +34,7 @@ namespace traj::board {
 
 struct AxisSteps {
   uint64_t expected = 0, decoded = 0;  // steps (edges)
+  uint64_t cancelled = 0;  // pairs of predicted steps netted out before their pulse
   int64_t final_expected = 0, final_decoded = 0;  // net position, steps
   double delay_min_us = 0, delay_max_us = 0;
   uint64_t delay_min_tick = 0, delay_max_tick = 0;  // where they are

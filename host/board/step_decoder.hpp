@@ -20,6 +20,7 @@ struct StepTiming {
 class StepDecoder {
  public:
   explicit StepDecoder(StepTiming t) : t_(t) {}
+  const StepTiming& timing() const { return t_; }
 
   void sample(uint64_t cycle, bool step, bool dir) {
     if (dir != dir_) {

@@ -31,7 +31,7 @@
 #include "traj_step_gen.hpp"
 
 #ifndef BENCH_FRAC
-#define BENCH_FRAC 14  // FracBits of the board build (rtl/traj_board.sv)
+#define BENCH_FRAC 12  // FracBits of the board build (rtl/traj_board.sv)
 #endif
 
 namespace {
