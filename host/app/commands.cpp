@@ -395,10 +395,12 @@ int sim_command(const SimArgs& a) {
     throw stream::StreamError(f.reader.error().empty() ? a.input + ": changed while simulated" : f.reader.error());
   const bool ok = sr.mismatches == 0 && !sr.tick_err;
   if (ok && csv) csv->commit();
-  std::printf("%s: %llu segments, %llu samples, %llu cycles (tick every %d) in %s, RTL == hls: %s, tick_err %s, "
+  const std::string pace =
+      sr.tick_gap ? "tick every " + std::to_string(sr.tick_gap) : std::string("a tick after each sample");
+  std::printf("%s: %llu segments, %llu samples, %llu cycles (%s) in %s, RTL == hls: %s, tick_err %s, "
               "underruns %llu -> %s\n",
               a.input.c_str(), static_cast<unsigned long long>(records),
-              static_cast<unsigned long long>(sr.sample_count), static_cast<unsigned long long>(sr.cycles), sr.tick_gap,
+              static_cast<unsigned long long>(sr.sample_count), static_cast<unsigned long long>(sr.cycles), pace.c_str(),
               sim_speed(sr).c_str(), sr.mismatches ? "NO" : "yes", sr.tick_err ? "SET" : "clear",
               static_cast<unsigned long long>(sr.underruns), ok ? to.c_str() : "(no CSV written)");
   if (!ok) std::fprintf(stderr, "trajcore sim: a check FAILED (see above)\n");

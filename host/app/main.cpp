@@ -139,7 +139,9 @@ int main(int argc, char** argv) {
   auto* sm = app.add_subcommand("sim", "Run a segment stream through the Verilated core");
   sm->add_option("stream", sa.input, "segment stream (.trj)")->required();
   sm->add_option("--csv", sa.csv, "samples CSV to write (default: none; the summary is always printed)");
-  sm->add_option("--tick-gap", sa.tick_gap, "clock cycles between ticks (0: shortest safe)");
+  sm->add_option("--tick-gap", sa.tick_gap,
+                 "clock cycles between ticks (0: the engine's pace, a tick after each sample; BCU streams: the "
+                 "core's minimum spacing)");
   sm->footer("A stream without a BCU format (FD segments) runs on traj_fd_engine, one with a BCU format (FD and BCU segments, "
              "from `trajcore demo --engine bcu|mixed` or `trajcore spline`) on traj_core.");
 

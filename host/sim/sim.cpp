@@ -58,6 +58,7 @@ class PulledFeed {
   bool all_read() const { return all_read_; }
   uint64_t longest_segment_words() const { return longest_; }
   double fraction(uint64_t) const { return records_ ? double(pulled_) / records_ : 0; }
+  const size_t& first_segment_words() const { return first_len_; }
 
  private:
   void refill() {
@@ -70,6 +71,7 @@ class PulledFeed {
     c_.ticks = r.ticks;
     c_.regs = std::move(r.regs);
     words_ = comp_.words(c_);
+    if (first_len_ == 0) first_len_ = words_.size();
     next_ = 0;
     longest_ = std::max<uint64_t>(longest_, words_.size());
     ticks_ += r.ticks;
@@ -80,7 +82,7 @@ class PulledFeed {
   uint64_t records_;
   fd::Compiled c_;
   std::vector<uint64_t> words_;
-  size_t next_ = 0, consumed_ = 0;
+  size_t next_ = 0, consumed_ = 0, first_len_ = 0;
   uint64_t ticks_ = 0, pulled_ = 0, longest_ = 0;
   bool all_read_ = false;
 };
@@ -105,6 +107,25 @@ struct EveryGap {
   uint64_t gap;
   bool tick(uint64_t cycle) { return cycle % gap == 0; }
   void fed(size_t, uint64_t) {}
+  void sampled() {}
+};
+
+// The engine's own pace: the first tick once the first segment is in, then
+// one in the cycle after each sample. A tick that meets a segment load waits
+// inside the engine (its tick contract); never two are outstanding, so none
+// is early, and the simulation runs at the engine's minimum tick spacing.
+struct AfterEachSample {
+  const size_t& first_len;  // words of the first segment (0 until it is known)
+  bool armed = false, due = false;
+  bool tick(uint64_t) {
+    const bool t = due;
+    due = false;
+    return t;
+  }
+  void fed(size_t words_in, uint64_t) {
+    if (!armed && first_len > 0 && words_in >= first_len) armed = due = true;
+  }
+  void sampled() { due = true; }
 };
 
 // First tick one gap after the first segment has entered the unit (a gap
@@ -121,6 +142,7 @@ struct GapAfterFirstSegment {
   void fed(size_t words_in, uint64_t cycle) {
     if (next == ~0ull && words_in >= first_len) next = cycle + gap;
   }
+  void sampled() {}
 };
 
 // The stream through the build's RTL and hls model in lockstep (two reset
@@ -159,6 +181,7 @@ void clock_stream(F& f, Ticks ticks, SimResult& res, const std::function<void(do
     ticks.fed(f.consumed(), ls.cycles() - 1);
     if (o.underrun) ++res.underruns;
     res.tick_err |= o.tick_err;
+    if (o.sample_valid) ticks.sampled();
     if (o.sample_valid && !o.underrun) {
       std::array<long long, 3> s{};
       for (int a = 0; a < B::Axes; ++a) s[a] = static_cast<long long>(sext(o.sample[a], M::kOutWidth));
@@ -264,13 +287,14 @@ SimResult run(const stream::Header& h, const Source& src, int tick_gap, const st
   using M = builds::ModelOf<B>;
   using U = typename B::Unit;
   constexpr int kMin = U::template kMinGap<M>;
+  const bool paced = tick_gap == 0 && src.pull && !builds::kIsCore<B>;  // AfterEachSample
   if (tick_gap <= 0) tick_gap = U::template kDefaultGap<M>;
   if (tick_gap < kMin)
     throw std::runtime_error("tick gap " + std::to_string(tick_gap) + " cycles is shorter than " + U::kGapReason +
                              " (" + std::to_string(kMin) + " cycles)");
   SimResult res;
   res.engine = U::kName;
-  res.tick_gap = tick_gap;
+  res.tick_gap = paced ? 0 : tick_gap;
   if constexpr (builds::kIsCore<B>) {
 #if TRAJ_APP_CORE
     Feed f = core_feed<B>(h, src.records, res);
@@ -283,8 +307,11 @@ SimResult run(const stream::Header& h, const Source& src, int tick_gap, const st
 #endif
   } else if (src.pull) {
     PulledFeed f(h, src.pull, src.expected);
-    clock_stream<B>(f, EveryGap{static_cast<uint64_t>(tick_gap)}, res, progress, sink,
-                    [](const std::array<long long, 3>&, bool) {});
+    const auto none = [](const std::array<long long, 3>&, bool) {};
+    if (paced)
+      clock_stream<B>(f, AfterEachSample{f.first_segment_words()}, res, progress, sink, none);
+    else
+      clock_stream<B>(f, EveryGap{static_cast<uint64_t>(tick_gap)}, res, progress, sink, none);
   } else {
     Feed f = fd_feed(h, src.records);
     clock_stream<B>(f, EveryGap{static_cast<uint64_t>(tick_gap)}, res, progress, sink,
