@@ -141,7 +141,10 @@ Loaded load(const std::string& file, const std::string& format, const job::JobCo
 // fitted polynomials.
 bool passes(const job::JobConfig& cfg, const report::Report& rep) {
   const bool output_ok = rep.exact_form ? rep.sample_to_fit <= rep.sample_bound : rep.worst_out <= 1 + 1e-9;
-  return rep.max_deviation <= cfg.limits.tol && rep.worst_plan <= 1 + 1e-9 && rep.worst_fit <= 1 + 1e-9 && output_ok;
+  const double e = cfg.machine.feed_accuracy;
+  const bool feed_ok = e <= 0 || std::max(std::fabs(rep.feed_err_max), std::fabs(rep.feed_err_min)) <= e;
+  return rep.max_deviation <= cfg.limits.tol && rep.worst_plan <= 1 + 1e-9 && rep.worst_fit <= 1 + 1e-9 && output_ok &&
+         feed_ok;
 }
 
 int plan_streamed(const PlanArgs& a, bool jsonl) {

@@ -35,6 +35,10 @@ void add_limits(CLI::App* c, JobConfig& cfg, std::vector<double>& v_axis, std::v
   auto& L = cfg.limits;
   c->add_option("--feed", L.feed, "commanded feed, units/s")->capture_default_str();
   c->add_option("--period", cfg.machine.period, "tick period, s")->capture_default_str();
+  c->add_option("--feed-accuracy", cfg.machine.feed_accuracy,
+                "bound on |chord between samples / chord between the planned points - 1| at every tick (0: the default "
+                "fit, about 2e-3)")
+      ->capture_default_str();
   c->add_option("--v-axis", v_axis, "per-axis velocity limits x,y,z (one value: all axes)")->delimiter(',');
   c->add_option("--a-axis", a_axis, "per-axis acceleration limits")->delimiter(',');
   c->add_option("--j-axis", j_axis, "per-axis jerk limits")->delimiter(',');

@@ -28,6 +28,9 @@ plan::SegmentOptions JobConfig::segment_options() const {
   so.degree = machine.degree;
   so.max_ticks = machine.longest_segment();
   so.fit_tol = machine.fit_budget(limits.tol);
+  // each tick within feed_rel of its travel: the chord between two ticks
+  // within 2 feed_rel of the planned arc
+  if (machine.feed_accuracy > 0) so.feed_rel = machine.feed_accuracy / 2;
   return so;
 }
 

@@ -16,6 +16,8 @@ using util::fmt;
 
 void Machine::validate() const {
   if (const std::string m = util::tick_period_problem(period); !m.empty()) throw PlanError(m);
+  if (!(feed_accuracy >= 0 && feed_accuracy <= 0.1))
+    throw PlanError("feed accuracy " + fmt("%g", feed_accuracy) + ": give 0 (the default fit) or a bound in (0, 0.1]");
   (void)format();
 }
 

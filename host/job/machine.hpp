@@ -41,6 +41,10 @@ AllowanceShare allowance_share(const Allowance& al, const plan::Limits& l, int a
 struct Machine {
   double period = 1e-3;      // servo tick period h, s
   int degree = 5;            // segment degree: 5 (quintic, C2 joins) or 3 (cubic, C1)
+  // Bound on |chord between consecutive samples / planned arc - 1| at every
+  // tick (--feed-accuracy); 0: the default fit (each tick within 0.25 % of
+  // its travel, about +-2e-3).
+  double feed_accuracy = 0;
   std::string units = "mm";  // units of the path and of the output LSB
   // Which of the degree's carried engine builds (carried_formats): 0 the
   // narrowest; set by choose_format.

@@ -127,6 +127,27 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
   }
   rep.feed_fluct_rms = cnt ? std::sqrt(sum2 / cnt) : 0;
   if (!cnt) rep.feed_fluct_max = rep.feed_fluct_min = 0;
+  // feed error: the output's chord against the planned points' chord
+  sum2 = 0;
+  cnt = 0;
+  rep.feed_err_max = -1e300;
+  rep.feed_err_min = 1e300;
+  for (size_t k = 0; k + 1 < n && k + 1 < r.ticks.size(); ++k) {
+    if (r.ticks[k + 1].s - r.ticks[k].s < 0.01 * cfg.limits.feed * h) continue;
+    double c2 = 0, p2 = 0;
+    for (int a = 0; a < d; ++a) {
+      c2 += (x[k + 1][a] - x[k][a]) * (x[k + 1][a] - x[k][a]);
+      p2 += (r.ticks[k + 1].x[a] - r.ticks[k].x[a]) * (r.ticks[k + 1].x[a] - r.ticks[k].x[a]);
+    }
+    if (p2 <= 0) continue;
+    const double fe = std::sqrt(c2 / p2) - 1;
+    rep.feed_err_max = std::max(rep.feed_err_max, fe);
+    rep.feed_err_min = std::min(rep.feed_err_min, fe);
+    sum2 += fe * fe;
+    ++cnt;
+  }
+  rep.feed_err_rms = cnt ? std::sqrt(sum2 / cnt) : 0;
+  if (!cnt) rep.feed_err_max = rep.feed_err_min = 0;
   // sampled derivatives
   for (size_t k = 0; k + 1 < n; ++k) {
     double v2 = 0, a2 = 0, j2 = 0;
@@ -254,6 +275,10 @@ std::string report_text(const JobConfig& cfg, const Report& rep, const JobResult
     << ")\n";
   o << "  feed fluctuation (chord / planned arc - 1)  max " << fmt("%+.3e", rep.feed_fluct_max) << "  min "
     << fmt("%+.3e", rep.feed_fluct_min) << "  RMS " << fmt("%.3e", rep.feed_fluct_rms) << "\n";
+  o << "  feed error (chord / planned chord - 1)      max " << fmt("%+.3e", rep.feed_err_max) << "  min "
+    << fmt("%+.3e", rep.feed_err_min) << "  RMS " << fmt("%.3e", rep.feed_err_rms)
+    << (cfg.machine.feed_accuracy > 0 ? "  (--feed-accuracy " + fmt("%g", cfg.machine.feed_accuracy) + ")" : std::string())
+    << "\n";
   o << "Limits            limit       plan peak   fit peak    output peak (sample differences)\n";
   for (int a = 0; a < 3; ++a) {
     if (rep.plan_peaks.v_axis[a] == 0 && rep.out_peaks.v_axis[a] == 0) continue;

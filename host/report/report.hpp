@@ -24,6 +24,10 @@ struct Report {
   double max_deviation = 0;  // distance of output samples to the exact curve, units
   double fit_tol = 0, quant = 0;
   double feed_fluct_max = 0, feed_fluct_min = 0, feed_fluct_rms = 0;
+  // chord between samples / chord between the planned points - 1: the speed
+  // error of the output itself (the chord-vs-arc term kappa^2 (v h)^2 / 24 of
+  // feed_fluct is the sampling's, not the output's); --feed-accuracy bounds it
+  double feed_err_max = 0, feed_err_min = 0, feed_err_rms = 0;
   plan::Peaks plan_peaks, fit_peaks, out_peaks;
   double out_path_v = 0, out_path_a = 0, out_path_j = 0;  // from sample differences (vector norms)
   double allow_v = 0, allow_a = 0, allow_j = 0;           // quantisation allowance on sample differences, per axis
