@@ -32,7 +32,8 @@ int run_command(const RunArgs& a);
 
 struct SimArgs {
   std::string input;
-  std::string csv;  // empty: no samples written
+  std::string csv;      // empty: no samples written
+  std::string samples;  // binary sample file (host/stream/README.md); empty: none
   int tick_gap = 0;
 };
 int sim_command(const SimArgs& a);

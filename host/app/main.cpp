@@ -143,6 +143,9 @@ int main(int argc, char** argv) {
   auto* sm = app.add_subcommand("sim", "Run a segment stream through the Verilated core");
   sm->add_option("stream", sa.input, "segment stream (.trj)")->required();
   sm->add_option("--csv", sa.csv, "samples CSV to write (default: none; the summary is always printed)");
+  sm->add_option("--samples", sa.samples,
+                 "binary sample file to write: a 24-byte header, then one little-endian int64 per axis per tick "
+                 "(host/stream/README.md)");
   sm->add_option("--tick-gap", sa.tick_gap,
                  "clock cycles between ticks (0: the engine's pace, a tick after each sample; BCU streams: the "
                  "core's minimum spacing)");
