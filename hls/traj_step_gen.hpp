@@ -90,10 +90,9 @@ class StepGen {
     const bool sbit = j < 0 ? false : (j >= OutWidth ? ((s >> (OutWidth - 1)) & 1) != 0 : ((s >> j) & 1) != 0);
     // the pass, least significant bit first, on the bit read one clock earlier:
     // tick pass: D1 = q - q_prev, D2 = D1 - D1_prev (0 on a restart),
-    //            D = 2M D1 - (M - 1) D2 (M = 2^m);
-    // sub pass:  D = D + 2 D2
-    const int pa = ax_q_ < Axes ? ax_q_ : 0;
-    const Axis& pq = ax_[pa];
+    //            dY = 2M D1 - (M - 1) D2 (M = 2^m), in nd_q;
+    // sub pass:  dY += 2 D2
+    const Axis& pass_axis = ax_[ax_q_ < Axes ? ax_q_ : 0];
     const int m = nm_q_;
     const bool pbit = (prd_q_ & 1) != 0 && !(reinit_q_ && bit_q_ < F);
     const bool dbit = sbit_q_ ^ pbit ^ borrow_q_;  // D1
@@ -102,7 +101,7 @@ class StepGen {
     const bool ddbit_t = !reinit_q_ && (dbit ^ ppbit ^ borrow2_q_);  // D2 (tick pass)
     const bool borrow2_d = !reinit_q_ && ((!dbit && ppbit) || (!dbit && borrow2_q_) || (ppbit && borrow2_q_));
     const bool ddbit = tickp_q_ ? ddbit_t : (prd_q_ & 4) != 0;
-    const bool add_a = tickp_q_ ? ((dl1_q_ >> m) & 1) != 0 : (pq.nd_q & 1) != 0;
+    const bool add_a = tickp_q_ ? ((dl1_q_ >> m) & 1) != 0 : (pass_axis.nd_q & 1) != 0;
     const bool add_c = tickp_q_ ? ddbit_t : (dl2_q_ & 1) != 0;
     const bool sub_b = tickp_q_ && (m == 0 ? ddbit_t : ((dl2_q_ >> (m - 1)) & 1) != 0);
     const bool s1 = add_a ^ add_c ^ c1_q_;
