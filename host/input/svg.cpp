@@ -3,12 +3,14 @@
 
 #include <tinyxml2.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <sstream>
 
 #include "input/cuts.hpp"
 #include "input/svg_path.hpp"
+#include "util/format.hpp"
 
 namespace traj::input {
 namespace {
@@ -240,7 +242,7 @@ class Walker {
     if (tag == "use") fail(where, "<use> (a clone) is not followed: unlink it first (Inkscape: Edit > Clone > Unlink Clone)");
     if (tag == "svg") fail(where, "nested <svg> elements are not supported");
     if (!shape && !kGroups.count(tag)) {
-      note_once(tag, "<" + tag + "> not converted (first " + where + "; Inkscape: Path > Object to Path)");
+      note_once(tag, "<" + util::excerpt(tag) + "> not converted (first " + where + "; Inkscape: Path > Object to Path)");
       return;
     }
     Affine ctm = parent_ctm;
@@ -309,7 +311,7 @@ Viewport viewport(const tinyxml2::XMLElement* root, const std::string& name, std
     if (!v || trim(v).empty()) return std::nan("");
     const Length l = split_length(v, which);
     if (l.unit == "%") {
-      notes.push_back(name + ": svg " + which + "=\"" + v + "\": a percentage, taken as the viewBox size");
+      notes.push_back(name + ": svg " + which + "=\"" + util::excerpt(v) + "\": a percentage, taken as the viewBox size");
       return std::nan("");
     }
     if (l.value <= 0) throw BadAttribute(std::string(which) + ": must be positive");
@@ -373,8 +375,11 @@ Toolpath read_document(tinyxml2::XMLDocument& doc, const std::string& name) {
   std::size_t segments = 0;
   for (const Cut& c : walker.cuts) segments += c.size();
   if (segments == 0) {
+    // the first few things skipped (a file of unknown elements must not make a page-long error)
     std::string skipped;
-    for (const std::string& n : walker.notes) skipped += "; " + n.substr(name.size() + 2);
+    const size_t shown = std::min<size_t>(walker.notes.size(), 3);
+    for (size_t i = 0; i < shown; ++i) skipped += "; " + walker.notes[i].substr(name.size() + 2);
+    if (walker.notes.size() > shown) skipped += "; and " + std::to_string(walker.notes.size() - shown) + " more";
     throw InputError(name + ": no paths: no path, line, polyline, polygon, rect, circle or ellipse with any length" + skipped);
   }
   Toolpath tp = toolpath_from_cuts(walker.cuts, 2);

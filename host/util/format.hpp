@@ -15,4 +15,9 @@ inline std::string num(double v) { return fmt("%g", v); }
 // The shortest text that reads back to the same double (0.3 prints as 0.3).
 std::string shortest(double v);
 
+// Text from an input file quoted in a message: at most `max` bytes, then "...".
+inline std::string excerpt(const std::string& text, std::size_t max = 40) {
+  return text.size() <= max ? text : text.substr(0, max) + "...";
+}
+
 }  // namespace traj::util
