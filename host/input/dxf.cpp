@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "input/cuts.hpp"
+#include "util/format.hpp"
 
 namespace traj::input {
 namespace {
@@ -111,9 +112,7 @@ class Collector : public DL_CreationAdapter {
   void addArc(const DL_ArcData& d) override {
     if (!begin("ARC")) return;
     const double a0 = d.angle1 * kPi / 180;
-    double a1 = d.angle2 * kPi / 180;
-    while (a1 <= a0) a1 += 2 * kPi;
-    circle_arc(d.cx, d.cy, d.cz, d.radius, a0, a1, false);
+    circle_arc(d.cx, d.cy, d.cz, d.radius, a0, ccw_end(a0, d.angle2 * kPi / 180, "ARC"), false);
   }
   void addCircle(const DL_CircleData& d) override {
     if (!begin("CIRCLE")) return;
@@ -124,8 +123,7 @@ class Collector : public DL_CreationAdapter {
     const Eigen::Vector3d c(d.cx, d.cy, d.cz), major(d.mx, d.my, d.mz);
     const Eigen::Vector3d n = ocs_axes(getExtrusion()->getDirection()).col(2);
     const Eigen::Vector3d minor = d.ratio * n.cross(major);
-    double t1 = d.angle2;
-    while (t1 <= d.angle1) t1 += 2 * kPi;
+    const double t1 = ccw_end(d.angle1, d.angle2, "ELLIPSE");
     const bool full = std::abs(t1 - d.angle1 - 2 * kPi) < 1e-12;
     const geo::BSpline unit = geo::make_arc(Eigen::Vector2d(0, 0), 1.0, d.angle1, full ? d.angle1 + 2 * kPi : t1);
     geo::BSpline e = unit;
@@ -183,6 +181,15 @@ class Collector : public DL_CreationAdapter {
   void addImage(const DL_ImageData&) override { skip("IMAGE"); }
 
  private:
+  // The end angle of a counter-clockwise sweep from a0 to a1, in (a0, a0 + 2 pi]
+  // (a file's angles may be any size: no loop of whole turns).
+  double ccw_end(double a0, double a1, const char* type) {
+    if (!std::isfinite(a0) || !std::isfinite(a1) || std::abs(a0) > 1e9 || std::abs(a1) > 1e9)
+      fail(std::string(type) + " angles " + util::num(a0) + ", " + util::num(a1) + " rad: out of range (not a number, or above 1e9)");
+    double span = std::fmod(a1 - a0, 2 * kPi);
+    if (span <= 0) span += 2 * kPi;
+    return a0 + span;
+  }
   // Starts a new entity; false inside a block definition (not drawn).
   bool begin(const char* type) {
     flush();

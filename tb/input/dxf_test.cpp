@@ -295,6 +295,12 @@ TEST(DxfReader, Errors) {
   EXPECT_NE(e.find("entity 1 (SPLINE): degree 1, 2 control points need 4 knots, got 3"), std::string::npos) << e;
   Dxf empty;
   EXPECT_NE(error_of(empty).find("err.dxf: no curves"), std::string::npos);
+  // an arc whose angle is absurd: refused at once (it once looped whole turns for minutes, a fuzz finding)
+  Dxf huge;
+  huge.entities = {arc(0, 0, 5, 1e300, 0)};
+  e = error_of(huge);
+  EXPECT_NE(e.find("entity 1 (ARC): ARC angles"), std::string::npos) << e;
+  EXPECT_NE(e.find("out of range"), std::string::npos) << e;
   try {
     traj::input::read_dxf("/nonexistent/x.dxf");
     FAIL();
