@@ -51,6 +51,23 @@ void sample_to_fit(const JobResult& r, const Samples& s, double h, double lsb, R
   }
 }
 
+// Largest, smallest and RMS of a series (all 0 for an empty one).
+struct Spread {
+  double max = -1e300, min = 1e300, sum2 = 0;
+  long long n = 0;
+  void add(double v) {
+    max = std::max(max, v);
+    min = std::min(min, v);
+    sum2 += v * v;
+    ++n;
+  }
+  void into(double& mx, double& mn, double& rms) const {
+    mx = n ? max : 0;
+    mn = n ? min : 0;
+    rms = n ? std::sqrt(sum2 / n) : 0;
+  }
+};
+
 }  // namespace
 
 Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, const Samples& s) {
@@ -109,45 +126,22 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
     for (int a = 0; a < d; ++a) e2 += (buf[a] - x[k][a]) * (buf[a] - x[k][a]);
     rep.max_deviation = std::max(rep.max_deviation, std::sqrt(e2));
   }
-  // feed fluctuation: chord between consecutive samples over the planned arc length
-  double sum2 = 0;
-  long long cnt = 0;
-  rep.feed_fluct_max = -1e300;
-  rep.feed_fluct_min = 1e300;
+  // per tick where the path moves: feed fluctuation (the output's chord over
+  // the planned arc) and feed error (over the planned points' chord)
+  Spread fluct, err;
   for (size_t k = 0; k + 1 < n && k + 1 < r.ticks.size(); ++k) {
     const double ds = r.ticks[k + 1].s - r.ticks[k].s;
     if (ds < 0.01 * cfg.limits.feed * h) continue;
-    double c2 = 0;
-    for (int a = 0; a < d; ++a) c2 += (x[k + 1][a] - x[k][a]) * (x[k + 1][a] - x[k][a]);
-    const double fl = std::sqrt(c2) / ds - 1;
-    rep.feed_fluct_max = std::max(rep.feed_fluct_max, fl);
-    rep.feed_fluct_min = std::min(rep.feed_fluct_min, fl);
-    sum2 += fl * fl;
-    ++cnt;
-  }
-  rep.feed_fluct_rms = cnt ? std::sqrt(sum2 / cnt) : 0;
-  if (!cnt) rep.feed_fluct_max = rep.feed_fluct_min = 0;
-  // feed error: the output's chord against the planned points' chord
-  sum2 = 0;
-  cnt = 0;
-  rep.feed_err_max = -1e300;
-  rep.feed_err_min = 1e300;
-  for (size_t k = 0; k + 1 < n && k + 1 < r.ticks.size(); ++k) {
-    if (r.ticks[k + 1].s - r.ticks[k].s < 0.01 * cfg.limits.feed * h) continue;
     double c2 = 0, p2 = 0;
     for (int a = 0; a < d; ++a) {
       c2 += (x[k + 1][a] - x[k][a]) * (x[k + 1][a] - x[k][a]);
       p2 += (r.ticks[k + 1].x[a] - r.ticks[k].x[a]) * (r.ticks[k + 1].x[a] - r.ticks[k].x[a]);
     }
-    if (p2 <= 0) continue;
-    const double fe = std::sqrt(c2 / p2) - 1;
-    rep.feed_err_max = std::max(rep.feed_err_max, fe);
-    rep.feed_err_min = std::min(rep.feed_err_min, fe);
-    sum2 += fe * fe;
-    ++cnt;
+    fluct.add(std::sqrt(c2) / ds - 1);
+    if (p2 > 0) err.add(std::sqrt(c2 / p2) - 1);
   }
-  rep.feed_err_rms = cnt ? std::sqrt(sum2 / cnt) : 0;
-  if (!cnt) rep.feed_err_max = rep.feed_err_min = 0;
+  fluct.into(rep.feed_fluct_max, rep.feed_fluct_min, rep.feed_fluct_rms);
+  err.into(rep.feed_err_max, rep.feed_err_min, rep.feed_err_rms);
   // sampled derivatives
   for (size_t k = 0; k + 1 < n; ++k) {
     double v2 = 0, a2 = 0, j2 = 0;
