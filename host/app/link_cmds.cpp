@@ -87,6 +87,12 @@ void add_upload(CLI::App& app, LinkCommands& lc) {
   c->add_option("--dir-setup-us", a.opt.dir_setup_us, "direction setup and hold time, us")->capture_default_str();
   c->add_option("--status-period", a.opt.status_period_s, "the board's STATUS period, s (0: on request only)")
       ->capture_default_str();
+  c->add_option("--max-engine-tick", a.max_engine_tick,
+                "longest engine tick, s: a stream with a longer tick is played at ceil(tick / this) engine ticks per "
+                "tick, its segments re-compiled exactly (the step edges' 10 us bound holds up to 1 ms); 0: always "
+                "the stream's own tick")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   c->add_option("--prefill", a.opt.prefill, "segments stored before START (0: as many as the FIFO takes)")
       ->capture_default_str();
   c->add_flag("--resume", a.opt.resume,
@@ -147,16 +153,21 @@ void add_link_commands(CLI::App& app, LinkCommands& lc) {
 }
 
 int upload_command(const UploadArgs& a) {
-  link::RecordSource src(a.input);
+  link::RecordSource src(a.input, a.max_engine_tick);
   auto port = link::open_port(a.port, a.opt.baud);
   catch_signals({SIGINT, SIGTERM});
   link::UploadOptions o = a.opt;
   o.interrupted = &g_interrupted;
   const auto& h = src.header();
-  if (h.period > 1e-3)  // the step generator's timing bound (rtl/README.md, step-edge timing)
+  if (src.engine_ticks_per_tick() > 1)
+    std::fprintf(stderr,
+                 "upload: stream tick %g ms played at %u engine ticks per tick (%g ms), the segments re-compiled "
+                 "exactly, so that the step edges keep within 10 us of the motion (--max-engine-tick)\n",
+                 src.stream_period() * 1e3, src.engine_ticks_per_tick(), h.period * 1e3);
+  else if (h.period > stream::kMaxStepEngineTick)  // the step generator's timing bound (rtl/README.md)
     std::fprintf(stderr,
                  "upload: note: tick period %g ms: the board's step edges are within 10 us of the motion's "
-                 "boundary crossings only for ticks up to 1 ms (plan for step outputs with --period 0.001 or finer)\n",
+                 "boundary crossings only for engine ticks up to 1 ms (leave out --max-engine-tick 0)\n",
                  h.period * 1e3);
   StatusLine line(std::ldexp(1.0, -h.frac_bits), h.units);
   const auto r = link::upload(*port, src, o, [&](const link::UploadProgress& p) { line.show(p, false); });
@@ -233,6 +244,21 @@ int loopback_board_command(const BoardArgs& a) {
   return 0;
 }
 
+// The expected stream as the board was given it: one with a longer tick than
+// the engine tick the tool configured was re-ticked by the tool
+// (link::RecordSource), the same way here.
+stream::ReadResult as_played(stream::ReadResult expect, const board::SimulatedBoard& b) {
+  if (b.tick_clocks() == 0) return expect;
+  const double engine_tick = double(b.tick_clocks()) / board::BoardBuild::kClkHz;
+  const double ratio = expect.header.period / engine_tick;
+  const long n = std::lround(ratio);
+  if (n <= 1 || std::fabs(ratio - double(n)) > 1e-3 * double(n)) return expect;
+  std::fprintf(stderr, "board: the expected stream's %g ms tick is played at %ld engine ticks of %g ms; its "
+               "prediction re-ticked as the tool re-ticks the stream\n",
+               expect.header.period * 1e3, n, engine_tick * 1e3);
+  return stream::retick(expect, static_cast<uint32_t>(n));
+}
+
 int simulated_board_command(const BoardArgs& a) {
   stream::ReadResult expect;
   if (!a.expect.empty()) {
@@ -252,7 +278,7 @@ int simulated_board_command(const BoardArgs& a) {
                s.underruns, s.bad_frames, s.out_of_order, double(board.cycles()) / board::BoardBuild::kClkHz,
                fault_summary(stats).c_str());
   if (a.expect.empty()) return 0;
-  const board::StepCheck c = board::check_steps(expect, board.step_shifts(), board);
+  const board::StepCheck c = board::check_steps(as_played(std::move(expect), board), board.step_shifts(), board);
   std::fprintf(stderr, "%s", board::describe(c).c_str());
   return c.ok() ? 0 : 1;
 }

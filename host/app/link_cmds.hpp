@@ -10,6 +10,7 @@
 #include "link/board.hpp"
 #include "link/board_server.hpp"
 #include "link/upload.hpp"
+#include "stream/retick.hpp"
 
 namespace traj::app {
 
@@ -17,6 +18,7 @@ struct UploadArgs {
   std::string input;                 // "-": standard input
   std::string port;
   link::UploadOptions opt;
+  double max_engine_tick = stream::kMaxStepEngineTick;  // 0: the stream's own tick
 };
 
 struct BoardArgs {

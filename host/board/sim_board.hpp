@@ -54,6 +54,8 @@ class SimulatedBoard : public link::Board {
   // The step shift of each axis, from the last good CONFIG the host sent
   // (decoded from the bytes on the RX pin, apart from the RTL).
   std::vector<int> step_shifts() const;
+  // The engine's tick period in clocks from the last good CONFIG (0: none yet).
+  uint32_t tick_clocks() const { return config_.tick_clocks; }
   // Step/dir of each axis, decoded from the pins.
   const StepDecoder& axis(int a) const { return decoders_.at(a); }
   void set_step_timing(StepTiming t);

@@ -96,6 +96,15 @@ struct RegisterNeeds {
   int common = 0;          // least common guard bits: sum C(K,i) <= tol 2^G
 };
 
+// A target given exactly (a polynomial already in the engine's units, e.g.
+// one recovered from another stream's registers): per axis q(m) in the tick
+// index m, 0 <= m <= K, in register units with r0's rounding bias included
+// (q = x 2^(G+F) + 2^(G-1) for a position x), coefficients of m^j.
+struct ExactTarget {
+  std::vector<std::vector<mpq_class>> q;
+  uint64_t ticks = 0;  // K
+};
+
 struct Compiled {
   uint32_t ticks = 0;
   std::vector<std::vector<mpz_class>> regs;  // [axis][i], signed exact values
@@ -125,6 +134,11 @@ class Compiler {
   // CompileError `out` is unspecified.
   void compile(const PolySegment& seg, const std::vector<mpz_class>* start, const std::string& where,
                Compiled& out) const;
+
+  // The same for an exact target (the reference's exact rational path: no
+  // double anywhere), with the same checks, rounding and bound.
+  Compiled compile_target(const ExactTarget& seg, const std::vector<mpz_class>* start = nullptr,
+                          const std::string& where = "segment") const;
 
   // The engine's stream words for a compiled segment (header, then registers).
   std::vector<uint64_t> words(const Compiled& c) const;

@@ -4,6 +4,7 @@
 // would fit instead.
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 #include "fd/detail/fd_internal.hpp"
 #include "fd/fd_compiler.hpp"
@@ -220,16 +221,18 @@ void check_segment(const Format& f_, const PolySegment& seg, const std::vector<m
   if (start && static_cast<int>(start->size()) != A) fail("start state has the wrong number of axes");
 }
 
-Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::vector<mpz_class>* start,
-                           const std::string& where) {
-  ++path_counts().reference;
+namespace {
+
+// The exact core of both compile_reference() and Compiler::compile_target():
+// per axis the target c (register units, r0's bias included) as a polynomial
+// in t over [0, T = K h]. `range_hint(axis)` completes a range refusal.
+Compiled compile_exact_target(const Format& f_, std::vector<std::vector<mpq_class>> c, const mpq_class& h, uint64_t K,
+                              const std::vector<mpz_class>* start, const std::string& where,
+                              const std::function<std::string(int)>& range_hint) {
   const int N = f_.degree;
   const int A = f_.axes;
   auto fail = [&](const std::string& what) { throw CompileError(where + ": " + what); };
 
-  check_segment(f_, seg, start, where);
-
-  const uint64_t K = seg.ticks;
   const int G = f_.guard_bits;
   // Quantisation budget: Q(K) <= tol/2.
   const RegisterNeeds needs = Compiler::register_needs(N, K, f_.tol_lsb);
@@ -242,10 +245,8 @@ Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::
          std::to_string(kmax) + " ticks, or use " + guard_suggestion(f_, gneed) + "; " + binding_note(needs));
   }
 
-  const mpq_class h = exact(seg.h);
   const mpq_class T = h * mpq_class(mpz_class(std::to_string(K)));
   const mpq_class scale = register_scale(f_);
-  const mpq_class bias(pow2(G), 2);
   const mpq_class half_tol_reg = exact(f_.tol_lsb / 2) * mpq_class(pow2(G));
   const mpq_class limit = mpq_class(pow2(f_.width - 1));  // |r0| must stay below 2^(W-1)
 
@@ -255,23 +256,21 @@ Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::
   out.end.resize(A);
   double carried = 0;
   for (int a = 0; a < A; ++a) {
-    // Target in register units: q(t) = x(t) * scale + bias, as exact coefficients.
-    std::vector<mpq_class> c(N + 1, 0);
-    for (size_t j = 0; j < seg.coef[a].size(); ++j) c[j] = exact(seg.coef[a][j]) * scale;
-    c[0] += bias;
+    std::vector<mpq_class>& ca = c[a];
+    ca.resize(N + 1, 0);
     // Start state and carried error e0.
-    mpz_class r0 = start ? (*start)[a] : round_nearest(c[0]);
-    mpq_class e0 = mpq_class(r0) - c[0];
+    mpz_class r0 = start ? (*start)[a] : round_nearest(ca[0]);
+    mpq_class e0 = mpq_class(r0) - ca[0];
     if (abs(e0) > half_tol_reg && start)
       fail("axis " + std::to_string(a) + " starts " + fmt_double(to_lsb(e0, G)) +
            " LSB away from the previous segment's end (more than tol/2 = " + fmt_double(f_.tol_lsb / 2) +
            " LSB): the path is not continuous here");
     carried = std::max(carried, to_lsb(e0, G));
     // Blend e0 out linearly: q += e0 (1 - t/T).
-    c[0] += e0;
-    c[1] -= e0 / T;
+    ca[0] += e0;
+    ca[1] -= e0 / T;
     // Range: |q(t)| + error < 2^(W-1) over [0, T].
-    const long double qmax = max_abs_on(c, T);
+    const long double qmax = max_abs_on(ca, T);
     const long double margin = std::fabs(static_cast<long double>(e0.get_d())) +
                                static_cast<long double>(Compiler::quant_bound_x2(N, K).get_d()) + 2;
     if (qmax + margin >= static_cast<long double>(limit.get_d()))
@@ -280,13 +279,13 @@ Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::
            " units, the format holds |x| < " +
            fmt_double(std::ldexp(1.0, f_.out_width() - 1 - f_.frac_bits)) +
            " (out_width=" + std::to_string(f_.out_width()) + ", frac_bits=" + std::to_string(f_.frac_bits) + ")" +
-           range_suggestion(f_, seg.coef[a], T, K));
+           range_hint(a));
     // Exact samples q(m h), m = 0..N, then the forward-difference table.
     std::vector<mpq_class> y(N + 1);
     for (int m = 0; m <= N; ++m) {
       const mpq_class t = h * m;
       mpq_class v = 0;
-      for (int j = N; j >= 0; --j) v = v * t + c[j];
+      for (int j = N; j >= 0; --j) v = v * t + ca[j];
       y[m] = v;
     }
     out.regs[a][0] = r0;
@@ -302,5 +301,45 @@ Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::
   return out;
 }
 
+}  // namespace
+
+Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::vector<mpz_class>* start,
+                           const std::string& where) {
+  ++path_counts().reference;
+  check_segment(f_, seg, start, where);
+  const mpq_class h = exact(seg.h);
+  const mpq_class T = h * mpq_class(mpz_class(std::to_string(seg.ticks)));
+  const mpq_class scale = register_scale(f_);
+  // Target in register units: q(t) = x(t) * scale + bias, as exact coefficients.
+  std::vector<std::vector<mpq_class>> c(f_.axes, std::vector<mpq_class>(f_.degree + 1, 0));
+  for (int a = 0; a < f_.axes; ++a) {
+    for (size_t j = 0; j < seg.coef[a].size(); ++j) c[a][j] = exact(seg.coef[a][j]) * scale;
+    c[a][0] += mpq_class(pow2(f_.guard_bits), 2);
+  }
+  return compile_exact_target(f_, std::move(c), h, seg.ticks, start, where,
+                              [&](int a) { return range_suggestion(f_, seg.coef[a], T, seg.ticks); });
+}
+
 }  // namespace detail
+
+Compiled Compiler::compile_target(const ExactTarget& seg, const std::vector<mpz_class>* start,
+                                  const std::string& where) const {
+  ++path_counts().reference;
+  auto fail = [&](const std::string& what) { throw CompileError(where + ": " + what); };
+  if (static_cast<int>(seg.q.size()) != f_.axes)
+    fail("has " + std::to_string(seg.q.size()) + " axes, the engine has " + std::to_string(f_.axes));
+  if (seg.ticks < 1) fail("tick count K=0: a segment needs at least one tick");
+  if (seg.ticks > f_.max_ticks)
+    fail("K=" + std::to_string(seg.ticks) + " ticks exceeds max_ticks=" + std::to_string(f_.max_ticks) +
+         "; split the segment");
+  for (int a = 0; a < f_.axes; ++a)
+    if (static_cast<int>(seg.q[a].size()) > f_.degree + 1)
+      fail("axis " + std::to_string(a) + " has degree " + std::to_string(seg.q[a].size() - 1) +
+           ", the engine is built for degree " + std::to_string(f_.degree));
+  if (start && static_cast<int>(start->size()) != f_.axes) fail("start state has the wrong number of axes");
+  Compiled out = compile_exact_target(f_, seg.q, mpq_class(1), seg.ticks, start, where, [](int) { return ""; });
+  wrap_differences(out);
+  return out;
+}
+
 }  // namespace traj::fd

@@ -14,20 +14,26 @@
 // time the motion crosses that boundary in that direction (nearest such
 // crossing) is found by bisection on the cubic pieces; the error is the edge
 // time minus the generator's constant latency (one tick plus the preparation
-// clocks) minus the exact time. Printed per tick period (2 ms .. 10 us): the
-// sub-chords per tick, steps, max and RMS error, and the crossings with no
-// edge (a boundary crossed and recrossed within one tick at a reversal).
+// clocks) minus the exact time. Printed per stream tick period (5 ms .. 10
+// us): the engine tick the board runs it at (`trajcore upload` plays a stream
+// with a tick above 1 ms at n = ceil(tick / 1 ms) engine ticks per tick, its
+// segments re-compiled: stream/retick.hpp, whose samples are within 1 LSB =
+// 2^-32 mm of the stream's polynomial, so the motion is sampled here at the
+// engine tick), the sub-chords per engine tick, steps, max and RMS error, and
+// the crossings with no edge (a boundary crossed and recrossed within one
+// tick at a reversal). The last row plays 2 ms as it is (--max-engine-tick 0).
 //
 //   bench_step_timing            the full table
-//   bench_step_timing --short    the test: 1 ms, 250 us, 50 us and 10 us ticks
-//                                on a shorter move; fails unless the counts are
-//                                exact and every edge is within 10 us
+//   bench_step_timing --short    the test: 1.5 ms, 1 ms, 250 us, 50 us and 10 us
+//                                ticks on a shorter move; fails unless the
+//                                counts are exact and every edge is within 10 us
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <vector>
 
+#include "stream/retick.hpp"
 #include "traj_step_gen.hpp"
 
 #ifndef BENCH_FRAC
@@ -233,19 +239,27 @@ int main(int argc, char** argv) {
   m.add(0.01, 0);
   std::printf("step timing: %.3f s of motion, %.0f steps/mm, clock %.0f MHz, pulse 1 us, dir setup/hold 2 us\n",
               m.t, 1 / kStep, kClock / 1e6);
-  std::printf("%10s %5s %8s %8s %12s %12s %10s %9s\n", "tick", "subs", "edges", "count", "max err us",
-              "rms err us", "at t (s)", "no edge");
-  const std::vector<double> periods = short_run ? std::vector<double>{1e-3, 250e-6, 50e-6, 10e-6}
-                                                : std::vector<double>{2e-3, 1e-3, 500e-6, 250e-6, 50e-6, 10e-6};
+  std::printf("%12s %12s %5s %8s %8s %12s %12s %10s %9s\n", "stream tick", "engine tick", "subs", "edges", "count",
+              "max err us", "rms err us", "at t (s)", "no edge");
+  struct Row {
+    double stream_tick, max_engine_tick;
+  };
+  const double kMax = traj::stream::kMaxStepEngineTick;
+  const std::vector<Row> rows =
+      short_run ? std::vector<Row>{{1.5e-3, kMax}, {1e-3, kMax}, {250e-6, kMax}, {50e-6, kMax}, {10e-6, kMax}}
+                : std::vector<Row>{{5e-3, kMax}, {1.5e-3, kMax}, {2e-3, kMax},  {1e-3, kMax},
+                                   {500e-6, kMax}, {250e-6, kMax}, {50e-6, kMax}, {10e-6, kMax}, {2e-3, 0}};
   bool ok = true;
-  for (double h : periods) {
+  for (const Row& row : rows) {
+    const double h = row.stream_tick / traj::stream::engine_ticks_per_tick(row.stream_tick, row.max_engine_tick);
     const Result r = run(m, h);
     const int subs = 1 << Gen::sub_bits(static_cast<uint32_t>(std::llround(h * kClock)));
-    std::printf("%8.0f us %5d %8lld %8s %12.2f %12.3f %10.4f %9lld%s\n", h * 1e6, subs, (long long)r.edges,
-                r.final_count == r.expect_count ? "exact" : "WRONG", r.max_err * 1e6, r.rms * 1e6, r.worst_t,
-                (long long)r.unmatched, r.err_flag ? "  err_o!" : "");
+    std::printf("%9.0f us %9.0f us %5d %8lld %8s %12.2f %12.3f %10.4f %9lld%s%s\n", row.stream_tick * 1e6, h * 1e6,
+                subs, (long long)r.edges, r.final_count == r.expect_count ? "exact" : "WRONG", r.max_err * 1e6,
+                r.rms * 1e6, r.worst_t, (long long)r.unmatched, r.err_flag ? "  err_o!" : "",
+                row.max_engine_tick > 0 ? "" : "  (as is: --max-engine-tick 0)");
     ok = ok && r.final_count == r.expect_count && !r.err_flag;
-    if (h <= 1e-3) ok = ok && r.max_err <= 10e-6 && r.unmatched == 0;
+    if (h <= kMax) ok = ok && r.max_err <= 10e-6 && r.unmatched == 0;
   }
   if (short_run && !ok) {
     std::printf("FAIL\n");

@@ -305,7 +305,9 @@ void run_random(uint64_t seed, int lo, int hi, double p_valid, uint64_t cycles, 
   }
   std::printf("    %llu cycles, %zu events, %zu samples checked against the prediction\n",
               static_cast<unsigned long long>(b.cycles()), b.tm_events().size(), b.predicted_samples());
-  if (!Source::kRawOnly) EXPECT_GT(b.predicted_samples(), 0u);
+  if (!Source::kRawOnly) {
+    EXPECT_GT(b.predicted_samples(), 0u);
+  }
 }
 
 }  // namespace
@@ -392,7 +394,9 @@ TEST(FdTmCosim, CompiledStreamAtMinimumSpacing) {
       for (int c = 0; c < kMinTick; ++c) ASSERT_TRUE(b.cycle({true, c == 0, false}));
     EXPECT_FALSE(b.tm_tick_err()) << "ticks MinTickClocks apart";
     ASSERT_TRUE(b.samples_agree());
-    if (!Source::kRawOnly) EXPECT_GT(b.predicted_samples(), 10u);
+    if (!Source::kRawOnly) {
+      EXPECT_GT(b.predicted_samples(), 10u);
+    }
   }
 }
 

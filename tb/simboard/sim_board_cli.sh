@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
-# sim_board_cli.sh TRAJCORE DIR clean|faults|restart|reset
+# sim_board_cli.sh TRAJCORE DIR clean|faults|restart|reset|coarse
 # `trajcore plan` -> `trajcore upload` -> `trajcore board` (the simulated
 # board: rtl/traj_board.sv Verilated, pins driven and decoded), on a
 # pseudo-terminal as a user runs them, with a short raster (2 pieces, 0.77 s of
@@ -10,13 +10,18 @@
 #   restart: the tool is killed (SIGKILL) during the upload and started
 #           again with --resume: still identical (no segment lost or twice);
 #   reset:  the board is reset mid-job: the upload stops with a message naming
-#           it and exits non-zero; the board reports no jump (it holds still).
+#           it and exits non-zero; the board reports no jump (it holds still);
+#   coarse: planned at 2 ms ticks: the tool plays it at 2 engine ticks of 1 ms
+#           (the segments re-compiled), and the pins equal the prediction of
+#           the re-compiled stream, twice as many ticks.
 set -euo pipefail
 T=$1
 dir=$2
 mode=${3:-clean}
 rm -rf "$dir" && mkdir -p "$dir" && cd "$dir"
-"$T" plan --raster 2 -o plan.trj > plan.txt
+period=0.001
+[ "$mode" = coarse ] && period=0.002
+"$T" plan --raster 2 --period $period -o plan.trj > plan.txt
 
 board=
 trap '[ -n "$board" ] && kill "$board" 2>/dev/null; true' EXIT
@@ -32,9 +37,9 @@ upload() {
 }
 
 case "$mode" in
-clean | faults | restart)
+clean | faults | restart | coarse)
   case "$mode" in
-  clean | restart) start_board --once ;;
+  clean | restart | coarse) start_board --once ;;
   faults) start_board --once --corrupt 0.001 --drop 0.001 --dup-frames 0.05 --seed 3 ;;
   esac
   if [ "$mode" = restart ]; then
@@ -57,6 +62,11 @@ clean | faults | restart)
   cat upload.txt board.txt
   [ "$rc" -eq 0 ] || { echo "the board's check failed (exit $rc)"; exit 1; }
   ticks=$(sed -n 's/.* \([0-9]*\) ticks (.*/\1/p' plan.txt)
+  if [ "$mode" = coarse ]; then
+    grep -q "stream tick 2 ms played at 2 engine ticks per tick (1 ms)" upload.err
+    grep -q "played at 2 engine ticks of 1 ms" board.txt
+    ticks=$((2 * ticks))
+  fi
   grep -q "pins decoded against the exact prediction of $ticks ticks .*: identical" board.txt
   if [ "$mode" = faults ]; then
     grep -q "faults: [1-9][0-9]* bytes corrupted, [1-9][0-9]* dropped, [1-9][0-9]* frames duplicated" board.txt
