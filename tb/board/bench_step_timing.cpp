@@ -247,7 +247,7 @@ int main(int argc, char** argv) {
   const double kMax = traj::stream::kMaxStepEngineTick;
   const std::vector<Row> rows =
       short_run ? std::vector<Row>{{1.5e-3, kMax}, {1e-3, kMax}, {250e-6, kMax}, {50e-6, kMax}, {10e-6, kMax}}
-                : std::vector<Row>{{5e-3, kMax}, {1.5e-3, kMax}, {2e-3, kMax},  {1e-3, kMax},
+                : std::vector<Row>{{5e-3, kMax}, {2e-3, kMax}, {1.5e-3, kMax}, {1e-3, kMax},
                                    {500e-6, kMax}, {250e-6, kMax}, {50e-6, kMax}, {10e-6, kMax}, {2e-3, 0}};
   bool ok = true;
   for (const Row& row : rows) {
