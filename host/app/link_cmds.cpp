@@ -45,8 +45,8 @@ class StatusLine {
     const auto now = std::chrono::steady_clock::now();
     if (!force && now - last_ < std::chrono::milliseconds(tty_ ? 200 : 5000)) return;
     last_ = now;
-    std::string pos;
-    if (p.have_status)
+    std::string pos;  // the engine holds no position before its first tick
+    if (p.have_status && p.status.ticks_played > 0)
       for (size_t a = 0; a < p.status.sample.size(); ++a)
         pos += strf("%s%.4f", a ? " " : "", double(p.status.sample[a]) * lsb_);
     const std::string line = strf(
