@@ -155,7 +155,10 @@ void clock_stream(F& f, Ticks ticks, SimResult& res, const std::function<void(do
                   const SampleSink& sink, OnSample on_sample) {
   using M = builds::ModelOf<B>;
   static_assert(B::Axes == 3, "report::Samples holds three axes");
-  Lockstep<typename B::Rtl, M> ls;
+  // The RTL on a second thread, compared with the model cycle by cycle; the
+  // model's ports drive the run (equal to the RTL's unless a mismatch is
+  // counted).
+  PipelinedLockstep<typename B::Rtl, M> ls;
   const auto t0 = std::chrono::steady_clock::now();
   typename M::In in;
   in.rst_n = false;
@@ -195,6 +198,7 @@ void clock_stream(F& f, Ticks ticks, SimResult& res, const std::function<void(do
       if (progress && (n % 100000 == 0)) progress(f.fraction(n));
     }
   }
+  ls.finish();
   res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   res.cycles = ls.cycles();
   res.mismatches = ls.mismatches();
