@@ -49,6 +49,10 @@ void add_limits(CLI::App* c, JobConfig& cfg, std::vector<double>& v_axis, std::v
   c->add_option("--tol", L.tol, "path tolerance: max distance of the output from the curve, units")
       ->capture_default_str();
   c->add_option("--degree", cfg.machine.degree, "segment degree: 5 (C2 joins) or 3")->capture_default_str();
+  c->add_option("--engine-width", cfg.machine.engine_width,
+                "the engine's register width: 96 for the board (rtl/traj_board.sv: quintic, 96-bit, 2^-32 units); "
+                "default: the narrowest carried engine whose quantisation allowance is at most 1 % of every limit "
+                "(ticks below about 250 us: 128-bit, 2^-44 units)");
 }
 
 void apply_axes(JobConfig& cfg, const std::vector<double>& v, const std::vector<double>& a,

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "job/job.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -51,18 +52,65 @@ SegmentCompiler::SegmentCompiler(const Machine& m) : comp_(m.format()) {
   const fd::Format f = m.format();
   ps_.h = m.period;
   ps_.coef.assign(f.axes, std::vector<double>(f.degree + 1, 0.0));
+  exact_joints_ = Machine::exact_joints(f);
+}
+
+namespace {
+
+mpq_class exact(double v) {
+  mpq_class q;
+  mpq_set_d(q.get_mpq_t(), v);
+  return q;
+}
+
+}  // namespace
+
+void SegmentCompiler::compile_joined(const plan::TimeSegment& seg, const std::string& where) {
+  const fd::Format& f = comp_.format();
+  const mpq_class h = exact(ps_.h);
+  const mpq_class lsb_units = mpq_class(mpz_class(1) << f.frac_bits);         // 2^F per unit
+  const mpq_class scale = lsb_units * mpq_class(mpz_class(1) << f.guard_bits);  // register LSB per unit
+  const mpq_class K(static_cast<unsigned long>(seg.K));
+  const mpq_class T_prev = h * mpq_class(static_cast<unsigned long>(prev_.K));
+  fd::ExactTarget t;
+  t.ticks = seg.K;
+  t.q.assign(static_cast<size_t>(f.axes), std::vector<mpq_class>(static_cast<size_t>(f.degree) + 1, 0));
+  double joint = 0;
+  for (int a = 0; a < f.axes; ++a) {
+    mpq_class end = 0;  // the previous polynomial at its end, exactly
+    for (int j = f.degree; j >= 0; --j) end = end * T_prev + exact(prev_.coef[a][j]);
+    const mpq_class delta = end - exact(seg.coef[a][0]);
+    joint = std::max(joint, std::fabs(mpq_class(delta * lsb_units).get_d()));
+    mpq_class hj = 1;
+    auto& q = t.q[static_cast<size_t>(a)];
+    for (int j = 0; j <= f.degree; ++j, hj *= h) q[j] = exact(seg.coef[a][j]) * scale * hj;
+    q[0] += delta * scale + mpq_class(mpz_class(1) << f.guard_bits, 2);
+    q[1] -= delta * scale / K;
+  }
+  if (joint > Machine::kJointLsb)
+    throw fd::CompileError(where + ": starts " + util::fmt("%g", joint) +
+                           " LSB from where the previous segment's polynomial ends (more than " +
+                           util::fmt("%g", Machine::kJointLsb) + "): the path is not continuous here");
+  c_ = comp_.compile_target(t, &c_.end, where);
+  c_.bound_lsb += joint;
 }
 
 const fd::Compiled& SegmentCompiler::compile(const plan::TimeSegment& seg, size_t index) {
-  ps_.ticks = seg.K;
-  for (size_t a = 0; a < ps_.coef.size(); ++a)
-    for (size_t j = 0; j < ps_.coef[a].size(); ++j) ps_.coef[a][j] = seg.coef[a][j];
+  const std::string where = "segment " + std::to_string(index);
   try {
-    comp_.compile(ps_, have_end_ ? &c_.end : nullptr, "segment " + std::to_string(index), c_);
+    if (exact_joints_ && have_end_) {
+      compile_joined(seg, where);
+    } else {
+      ps_.ticks = seg.K;
+      for (size_t a = 0; a < ps_.coef.size(); ++a)
+        for (size_t j = 0; j < ps_.coef[a].size(); ++j) ps_.coef[a][j] = seg.coef[a][j];
+      comp_.compile(ps_, have_end_ ? &c_.end : nullptr, where, c_);
+    }
   } catch (const fd::CompileError& e) {
     throw PlanError(std::string("compile: ") + e.what());
   }
   have_end_ = true;
+  prev_ = seg;
   return c_;
 }
 

@@ -60,10 +60,17 @@ class SegmentCompiler {
   const fd::Compiled& compile(const plan::TimeSegment& seg, size_t index);
 
  private:
+  // Machine::exact_joints: the target is the segment's polynomial plus
+  // delta (1 - t/T), delta = where the previous polynomial ends (exact) minus
+  // where this one starts, so that it starts exactly there; compiled from
+  // that exact target, its bound grows by |delta| (at most kJointLsb).
+  void compile_joined(const plan::TimeSegment& seg, const std::string& where);
   fd::Compiler comp_;
   fd::PolySegment ps_;
   fd::Compiled c_;
   bool have_end_ = false;
+  bool exact_joints_ = false;
+  plan::TimeSegment prev_;  // the last segment compiled (its polynomial's end)
 };
 
 // One tick at `x`: the last segment of a motion, so that the core's last

@@ -48,9 +48,13 @@ AllowanceShare allowance_share(const Allowance& al, const plan::Limits& l, int a
 
 std::vector<fd::Format> Machine::carried_formats(int degree) {
   // {axes, degree, width, chunk_width, guard_bits, frac_bits}
-  if (degree == 5) return {{3, 5, 96, 16, 48, 32}};
+  if (degree == 5) return {{3, 5, 96, 16, 48, 32}, {3, 5, 128, 16, 48, 44}};
   if (degree == 3) return {{3, 3, 64, 16, 32, 16}, {3, 3, 96, 16, 48, 32}};
   throw PlanError("segment degree " + std::to_string(degree) + ": the tool carries engines for degree 3 and 5");
+}
+
+double Machine::worst_error_lsb(const fd::Format& f) {
+  return 0.5 + f.tol_lsb + (exact_joints(f) ? kJointLsb : 0.0);
 }
 
 fd::Format Machine::format() const {
@@ -64,7 +68,7 @@ fd::Format Machine::format() const {
 namespace {
 
 AllowanceShare share_of(const fd::Format& f, double period, const plan::Limits& l) {
-  const double q = (0.5 + f.tol_lsb) * std::ldexp(1.0, -f.frac_bits);
+  const double q = Machine::worst_error_lsb(f) * std::ldexp(1.0, -f.frac_bits);
   return allowance_share(sample_allowance(q, period), l, f.axes, f.degree);
 }
 
@@ -74,6 +78,16 @@ void Machine::choose_format(const plan::Limits& l) {
   l.validate();
   validate();
   const std::vector<fd::Format> fs = carried_formats(degree);
+  if (engine_width != 0) {
+    std::string widths;
+    for (build = 0; build < static_cast<int>(fs.size()); ++build) {
+      if (fs[build].width == engine_width) return;
+      widths += (widths.empty() ? "" : ", ") + std::to_string(fs[build].width);
+    }
+    build = 0;
+    throw PlanError("engine width " + std::to_string(engine_width) + ": the tool carries degree-" +
+                    std::to_string(degree) + " engines of width " + widths);
+  }
   for (build = 0; build + 1 < static_cast<int>(fs.size()); ++build)
     if (share_of(fs[build], period, l).share <= kAllowanceShare) return;
 }
@@ -113,7 +127,7 @@ double Machine::lsb() const { return std::ldexp(1.0, -format().frac_bits); }
 
 double Machine::fit_budget(double tol) const {
   const fd::Format f = format();
-  const double quant = (0.5 + f.tol_lsb) * lsb();
+  const double quant = worst_error_lsb(f) * lsb();
   const double budget = tol - quant;
   if (!(budget > 0))
     throw PlanError("path tolerance " + fmt("%g", tol) + " " + units + " is below the output quantisation (" +

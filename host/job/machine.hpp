@@ -31,7 +31,7 @@ Allowance sample_allowance(double q, double h);
 // The largest allowance of a format, as a share of the limit it is compared
 // with (every per-axis v, a, j and the path's feed, a_tan, a_cen, j_tan,
 // j_cen; no jerk for cubic segments, which do not limit it), with q the
-// format's worst sample error (1/2 LSB + tol_lsb LSB).
+// format's worst sample error (Machine::worst_error_lsb).
 struct AllowanceShare {
   double share = 0;
   std::string limit;  // the limit it is largest against, e.g. "j_tan"
@@ -49,6 +49,9 @@ struct Machine {
   // Which of the degree's carried engine builds (carried_formats): 0 the
   // narrowest; set by choose_format.
   int build = 0;
+  // Register width the engine must have (--engine-width; 96: the board's
+  // build, rtl/traj_board.sv), 0: chosen by choose_format.
+  int engine_width = 0;
 
   // The output format should be fine enough that the quantisation allowance
   // on sample differences is at most this share of every limit; where no
@@ -60,27 +63,37 @@ struct Machine {
   // finite or the tool carries no engine of this degree.
   void validate() const;
   // The engine formats of the builds the tool carries for `degree`
-  // (host/sim/CMakeLists.txt, TRAJ_SIM_BUILDS), narrowest first; each keeps
-  // 16 integer bits (|x| < 32768 units):
-  //   quintic: Axes 3, Width 96, Chunk 16, Guard 48, F 32 (1 LSB = 2^-32 units)
-  //   cubic:   Axes 3, Width 64, Chunk 16, Guard 32, F 16
+  // (host/sim/CMakeLists.txt, TRAJ_SIM_BUILDS), narrowest first:
+  //   quintic: Axes 3, Width 96, Chunk 16, Guard 48, F 32 (1 LSB = 2^-32 units, |x| < 32768)
+  //            Axes 3, Width 128, Chunk 16, Guard 48, F 44 (2^-44 units, |x| < 2^35: fine ticks)
+  //   cubic:   Axes 3, Width 64, Chunk 16, Guard 32, F 16 (|x| < 32768)
   //            Axes 3, Width 96, Chunk 16, Guard 48, F 32
-  // The fit works in double precision on absolute coordinates, so F stays
-  // at 32: at 2^-48 a position of a few mm is already only a few ulp from
-  // the next LSB and the compiler's continuity check (tol/2 LSB) fails.
   // PlanError if the tool carries no engine of this degree.
   static std::vector<fd::Format> carried_formats(int degree);
+  // The fit keeps absolute coordinates in double precision, so consecutive
+  // fitted polynomials meet only to a few ulp (1.4e-14 mm at 100 mm). That is
+  // far below the compiler's continuity budget (tol/2 LSB) at 2^-32 units,
+  // not at 2^-44: for formats finer than 2^-40 units the segment compiler
+  // joins each segment to where the previous polynomial ends, exactly
+  // (SegmentCompiler), and the mismatch, at most kJointLsb, adds to the
+  // segment's error bound.
+  static bool exact_joints(const fd::Format& f) { return f.frac_bits > 40; }
+  static constexpr double kJointLsb = 0.5;
+  // The format's worst sample error, output LSB: 1/2 (rounding) + tol_lsb
+  // (registers) + kJointLsb where joints are exact.
+  static double worst_error_lsb(const fd::Format& f);
   // The format of the chosen build.
   fd::Format format() const;
   // Sets `build` to the narrowest carried format whose allowance share
-  // (allowance_share with q = (1/2 + tol_lsb) LSB) is at most
-  // kAllowanceShare, else to the finest. Validates the limits and the
-  // machine first.
+  // (allowance_share with q = worst_error_lsb LSB) is at most
+  // kAllowanceShare, else to the finest; with engine_width set, to the
+  // carried format of that width (PlanError if none). Validates the limits
+  // and the machine first.
   void choose_format(const plan::Limits& l);
   double lsb() const;  // one output LSB, units
   // The deviation the fit may use out of the path tolerance `tol`: what is
-  // left after the output rounding (1/2 LSB) and the register error bound
-  // (format().tol_lsb LSB). plan::PlanError if nothing is left.
+  // left after the format's worst sample error (worst_error_lsb).
+  // plan::PlanError if nothing is left.
   double fit_budget(double tol) const;
   // The longest segment (ticks) the compiler accepts in this format.
   uint32_t longest_segment() const;

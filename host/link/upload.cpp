@@ -127,7 +127,8 @@ class Uploader {
       case NakReason::kBadContent:
         if (tracking_ && ++bad_content_ >= 3)
           fail("the board refuses segment " + std::to_string(n.next_seq) + " as bad content: its build takes another "
-               "record format than this stream's (" + std::to_string(src_.record_bytes()) + "-byte records)");
+               "record format than this stream's (" + std::to_string(src_.record_bytes()) + "-byte records; the "
+               "board tops take 3 axes, quintic, 96-bit: `trajcore plan --engine-width 96`)");
         if (tracking_) go_back(n.next_seq);
         return;
       case NakReason::kPlaying:
