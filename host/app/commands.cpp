@@ -145,8 +145,20 @@ struct Loaded {
   double fastest_feed_move = 0;  // a toolpath's: the top of the path plot's colour scale (0: the feed limit)
 };
 
+// A JSON Lines path read whole (run plans and reports the whole path; `plan`
+// streams it): the same reader and checks as the streamed plan.
+plan::Path load_jsonl(const std::string& file) {
+  input::JsonlSource src(file);
+  plan::Path p;
+  geo::BSpline sp;
+  std::string where;
+  while (src.next(sp, where)) p.add(sp, where);
+  return p;
+}
+
 Loaded load(const std::string& file, const std::string& format, const job::JobConfig& cfg) {
   const input::FileKind kind = input::file_kind(file, format);
+  if (kind == input::FileKind::kJsonl) return {load_jsonl(file), cfg, {}};
   if (!input::is_toolpath(kind)) return {input::load_path(file), cfg, {}};
   const input::Toolpath tp = input::read_toolpath(file, kind);
   for (const auto& n : tp.notes) std::fprintf(stderr, "trajcore: note: %s\n", n.c_str());
@@ -317,10 +329,6 @@ int plan_command(const PlanArgs& a) {
 }
 
 int run_command(const RunArgs& a) {
-  if (input::file_kind(a.input, a.format) == input::FileKind::kJsonl)
-    throw PlanError("run: " + a.input + " is a JSON Lines path, which is planned as a stream; run needs the whole "
-                    "path in memory (report, plots): use `trajcore plan " + a.input + " -o plan.trj` (streamed) then "
-                    "`trajcore sim plan.trj`");
   if (a.input.empty()) throw PlanError("give a path file");
   const Loaded in = load(a.input, a.format, a.cfg);
   const plan::Path& path = in.path;

@@ -139,8 +139,8 @@ int main(int argc, char** argv) {
       "format (degree, knots, control_points, optional weights); blank lines and lines starting with # are "
       "skipped; consecutive curves must meet. The file is read line by line while the segments are written, so a "
       "path of a million pieces plans in memory bounded by the window. An error names <file>:<line> and the field, "
-      "and leaves no output file. (`trajcore run` needs the whole path in memory for its report and plots: for a "
-      ".jsonl use `trajcore plan` then `trajcore sim`.)");
+      "and leaves no output file. (`trajcore run` reads a .jsonl whole: its report and plots are of the whole "
+      "path, planned at once.)");
   pl->add_option("--raster", pa.raster, "instead of a file: a synthetic raster toolpath of this many pieces (streamed)");
   add_limits(pl, pa.cfg, v_axis, a_axis, j_axis);
 
