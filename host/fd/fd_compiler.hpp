@@ -111,6 +111,10 @@ struct Compiled {
   std::vector<mpz_class> end;                // r0 after K ticks: the next start
   double carried_lsb = 0;                    // |e0| in output LSB
   double bound_lsb = 0;                      // |e0| + Q(K), output LSB (register error bound)
+  // |delta| of a linear blend delta (1 - t/T) the caller put into the target
+  // (job::SegmentCompiler's exact joints), output LSB: it moves positions by
+  // up to |delta| and first differences by |delta| / K, no higher difference.
+  double offset_lsb = 0;
   RegisterNeeds needs;                       // per-register fraction bits for these K ticks
 };
 

@@ -92,7 +92,7 @@ void SegmentCompiler::compile_joined(const plan::TimeSegment& seg, const std::st
                            " LSB from where the previous segment's polynomial ends (more than " +
                            util::fmt("%g", Machine::kJointLsb) + "): the path is not continuous here");
   c_ = comp_.compile_target(t, &c_.end, where);
-  c_.bound_lsb += joint;
+  c_.offset_lsb = joint;
 }
 
 const fd::Compiled& SegmentCompiler::compile(const plan::TimeSegment& seg, size_t index) {

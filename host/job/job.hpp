@@ -63,7 +63,7 @@ class SegmentCompiler {
   // Machine::exact_joints: the target is the segment's polynomial plus
   // delta (1 - t/T), delta = where the previous polynomial ends (exact) minus
   // where this one starts, so that it starts exactly there; compiled from
-  // that exact target, its bound grows by |delta| (at most kJointLsb).
+  // that exact target (|delta| at most kJointLsb, fd::Compiled::offset_lsb).
   void compile_joined(const plan::TimeSegment& seg, const std::string& where);
   fd::Compiler comp_;
   fd::PolySegment ps_;

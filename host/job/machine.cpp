@@ -21,7 +21,9 @@ void Machine::validate() const {
   (void)format();
 }
 
-Allowance sample_allowance(double q, double h) { return {2 * q / h, 4 * q / (h * h), 8 * q / (h * h * h)}; }
+Allowance sample_allowance(double q, double offset, double h) {
+  return {(2 * q + offset) / h, 4 * q / (h * h), 8 * q / (h * h * h)};
+}
 
 AllowanceShare allowance_share(const Allowance& al, const plan::Limits& l, int axes, int degree) {
   AllowanceShare w;
@@ -53,10 +55,6 @@ std::vector<fd::Format> Machine::carried_formats(int degree) {
   throw PlanError("segment degree " + std::to_string(degree) + ": the tool carries engines for degree 3 and 5");
 }
 
-double Machine::worst_error_lsb(const fd::Format& f) {
-  return 0.5 + f.tol_lsb + (exact_joints(f) ? kJointLsb : 0.0);
-}
-
 fd::Format Machine::format() const {
   const std::vector<fd::Format> f = carried_formats(degree);
   if (build < 0 || build >= static_cast<int>(f.size()))
@@ -68,8 +66,9 @@ fd::Format Machine::format() const {
 namespace {
 
 AllowanceShare share_of(const fd::Format& f, double period, const plan::Limits& l) {
-  const double q = Machine::worst_error_lsb(f) * std::ldexp(1.0, -f.frac_bits);
-  return allowance_share(sample_allowance(q, period), l, f.axes, f.degree);
+  const double lsb = std::ldexp(1.0, -f.frac_bits);
+  return allowance_share(sample_allowance(Machine::sample_error_lsb(f) * lsb, Machine::joint_lsb(f) * lsb, period), l,
+                         f.axes, f.degree);
 }
 
 }  // namespace
@@ -127,7 +126,7 @@ double Machine::lsb() const { return std::ldexp(1.0, -format().frac_bits); }
 
 double Machine::fit_budget(double tol) const {
   const fd::Format f = format();
-  const double quant = worst_error_lsb(f) * lsb();
+  const double quant = (sample_error_lsb(f) + joint_lsb(f)) * lsb();
   const double budget = tol - quant;
   if (!(budget > 0))
     throw PlanError("path tolerance " + fmt("%g", tol) + " " + units + " is below the output quantisation (" +

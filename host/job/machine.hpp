@@ -26,12 +26,15 @@ namespace traj::job {
 struct Allowance {
   double v = 0, a = 0, j = 0;
 };
-Allowance sample_allowance(double q, double h);
+// q: the samples' error about a smooth trajectory; offset: a linear
+// deviation on top (exact joints, Machine::joint_lsb), which moves first
+// differences only.
+Allowance sample_allowance(double q, double offset, double h);
 
 // The largest allowance of a format, as a share of the limit it is compared
 // with (every per-axis v, a, j and the path's feed, a_tan, a_cen, j_tan,
 // j_cen; no jerk for cubic segments, which do not limit it), with q the
-// format's worst sample error (Machine::worst_error_lsb).
+// samples' error (Machine::sample_error_lsb and joint_lsb).
 struct AllowanceShare {
   double share = 0;
   std::string limit;  // the limit it is largest against, e.g. "j_tan"
@@ -73,26 +76,32 @@ struct Machine {
   // The fit keeps absolute coordinates in double precision, so consecutive
   // fitted polynomials meet only to a few ulp (1.4e-14 mm at 100 mm). That is
   // far below the compiler's continuity budget (tol/2 LSB) at 2^-32 units,
-  // not at 2^-44: for formats finer than 2^-40 units the segment compiler
-  // joins each segment to where the previous polynomial ends, exactly
-  // (SegmentCompiler), and the mismatch, at most kJointLsb, adds to the
-  // segment's error bound.
+  // not at 2^-44 (several ulp of a coordinate of 20 mm are 1/2 LSB there):
+  // for formats finer than 2^-40 units the segment compiler joins each
+  // segment exactly to where the previous polynomial ends (SegmentCompiler)
+  // by a linear blend of the mismatch, at most kJointLsb (2^-34 units at
+  // 2^-44: a few ulp of the largest coordinate the 96-bit format holds;
+  // a larger one is a jump and refused), which moves positions and first
+  // differences only (fd::Compiled::offset_lsb).
   static bool exact_joints(const fd::Format& f) { return f.frac_bits > 40; }
-  static constexpr double kJointLsb = 0.5;
-  // The format's worst sample error, output LSB: 1/2 (rounding) + tol_lsb
-  // (registers) + kJointLsb where joints are exact.
-  static double worst_error_lsb(const fd::Format& f);
+  static constexpr double kJointLsb = 1024;
+  // The samples' error about the fitted polynomials, output LSB: 1/2
+  // (rounding) + tol_lsb (registers); joint_lsb on top for positions and
+  // first differences.
+  static double sample_error_lsb(const fd::Format& f) { return 0.5 + f.tol_lsb; }
+  static double joint_lsb(const fd::Format& f) { return exact_joints(f) ? kJointLsb : 0.0; }
   // The format of the chosen build.
   fd::Format format() const;
   // Sets `build` to the narrowest carried format whose allowance share
-  // (allowance_share with q = worst_error_lsb LSB) is at most
+  // (allowance_share with q = sample_error_lsb, offset joint_lsb) is at most
   // kAllowanceShare, else to the finest; with engine_width set, to the
   // carried format of that width (PlanError if none). Validates the limits
   // and the machine first.
   void choose_format(const plan::Limits& l);
   double lsb() const;  // one output LSB, units
   // The deviation the fit may use out of the path tolerance `tol`: what is
-  // left after the format's worst sample error (worst_error_lsb).
+  // left after the samples' error and the joints (sample_error_lsb +
+  // joint_lsb).
   // plan::PlanError if nothing is left.
   double fit_budget(double tol) const;
   // The longest segment (ticks) the compiler accepts in this format.

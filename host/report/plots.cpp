@@ -346,9 +346,13 @@ void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, co
   };
   // quantisation allowance on sample differences, as in make_report
   double bound = 0;
-  for (const auto& c : r.compiled) bound = std::max(bound, c.bound_lsb);
-  const double quant = (0.5 + bound) * lsb, sd = std::sqrt(static_cast<double>(d));
-  const job::Allowance al = job::sample_allowance(quant, h);
+  double offset = 0;
+  for (const auto& c : r.compiled) {
+    bound = std::max(bound, c.bound_lsb);
+    offset = std::max(offset, c.offset_lsb);
+  }
+  const double sd = std::sqrt(static_cast<double>(d));
+  const job::Allowance al = job::sample_allowance((0.5 + bound) * lsb, offset * lsb, h);
   const double allow_v = al.v, allow_a = al.a, allow_j = al.j;
   const std::string u1 = u + "/s", u2 = u + "/s\xC2\xB2", u3 = u + "/s\xC2\xB3";
   const std::string not_limited = "not limited (cubic, C1 joins)";

@@ -47,7 +47,8 @@ void sample_to_fit(const JobResult& r, const Samples& s, double h, double lsb, R
         rep.sample_to_fit = std::max(rep.sample_to_fit, static_cast<double>(e));
       }
     // + 1e-6 LSB: the long double evaluation's rounding, far above its size
-    rep.sample_bound = std::max(rep.sample_bound, (0.5 + r.compiled[i].bound_lsb + 1e-6) * lsb);
+    rep.sample_bound =
+        std::max(rep.sample_bound, (0.5 + r.compiled[i].bound_lsb + r.compiled[i].offset_lsb + 1e-6) * lsb);
   }
 }
 
@@ -85,8 +86,13 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
   }
   rep.fit_tol = r.fit_tol;
   double bound = 0;
-  for (const auto& c : r.compiled) bound = std::max(bound, c.bound_lsb);
-  rep.quant = (0.5 + bound) * lsb;
+  double offset = 0;
+  for (const auto& c : r.compiled) {
+    bound = std::max(bound, c.bound_lsb);
+    offset = std::max(offset, c.offset_lsb);
+  }
+  rep.quant = (0.5 + bound + offset) * lsb;
+  rep.quant_diff = (0.5 + bound) * lsb;
   rep.guard_needed = fd::Compiler::guard_bits_needed(r.header.degree, rep.k_max, cfg.machine.format().tol_lsb);
   rep.plan_peaks = peaks_of(r.ticks, d);
   rep.worst_plan = worst_ratio(rep.plan_peaks, cfg.limits, d, &rep.worst_plan_what);
@@ -164,7 +170,7 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
     rep.out_path_a = std::max(rep.out_path_a, std::sqrt(a2));
     rep.out_path_j = std::max(rep.out_path_j, std::sqrt(j2));
   }
-  const job::Allowance al = job::sample_allowance(rep.quant, h);
+  const job::Allowance al = job::sample_allowance(rep.quant_diff, rep.quant - rep.quant_diff, h);
   rep.allow_v = al.v;
   rep.allow_a = al.a;
   rep.allow_j = al.j;
@@ -303,7 +309,8 @@ std::string report_text(const JobConfig& cfg, const Report& rep, const JobResult
     << fmt("%.3g", rep.allow_v) << ", a " << fmt("%.3g", rep.allow_a) << ", j " << fmt("%.3g", rep.allow_j) << " ("
     << fmt("%.2g", 100 * rep.allow_share) << " % of the " << rep.allow_share_what << " limit, the largest share)\n";
   o << "  samples to the fitted polynomials  " << fmt("%.3g", rep.sample_to_fit) << " " << cfg.machine.units
-    << " (bound " << fmt("%.3g", rep.sample_bound) << ": 1/2 LSB + the register error bound)\n";
+    << " (bound " << fmt("%.3g", rep.sample_bound) << ": 1/2 LSB + the register error bound"
+    << (rep.quant > rep.quant_diff ? " + the exact joints' offset" : "") << ")\n";
   if (rep.exact_form)
     o << "  guarantee (exact form): the allowance is above " << fmt("%g", 100 * job::Machine::kAllowanceShare)
       << " % of a limit at this tick period and output LSB,\n"

@@ -22,7 +22,10 @@ struct Report {
   size_t segments = 0;
   uint32_t k_min = 0, k_max = 0;
   double max_deviation = 0;  // distance of output samples to the exact curve, units
-  double fit_tol = 0, quant = 0;
+  // quant: the samples' largest error about the fitted polynomials, units
+  // (1/2 LSB + register bound + exact-joint offset); quant_diff: the same
+  // without the offset, which moves no second or higher difference
+  double fit_tol = 0, quant = 0, quant_diff = 0;
   double feed_fluct_max = 0, feed_fluct_min = 0, feed_fluct_rms = 0;
   // chord between samples / chord between the planned points - 1: the speed
   // error of the output itself (the chord-vs-arc term kappa^2 (v h)^2 / 24 of
