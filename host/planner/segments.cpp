@@ -198,7 +198,7 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
   // limit"; the Bernstein bound (>= the exact maximum) only skips the root
   // search where it already shows that the limit holds.
   std::vector<std::array<double, kMaxAxes>> tail = o.history, pos;
-  while (tail.size() > 3) tail.erase(tail.begin());
+  if (tail.size() > 3) tail.erase(tail.begin(), tail.end() - 3);
   const double min_chord = 1e-9 * L.feed * period;  // below: at rest, no direction
   std::string fail_why;
   auto try_fit = [&](long long k0, long long k1, TimeSegment& seg) {
@@ -278,12 +278,12 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
   };
   // A kept segment: its fitted positions before its end become the tail.
   auto accept = [&](TimeSegment& seg) {
-    for (uint32_t k = 0; k < seg.K; ++k) {
+    for (uint32_t k = seg.K > 3 ? seg.K - 3 : 0; k < seg.K; ++k) {
       std::array<double, kMaxAxes> q{};
       for (int a = 0; a < d; ++a) q[a] = poly_val(seg.coef[a].data(), seg.degree, k * period);
       tail.push_back(q);
     }
-    while (tail.size() > 3) tail.erase(tail.begin());
+    if (tail.size() > 3) tail.erase(tail.begin(), tail.end() - 3);
     out.push_back(std::move(seg));
   };
   // Greedy: from each start, the longest segment that passes (binary search
