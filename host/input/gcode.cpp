@@ -477,6 +477,10 @@ class Interpreter {
     spec.c1 = c1;
     spec.c2 = c2;
     spec.sweep = sweep;
+    if (spec.start[pa.normal] != spec.end[pa.normal] && gcode::helix_pieces(spec) > gcode::kMaxHelixPieces)
+      fail(word, "helical arc of radius " + fmt_num(std::hypot(c1 - s1, c2 - s2) / units_) +
+                     ": too large to follow within " + fmt_num(gcode::kHelixBound) + " in at most " +
+                     std::to_string(gcode::kMaxHelixPieces) + " pieces");
     emit(Move::Kind::kFeed, gcode::arc3(spec), f);
   }
 

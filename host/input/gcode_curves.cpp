@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace traj::input::gcode {
 namespace {
@@ -143,8 +144,8 @@ Eigen::MatrixXd helix_piece(const ArcSpec& s, double phi_m, double h, double r_m
 geo::BSpline helical_arc(const ArcSpec& s) {
   const double r0 = radius_of(s, s.start), r1 = radius_of(s, s.end), a0 = angle_of(s, s.start);
   const double z0 = s.start[s.normal], z1 = s.end[s.normal];
-  int m = std::max(1, static_cast<int>(std::ceil(std::abs(s.sweep) / (kPi / 4) - 1e-12)));
-  while (helix_piece_bound(std::max(r0, r1), std::abs(s.sweep) / (2 * m)) > kHelixBound) ++m;
+  const int m = helix_pieces(s);
+  if (m > kMaxHelixPieces) throw std::invalid_argument("helical arc: radius too large to cut into pieces");
   const int p = kHelixTaylorDegree + 1;
   const double dr = (r1 - r0) / s.sweep, dz = (z1 - z0) / s.sweep, h = s.sweep / (2 * m);
   Eigen::MatrixXd ctrl(p * m + 1, 3);
@@ -174,6 +175,24 @@ geo::BSpline helical_arc(const ArcSpec& s) {
 }
 
 }  // namespace
+
+int helix_pieces(const ArcSpec& s) {
+  const double r = std::max(radius_of(s, s.start), radius_of(s, s.end)), sweep = std::abs(s.sweep);
+  const auto fits = [&](int m) { return helix_piece_bound(r, sweep / (2 * m)) <= kHelixBound; };
+  int lo = std::max(1, static_cast<int>(std::ceil(sweep / (kPi / 4) - 1e-12)));
+  if (fits(lo)) return lo;
+  int hi = lo;  // the bound falls as m grows: double until it fits, then bisect
+  while (!fits(hi)) {
+    if (hi > kMaxHelixPieces) return kMaxHelixPieces + 1;
+    lo = hi;
+    hi *= 2;
+  }
+  while (hi - lo > 1) {
+    const int mid = lo + (hi - lo) / 2;
+    (fits(mid) ? hi : lo) = mid;
+  }
+  return hi;
+}
 
 double helix_piece_bound(double r, double h) {
   const int n = kHelixTaylorDegree;

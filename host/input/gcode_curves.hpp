@@ -45,6 +45,13 @@ struct ArcSpec {
   double sweep = 0;                       // signed angle, radians (> 0 from first towards second)
 };
 
+// The pieces helical_arc cuts a helix into: the least m >= ceil(|sweep| /
+// 45 degrees) with r_max (h^12/12! + h^13/13!) <= kHelixBound, h = |sweep| /
+// (2m); kMaxHelixPieces + 1 where more would be needed (a radius beyond
+// about 1e22 units: the reader refuses it rather than allocate for it).
+constexpr int kMaxHelixPieces = 10000;
+int helix_pieces(const ArcSpec& a);
+
 geo::BSpline line3(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
 // Planar (start.normal == end.normal) or helical, chosen by the spec.
 geo::BSpline arc3(const ArcSpec& a);

@@ -221,6 +221,9 @@ TEST(Gcode, Refusals) {
       {"F1\nG2 X0 Y0 I10 J0 P0\nM2\n", "t.ngc:2: P0: the number of turns must be 1 or more"},
       // found by the fuzzer: the count overflowed int (undefined behaviour)
       {"F1\nG2 X0 Y0 I10 J0 P1000000000000\nM2\n", "t.ngc:2: P1000000000000: the number of turns must be at most 10000"},
+      // found by the fuzzer: a helix of radius 1e70 asked for 7.6 GB of pieces
+      {"F1\nG3 X0 Y0 Z-5 I-10000000000000000000000000000000000000000000000000000000000000000000000\nM2\n",
+       "t.ngc:2: G3: helical arc of radius 1e+70: too large to follow within 1e-12 in at most 10000 pieces"},
       {"F1\nG2 X1 Y0 R0.2\nM2\n", "t.ngc:2: R0.2: the radius is too small to reach the end point"},
       {"F1\nG2 X0.0019 I0.001 J0\nM2\n", "t.ngc:2: G2: zero-radius arc (start radius 0.001, end radius 0.0009)"},
       {"F1\nG5.2 X1 Y0 P1\nX2 Y2 P1\nG1 X5\nM2\n", "t.ngc:4: G1: G5.2 NURBS not closed with G5.3"},
