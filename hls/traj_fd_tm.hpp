@@ -13,6 +13,12 @@
 //     register; sample_valid pulses when the pass is done. The pass of a
 //     segment's last tick reads the r[0] words only (Axes*Chunks clocks): the
 //     next segment replaces the registers.
+//   * the same r[0] chunks are also written, whole, to a second RAM of
+//     Axes*Chunks words (the sample RAM, address (a << ChB) | c) with a
+//     registered read port: sample_word = the word at the sample_addr of the
+//     clock before. Consumers that take the samples a word at a time (and
+//     the area figures) read them there; the parallel sample register is
+//     then unused and synthesis removes it.
 // Ticks kMinTickClocks = Axes*Chunks*(Degree+2) + HdrWords + 1 clocks apart
 // never wait (segment boundaries included); within a segment kRunTickClocks =
 // kSlots + 1 is enough.
@@ -58,12 +64,15 @@ class FdTm {
   static constexpr int kChB = fd_tm_clog2(kChunks);
   static constexpr int kRgB = fd_tm_clog2(Degree + 1);
   static constexpr int kMemWords = 1 << (kAxB + kChB + kRgB);
+  static constexpr int kSampleAddrWidth = kAxB + kChB > 0 ? kAxB + kChB : 1;
+  static constexpr int kSampleWords = 1 << kSampleAddrWidth;
 
   struct In {
     bool rst_n = true;
     uint64_t tdata = 0;  // low ChunkWidth bits used
     bool tvalid = false;
     bool tick = false;
+    int sample_addr = 0;  // low kSampleAddrWidth bits used
   };
 
   struct Out {
@@ -73,6 +82,8 @@ class FdTm {
     bool underrun;
     bool seg_done;
     bool tick_err;
+    uint64_t sample_word;     // the sample RAM word read at the last sample_addr
+    bool sample_word_known;   // model-only: that word was written since power-up
   };
 
   Out outputs() const {
@@ -83,6 +94,8 @@ class FdTm {
     o.underrun = underrun_q_;
     o.seg_done = seg_done_q_;
     o.tick_err = tick_err_q_;
+    o.sample_word = sample_word_q_;
+    o.sample_word_known = sample_word_known_q_;
     return o;
   }
 
@@ -147,6 +160,16 @@ class FdTm {
       sample_d[ra_q_] = (sample_q_[ra_q_] & ~(mask(nbits) << at)) | (field << at);
     }
 
+    // Sample RAM: read before this edge's write; written with every r[0]
+    // chunk the pass reads.
+    const int s_addr = in.sample_addr & (kSampleWords - 1);
+    const uint64_t sample_word_d = smem_[s_addr];
+    const bool sample_word_known_d = smem_known_[s_addr];
+    if (busy_q_ && ri_q_ == 0) {
+      smem_[saddr(ra_q_, rc_q_)] = rd_q_;
+      smem_known_[saddr(ra_q_, rc_q_)] = true;
+    }
+
     // Field counters.
     int a_d = a_q_, c_d = c_q_, i_d = i_q_;
     if (step) {
@@ -207,6 +230,8 @@ class FdTm {
     ri_q_ = i_q_;
     for (int n = 0; n < Degree; ++n) carry_q_[n] = carry_d[n];
     for (int a = 0; a < Axes; ++a) sample_q_[a] = sample_d[a];
+    sample_word_q_ = sample_word_d;
+    sample_word_known_q_ = sample_word_known_d;
     a_q_ = a_d;
     c_q_ = c_d;
     i_q_ = i_d;
@@ -245,6 +270,7 @@ class FdTm {
   bool tready() const { return !active_q_ && !busy_q_; }
 
   static int addr(int a, int c, int i) { return (a << (kChB + kRgB)) | (c << kRgB) | i; }
+  static int saddr(int a, int c) { return (a << kChB) | c; }
 
   void reset() {
     for (int n = 0; n < Degree; ++n) carry_q_[n] = false;
@@ -276,6 +302,10 @@ class FdTm {
   int a_q_ = 0, c_q_ = 0, i_q_ = 0;     // field counters
   int ra_q_ = 0, rc_q_ = 0, ri_q_ = 0;  // the slot of rd_q
   u128 sample_q_[Axes] = {};
+  uint64_t smem_[kSampleWords] = {};
+  bool smem_known_[kSampleWords] = {};  // model-only (the RTL's RAM is not reset)
+  uint64_t sample_word_q_ = 0;
+  bool sample_word_known_q_ = false;
   uint32_t count_q_ = 0;
   bool cnt_one_q_ = false;
   bool last_tick_q_ = false;

@@ -99,6 +99,12 @@ module traj_board #(
 
   if (FdTimeMux) begin : g_fd_tm
     logic [Axes*OutWidth-1:0] sample_hold_q;
+    /* verilator lint_off UNUSEDSIGNAL */
+    logic [ChunkWidth-1:0]    sample_word;  // the step generator takes sample_o whole
+    /* verilator lint_on UNUSEDSIGNAL */
+    localparam int SampleAddrW = ($clog2(Axes) + $clog2(Width / ChunkWidth) > 0) ? $clog2(Axes) + $clog2(Width / ChunkWidth) : 1;
+    logic [SampleAddrW-1:0]   sample_addr;
+    assign sample_addr = '0;
 
     traj_fd_tm #(
       .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits),
@@ -108,6 +114,7 @@ module traj_board #(
       .s_axis_tdata(seg_tdata), .s_axis_tvalid(seg_tvalid), .s_axis_tready(seg_tready),
       .tick_i(tick),
       .sample_valid_o(sample_valid), .sample_o(sample),
+      .sample_addr_i(sample_addr), .sample_word_o(sample_word),
       .underrun_o(underrun), .seg_done_o(seg_done), .tick_err_o(tick_err)
     );
 

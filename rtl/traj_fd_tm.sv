@@ -17,6 +17,13 @@
 //   * the old r[0] chunks, read in the pass, are captured into the sample
 //     register (the bits at GuardBits and above), so sample_o changes during
 //     a pass and sample_valid_o pulses once the pass is done;
+//   * the same r[0] chunks are written, whole, to a second RAM of
+//     Axes*Chunks words (the sample RAM, word (a << ChB) | c: chunk c of axis
+//     a's r[0], register bits c*ChunkWidth and up; the sample is the bits at
+//     GuardBits and above) read through a registered port: sample_word_o is
+//     the word at the sample_addr_i of the clock before. A consumer that
+//     takes the samples a word at a time reads them there and leaves
+//     sample_o open: synthesis then drops the Axes*OutWidth sample flops;
 //   * segment words are written to the RAM as they arrive (stream order:
 //     axis, register, chunk): the same field counters walk the RAM in the
 //     load order and in the pass order;
@@ -35,7 +42,8 @@
 // wait and never set tick_err (within a segment Slots + 1 is enough) while
 // the stream delivers a word per clock when asked.
 // sample_o holds from sample_valid_o until the next pass captures, i.e.
-// until one clock after the next tick is taken.
+// until one clock after the next tick is taken; so do the sample RAM's words
+// (a word is defined once a pass has written it: the RAM is not reset).
 `default_nettype none
 `include "traj_check.svh"
 
@@ -48,7 +56,8 @@ module traj_fd_tm #(
   parameter int TickClocks    = 240,  // tick spacing the design uses (clocks), >= MinTickClocks
   // derived, do not override
   parameter int OutWidth      = Width - GuardBits,
-  parameter int MinTickClocks = Axes * (Width / ChunkWidth) * (Degree + 2) + ((ChunkWidth < 32) ? 32 / ChunkWidth : 1) + 1
+  parameter int MinTickClocks = Axes * (Width / ChunkWidth) * (Degree + 2) + ((ChunkWidth < 32) ? 32 / ChunkWidth : 1) + 1,
+  parameter int SampleAddrWidth = ($clog2(Axes) + $clog2(Width / ChunkWidth) > 0) ? $clog2(Axes) + $clog2(Width / ChunkWidth) : 1
 ) (
   input  logic                     clk_i,
   input  logic                     rst_ni,
@@ -61,6 +70,9 @@ module traj_fd_tm #(
   // samples: axis a in sample_o[a*OutWidth +: OutWidth], two's complement
   output logic                     sample_valid_o,
   output logic [Axes*OutWidth-1:0] sample_o,
+  // sample RAM read port: word (axis << ChB) | chunk, one clock latency
+  input  logic [SampleAddrWidth-1:0] sample_addr_i,
+  output logic [ChunkWidth-1:0]    sample_word_o,
   output logic                     underrun_o,
   output logic                     seg_done_o,
   output logic                     tick_err_o
@@ -94,6 +106,8 @@ module traj_fd_tm #(
                     "traj_fd_tm: OutWidth is derived (Width-GuardBits); do not override it")
   `TRAJ_PARAM_CHECK(g_bad_mintick, MinTickClocks == Axes * Chunks * (Degree + 2) + HdrWords + 1,
                     "traj_fd_tm: MinTickClocks is derived (Axes*Chunks*(Degree+2)+HdrWords+1); do not override it")
+  `TRAJ_PARAM_CHECK(g_bad_saddr, SampleAddrWidth == ((AxB + ChB > 0) ? AxB + ChB : 1),
+                    "traj_fd_tm: SampleAddrWidth is derived (clog2(Axes)+clog2(Chunks), at least 1); do not override it")
   `TRAJ_PARAM_CHECK(g_bad_tick, TickClocks >= MinTickClocks,
                     "traj_fd_tm: TickClocks is below MinTickClocks = Axes*Chunks*(Degree+2)+HdrWords+1")
 
@@ -285,6 +299,22 @@ module traj_fd_tm #(
     end
   end
 
+  // Sample RAM: every r[0] chunk the pass reads (its own RAM, so that a
+  // consumer reads the samples while the next pass runs in the register RAM).
+  localparam int SaW = AxB + ChB;  // address bits in use (0: one word)
+  logic [ChunkWidth-1:0] sample_word_q;
+  logic [SampleAddrWidth-1:0] cap_addr;
+  if (SaW > 0) begin : g_saddr
+    assign cap_addr = SampleAddrWidth'((32'(ra_q) << ChB) | 32'(rc_q));
+  end else begin : g_saddr_one
+    assign cap_addr = '0;
+  end
+  (* no_rw_check, ram_style = "block" *) logic [ChunkWidth-1:0] smem [2**SampleAddrWidth];
+  always_ff @(posedge clk_i) begin
+    if (cap) smem[cap_addr] <= rd_q;
+    sample_word_q <= smem[sample_addr_i];
+  end
+
   // ---------------------------------------------------------------------
   // Control registers.
   // ---------------------------------------------------------------------
@@ -410,6 +440,10 @@ module traj_fd_tm #(
       // the output moves only while a pass of an active segment captures
       // r[0]: underrun, idle, loading and reset hold it (no jump)
       if (!$past(cap)) assert (sample_q == $past(sample_q));
+      // the sample RAM port: a word read twice at one address with no
+      // capture between is the same word (only a pass's capture writes it)
+      if ($past(f_past_valid) && $past(sample_addr_i) == $past(sample_addr_i, 2) && !$past(cap, 2))
+        assert (sample_word_q == $past(sample_word_q));
       // a segment-done pulse comes with its sample, never with an underrun
       if (seg_done_q) assert (sample_valid_q && !underrun_q);
       if (underrun_q) assert (sample_valid_q == $past(primed_q));
@@ -469,6 +503,7 @@ module traj_fd_tm #(
   assign s_axis_tready  = ready;
   assign sample_valid_o = sample_valid_q;
   assign sample_o       = sample_q;
+  assign sample_word_o  = sample_word_q;
   assign underrun_o     = underrun_q;
   assign seg_done_o     = seg_done_q;
   assign tick_err_o     = tick_err_q;

@@ -3,7 +3,8 @@
 // together with the same inputs; on every cycle from the first reset edge on,
 // every output port of the RTL is compared with the model's (tready,
 // sample_valid, underrun, seg_done, tick_err always; the sample bus where the
-// model's sample_valid is high). Before the first reset edge the RTL holds its
+// model's sample_valid is high; a sample RAM read port where the model says
+// its word was written). Before the first reset edge the RTL holds its
 // random initial state (--x-initial unique), so nothing is compared.
 //
 // The caller chooses the inputs of every cycle (step(in)); the driver is a
@@ -91,8 +92,14 @@ class RtlChecker {
     rtl_->s_axis_tvalid = in.tvalid;
     rtl_->s_axis_tdata = static_cast<uint64_t>(in.tdata);
     if constexpr (has_tuser()) rtl_->s_axis_tuser = in.tuser;
+    if constexpr (has_sample_port()) rtl_->sample_addr_i = in.sample_addr;
     rtl_->tick_i = in.tick;
   }
+  static constexpr bool has_sample_port() { return HasSampleAddr<In>::value; }
+  template <class I, class = void>
+  struct HasSampleAddr : std::false_type {};
+  template <class I>
+  struct HasSampleAddr<I, std::void_t<decltype(I::sample_addr)>> : std::true_type {};
   static constexpr bool has_tuser() { return HasTuser<In>::value; }
   template <class I, class = void>
   struct HasTuser : std::false_type {};
@@ -107,6 +114,7 @@ class RtlChecker {
     out_.tick_err = rtl_->tick_err_o;
     if (out_.sample_valid)
       for (int a = 0; a < kAxes; ++a) out_.sample[a] = vl_bits(rtl_->sample_o, a * kOutWidth, kOutWidth);
+    if constexpr (has_sample_port()) out_.sample_word = rtl_->sample_word_o;
   }
 
   void compare(const Out& h) {
@@ -121,6 +129,8 @@ class RtlChecker {
         const u128 r = out_.sample_valid ? out_.sample[a] : vl_bits(rtl_->sample_o, a * kOutWidth, kOutWidth);
         if (r != h.sample[a]) differ("sample_o axis " + std::to_string(a), r, h.sample[a]);
       }
+    if constexpr (has_sample_port())
+      if (h.sample_word_known && out_.sample_word != h.sample_word) differ("sample_word_o", out_.sample_word, h.sample_word);
   }
   void port(const char* name, bool rtl, bool hls) {
     if (rtl != hls) differ(name, rtl, hls);

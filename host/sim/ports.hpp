@@ -15,6 +15,10 @@ template <int Axes>
 struct Ports {
   bool tready = false, sample_valid = false, underrun = false, seg_done = false, tick_err = false;
   u128 sample[Axes] = {};  // OutWidth-bit two's complement; read only where sample_valid
+  // a sample RAM read port (traj_fd_tm): the word read, and (from the model)
+  // whether it is defined; compared only where defined
+  uint64_t sample_word = 0;
+  bool sample_word_known = false;
 };
 
 namespace detail {
@@ -22,6 +26,10 @@ template <class M, class = void>
 struct HasOutputs : std::false_type {};  // traj_fd_engine's model returns its ports as one Out
 template <class M>
 struct HasOutputs<M, std::void_t<decltype(std::declval<const M&>().outputs())>> : std::true_type {};
+template <class O, class = void>
+struct HasSampleWord : std::false_type {};  // traj_fd_tm's model has a sample RAM read port
+template <class O>
+struct HasSampleWord<O, std::void_t<decltype(O::sample_word)>> : std::true_type {};
 template <class M, bool = HasOutputs<M>::value>
 struct AxesOf {
   static constexpr int value = M::kAxes;
@@ -48,6 +56,10 @@ Ports<kAxesOf<M>> hls_ports(const M& m) {
     p.seg_done = o.seg_done;
     p.tick_err = o.tick_err;
     for (int a = 0; a < kAxesOf<M>; ++a) p.sample[a] = o.sample[a];
+    if constexpr (detail::HasSampleWord<typename M::Out>::value) {
+      p.sample_word = o.sample_word;
+      p.sample_word_known = o.sample_word_known;
+    }
   } else {
     p.tready = m.tready();
     p.sample_valid = m.sample_valid();

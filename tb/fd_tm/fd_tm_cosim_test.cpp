@@ -6,7 +6,10 @@
 //     and tick by tick (underruns included) when ticks leave both engines
 //     time to load;
 //   * its samples == the host compiler's exact prediction (fd::Compiler::
-//     sample_at) for every sample of a compiled segment.
+//     sample_at) for every sample of a compiled segment;
+//   * the sample RAM read port (sample_addr_i, random each cycle, compared by
+//     the lockstep driver wherever the word is defined) gives the samples of
+//     sample_o, word by word (SampleRamPortReadsEverySample).
 // Built once per parameter set (CMakeLists.txt): VTOP, FD_AXES, FD_DEGREE,
 // FD_WIDTH, FD_CHUNK, FD_GUARD. TRAJ_SEED=<n> reruns one seed.
 #include <gtest/gtest.h>
@@ -18,6 +21,7 @@
 #include <deque>
 #include <random>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "fd/fd_compiler.hpp"
@@ -159,6 +163,7 @@ struct Side {
 
 struct Stim {
   bool rst_n = true, tick = false, stall = false;
+  int sample_addr = -1;  // the sample RAM address read (-1: random)
 };
 
 class Bench {
@@ -209,6 +214,9 @@ class Bench {
   }
 
   const std::vector<Event>& tm_events() const { return tm_.events; }
+  // the RTL's sample RAM read port of the last cycle (equal to the model's
+  // wherever the model's word is defined: the lockstep driver compares)
+  uint64_t tm_sample_word() const { return tm_.last_word; }
   const std::vector<Event>& par_events() const { return par_.events; }
   bool tm_tick_err() const { return tm_.tick_err; }
   bool par_tick_err() const { return par_.tick_err; }
@@ -246,6 +254,7 @@ class Bench {
     in.tick = s.tick;
     in.tvalid = offer;
     in.tdata = offer ? word(side.word) : rng_();  // tdata is don't-care when !tvalid
+    if constexpr (std::is_same_v<typename S::In, Tm::In>) in.sample_addr = s.sample_addr >= 0 ? s.sample_addr : static_cast<int>(rng_() % Tm::kSampleWords);
     const bool accepted = offer && side.tready() && s.rst_n;
     side.step(in);
     if (accepted) ++side.word;
@@ -255,8 +264,10 @@ class Bench {
   struct TmSide : Side<traj::sim::Lockstep<VTOP, Tm>> {
     using In = Tm::In;
     bool tready() const { return unit.model().outputs().tready; }
+    uint64_t last_word = 0;
     void step(const In& in) {
       const auto& p = unit.step(in);
+      last_word = p.sample_word;
       if (unit.compared()) record(p);  // before the first reset edge the RTL holds random state
     }
   };
@@ -452,4 +463,45 @@ TEST(FdTmCosim, OneStrobeIsOneTick) {
   EXPECT_TRUE(b.tm_tick_err());
   strobe(12);
   EXPECT_EQ(b.tm_events().size(), 5u);
+}
+
+TEST(FdTmCosim, SampleRamPortReadsEverySample) {
+  // After each sample_valid the port is read at every {axis, chunk}: the
+  // words, reassembled, are sample_o's sample (bits GuardBits and up of
+  // r[0]), which the other tests check against the parallel engine and the
+  // host's prediction. Ticks 2 * MinTickClocks apart leave time to read.
+  constexpr int kWordsRead = FD_AXES * kChunks;
+  constexpr int kChB = Tm::kSampleAddrWidth - (FD_AXES > 1 ? 32 - __builtin_clz(FD_AXES - 1) : 0);
+  static_assert(2 * kMinTick > kRunTick + kWordsRead + 4, "time to read the port between ticks");
+  Bench b(11, 1, 1.0);
+  for (int i = 0; i < 2; ++i) ASSERT_TRUE(b.cycle({false, false, false}));
+  size_t checked = 0;
+  for (int t = 0; t < 300; ++t) {
+    const size_t before = b.tm_events().size();
+    int c = 0;
+    for (; c < 2 * kMinTick && b.tm_events().size() == before; ++c) ASSERT_TRUE(b.cycle({true, c == 0, false}));
+    if (b.tm_events().size() == before || !b.tm_events().back().valid) {
+      for (; c < 2 * kMinTick; ++c) ASSERT_TRUE(b.cycle({}));
+      continue;
+    }
+    const Event e = b.tm_events().back();
+    std::vector<u128> reg(FD_AXES, 0);
+    for (int w = 0; w <= kWordsRead; ++w, ++c) {  // address w; its word a clock later
+      Stim s;
+      s.sample_addr = w < kWordsRead ? ((w / kChunks) << kChB) | (w % kChunks) : 0;
+      ASSERT_TRUE(b.cycle(s));
+      if (w > 0) {
+        const int a = (w - 1) / kChunks, ch = (w - 1) % kChunks;
+        reg[a] |= u128(b.tm_sample_word()) << (ch * FD_CHUNK);
+      }
+    }
+    for (int a = 0; a < FD_AXES; ++a) {
+      const u128 smp = (reg[a] >> FD_GUARD) & traj::mask(Par::kOutWidth);
+      ASSERT_EQ(static_cast<unsigned long long>(smp), static_cast<unsigned long long>(e.sample[a])) << "tick " << t << " axis " << a;
+      ASSERT_EQ(static_cast<unsigned long long>(smp >> 64), static_cast<unsigned long long>(e.sample[a] >> 64)) << "tick " << t << " axis " << a;
+    }
+    ++checked;
+    for (; c < 2 * kMinTick; ++c) ASSERT_TRUE(b.cycle({}));
+  }
+  EXPECT_GT(checked, 200u);
 }
