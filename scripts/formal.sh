@@ -25,6 +25,8 @@ case $unit in
   traj_seg_fifo) blast="memory_map; opt -fast; techmap; opt -fast; abc -g AND; opt_clean;" ;;
   # traj_fd_tm: z3 does not finish step 0 on the word-level model either
   traj_fd_tm) blast="memory_map; opt -fast; techmap; opt -fast; abc -g AND; opt_clean;"; DEPTH=${DEPTH:-16} ;;
+  # traj_time_scale: the S-curve's comparisons and the product's datapath
+  traj_time_scale) blast="memory_map; opt -fast; techmap; opt -fast; abc -g AND; opt_clean;"; DEPTH=${DEPTH:-12} ;;
   traj_link_proto) blast="memory_map; opt -fast; techmap; opt -fast; abc -g AND; opt_clean;"; DEPTH=${DEPTH:-80}
                    bounded=1 ;;
 esac
