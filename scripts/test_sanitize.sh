@@ -8,7 +8,8 @@
 #           except those left out below
 #     host  the host libraries and their unit tests only (geometry, fd unit tests, stream, input,
 #           corners, the planner's streaming, arc-length table, plot and JSON Lines tests, the
-#           job's toolpath streaming, fuzz replay, the link's frame codec and the upload client
+#           job's toolpath streaming, the time-scale reference and hls model, fuzz replay, the
+#           link's frame codec and the upload client
 #           against the loopback board with faults): no Verilated model is built; the CI step
 #           (.ci/run). Left out: planner_test (planner.unit.{PlannerCore,PlannerInput,Profile,
 #           Segments}: it links the Verilated engines) and the *.cli.* tests (the trajcore tool)
@@ -52,8 +53,8 @@ case "$scope" in
     cmake --build "$build" -j "$(nproc)" --target host/util/all host/geometry/all host/planner/all host/input/all \
       host/corners/all trajcore_fd trajcore_stream tb/geometry/all tb/stream/all tb/input/all tb/corners/all \
       tb/fuzz/all fd_recurrence_test fd_model_test fd_compiler_speed_test fd_compiler_report_test link_test upload_test \
-      streaming_test arc_table_test plots_test jsonl_test toolpath_stream_test
-    select='^(geometry|fd\.unit|stream|input|corners|fuzz\.unit|link\.host|upload\.e2e|job\.unit)\.'
+      streaming_test arc_table_test plots_test jsonl_test toolpath_stream_test time_scale_test time_scale_hls_test
+    select='^(geometry|fd\.unit|stream|input|corners|fuzz\.unit|link\.host|upload\.e2e|job\.unit|timescale\.(unit|hls))\.'
     select="$select|^planner\.unit\.(Streaming|ArcTable|Plots|Jsonl)\."
     skip="$skip|^stream\.cli\."  # they run the trajcore tool, which carries the Verilated engines
     ;;
