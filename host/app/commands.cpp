@@ -253,15 +253,19 @@ int plan_whole(const PlanArgs& a) {
   const plan::Path& path = in.path;
   const job::JobConfig& cfg = in.cfg;
   const auto res = job::run_job(path, cfg, progress);
+  // the plan report; the output columns are the host's exact prediction of
+  // the core's samples (`trajcore run` confirms them on the Verilated core).
+  // Made before the stream is written: a plan without the time-scaling
+  // headroom asked for writes nothing.
+  const auto rep = report::make_report(path, cfg, res, report::predicted_samples(res));
+  const std::string scale_text = a.scale.on() ? time_scale_text(a.scale, rep, res) : std::string();
   stream::write_file(a.output, res.header, job::records_of(res));
   std::FILE* text = a.output == "-" ? stderr : stdout;  // the stream may go to standard output
   std::fprintf(text, "%s: %zu segments, %zu ticks (%.3f s of motion) -> %s\n", a.input.c_str(), res.segments.size(),
               res.ticks.size(), res.plan.duration(), a.output.c_str());
-  // the plan report; the output columns are the host's exact prediction of
-  // the core's samples (`trajcore run` confirms them on the Verilated core)
-  const auto rep = report::make_report(path, cfg, res, report::predicted_samples(res));
   std::fputs((in.toolpath_text + report::report_text(cfg, rep, res)).c_str(), text);
   std::fprintf(text, "(output columns: the host's exact prediction of the core's samples)\n");
+  std::fputs(scale_text.c_str(), text);
   const bool ok = passes(cfg, rep);
   if (!ok) std::fprintf(stderr, "trajcore plan: a check FAILED (see the report)\n");
   return ok ? 0 : 1;
@@ -324,6 +328,8 @@ int plan_command(const PlanArgs& a) {
   const bool jsonl = !a.input.empty() && a.raster == 0 && input::file_kind(a.input, a.format) == input::FileKind::kJsonl;
   if (jsonl && a.window_given && a.window == 0)
     throw PlanError("plan: a JSON Lines path is always streamed: --window must be at least 2");
+  if ((a.window > 0 || a.raster > 0 || jsonl) && a.scale.on())
+    throw PlanError("plan: --time-scale needs the whole path planned at once (no --window, --raster or .jsonl)");
   if (a.window > 0 || a.raster > 0 || jsonl) return plan_streamed(a, jsonl);
   return plan_whole(a);
 }
@@ -353,7 +359,8 @@ int run_command(const RunArgs& a) {
   write_csv(stage.dir + "/samples.csv", res.header, sr.samples);
   const auto rep = report::make_report(path, cfg, res, sr.samples);
   report::write_plots(stage.dir, path, cfg, res, sr.samples, in.fastest_feed_move);
-  const std::string text = in.toolpath_text + report::report_text(cfg, rep, res) + core_line(sr);
+  const std::string text = in.toolpath_text + report::report_text(cfg, rep, res) + core_line(sr) +
+                           (a.scale.on() ? time_scale_text(a.scale, rep, res) : std::string());
   {
     util::AtomicFile f(stage.dir + "/report.txt");
     f.out() << text;

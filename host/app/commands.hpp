@@ -6,6 +6,7 @@
 #include <string>
 
 #include "job/job.hpp"
+#include "time_scale_cmd.hpp"
 
 namespace traj::app {
 
@@ -16,6 +17,7 @@ struct PlanArgs {
   std::string output = "out/plan.trj";
   size_t window = 0;                 // > 0: stream with this window
   bool window_given = false;         // --window was on the command line
+  TimeScaleArgs scale;               // --time-scale: planned below the limits, ramp bounds reported
   size_t raster = 0;                 // > 0: a synthetic raster of this many pieces instead of a file
 };
 // Writes the segment stream; for a whole path also prints the plan report.
@@ -26,6 +28,7 @@ struct RunArgs {
   std::string input;
   std::string format;                // as PlanArgs::format
   std::string out_dir = "out";
+  TimeScaleArgs scale;               // as PlanArgs::scale
 };
 // plan + simulate on the Verilated core + report and plots, all files or none.
 int run_command(const RunArgs& a);

@@ -55,6 +55,18 @@ void add_limits(CLI::App* c, JobConfig& cfg, std::vector<double>& v_axis, std::v
                 "(ticks below about 250 us: 128-bit, 2^-44 units)");
 }
 
+void add_time_scale(CLI::App* c, traj::app::TimeScaleArgs& t) {
+  c->add_option("--time-scale", t.s_max,
+                "plan for time scaling up to this feed override (e.g. 1.2 for 120 %): below the limits by "
+                "--scale-headroom, with the ramp bounds of s that keep every per-axis limit in the report "
+                "(host/timescale/README.md)");
+  c->add_option("--scale-headroom", t.headroom,
+                "with --time-scale: the shares of the acceleration and jerk limits the plan uses")
+      ->delimiter(',')
+      ->capture_default_str();
+  c->add_option("--servo-period", t.servo_period, "with --time-scale: the board's servo tick, s")->capture_default_str();
+}
+
 void apply_axes(JobConfig& cfg, const std::vector<double>& v, const std::vector<double>& a,
                 const std::vector<double>& j) {
   auto set = [](double* dst, const std::vector<double>& src, const char* name) {
@@ -143,6 +155,7 @@ int main(int argc, char** argv) {
       "path, planned at once.)");
   pl->add_option("--raster", pa.raster, "instead of a file: a synthetic raster toolpath of this many pieces (streamed)");
   add_limits(pl, pa.cfg, v_axis, a_axis, j_axis);
+  add_time_scale(pl, pa.scale);
 
   auto* sm = app.add_subcommand("sim", "Run a segment stream through the Verilated core");
   sm->add_option("stream", sa.input, "segment stream (.trj)")->required();
@@ -164,6 +177,7 @@ int main(int argc, char** argv) {
   rn->add_option("--format", ra.format, kFormatHelp)->check(CLI::IsMember(kFormats));
   rn->add_option("--out-dir", ra.out_dir, "where to write plan.trj, samples.csv, report.txt, *.svg")->capture_default_str();
   add_limits(rn, ra.cfg, v_axis, a_axis, j_axis);
+  add_time_scale(rn, ra.scale);
 
   traj::app::LinkCommands lc;
   traj::app::add_link_commands(app, lc);
@@ -182,12 +196,14 @@ int main(int argc, char** argv) {
 #endif
     if (*pl) {
       apply_axes(pa.cfg, v_axis, a_axis, j_axis);
+      if (pa.scale.on()) traj::app::apply_time_scale_headroom(pa.cfg, pa.scale);
       pa.cfg.machine.choose_format(pa.cfg.limits);
       pa.window_given = window_opt->count() > 0;
       return traj::app::plan_command(pa);
     }
     if (*rn) {
       apply_axes(ra.cfg, v_axis, a_axis, j_axis);
+      if (ra.scale.on()) traj::app::apply_time_scale_headroom(ra.cfg, ra.scale);
       ra.cfg.machine.choose_format(ra.cfg.limits);
       return traj::app::run_command(ra);
     }

@@ -2,6 +2,7 @@
 #include "timescale/time_scale.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -27,7 +28,9 @@ RampBounds derive_ramp_bounds(const std::vector<AxisKinematics>& plan, const std
     const AxisKinematics& p = plan[a];
     const AxisKinematics& L = limits[a];
     if (p.v <= 0) continue;  // the axis does not move
-    const std::string who = "time scaling to " + std::to_string(s_max) + "x: axis " + axis_name(a) + ": ";
+    char sm[32];
+    std::snprintf(sm, sizeof sm, "%g", s_max);
+    const std::string who = std::string("time scaling up to s = ") + sm + ": axis " + axis_name(a) + ": ";
     const double e = err.of_axis(p), H = err.servo_tick;
     if (p.v * s_max + 2 * e / H > L.v) throw std::invalid_argument(who + "velocity peak x s_max is above its limit");
     const double head_a = L.a - p.a * s_max * s_max - 4 * e / (H * H);
