@@ -75,7 +75,7 @@ Length split_length(const std::string& text, const std::string& what) {
     const auto [v, unit] = svg::parse_length(text);
     return {v, unit};
   } catch (const PathDataError&) {
-    throw BadAttribute(what + ": '" + text + "' is not a length");
+    throw BadAttribute(what + ": '" + util::excerpt(text) + "' is not a length");
   }
 }
 
@@ -87,7 +87,7 @@ double px_per_unit(const std::string& unit, const std::string& what) {
   if (unit == "pt") return 96.0 / 72.0;
   if (unit == "pc") return 16.0;
   if (unit == "Q") return 96.0 / 101.6;
-  throw BadAttribute(what + ": unknown unit '" + unit + "' (known: mm, cm, in, pt, pc, px, Q)");
+  throw BadAttribute(what + ": unknown unit '" + util::excerpt(unit) + "' (known: mm, cm, in, pt, pc, px, Q)");
 }
 
 // The length a percentage of attribute `name` refers to: the viewport's width (x, cx, rx, width, ...),

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "util/format.hpp"
+
 namespace traj::input::svg {
 namespace {
 
@@ -63,7 +65,7 @@ class Scanner {
     double v = 0;
     const auto r = std::from_chars(s_.data() + from, s_.data() + j, v);
     if (r.ec != std::errc() || r.ptr != s_.data() + j || !std::isfinite(v))
-      throw PathDataError(begin, "number '" + s_.substr(begin, j - begin) + "' out of range");
+      throw PathDataError(begin, "number '" + util::excerpt(s_.substr(begin, j - begin)) + "' out of range");
     i_ = j;
     return v;
   }
@@ -245,7 +247,7 @@ Affine transform_function(const std::string& name, const std::vector<double>& a,
     need({1});
     m(1, 0) = std::tan(a[0] * kPi / 180.0);
   } else {
-    throw PathDataError(at, "unknown transform '" + name + "'");
+    throw PathDataError(at, "unknown transform '" + util::excerpt(name) + "'");
   }
   return m;
 }
