@@ -258,8 +258,9 @@ int plan_whole(const PlanArgs& a) {
   // Made before the stream is written: a plan without the time-scaling
   // headroom asked for writes nothing.
   const auto rep = report::make_report(path, cfg, res, report::predicted_samples(res));
-  const std::string scale_text = a.scale.on() ? time_scale_text(a.scale, rep, res) : std::string();
-  stream::write_file(a.output, res.header, job::records_of(res));
+  stream::Header header = res.header;
+  const std::string scale_text = a.scale.on() ? time_scale_text(a.scale, rep, res, header) : std::string();
+  stream::write_file(a.output, header, job::records_of(res));
   std::FILE* text = a.output == "-" ? stderr : stdout;  // the stream may go to standard output
   std::fprintf(text, "%s: %zu segments, %zu ticks (%.3f s of motion) -> %s\n", a.input.c_str(), res.segments.size(),
               res.ticks.size(), res.plan.duration(), a.output.c_str());
@@ -359,8 +360,13 @@ int run_command(const RunArgs& a) {
   write_csv(stage.dir + "/samples.csv", res.header, sr.samples);
   const auto rep = report::make_report(path, cfg, res, sr.samples);
   report::write_plots(stage.dir, path, cfg, res, sr.samples, in.fastest_feed_move);
-  const std::string text = in.toolpath_text + report::report_text(cfg, rep, res) + core_line(sr) +
-                           (a.scale.on() ? time_scale_text(a.scale, rep, res) : std::string());
+  std::string scale_text;
+  if (a.scale.on()) {  // the stream again, with the time-scaling fields in its header
+    stream::Header header = res.header;
+    scale_text = time_scale_text(a.scale, rep, res, header);
+    stream::write_file(stage.dir + "/plan.trj", header, records);
+  }
+  const std::string text = in.toolpath_text + report::report_text(cfg, rep, res) + core_line(sr) + scale_text;
   {
     util::AtomicFile f(stage.dir + "/report.txt");
     f.out() << text;
@@ -459,6 +465,9 @@ int sim_command(const SimArgs& a) {
               static_cast<unsigned long long>(sr.sample_count), static_cast<unsigned long long>(sr.cycles), pace.c_str(),
               sim_speed(sr).c_str(), sr.mismatches ? "NO" : "yes", sr.tick_err ? "SET" : "clear",
               static_cast<unsigned long long>(sr.underruns), ok ? to.c_str() : "(no samples written)");
+  if (header.has_time_scaling())
+    std::printf("  time scaling (header): s <= %g, |ds/dt| <= %g /s, |d2s/dt2| <= %g /s^2\n", header.scale_max,
+                static_cast<double>(header.scale_rate), static_cast<double>(header.scale_accel));
   if (!ok) std::fprintf(stderr, "trajcore sim: a check FAILED (see above)\n");
   return ok ? 0 : 1;
 }

@@ -72,7 +72,7 @@ class StatusLine {
 void add_upload(CLI::App& app, LinkCommands& lc) {
   auto& a = lc.up;
   auto* c = lc.upload = app.add_subcommand("upload", "Upload a segment stream to a board (rtl/board/LINK.md)");
-  c->add_option("stream", a.input, "segment stream (.trj, version 3), or - for standard input")->required();
+  c->add_option("stream", a.input, "segment stream (.trj, version 4), or - for standard input")->required();
   c->add_option("--port", a.port, "serial port (/dev/ttyUSB1), pseudo-terminal (/dev/pts/N) or tcp:HOST:PORT")
       ->required();
   c->add_option("--baud", a.opt.baud, "serial baud rate (8N1, no flow control)")->capture_default_str();

@@ -30,7 +30,8 @@ void apply_time_scale_headroom(job::JobConfig& cfg, TimeScaleArgs& t) {
   L.j_cen *= t.headroom[1];
 }
 
-std::string time_scale_text(const TimeScaleArgs& t, const report::Report& rep, const job::JobResult& res) {
+std::string time_scale_text(const TimeScaleArgs& t, const report::Report& rep, const job::JobResult& res,
+                            stream::Header& header) {
   const plan::Limits& machine = t.machine;
   const int axes = std::min(res.header.axes, plan::kMaxAxes);
   std::vector<timescale::AxisKinematics> peaks(axes), limits(axes);
@@ -53,6 +54,11 @@ std::string time_scale_text(const TimeScaleArgs& t, const report::Report& rep, c
   } catch (const std::invalid_argument& e) {
     throw PlanError(std::string(e.what()) + " (--scale-headroom gives the shares of the limits the plan uses)");
   }
+  // the stream's fields: s_max rounded down to 1/4096, the bounds to the
+  // float below them (each only makes the ramps slower)
+  header.scale_max = std::floor(t.s_max * stream::kScaleMaxUnit + 1e-9) / stream::kScaleMaxUnit;
+  header.scale_rate = std::nextafter(static_cast<float>(rb.rate), 0.0f);
+  header.scale_accel = std::nextafter(static_cast<float>(rb.accel), 0.0f);
   const double n = H / h;
   const double p = std::log2(n);
   char buf[1024];

@@ -10,6 +10,7 @@
 
 #include "job/job.hpp"
 #include "report/report.hpp"
+#include "stream/segment_stream.hpp"
 
 namespace traj::app {
 
@@ -30,6 +31,9 @@ void apply_time_scale_headroom(job::JobConfig& cfg, TimeScaleArgs& t);
 // of plan, fit and output, with 2 % for the maxima between ticks), the ramp
 // bounds under the machine's limits, and the unit's integer configuration.
 // PlanError (naming the axis and the limit) when the plan leaves no headroom.
-std::string time_scale_text(const TimeScaleArgs& t, const report::Report& rep, const job::JobResult& res);
+// The bounds also go into `header` (s_max, |ds/dt|, |d2s/dt2|: the stream's
+// time-scaling fields, rounded toward the safe side).
+std::string time_scale_text(const TimeScaleArgs& t, const report::Report& rep, const job::JobResult& res,
+                            stream::Header& header);
 
 }  // namespace traj::app

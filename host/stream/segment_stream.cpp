@@ -182,6 +182,26 @@ size_t fd_field_offset(const std::string& message) {
     if (field == name) return off;
   return 8;
 }
+// The time-scaling fields: none (all zero), or s_max in (0, 2] with both
+// ramp bounds finite and positive.
+std::string time_scaling_problem(const Header& h) {
+  if (h.scale_max == 0) {
+    if (h.scale_rate != 0 || h.scale_accel != 0) return "time-scaling ramp bounds without s_max (bytes 18-19 are 0)";
+    return "";
+  }
+  char buf[160];
+  if (!(h.scale_max * kScaleMaxUnit >= 1 - 1e-9 && h.scale_max <= 2)) {
+    std::snprintf(buf, sizeof buf, "time-scaling s_max %g: must be in [1/4096, 2]", h.scale_max);
+    return buf;
+  }
+  if (!(std::isfinite(h.scale_rate) && h.scale_rate > 0) || !(std::isfinite(h.scale_accel) && h.scale_accel > 0)) {
+    std::snprintf(buf, sizeof buf, "time-scaling ramp bounds |ds/dt| <= %g, |d2s/dt2| <= %g: must be finite and positive",
+                  static_cast<double>(h.scale_rate), static_cast<double>(h.scale_accel));
+    return buf;
+  }
+  return "";
+}
+
 }  // namespace
 
 std::vector<uint8_t> encode_header(const Header& h) {
@@ -193,6 +213,7 @@ std::vector<uint8_t> encode_header(const Header& h) {
     const std::string p = bcu_header_problem(h, off);
     if (!p.empty()) throw StreamError(p);
   }
+  if (const std::string p = time_scaling_problem(h); !p.empty()) throw StreamError(p);
   std::vector<uint8_t> b{'T', 'R', 'J', 'S'};
   put(b, kVersion, 2);
   put(b, kHeaderBytes, 2);
@@ -202,7 +223,7 @@ std::vector<uint8_t> encode_header(const Header& h) {
   put(b, h.chunk_width, 2);
   put(b, h.guard_bits, 2);
   put(b, static_cast<uint16_t>(static_cast<int16_t>(h.frac_bits)), 2);
-  put(b, 0, 2);
+  put(b, static_cast<uint16_t>(std::floor(h.scale_max * kScaleMaxUnit + 1e-9)), 2);
   uint64_t pbits;
   std::memcpy(&pbits, &h.period, 8);
   put(b, pbits, 8);
@@ -211,7 +232,11 @@ std::vector<uint8_t> encode_header(const Header& h) {
   put(b, h.bcu_guard_bits, 2);
   put(b, h.bcu_max_depth, 2);
   put(b, h.bcu_out_width, 2);
-  put(b, 0, 8);
+  uint32_t fbits = 0;  // no time scaling: all 0 (not the bits of -0)
+  if (h.has_time_scaling()) std::memcpy(&fbits, &h.scale_rate, 4);
+  put(b, fbits, 4);
+  if (h.has_time_scaling()) std::memcpy(&fbits, &h.scale_accel, 4);
+  put(b, fbits, 4);
   put(b, crc(b.data(), b.size()), 4);
   return b;
 }
@@ -473,8 +498,19 @@ std::string StreamReader::header_problem(const std::vector<uint8_t>& b, size_t n
   h.bcu_guard_bits = static_cast<int>(get(&b[46], 2));
   h.bcu_max_depth = static_cast<int>(get(&b[48], 2));
   h.bcu_out_width = static_cast<int>(get(&b[50], 2));
-  if ((at = first_nonzero(b, 18, 20)) < 20) return "header: reserved byte " + hex2(b[at]) + ", must be 0";
-  if ((at = first_nonzero(b, 52, 60)) < 60) return "header: reserved byte " + hex2(b[at]) + ", must be 0";
+  h.scale_max = static_cast<double>(get(&b[18], 2)) / kScaleMaxUnit;
+  if (h.scale_max == 0) {
+    if ((at = first_nonzero(b, 52, 60)) < 60) return "header: time-scaling ramp bounds without s_max (bytes 18-19 are 0)";
+  } else {
+    uint32_t fbits = static_cast<uint32_t>(get(&b[52], 4));
+    std::memcpy(&h.scale_rate, &fbits, 4);
+    fbits = static_cast<uint32_t>(get(&b[56], 4));
+    std::memcpy(&h.scale_accel, &fbits, 4);
+    if (const std::string p = time_scaling_problem(h); !p.empty()) {
+      at = h.scale_max > 2 ? 18 : (std::isfinite(h.scale_rate) && h.scale_rate > 0 ? 56 : 52);
+      return "header: " + p;
+    }
+  }
   try {
     h.format().validate();
   } catch (const std::exception& e) {

@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 // trajcore segment stream: the file (or link) format that carries compiled
-// segments from the host to the core, version 3: forward-difference segments
+// segments from the host to the core, version 4: forward-difference segments
 // (traj_fd_engine) and, when the header carries a BCU format, BCU segments
 // (traj_core: both engines behind one word stream, tuser = kind). Every record
 // carries its sequence number; the link (rtl/board/LINK.md) sends the records
-// as they are in the file, one per SEGMENT frame. The reader accepts version 3
+// as they are in the file, one per SEGMENT frame. The reader accepts version 4
 // only. host/stream/README.md is the reference for every layout.
 //
 // All integers little-endian. CRC-32 is zlib's (IEEE 802.3 polynomial).
@@ -95,8 +95,15 @@ struct Header {
   // BCU generator format. bcu_ctrl_width == 0: no BCU engine, the stream
   // cannot hold BCU records (the fields are written as 0).
   int bcu_ctrl_width = 0, bcu_guard_bits = 0, bcu_max_depth = 0, bcu_out_width = 0;
+  // Time scaling (host/timescale): the largest s the plan was made for
+  // (0: none; a multiple of 1/4096, at most 2) and the ramp bounds of s that
+  // keep every per-axis limit, |ds/dt| <= scale_rate (1/s) and
+  // |d2s/dt2| <= scale_accel (1/s^2), both positive when scale_max is.
+  double scale_max = 0;
+  float scale_rate = 0, scale_accel = 0;
 
   bool has_bcu() const { return bcu_ctrl_width != 0; }
+  bool has_time_scaling() const { return scale_max != 0; }
   fd::Format format() const;
   bcu::Format bcu_format() const;  // axes, chunk width and F from the shared fields
   static Header from(const fd::Format& f, double period, const std::string& units);
@@ -120,7 +127,8 @@ struct Record {
   int depth() const;                         // BCU: d with K = 2^d (-1 if K is not a power of two)
 };
 
-constexpr int kVersion = 3;       // the version written and read
+constexpr int kVersion = 4;       // the version written and read
+constexpr int kScaleMaxUnit = 4096;  // the header's s_max is a multiple of 1/4096 (written rounded down)
 constexpr int kHeaderBytes = 64;
 constexpr int kEndBytes = 16;
 // The FD record's K bound: the compiler's longest segment (fd::Format::max_ticks).

@@ -73,7 +73,7 @@ inline std::vector<uint8_t> stuff(const std::vector<uint8_t>& b) {
   return s;
 }
 
-// One FD segment record (stream version 3) and the engine words it must become.
+// One FD segment record (stream version 4) and the engine words it must become.
 struct Record {
   uint32_t seq = 0, K = 1;
   std::vector<uint8_t> regs;

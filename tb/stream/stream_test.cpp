@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// Segment stream format version 3 (FD records; BCU records when the header
+// Segment stream format version 4 (FD records; BCU records when the header
 // carries a BCU format; every record numbered): round trip, every corruption
 // or truncation reported with its place (byte offset and segment) while every
 // record before it stays accepted, and every record that is out of order,
@@ -13,6 +13,7 @@
 #include <fstream>
 #include <functional>
 #include <sstream>
+#include <limits>
 #include <random>
 
 #include "stream/segment_stream.hpp"
@@ -279,7 +280,7 @@ TEST(StreamV2, RoundTripMixedKinds) {
   const Header h = header_v2();
   const auto recs = mixed_records(rng, h, 24);
   const auto bytes = encode(h, recs);
-  EXPECT_EQ(get_version(bytes), 3);
+  EXPECT_EQ(get_version(bytes), 4);
   EXPECT_EQ(bytes.size(), offsets(h, recs).back() + 16);
   const auto res = decode(bytes, "mem");
   ASSERT_TRUE(res.complete) << res.error;
@@ -304,11 +305,11 @@ TEST(StreamV2, RoundTripMixedKinds) {
   EXPECT_LT(nb, recs.size());
 }
 
-TEST(StreamV2, FdOnlyHeaderIsVersionThreeWithZeroBcuFields) {
+TEST(StreamV2, FdOnlyHeaderIsVersionFourWithZeroBcuFields) {
   std::mt19937_64 rng(16);
   const Header h = header();
   const auto bytes = encode(h, records(rng, h, 3));
-  EXPECT_EQ(get_version(bytes), 3);
+  EXPECT_EQ(get_version(bytes), 4);
   EXPECT_EQ(bytes[6] | (bytes[7] << 8), 64);
   for (int i = 44; i < 60; ++i) EXPECT_EQ(bytes[i], 0) << i;
   EXPECT_EQ(bytes.size(), 64 + 3 * fd_record_bytes(h) + 16);
@@ -319,12 +320,12 @@ TEST(StreamV2, FdOnlyHeaderIsVersionThreeWithZeroBcuFields) {
 }
 
 TEST(StreamV2, OlderVersionsAreRefusedByName) {
-  for (int v : {1, 2, 4}) {
+  for (int v : {1, 2, 3, 5}) {
     auto bytes = encode(header(), {});
     bytes[4] = static_cast<uint8_t>(v);
     EXPECT_EQ(decode(bytes, "old.trj").error,
               "old.trj: byte 4: unsupported version " + std::to_string(v) +
-                  " (this reader reads version 3 only: write the stream again with this trajcore)");
+                  " (this reader reads version 4 only: write the stream again with this trajcore)");
   }
 }
 
@@ -601,15 +602,38 @@ TEST(StreamIntegrity, NonzeroFlagsAndReservedAreRefused) {
   reseal(b, e, 16);
   EXPECT_EQ(decode(b, "plan.trj").error, "plan.trj: byte " + std::to_string(e + 2) +
                                              ": end record: reserved byte 0x10, must be 0");
-  // the header's reserved fields
-  for (size_t at : {18u, 19u, 52u, 59u}) {
+  // the header's time-scaling fields (s_max at 18, the ramp bounds at 52
+  // and 56): bounds without s_max, s_max without bounds, s_max above 2
+  const std::pair<size_t, std::string> bad_scale[] = {
+      {52, "byte 52: header: time-scaling ramp bounds without s_max (bytes 18-19 are 0)"},
+      {59, "byte 59: header: time-scaling ramp bounds without s_max (bytes 18-19 are 0)"},
+      {18, "byte 52: header: time-scaling ramp bounds |ds/dt| <= 0, |d2s/dt2| <= 0: must be finite and positive"},
+      {19, "byte 18: header: time-scaling s_max 8: must be in [1/4096, 2]"}};
+  for (const auto& [at, msg] : bad_scale) {
     auto hb = f.good;
-    hb[at] = 0x20;
+    hb[at] = 0x80;
     reseal(hb, 0, 64);
     const auto res = decode(hb, "plan.trj");
-    EXPECT_EQ(res.error, "plan.trj: byte " + std::to_string(at) + ": header: reserved byte 0x20, must be 0");
+    EXPECT_EQ(res.error, "plan.trj: " + msg);
     EXPECT_TRUE(res.records.empty());
   }
+}
+
+TEST(StreamIntegrity, TimeScalingFieldsRoundTrip) {
+  Header h = header();
+  h.scale_max = 1.2;  // written rounded down to 4915/4096
+  h.scale_rate = 5.125f;
+  h.scale_accel = 196.5f;
+  const auto res = decode(encode(h, {}), "ts.trj");
+  ASSERT_TRUE(res.complete) << res.error;
+  EXPECT_EQ(res.header.scale_max, 4915.0 / 4096);
+  EXPECT_EQ(res.header.scale_rate, 5.125f);
+  EXPECT_EQ(res.header.scale_accel, 196.5f);
+  h.scale_accel = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(encode(h, {}), StreamError);
+  h.scale_accel = 1;
+  h.scale_max = 2.5;
+  EXPECT_THROW(encode(h, {}), StreamError);
 }
 
 TEST(StreamIntegrity, UnknownUnitsAndRecordTypeAreRefused) {
