@@ -69,6 +69,7 @@ std::string time_scale_text(const TimeScaleArgs& t, const report::Report& rep, c
                 t.s_max, 100 * t.s_max, 100 * t.headroom[0], 100 * t.headroom[1]);
   s += buf;
   for (int a = 0; a < axes; ++a) {
+    if (peaks[a].v <= 0) continue;  // the axis does not move
     std::snprintf(buf, sizeof buf, "  plan peaks, axis %c    v %.4g, a %.4g, j %.4g (limits %g, %g, %g; +2 %% for the maxima between ticks)\n",
                   "xyz"[a], peaks[a].v, peaks[a].a, peaks[a].j, limits[a].v, limits[a].a, limits[a].j);
     s += buf;

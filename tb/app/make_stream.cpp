@@ -1,4 +1,4 @@
-// Writes version-3 segment streams for the CLI tests of `trajcore sim` (the
+// Writes version-4 segment streams for the CLI tests of `trajcore sim` (the
 // fd_cubic format: 3 axes, cubic, 64-bit registers, 16-bit chunks, 32 guard
 // bits, F = 16, 1 ms, mm):
 //   make_stream long <K> <out.trj>   one segment of K ticks, 1 LSB per tick on x
