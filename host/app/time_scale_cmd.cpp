@@ -52,7 +52,7 @@ std::string time_scale_text(const TimeScaleArgs& t, const report::Report& rep, c
     rb = timescale::derive_ramp_bounds(peaks, limits, t.s_max, err);
     ib = timescale::integer_bounds(rb, H);
   } catch (const std::invalid_argument& e) {
-    throw PlanError(std::string(e.what()) + " (--scale-headroom gives the shares of the limits the plan uses)");
+    throw PlanError(std::string(e.what()) + " (--scale-headroom: the shares of the limits the plan uses; --period: the engine tick)");
   }
   // the stream's fields: s_max rounded down to 1/4096, the bounds to the
   // float below them (each only makes the ramps slower)

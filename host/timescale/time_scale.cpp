@@ -35,8 +35,22 @@ RampBounds derive_ramp_bounds(const std::vector<AxisKinematics>& plan, const std
     if (p.v * s_max + 2 * e / H > L.v) throw std::invalid_argument(who + "velocity peak x s_max is above its limit");
     const double head_a = L.a - p.a * s_max * s_max - 4 * e / (H * H);
     const double head_j = L.j - p.j * s_max * s_max * s_max - 8 * e / (H * H * H);
-    if (head_a <= 0) throw std::invalid_argument(who + "the plan's acceleration leaves no headroom (plan it below the limit)");
-    if (head_j <= 0) throw std::invalid_argument(who + "the plan's jerk leaves no headroom (plan it below the limit)");
+    // the interpolation's own share (an engine tick too coarse for the servo
+    // tick), named apart from the plan's
+    const double interp_a = 4 * e / (H * H), interp_j = 8 * e / (H * H * H);
+    if (head_a <= 0 || head_j <= 0) {
+      const bool interp = (head_a <= 0 && L.a - p.a * s_max * s_max > 0) || (head_j <= 0 && L.j - p.j * s_max * s_max * s_max > 0);
+      if (interp) {
+        char buf[256];
+        std::snprintf(buf, sizeof buf,
+                      "the interpolation between engine samples %g s apart at the servo tick %g s takes %.3g of the "
+                      "acceleration limit and %.3g of the jerk limit: tick the engine finer (plan with a shorter --period)",
+                      err.engine_tick, H, interp_a / L.a, interp_j / L.j);
+        throw std::invalid_argument(who + buf);
+      }
+      throw std::invalid_argument(who + (head_a <= 0 ? "the plan's acceleration" : "the plan's jerk") +
+                                  " leaves no headroom (plan it below the limit)");
+    }
     rate = std::min(rate, head_a / p.v);
     if (p.a > 0) rate = std::min(rate, rate_share * head_j / (3 * p.a * s_max));
   }
