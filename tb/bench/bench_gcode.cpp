@@ -18,6 +18,7 @@
 #include <string>
 
 #include "cam_program.hpp"
+#include "child_process.hpp"
 #include "input/gcode.hpp"
 #include "job/job.hpp"
 #include "job/streaming.hpp"
@@ -69,26 +70,6 @@ void streamed(const std::string& file, long lines) {
   print_row("streamed (window 64)", lines, st.motion_time, host, st.segments, b);
 }
 
-// Runs f in a child process; false if it failed.
-template <class F>
-bool in_child(F f) {
-  std::fflush(stdout);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    try {
-      f();
-    } catch (const std::exception& e) {
-      std::printf("FAILED: %s\n", e.what());
-      std::fflush(stdout);
-      _exit(1);
-    }
-    _exit(0);
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) && WEXITSTATUS(status) == 0;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -110,8 +91,8 @@ int main(int argc, char** argv) {
       std::ofstream o(file);
       bench::write_cam_program(o, n);
     }
-    ok = in_child([&] { streamed(file, n); }) && ok;
-    ok = in_child([&] { whole(file, n); }) && ok;
+    ok = bench::in_child([&] { streamed(file, n); }, "FAILED: ") && ok;
+    ok = bench::in_child([&] { whole(file, n); }, "FAILED: ") && ok;
   }
   std::filesystem::remove_all(dir);
   return ok ? 0 : 1;

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "child_process.hpp"
 #include "input/path_json.hpp"
 #include "input/raster.hpp"
 #include "job/job.hpp"
@@ -70,25 +71,6 @@ void raster(size_t pieces, double period) {
   row("raster", period, st.motion_time, st.wall, segments, ticks, cfg);
 }
 
-// Runs f in a child process; false if it failed.
-template <class F>
-bool in_child(F f) {
-  const pid_t pid = fork();
-  if (pid == 0) {
-    try {
-      f();
-    } catch (const std::exception& e) {
-      std::printf("  failed: %s\n", e.what());
-      std::fflush(stdout);
-      _exit(1);
-    }
-    _exit(0);
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) && WEXITSTATUS(status) == 0;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -106,7 +88,7 @@ int main(int argc, char** argv) {
               "segments", "ticks", "rss_MiB", "engine");
   std::fflush(stdout);  // before the children copy the buffer
   bool ok = true;
-  for (double h : periods) ok = in_child([&] { butterfly(pos[0], h); }) && ok;
-  for (double h : periods) ok = in_child([&] { raster(pieces, h); }) && ok;
+  for (double h : periods) ok = bench::in_child([&] { butterfly(pos[0], h); }, "  failed: ") && ok;
+  for (double h : periods) ok = bench::in_child([&] { raster(pieces, h); }, "  failed: ") && ok;
   return ok ? 0 : 1;
 }
