@@ -119,8 +119,10 @@ class TimeScale {
         break;
       case kTick: {
         end_q_ = in.end;
-        // the last sample's index, saturated at 2^32 - 1 (32-bit index)
-        const uint64_t li = static_cast<uint64_t>(w_q_) + 1 + in.avail;
+        // the last sample phi may reach, saturated at 2^32 - 1 (32-bit
+        // index): the last available one at the end, else the one before it
+        // (the window at phi needs the sample after phi's)
+        const uint64_t li = static_cast<uint64_t>(w_q_) + (in.end ? 1 : 0) + in.avail;
         last_q_ = static_cast<uint32_t>(li > 0xffffffffu ? 0xffffffffu : li);
         sc_q_ = shift;
         const int64_t tgt0 = (in.hold || starved_q_) ? 0 : ov;
@@ -246,7 +248,7 @@ class TimeScale {
       case kPhi: {
         const u128 last = static_cast<u128>(last_q_) << 32;
         if (phisum_q_ > last) {
-          phi_q_ = last;
+          if (last >= phi_q_) phi_q_ = last;  // never back
           if (!end_q_) err_d = true;  // cannot happen: the check before keeps a stop within the data
         } else {
           phi_q_ = phisum_q_ & mask(64);

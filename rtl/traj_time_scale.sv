@@ -140,11 +140,14 @@ module traj_time_scale #(
   logic [32:0]   idx_diff;  // last - index(phi), for the time ahead
   logic          frac_nz;
   logic          phi_over;  // phisum > last << 32
+  logic          phi_behind;  // last << 32 < phi
   logic [OutWidth-1:0] y0a, y1a;
   logic signed [AccW-1:0] y0s, acc_sum;
 
   assign ov = (override_i > s_max_i) ? s_max_i : override_i;
-  assign last_sum = {2'b00, w_q} + 34'd1 + {2'b00, avail_i};
+  // the last sample phi may reach: the last available one at the end, else
+  // the one before it (the window at phi needs the sample after phi's)
+  assign last_sum = {2'b00, w_q} + {33'd0, end_i} + {2'b00, avail_i};
 
   // stage A inputs: the curve stepped and its target
   always_comb begin
@@ -194,6 +197,7 @@ module traj_time_scale #(
   assign frac_nz  = phi_q[31:0] != '0;
   assign phi_over = (phisum_q[LW:32] > {3'b000, last_q}) ||
                     (phisum_q[LW:32] == {3'b000, last_q} && phisum_q[31:0] != '0);
+  assign phi_behind = (phi_q[63:32] > last_q) || (phi_q[63:32] == last_q && phi_q[31:0] != '0);
 
   // the axis in work is always at the bottom of the window registers: they
   // rotate by one axis after each axis's output (no axis multiplexer)
@@ -332,8 +336,10 @@ module traj_time_scale #(
         StPhi: begin
           if (phi_over) begin
             // at the trajectory's end; without end_i it cannot happen (the
-            // check keeps every stop within the data): err_o
-            phi_q <= {last_q, 32'd0};
+            // check keeps every stop within the data): err_o. Never back
+            // (a last sample behind phi: only after end_i fell, which the
+            // contract excludes while a job plays)
+            if (!phi_behind) phi_q <= {last_q, 32'd0};
             if (!end_q) err_q <= 1'b1;
           end else begin
             phi_q <= phisum_q[63:0];
@@ -480,11 +486,11 @@ module traj_time_scale #(
         if (st_q != StAdv && st_q != StAdvWait && w_q != '1) assert (w_q == phi_q[63:32]);
         if (st_q == StAdv && w_q != '1) assert (w_q <= phi_q[63:32]);
         if (st_q == StAdvWait && w_q != '1) assert (w_q < phi_q[63:32]);
-        // from the tick on, the last sample lies ahead of phi; the sum is
-        // phi plus the increment
+        // from the tick on, the last sample phi may reach is not behind it;
+        // the sum is phi plus the increment
         if ((st_q == StAhead || st_q == StShr || st_q == StA || st_q == StB || st_q == StC ||
              st_q == StDecide || st_q == StShl || st_q == StPhi) && w_q != '1)
-          assert (last_q > phi_q[63:32]);
+          assert (last_q >= phi_q[63:32]);
         if (st_q == StPhi) assert (phisum_q >= {3'b000, phi_q});
       end
       // |k| <= m (m held): the step never exceeds it (the stage registers

@@ -151,8 +151,11 @@ int64_t TimeScaler::travel_needed() const {
 std::vector<int64_t> TimeScaler::tick(const std::vector<int64_t>& samples, uint64_t n_samples, bool end) {
   const int sh = 32 - b_.scale_bits;
   const auto to_phi = [&](int64_t s_units) { return static_cast<unsigned __int128>(s_units) << sh; };
-  // trajectory time available ahead (phi units): up to the last sample
-  const unsigned __int128 last = n_samples > 0 ? static_cast<unsigned __int128>(n_samples - 1) << 32 : 0;
+  // trajectory time available ahead (phi units): up to the last sample at the
+  // end, else up to the one before it (the unit's window at phi holds the
+  // sample after phi's, so it has to be there)
+  const uint64_t last_index = end ? (n_samples > 0 ? n_samples - 1 : 0) : (n_samples > 1 ? n_samples - 2 : 0);
+  const unsigned __int128 last = static_cast<unsigned __int128>(last_index) << 32;
   const unsigned __int128 ahead = last > phi_ ? last - phi_ : 0;
   if (!end) {
     curve_.set_target(hold_ || starved_ ? 0 : override_);
