@@ -12,7 +12,7 @@
 namespace traj {
 
 template <int ClkHz, int Baud, int Axes, int Degree, int Width, int ChunkWidth, int GuardBits, int FifoDepth,
-          int MinTickPeriod>
+          int MinTickPeriod, int ScaleWidth = 0>
 class Link {
  public:
   static constexpr int kOutWidth = Width - GuardBits;
@@ -20,7 +20,7 @@ class Link {
   static constexpr int kSegWords = kHdrWords + Axes * (Degree + 1) * Width / ChunkWidth;
   using Rx = UartRx<ClkHz, Baud>;
   using Tx = UartTx<ClkHz, Baud>;
-  using Proto = LinkProto<Axes, Degree, Width, ChunkWidth, GuardBits, MinTickPeriod, ClkHz>;
+  using Proto = LinkProto<Axes, Degree, Width, ChunkWidth, GuardBits, MinTickPeriod, ClkHz, ScaleWidth>;
   using Fifo = SegFifo<ChunkWidth, kSegWords, FifoDepth>;
   static constexpr int kDiv = Rx::kDiv;
   static constexpr int kCap = Fifo::kCap;
@@ -30,7 +30,11 @@ class Link {
     bool rx = true;
     bool tready = false;
     bool tick = false, seg_start = false, underrun = false, tick_err = false;
+    bool eng_tick = false;
     uint64_t sample[Axes] = {};
+    uint32_t scale_s = 0, ahead = 0;
+    uint16_t starved_count = 0;
+    bool starved = false, held = false;
   };
   struct Out {
     bool tx;
@@ -41,6 +45,12 @@ class Link {
     uint8_t step_shift[Axes];
     uint16_t pulse, setup;
     bool enable;
+    uint32_t scale_m, scale_s_max, scale_override;
+    uint8_t scale_shift;
+    bool scale_auto, hold, stop, end, resume;
+    bool stored;  // a record stored (committed to the FIFO), its K in stored_k
+    uint32_t stored_k;
+    bool cleared;  // the FIFO cleared (RESET)
   };
 
   Out outputs(const In& in) const {
@@ -55,6 +65,18 @@ class Link {
     o.pulse = w.proto.pulse;
     o.setup = w.proto.setup;
     o.enable = w.proto.enable;
+    o.scale_m = w.proto.scale_m;
+    o.scale_s_max = w.proto.scale_s_max;
+    o.scale_override = w.proto.scale_override;
+    o.scale_shift = w.proto.scale_shift;
+    o.scale_auto = w.proto.scale_auto;
+    o.hold = w.proto.hold;
+    o.stop = w.proto.stop;
+    o.end = w.proto.end;
+    o.resume = w.proto.resume;
+    o.stored = w.proto.fifo_commit;
+    o.stored_k = w.proto.stored_k;
+    o.cleared = w.proto.fifo_clear;
     return o;
   }
 
@@ -111,6 +133,12 @@ class Link {
     w.pi.underrun = in.underrun;
     w.pi.tick_err = in.tick_err;
     for (int a = 0; a < Axes; ++a) w.pi.sample[a] = in.sample[a];
+    w.pi.eng_tick = in.eng_tick;
+    w.pi.scale_s = in.scale_s;
+    w.pi.ahead = in.ahead;
+    w.pi.starved_count = in.starved_count;
+    w.pi.starved = in.starved;
+    w.pi.held = in.held;
     w.proto = proto_.outputs(w.pi);
     return w;
   }

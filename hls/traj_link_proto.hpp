@@ -12,14 +12,18 @@ inline uint32_t crc32_byte(uint32_t c, uint8_t d) {
   return r;
 }
 
-template <int Axes, int Degree, int Width, int ChunkWidth, int GuardBits, int MinTickPeriod, int ClkHz>
+// ScaleWidth: SW of the board's time-scale unit (0: none; CONFIG's time
+// scaling and FEED are refused).
+template <int Axes, int Degree, int Width, int ChunkWidth, int GuardBits, int MinTickPeriod, int ClkHz,
+          int ScaleWidth = 0>
 class LinkProto {
  public:
   static constexpr int kOutWidth = Width - GuardBits;
   static constexpr int kRegBytes = Axes * (Degree + 1) * Width / 8;
   static constexpr int kRecBytes = 16 + kRegBytes;
   static constexpr int kChunkB = ChunkWidth / 8;
-  static constexpr int kStatLen = 40 + 8 * Axes;
+  static constexpr int kStatLen = 48 + 8 * Axes;
+  static constexpr int kCfgLen = 40, kFeedLen = 8;
   static constexpr int kCrcWordA = 3;
   static constexpr int kCrcWordS = 2 + kStatLen / 4;
   static constexpr uint32_t kResidue = 0xDEBB20E3u;
@@ -30,9 +34,10 @@ class LinkProto {
   static_assert(kOutWidth >= 2 && kOutWidth <= 64, "OutWidth (Width - GuardBits) must be 2..64");
   static_assert(kRecBytes <= 2048, "the record exceeds 2048 bytes");
   static_assert(ClkHz >= 1, "ClkHz must be positive");
+  static_assert(ScaleWidth == 0 || (ScaleWidth >= 4 && ScaleWidth <= 24), "ScaleWidth must be 0 or 4..24");
 
   enum : uint8_t {
-    kReset = 0x01, kConfig = 0x02, kStart = 0x03, kStop = 0x04, kResume = 0x05, kStatReq = 0x06,
+    kReset = 0x01, kConfig = 0x02, kStart = 0x03, kStop = 0x04, kResume = 0x05, kStatReq = 0x06, kFeed = 0x07,
     kSegment = 0x10, kEnd = 0x11, kAck = 0x81, kNak = 0x82, kStatus = 0x83
   };
 
@@ -44,7 +49,12 @@ class LinkProto {
     uint16_t fifo_level = 0, fifo_credits = 0;
     bool fifo_busy = false;
     bool tick = false, seg_start = false, underrun = false, tick_err = false;
+    bool eng_tick = false;       // the engine's tick (the servo tick without time scaling)
     uint64_t sample[Axes] = {};  // OutWidth bits each
+    // time scaling, for STATUS
+    uint32_t scale_s = 0, ahead = 0;
+    uint16_t starved_count = 0;
+    bool starved = false, held = false;
   };
   struct Out {
     uint8_t tx_tdata;
@@ -57,6 +67,11 @@ class LinkProto {
     uint8_t step_shift[Axes];
     uint16_t pulse, setup;
     bool enable;
+    // time scaling (CONFIG, FEED), the job's end, the K of a stored record
+    uint32_t scale_m, scale_s_max, scale_override;
+    uint8_t scale_shift;
+    bool scale_auto, hold, stop, end, resume;
+    uint32_t stored_k;  // with fifo_commit
   };
 
   // Outputs of the cycle with inputs `in` (some are combinational in the inputs).
@@ -70,13 +85,24 @@ class LinkProto {
     o.fifo_commit = v_.store;
     o.fifo_rollback = v_.fend && !v_.store;
     o.fifo_clear = v_.do_reset;
-    o.release = playing_q_ && !halt_q_ && !stop_q_ && !in.tick && !tick_d1_q_ && !tick_d2_q_ && !in.underrun;
+    o.release = playing_q_ && !halt_q_ && (!stop_q_ || cfg_m_q_ != 0) && !in.eng_tick && !tick_d1_q_ &&
+                !tick_d2_q_ && !in.underrun;
     o.run = playing_q_ && !halt_q_;
     o.tick_period = cfg_tick_q_;
     for (int a = 0; a < Axes; ++a) o.step_shift[a] = cfg_shift_q_[a];
     o.pulse = cfg_pulse_q_;
     o.setup = cfg_setup_q_;
     o.enable = cfg_en_q_;
+    o.scale_m = cfg_m_q_;
+    o.scale_s_max = cfg_smax_q_;
+    o.scale_override = cfg_ovr_q_;
+    o.scale_shift = cfg_shl_q_;
+    o.scale_auto = cfg_auto_q_;
+    o.hold = hold_q_;
+    o.stop = stop_q_;
+    o.end = end_q_;
+    o.resume = v_.do_resume;
+    o.stored_k = sh_k_q_;
     return o;
   }
 
@@ -94,7 +120,16 @@ class LinkProto {
       else if (pd_.cen) sh_en_q_ = d & 1;
       for (int a = 0; a < Axes; ++a)
         if (pd_.cshift && (idx_q_ & 7) == a) sh_shift_q_[a] = d & 63;
+      if (pd_.cm) sh_m_q_ = (sh_m_q_ >> 8) | (uint32_t{d} << 24);
+      else if (pd_.csmax) sh_smax_q_ = (sh_smax_q_ >> 8) | (uint32_t{d} << 24);
+      else if (pd_.cshl) sh_shl_q_ = d & 63;
+      else if (pd_.cfl) sh_auto_q_ = d & 1;
     }
+    // the override: CONFIG's and FEED's; FEED's hold; a SEGMENT's K
+    if (c.dv && c.in_pay && ((is_cfg() && pd_.covr) || (is_feed() && pd_.ctick)))
+      sh_ovr_q_ = (sh_ovr_q_ >> 8) | (uint32_t{d} << 24);
+    if (c.dv && c.in_pay && is_feed() && pd_.p4) sh_hold_q_ = d & 1;
+    if (c.dv && c.in_pay && is_seg() && pd_.k) sh_k_q_ = (sh_k_q_ >> 8) | (uint32_t{d} << 24);
 
 
     // Per-body flags and fields (datapath: set at the opening flag).
@@ -202,7 +237,7 @@ class LinkProto {
     const bool tx_take_stat = tx_state_q_ == kSIdle && !ans_pend_q_ && stat_pend_q_;
     const bool playing = playing_q_, halt = halt_q_, stop = stop_q_;
     tick_d2_q_ = tick_d1_q_;
-    tick_d1_q_ = in.tick;
+    tick_d1_q_ = in.eng_tick;
     if (v.store) ++next_seq_q_;
     if (v.do_reset) {
       next_seq_q_ = q.seq_q_;
@@ -215,6 +250,15 @@ class LinkProto {
       cfg_pulse_q_ = q.sh_pulse_q_;
       cfg_setup_q_ = q.sh_setup_q_;
       cfg_en_q_ = q.sh_en_q_;
+      cfg_m_q_ = q.sh_m_q_;
+      cfg_smax_q_ = q.sh_smax_q_;
+      cfg_ovr_q_ = q.sh_ovr_q_;
+      cfg_shl_q_ = q.sh_shl_q_;
+      cfg_auto_q_ = q.sh_auto_q_;
+    }
+    if (v.do_feed) {
+      cfg_ovr_q_ = q.sh_ovr_q_;
+      hold_q_ = q.sh_hold_q_;
     }
     if (v.do_start && !halt) {
       playing_q_ = true;
@@ -282,6 +326,7 @@ class LinkProto {
   // Registered decodes of the position in the body (the RTL's pd_*_q).
   struct Position {
     bool pay, over, k, reg, p0, p13, pseq, p7, ctick, cshift, cpulse, csetup, cen, cres;
+    bool cm, csmax, covr, cshl, cfl, p4, fres;
   };
   static Position position(uint16_t idx, uint16_t len) {
     const int p = (idx - 8) & 0xFFF;
@@ -299,7 +344,14 @@ class LinkProto {
     r.cpulse = p == 16 || p == 17;
     r.csetup = p == 18 || p == 19;
     r.cen = p == 20;
-    r.cres = p > 20 && p < 24;
+    r.cres = (p > 20 && p < 24) || p == 38 || p == 39;
+    r.cm = p >= 24 && p < 28;
+    r.csmax = p >= 28 && p < 32;
+    r.covr = p >= 32 && p < 36;
+    r.cshl = p == 36;
+    r.cfl = p == 37;
+    r.p4 = p == 4;
+    r.fres = p >= 5 && p < 8;
     return r;
   }
 
@@ -310,7 +362,7 @@ class LinkProto {
     bool in_pay, overlong, wbyte, wdone, cbad_byte, cbad_end;
     uint64_t asm_d, wword;
     bool fend, good, store, answer, want_stat, ooo;
-    bool do_reset, do_config, do_start, do_stop, do_resume, do_end;
+    bool do_reset, do_config, do_start, do_stop, do_resume, do_end, do_feed;
     uint8_t code;
     bool tx_hs, tx_first, tx_adv, tx_last_byte;
     uint8_t tx_cur, tx_tdata;
@@ -319,10 +371,13 @@ class LinkProto {
 
   static bool known(uint8_t t) {
     return t == kReset || t == kConfig || t == kStart || t == kStop || t == kResume || t == kStatReq ||
-           t == kSegment || t == kEnd;
+           t == kFeed || t == kSegment || t == kEnd;
   }
   bool is_seg() const { return type_q_ == kSegment; }
   bool is_cfg() const { return type_q_ == kConfig; }
+  bool is_feed() const { return type_q_ == kFeed; }
+  // a time-scaling value the unit cannot hold (bits at or above ScaleWidth)
+  static bool too_wide(uint32_t v) { return ScaleWidth == 0 || (ScaleWidth < 32 && (v >> ScaleWidth) != 0); }
   static constexpr uint64_t out_mask() { return kOutWidth >= 64 ? ~uint64_t{0} : (uint64_t{1} << kOutWidth) - 1; }
   static constexpr uint64_t chunk_mask() {
     return ChunkWidth >= 64 ? ~uint64_t{0} : (uint64_t{1} << ChunkWidth) - 1;
@@ -356,6 +411,11 @@ class LinkProto {
       if (pd_.cshift) c.cbad_byte = d > 63;
       else if (pd_.cen) c.cbad_byte = d > 1;
       else if (pd_.cres) c.cbad_byte = d != 0;
+      else if (pd_.cshl) c.cbad_byte = d > 40;
+      else if (pd_.cfl) c.cbad_byte = d > 1;
+    } else if (is_feed()) {
+      if (pd_.p4) c.cbad_byte = d > 1;
+      else if (pd_.fres) c.cbad_byte = d != 0;
     }
 
     // verdict
@@ -368,7 +428,12 @@ class LinkProto {
         cbad_end = len_q_ != kRecBytes || kz_q_;
         break;
       case kConfig:
-        cbad_end = len_q_ != 24 || sh_pulse_q_ == 0 || (sh_tick_q_ != 0 && sh_tick_q_ < uint32_t(MinTickPeriod));
+        cbad_end = len_q_ != kCfgLen || sh_pulse_q_ == 0 || (sh_tick_q_ != 0 && sh_tick_q_ < uint32_t(MinTickPeriod)) ||
+                   (sh_m_q_ == 0 ? (sh_smax_q_ != 0 || sh_ovr_q_ != 0 || sh_shl_q_ != 0 || sh_auto_q_)
+                                 : (too_wide(sh_m_q_) || too_wide(sh_smax_q_) || too_wide(sh_ovr_q_)));
+        break;
+      case kFeed:
+        cbad_end = len_q_ != kFeedLen || too_wide(sh_ovr_q_);
         break;
       default:
         cbad_end = len_q_ != 0;
@@ -389,6 +454,7 @@ class LinkProto {
           case kStart: c.do_start = true; break;
           case kStop: c.do_stop = true; break;
           case kResume: c.do_resume = true; break;
+          case kFeed: c.do_feed = true; break;
           case kStatReq:
             c.answer = false;
             c.want_stat = true;
@@ -436,7 +502,8 @@ class LinkProto {
     switch (w) {
       case 2: {
         const uint32_t flags = (playing_q_ ? 1u : 0u) | (halt_q_ ? 2u : 0u) | (ended_q_ ? 4u : 0u) |
-                               (in.tick_err ? 8u : 0u) | (cfg_en_q_ ? 16u : 0u) | (in.fifo_level == 0 ? 32u : 0u);
+                               (in.tick_err ? 8u : 0u) | (cfg_en_q_ ? 16u : 0u) | (in.fifo_level == 0 ? 32u : 0u) |
+                               (in.starved ? 64u : 0u) | (in.held ? 128u : 0u);
         return (uint32_t{in.fifo_level} << 16) | (flags << 8) | uint32_t(Axes);
       }
       case 3: return n_played_q_;
@@ -447,13 +514,15 @@ class LinkProto {
       case 8: return n_bytes_q_;
       case 9: return in.fifo_credits;
       case 10: return uint32_t(ClkHz);
-      case 11: return 0;
+      case 11: return in.scale_s;
+      case 12: return in.starved_count;
+      case 13: return in.ahead;
       default: {
         for (int a = 0; a < Axes; ++a) {
           uint64_t s = snap_q_[a];
           if (kOutWidth < 64 && ((s >> (kOutWidth - 1)) & 1)) s |= ~out_mask();
-          if (w == 12 + 2 * a) return static_cast<uint32_t>(s);
-          if (w == 13 + 2 * a) return static_cast<uint32_t>(s >> 32);
+          if (w == 14 + 2 * a) return static_cast<uint32_t>(s);
+          if (w == 15 + 2 * a) return static_cast<uint32_t>(s >> 32);
         }
         return 0;
       }
@@ -472,6 +541,9 @@ class LinkProto {
     cfg_pulse_q_ = 1;
     cfg_setup_q_ = 0;
     cfg_en_q_ = false;
+    cfg_m_q_ = cfg_smax_q_ = cfg_ovr_q_ = 0;
+    cfg_shl_q_ = 0;
+    cfg_auto_q_ = hold_q_ = false;
     stat_cnt_q_ = 0;
     n_played_q_ = n_ticks_q_ = n_under_q_ = n_bad_q_ = n_ooo_q_ = n_bytes_q_ = 0;
     ans_pend_q_ = false;
@@ -500,6 +572,9 @@ class LinkProto {
   uint8_t sh_shift_q_[Axes] = {};
   uint16_t sh_pulse_q_ = 0, sh_setup_q_ = 0;
   bool sh_en_q_ = false;
+  uint32_t sh_m_q_ = 0, sh_smax_q_ = 0, sh_ovr_q_ = 0, sh_k_q_ = 0;
+  uint8_t sh_shl_q_ = 0;
+  bool sh_auto_q_ = false, sh_hold_q_ = false;
   // link, playback, configuration, counters
   uint32_t next_seq_q_ = 0;
   bool playing_q_ = false, halt_q_ = false, stop_q_ = false, end_q_ = false, ended_q_ = false;
@@ -507,6 +582,9 @@ class LinkProto {
   uint8_t cfg_shift_q_[Axes] = {};
   uint16_t cfg_pulse_q_ = 1, cfg_setup_q_ = 0;
   bool cfg_en_q_ = false;
+  uint32_t cfg_m_q_ = 0, cfg_smax_q_ = 0, cfg_ovr_q_ = 0;
+  uint8_t cfg_shl_q_ = 0;
+  bool cfg_auto_q_ = false, hold_q_ = false;
   uint32_t n_played_q_ = 0, n_ticks_q_ = 0, n_under_q_ = 0, n_bad_q_ = 0, n_ooo_q_ = 0, n_bytes_q_ = 0;
   bool ans_pend_q_ = false, stat_pend_q_ = false, tick_d1_q_ = false, tick_d2_q_ = false;
   uint8_t ans_code_q_ = 0;

@@ -28,6 +28,20 @@
 //   sample_valid until the next tick).
 // * enable_o is high when CONFIG enables the outputs (drivers with an
 //   active-low enable need an inverter or the top's inversion).
+// * TimeScale = 1: the time-scale unit (traj_time_scale: feed override, feed
+//   hold, a stop on the path when data runs out; LINK.md) sits between the
+//   servo tick and the engine when CONFIG enables it (m != 0): the unit ticks
+//   the engine and the step generator and STATUS take its interpolated
+//   output. Its count of engine ticks ahead (avail) is kept here: + K of each
+//   record stored, moved from the FIFO's share to the engine's as a segment's
+//   header leaves the FIFO, - 1 per real engine sample; RESET clears the
+//   FIFO's share. hold_i (a button, synchronised by the top), FEED's hold and
+//   STOP hold; RESUME lets a starved hold resume as auto-resume does. With
+//   the unit on, the engine underruns only at the job's end (the unit ticks
+//   it once past the last sample, END taken: the link's end of the job); the
+//   board tells the link the end of a STOP (S at 0, at a servo tick) by the
+//   same underrun input.
+//   TimeScale = 0: no unit, hold_i unused, the link refuses time scaling.
 `default_nettype none
 `include "traj_check.svh"
 
@@ -42,6 +56,8 @@ module traj_board #(
   parameter int FifoDepth     = 16384,
   parameter int MinTickPeriod = 256,
   parameter bit FdTimeMux     = 1'b1,
+  parameter int TimeScale     = 0,     // 1: the time-scale unit (below)
+  parameter int ScaleWidth    = 20,    // SW of the time-scale unit (S, m, s_max)
   // derived, do not override
   parameter int OutWidth      = Width - GuardBits
 ) (
@@ -50,6 +66,7 @@ module traj_board #(
   input  logic            rx_i,         // UART RX, synchronised to clk_i by the top
   output logic            tx_o,         // UART TX (a flop)
   input  logic            tick_ext_i,   // external servo tick, asynchronous
+  input  logic            hold_i,       // feed hold (TimeScale), synchronised to clk_i by the top
   output logic [Axes-1:0] step_o,
   output logic [Axes-1:0] dir_o,
   output logic            enable_o,
@@ -64,6 +81,8 @@ module traj_board #(
 
   `TRAJ_PARAM_CHECK(g_bad_derived, OutWidth == Width - GuardBits,
                     "traj_board: OutWidth is derived; do not override it")
+  `TRAJ_PARAM_CHECK(g_bad_scale, (TimeScale == 0 || TimeScale == 1) && ScaleWidth >= 4 && ScaleWidth <= 24,
+                    "traj_board: TimeScale must be 0 or 1, ScaleWidth 4..24")
   `TRAJ_PARAM_CHECK(g_bad_min_tick, MinTickPeriod >= Axes * (StepPeriodWidth + StepFracBits + StepSubBits + 3) + 3,
                     "traj_board: MinTickPeriod must cover the step generator's preparation")
 
@@ -74,6 +93,18 @@ module traj_board #(
   logic [31:0]              tick_period;
   logic [Axes*6-1:0]        step_shift;
   logic [15:0]              pulse, setup;
+  // time scaling
+  logic [31:0]              sc_m, sc_smax, sc_ovr, stored_k, ahead;
+  logic [5:0]               sc_shift;
+  logic                     sc_auto, link_hold, link_stop, link_end, link_resume, stored, cleared;
+  logic                     eng_tick, link_underrun;
+  // the output samples (the step generator's input), also read by the
+  // simulated board (host/board/sim_board.cpp)
+  logic                     out_valid /* verilator public_flat_rd */;
+  logic [Axes*OutWidth-1:0] out_sample /* verilator public_flat_rd */;
+  logic [31:0]              ts_s;
+  logic [15:0]              ts_count;
+  logic                     ts_starved, ts_held, ts_err;
   // engine
   logic                     tick, sample_valid, underrun, seg_done, tick_err;
   logic [Axes*OutWidth-1:0] sample, status_sample;
@@ -87,14 +118,18 @@ module traj_board #(
   traj_link #(
     .ClkHz(ClkHz), .Baud(Baud), .Axes(Axes), .Degree(Degree), .Width(Width),
     .ChunkWidth(ChunkWidth), .GuardBits(GuardBits), .FifoDepth(FifoDepth),
-    .MinTickPeriod(MinTickPeriod)
+    .MinTickPeriod(MinTickPeriod), .ScaleWidth((TimeScale != 0) ? ScaleWidth : 0)
   ) u_link (
     .clk_i, .rst_ni, .rx_i, .tx_o,
     .m_axis_tdata(seg_tdata), .m_axis_tvalid(seg_tvalid), .m_axis_tready(seg_tready),
-    .tick_i(tick), .seg_start_i(seg_start), .underrun_i(underrun),
-    .tick_err_i(tick_err || step_err), .sample_i(status_sample),
+    .tick_i(tick), .eng_tick_i(eng_tick), .seg_start_i(seg_start), .underrun_i(link_underrun),
+    .tick_err_i(tick_err || step_err || ts_err), .sample_i(status_sample),
+    .scale_s_i(ts_s), .starved_count_i(ts_count), .ahead_i(ahead), .starved_i(ts_starved), .held_i(ts_held),
     .run_o(run), .tick_period_o(tick_period), .step_shift_o(step_shift),
-    .pulse_o(pulse), .setup_o(setup), .enable_o(enable)
+    .pulse_o(pulse), .setup_o(setup), .enable_o(enable),
+    .scale_m_o(sc_m), .scale_s_max_o(sc_smax), .scale_override_o(sc_ovr), .scale_shift_o(sc_shift),
+    .scale_auto_o(sc_auto), .hold_o(link_hold), .stop_o(link_stop), .end_o(link_end),
+    .resume_o(link_resume), .stored_o(stored), .stored_k_o(stored_k), .cleared_o(cleared)
   );
 
   if (FdTimeMux) begin : g_fd_tm
@@ -112,7 +147,7 @@ module traj_board #(
     ) u_engine (
       .clk_i, .rst_ni,
       .s_axis_tdata(seg_tdata), .s_axis_tvalid(seg_tvalid), .s_axis_tready(seg_tready),
-      .tick_i(tick),
+      .tick_i(eng_tick),
       .sample_valid_o(sample_valid), .sample_o(sample),
       .sample_addr_i(sample_addr), .sample_word_o(sample_word),
       .underrun_o(underrun), .seg_done_o(seg_done), .tick_err_o(tick_err)
@@ -120,7 +155,7 @@ module traj_board #(
 
     // datapath, not reset (as the engines' sample_o)
     always_ff @(posedge clk_i) begin
-      if (sample_valid) sample_hold_q <= sample;
+      if (out_valid) sample_hold_q <= out_sample;
     end
     assign status_sample = sample_hold_q;
   end else begin : g_fd_par
@@ -129,11 +164,138 @@ module traj_board #(
     ) u_engine (
       .clk_i, .rst_ni,
       .s_axis_tdata(seg_tdata), .s_axis_tvalid(seg_tvalid), .s_axis_tready(seg_tready),
-      .tick_i(tick),
+      .tick_i(eng_tick),
       .sample_valid_o(sample_valid), .sample_o(sample),
       .underrun_o(underrun), .seg_done_o(seg_done), .tick_err_o(tick_err)
     );
-    assign status_sample = sample;
+    // registered as with the time-multiplexed engine when the unit's output
+    // (held until its next servo tick) is not the sample
+    if (TimeScale != 0) begin : g_status_hold
+      logic [Axes*OutWidth-1:0] sample_hold_q;
+      always_ff @(posedge clk_i) begin
+        if (out_valid) sample_hold_q <= out_sample;
+      end
+      assign status_sample = sample_hold_q;
+    end else begin : g_status_live
+      assign status_sample = sample;
+    end
+  end
+
+  // -------------------------------------------------------------------
+  // Time scaling: engine ticks ahead, the unit, the output.
+  // -------------------------------------------------------------------
+  localparam int HdrWords = (ChunkWidth < 32) ? 32 / ChunkWidth : 1;
+  localparam int SegWords = HdrWords + Axes * (Degree + 1) * Width / ChunkWidth;
+  localparam int WordBits = $clog2(SegWords + 1);
+  logic [WordBits-1:0] word_q;      // words of the segment leaving the FIFO so far
+  logic [31:0]         hdr_k;       // its K, as its header words pass
+  logic [31:0]         fifo_k_q;    // K of the segments stored, not yet left the FIFO
+  logic [31:0]         eng_k_q;     // samples of the segments in the engine not yet played
+  logic                hdr_done, real_sample;
+  if (ChunkWidth >= 32) begin : g_hdr1
+    assign hdr_k = seg_tdata[31:0];
+  end else begin : g_hdr2
+    logic [15:0] hdr_lo_q;
+    always_ff @(posedge clk_i) begin
+      if (seg_tvalid && seg_tready && word_q == '0) hdr_lo_q <= seg_tdata[15:0];
+    end
+    assign hdr_k = {seg_tdata[15:0], hdr_lo_q};
+  end
+  assign hdr_done    = seg_tvalid && seg_tready && word_q == WordBits'(HdrWords - 1);
+  assign real_sample = sample_valid && !underrun;
+  always_ff @(posedge clk_i) begin
+    if (!rst_ni) begin
+      word_q   <= '0;
+      fifo_k_q <= '0;
+      eng_k_q  <= '0;
+    end else begin
+      if (seg_tvalid && seg_tready) word_q <= (word_q == WordBits'(SegWords - 1)) ? '0 : word_q + 1'b1;
+      fifo_k_q <= (cleared ? 32'h0 : fifo_k_q) + (stored ? stored_k : 32'h0) - (hdr_done ? hdr_k : 32'h0);
+      eng_k_q  <= eng_k_q + (hdr_done ? hdr_k : 32'h0) - {31'h0, real_sample};
+    end
+  end
+  assign ahead = fifo_k_q + eng_k_q;
+
+  if (TimeScale != 0) begin : g_scale
+    logic             scale_on, done_q, resume_q, ts_valid, ts_busy, ts_tick, ts_eng_tick, ts_starved_q;
+    logic             have_q, step_valid_q, under_q;
+    logic [Axes*OutWidth-1:0] step_sample_q;
+    /* verilator lint_off UNUSEDSIGNAL */
+    logic             unused_wide;  // bits above ScaleWidth: the link refuses them
+    assign unused_wide = ^{sc_smax, sc_ovr};
+    /* verilator lint_on UNUSEDSIGNAL */
+    logic [ScaleWidth-1:0] s_now;
+    logic [Axes*OutWidth-1:0] ts_sample;
+    assign scale_on = sc_m != '0;
+    assign ts_tick  = tick && scale_on;
+    assign ts_held  = scale_on && (link_hold || hold_i || link_stop);
+
+    traj_time_scale #(.Axes(Axes), .OutWidth(OutWidth), .SW(ScaleWidth)) u_scale (
+      .clk_i, .rst_ni, .tick_i(ts_tick),
+      .m_i(sc_m[ScaleWidth-1:0]), .s_max_i(sc_smax[ScaleWidth-1:0]), .override_i(sc_ovr[ScaleWidth-1:0]),
+      .shift_i(sc_shift), .hold_i(ts_held), .auto_resume_i(sc_auto || resume_q), .end_i(link_end),
+      .avail_i(ahead),
+      .eng_tick_o(ts_eng_tick), .eng_valid_i(sample_valid), .eng_sample_i(sample),
+      .sample_valid_o(ts_valid), .sample_o(ts_sample), .s_o(s_now), .starved_o(ts_starved_q),
+      .starved_count_o(ts_count), .busy_o(ts_busy), .err_o(ts_err)
+    );
+
+    // RESUME lets a starved hold resume (once twice the stop fits) as
+    // auto-resume does; done_q: a STOP has come to rest, to the link
+    always_ff @(posedge clk_i) begin
+      if (!rst_ni) begin
+        resume_q <= 1'b0;
+        done_q   <= 1'b0;
+      end else begin
+        if (link_resume) resume_q <= 1'b1;
+        else if (!ts_starved_q) resume_q <= 1'b0;
+        done_q <= ts_tick && !ts_busy && link_stop && s_now == '0;
+      end
+    end
+
+    // The step generator times its steps from each sample's arrival, so the
+    // unit's samples (ready a varying number of clocks after their servo
+    // tick: the engine ticks they need) reach it at the next servo tick, a
+    // fixed latency of one tick: the unit's sample_o still holds the last
+    // result in the cycle of the tick that starts the next.
+    always_ff @(posedge clk_i) begin
+      if (!rst_ni) begin
+        have_q       <= 1'b0;
+        step_valid_q <= 1'b0;
+        under_q      <= 1'b0;
+      end else begin
+        if (ts_valid) have_q <= 1'b1;
+        step_valid_q <= ts_tick && have_q;
+        under_q      <= (under_q && !ts_tick) || (underrun && scale_on);
+      end
+    end
+    always_ff @(posedge clk_i) begin  // datapath, not reset
+      if (ts_tick) step_sample_q <= ts_sample;
+    end
+    assign eng_tick      = scale_on ? ts_eng_tick : tick;
+    assign out_valid     = scale_on ? step_valid_q : sample_valid;
+    assign out_sample    = scale_on ? step_sample_q : sample;
+    // the engine's underrun (with the unit on: the job's end) reaches the
+    // link at the next servo tick, so that the last sample reaches the step
+    // generator before playback stops
+    assign link_underrun = scale_on ? ((ts_tick && under_q) || done_q) : underrun;
+    assign ts_s          = 32'(s_now);
+    assign ts_starved    = ts_starved_q;
+  end else begin : g_no_scale
+    /* verilator lint_off UNUSEDSIGNAL */
+    logic unused_scale;
+    assign unused_scale = ^{sc_m, sc_smax, sc_ovr, sc_shift, sc_auto, link_hold, link_stop, link_end,
+                            link_resume, hold_i};
+    /* verilator lint_on UNUSEDSIGNAL */
+    assign eng_tick      = tick;
+    assign out_valid     = sample_valid;
+    assign out_sample    = sample;
+    assign link_underrun = underrun;
+    assign ts_s          = '0;
+    assign ts_count      = '0;
+    assign ts_starved    = 1'b0;
+    assign ts_held       = 1'b0;
+    assign ts_err        = 1'b0;
   end
 
   traj_tick_gen #(.PeriodWidth(32)) u_tick (
@@ -155,7 +317,7 @@ module traj_board #(
     .clk_i, .rst_ni,
     .shift_i(step_shift), .period_i(step_period_q), .pulse_i(pulse), .setup_i(setup),
     .enable_i(enable),
-    .sample_valid_i(sample_valid), .sample_i(sample),
+    .sample_valid_i(out_valid), .sample_i(out_sample),
     .step_o, .dir_o, .enable_o, .err_o(step_err)
   );
 
@@ -173,7 +335,7 @@ module traj_board #(
   end
 
   assign run_o       = run;
-  assign err_o       = tick_err || step_err;
+  assign err_o       = tick_err || step_err || ts_err;
   assign heartbeat_o = beat_q[9];
 
 endmodule

@@ -8,8 +8,13 @@
 //     exactly traj_fd_engine's s_axis order); tvalid is a flop and the data
 //     hold until taken; a segment starts only while playing (run_o) and then
 //     leaves whole.
-//   * tick_i: the servo strobe the engine gets (one cycle per tick): counts
-//     the ticks played and the status period.
+//   * tick_i: the servo strobe (one cycle per tick): counts the ticks played
+//     and the status period; eng_tick_i: the engine's tick (tick_i without
+//     time scaling), keeps segment starts away from it.
+//   * time scaling (LINK.md): scale_*_o, hold_o, stop_o, end_o, resume_o to
+//     the board's traj_time_scale, stored_o/stored_k_o (the K of each record
+//     stored) for its count of engine ticks ahead; scale_s_i, starved_*,
+//     ahead_i, held_i for STATUS.
 //   * seg_start_i: one cycle when a segment's first sample leaves the engine
 //     (segments played).
 //   * underrun_i: the engine's underrun_o (a tick found no segment), at most
@@ -36,6 +41,7 @@ module traj_link #(
   parameter int GuardBits     = 32,
   parameter int FifoDepth     = 4096,        // FIFO RAM words (16384: one UP5K SPRAM)
   parameter int MinTickPeriod = 256,         // smallest CONFIG tick period in clocks
+  parameter int ScaleWidth    = 0,           // SW of the board's time-scale unit (0: none)
   // derived, do not override
   parameter int OutWidth      = Width - GuardBits
 ) (
@@ -49,16 +55,34 @@ module traj_link #(
   input  logic                     m_axis_tready,
   // board
   input  logic                     tick_i,
+  input  logic                     eng_tick_i,
   input  logic                     seg_start_i,
   input  logic                     underrun_i,
   input  logic                     tick_err_i,
   input  logic [Axes*OutWidth-1:0] sample_i,
+  input  logic [31:0]              scale_s_i,
+  input  logic [15:0]              starved_count_i,
+  input  logic [31:0]              ahead_i,
+  input  logic                     starved_i,
+  input  logic                     held_i,
   output logic                     run_o,
   output logic [31:0]              tick_period_o,
   output logic [Axes*6-1:0]        step_shift_o,
   output logic [15:0]              pulse_o,
   output logic [15:0]              setup_o,
-  output logic                     enable_o
+  output logic                     enable_o,
+  output logic [31:0]              scale_m_o,
+  output logic [31:0]              scale_s_max_o,
+  output logic [31:0]              scale_override_o,
+  output logic [5:0]               scale_shift_o,
+  output logic                     scale_auto_o,
+  output logic                     hold_o,
+  output logic                     stop_o,
+  output logic                     end_o,
+  output logic                     resume_o,
+  output logic                     stored_o,     // a record stored, its K in stored_k_o
+  output logic [31:0]              stored_k_o,
+  output logic                     cleared_o     // the FIFO cleared (RESET)
 );
 
   localparam int HdrWords = (ChunkWidth < 32) ? 32 / ChunkWidth : 1;
@@ -79,7 +103,7 @@ module traj_link #(
 
   traj_link_proto #(
     .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits),
-    .MinTickPeriod(MinTickPeriod), .ClkHz(ClkHz)
+    .MinTickPeriod(MinTickPeriod), .ClkHz(ClkHz), .ScaleWidth(ScaleWidth)
   ) u_proto (
     .clk_i, .rst_ni,
     .rx_data_i(rx_data), .rx_valid_i(rx_valid), .rx_err_i(rx_err),
@@ -87,9 +111,14 @@ module traj_link #(
     .fifo_wr_o(fifo_wr), .fifo_wr_data_o(fifo_wr_data), .fifo_commit_o(fifo_commit),
     .fifo_rollback_o(fifo_rollback), .fifo_clear_o(fifo_clear), .release_o(fifo_release),
     .fifo_level_i(fifo_level), .fifo_credits_i(fifo_credits), .fifo_busy_i(fifo_busy),
-    .tick_i, .seg_start_i, .underrun_i, .tick_err_i, .sample_i,
-    .run_o, .tick_period_o, .step_shift_o, .pulse_o, .setup_o, .enable_o
+    .tick_i, .eng_tick_i, .seg_start_i, .underrun_i, .tick_err_i, .sample_i,
+    .scale_s_i, .starved_count_i, .ahead_i, .starved_i, .held_i,
+    .run_o, .tick_period_o, .step_shift_o, .pulse_o, .setup_o, .enable_o,
+    .scale_m_o, .scale_s_max_o, .scale_override_o, .scale_shift_o, .scale_auto_o,
+    .hold_o, .stop_o, .end_o, .resume_o, .stored_k_o
   );
+  assign stored_o  = fifo_commit;
+  assign cleared_o = fifo_clear;
 
   traj_seg_fifo #(.ChunkWidth(ChunkWidth), .SegWords(SegWords), .Depth(FifoDepth)) u_fifo (
     .clk_i, .rst_ni,

@@ -22,11 +22,16 @@
 // Playback: START sets playing; underrun_i while playing ends a STOP, or
 // reaches the end (END received, FIFO empty and idle), or is an underrun
 // (counted, halt until RESUME). release_o lets the FIFO start a segment:
-// playing, no halt, no STOP, and no tick in this or the two previous cycles
-// nor an underrun strobe now (underrun_i follows its tick by at most 2
+// playing, no halt, no STOP (with time scaling a STOP is a hold: the data
+// still goes to the engine), and no engine tick in this or the two previous
+// cycles nor an underrun strobe now (underrun_i follows its tick by at most 2
 // cycles, as the FD engine's underrun_o does): so no segment is handed to the
-// engine after an underrun tick it could not serve.
-// Strobes (tick_i, seg_start_i, underrun_i, rx_valid_i, rx_err_i) are one
+// engine after an underrun tick it could not serve. With time scaling the
+// board gives underrun_i when a STOP has come to rest or the job's last
+// sample is out (the engine itself never underruns then).
+// Time scaling (scale_*_o, hold_o: CONFIG and FEED, LINK.md) is applied by
+// the board's traj_time_scale; STATUS reports its state (scale_s_i, ...).
+// Strobes (tick_i, eng_tick_i, seg_start_i, underrun_i, rx_valid_i, rx_err_i) are one
 // cycle each, rx_valid_i at most every other cycle (the UART gives one per
 // character); the tx stream holds its byte until tx_tready_i.
 `default_nettype none
@@ -40,6 +45,7 @@ module traj_link_proto #(
   parameter int GuardBits     = 32,   // FD guard bits: OutWidth = Width - GuardBits <= 64
   parameter int MinTickPeriod = 256,  // smallest CONFIG tick period in clocks (0 = external is allowed)
   parameter int ClkHz         = 48_000_000,  // clk_i in Hz, reported in STATUS (the host's clocks -> seconds)
+  parameter int ScaleWidth    = 0,    // SW of the board's time-scale unit (0: none, time scaling and FEED refused)
   // derived, do not override
   parameter int OutWidth      = Width - GuardBits
 ) (
@@ -65,29 +71,50 @@ module traj_link_proto #(
   input  logic                     fifo_busy_i,
   // board
   input  logic                     tick_i,
+  input  logic                     eng_tick_i,     // the engine's tick (tick_i without time scaling)
   input  logic                     seg_start_i,
   input  logic                     underrun_i,
   input  logic                     tick_err_i,
   input  logic [Axes*OutWidth-1:0] sample_i,
+  // time scaling, for STATUS
+  input  logic [31:0]              scale_s_i,
+  input  logic [15:0]              starved_count_i,
+  input  logic [31:0]              ahead_i,
+  input  logic                     starved_i,
+  input  logic                     held_i,
   output logic                     run_o,
   output logic [31:0]              tick_period_o,
   output logic [Axes*6-1:0]        step_shift_o,
   output logic [15:0]              pulse_o,
   output logic [15:0]              setup_o,
-  output logic                     enable_o
+  output logic                     enable_o,
+  // time scaling (CONFIG, FEED), STOP, the job's end (END taken), RESUME (a
+  // strobe), the K of a stored record (with fifo_commit_o)
+  output logic [31:0]              scale_m_o,
+  output logic [31:0]              scale_s_max_o,
+  output logic [31:0]              scale_override_o,
+  output logic [5:0]               scale_shift_o,
+  output logic                     scale_auto_o,
+  output logic                     hold_o,
+  output logic                     stop_o,
+  output logic                     end_o,
+  output logic                     resume_o,
+  output logic [31:0]              stored_k_o
 );
 
   localparam int RegBytes  = Axes * (Degree + 1) * Width / 8;
   localparam int RecBytes  = 16 + RegBytes;                  // SEGMENT payload
   localparam int ChunkB    = ChunkWidth / 8;
-  localparam int StatLen   = 40 + 8 * Axes;                  // STATUS payload
+  localparam int StatLen   = 48 + 8 * Axes;                  // STATUS payload
+  localparam int CfgLen    = 40;                             // CONFIG payload
+  localparam int FeedLen   = 8;                              // FEED payload
   localparam int CrcWordA  = 3;                              // ACK/NAK: last body word
   localparam int CrcWordS  = 2 + StatLen / 4;                // STATUS: last body word
   localparam logic [31:0] Residue = 32'hDEBB20E3;
 
   // frame types
   localparam logic [7:0] TReset = 8'h01, TConfig = 8'h02, TStart = 8'h03, TStop = 8'h04;
-  localparam logic [7:0] TResume = 8'h05, TStatReq = 8'h06, TSegment = 8'h10, TEnd = 8'h11;
+  localparam logic [7:0] TResume = 8'h05, TStatReq = 8'h06, TFeed = 8'h07, TSegment = 8'h10, TEnd = 8'h11;
   localparam logic [7:0] TAck = 8'h81, TNak = 8'h82, TStatus = 8'h83;
 
   `TRAJ_PARAM_CHECK(g_bad_axes, Axes >= 1 && Axes <= 8, "traj_link_proto: Axes must be 1..8")
@@ -100,6 +127,8 @@ module traj_link_proto #(
                     "traj_link_proto: OutWidth (Width - GuardBits) must be 2..64")
   `TRAJ_PARAM_CHECK(g_bad_rec, RecBytes <= 2048, "traj_link_proto: the record exceeds 2048 bytes")
   `TRAJ_PARAM_CHECK(g_bad_clk, ClkHz >= 1, "traj_link_proto: ClkHz must be positive")
+  `TRAJ_PARAM_CHECK(g_bad_scale, ScaleWidth == 0 || (ScaleWidth >= 4 && ScaleWidth <= 24),
+                    "traj_link_proto: ScaleWidth must be 0 or 4..24")
   `TRAJ_PARAM_CHECK(g_bad_derived, OutWidth == Width - GuardBits,
                     "traj_link_proto: OutWidth is derived; do not override it")
 
@@ -154,6 +183,7 @@ module traj_link_proto #(
   logic        overlong;  // past the CRC
   logic        pd_pay_q, pd_over_q, pd_k_q, pd_reg_q, pd_p0_q, pd_p13_q, pd_pseq_q;
   logic        pd_ctick_q, pd_cshift_q, pd_cpulse_q, pd_csetup_q, pd_cen_q, pd_cres_q;
+  logic        pd_cm_q, pd_csmax_q, pd_covr_q, pd_cshl_q, pd_cfl_q, pd_p4_q, pd_fres_q;
   assign p        = idx_q - 12'd8;
   assign in_pay   = pd_pay_q;
   assign overlong = pd_over_q;
@@ -170,20 +200,28 @@ module traj_link_proto #(
     pd_cpulse_q <= (p == 12'd16) || (p == 12'd17);
     pd_csetup_q <= (p == 12'd18) || (p == 12'd19);
     pd_cen_q    <= (p == 12'd20);
-    pd_cres_q   <= (p > 12'd20) && (p < 12'd24);
+    pd_cres_q   <= ((p > 12'd20) && (p < 12'd24)) || (p == 12'd38) || (p == 12'd39);
+    pd_cm_q     <= (p >= 12'd24) && (p < 12'd28);
+    pd_csmax_q  <= (p >= 12'd28) && (p < 12'd32);
+    pd_covr_q   <= (p >= 12'd32) && (p < 12'd36);
+    pd_cshl_q   <= (p == 12'd36);
+    pd_cfl_q    <= (p == 12'd37);
+    pd_p4_q     <= (p == 12'd4);
+    pd_fres_q   <= (p >= 12'd5) && (p < 12'd8);
   end
 
   logic known;
   always_comb begin
     case (d)
-      TReset, TConfig, TStart, TStop, TResume, TStatReq, TSegment, TEnd: known = 1'b1;
+      TReset, TConfig, TStart, TStop, TResume, TStatReq, TFeed, TSegment, TEnd: known = 1'b1;
       default: known = 1'b0;
     endcase
   end
 
-  logic is_seg, is_cfg;
-  assign is_seg = (type_q == TSegment);
-  assign is_cfg = (type_q == TConfig);
+  logic is_seg, is_cfg, is_feed;
+  assign is_seg  = (type_q == TSegment);
+  assign is_cfg  = (type_q == TConfig);
+  assign is_feed = (type_q == TFeed);
 
   // SEGMENT payload bytes that carry engine words: K and the registers.
   logic wbyte, wdone;
@@ -215,6 +253,11 @@ module traj_link_proto #(
       if (pd_cshift_q) cbad_byte = (d > 8'd63);
       else if (pd_cen_q) cbad_byte = (d > 8'd1);
       else if (pd_cres_q) cbad_byte = (d != 8'd0);
+      else if (pd_cshl_q) cbad_byte = (d > 8'd40);
+      else if (pd_cfl_q) cbad_byte = (d > 8'd1);
+    end else if (is_feed) begin
+      if (pd_p4_q) cbad_byte = (d > 8'd1);
+      else if (pd_fres_q) cbad_byte = (d != 8'd0);
     end
   end
 
@@ -223,6 +266,9 @@ module traj_link_proto #(
   logic [Axes*6-1:0] sh_shift_q;
   logic [15:0]       sh_pulse_q, sh_setup_q;
   logic              sh_en_q;
+  logic [31:0]       sh_m_q, sh_smax_q, sh_ovr_q, sh_k_q;
+  logic [5:0]        sh_shl_q;
+  logic              sh_auto_q, sh_hold_q;
 
   always_ff @(posedge clk_i) begin
     if (dv && in_pay && is_cfg) begin
@@ -231,8 +277,22 @@ module traj_link_proto #(
       else if (pd_cpulse_q) sh_pulse_q <= {d, sh_pulse_q[15:8]};
       else if (pd_csetup_q) sh_setup_q <= {d, sh_setup_q[15:8]};
       else if (pd_cen_q) sh_en_q <= d[0];
+      if (pd_cm_q) sh_m_q <= {d, sh_m_q[31:8]};
+      else if (pd_csmax_q) sh_smax_q <= {d, sh_smax_q[31:8]};
+      else if (pd_cshl_q) sh_shl_q <= d[5:0];
+      else if (pd_cfl_q) sh_auto_q <= d[0];
     end
+    // the override: CONFIG's and FEED's; FEED's hold; a SEGMENT's K
+    if (dv && in_pay && ((is_cfg && pd_covr_q) || (is_feed && pd_ctick_q))) sh_ovr_q <= {d, sh_ovr_q[31:8]};
+    if (dv && in_pay && is_feed && pd_p4_q) sh_hold_q <= d[0];
+    if (dv && in_pay && is_seg && pd_k_q) sh_k_q <= {d, sh_k_q[31:8]};
   end
+
+  // a time-scaling value the unit cannot hold (bits at or above ScaleWidth)
+  function automatic logic too_wide(input logic [31:0] v);
+    if (ScaleWidth == 0) too_wide = 1'b1;
+    else too_wide = (v >> ScaleWidth) != '0;
+  endfunction
   for (genvar a = 0; a < Axes; a++) begin : g_sh_shift
     always_ff @(posedge clk_i) begin
       if (dv && in_pay && is_cfg && pd_cshift_q && idx_q[2:0] == 3'(a)) sh_shift_q[a*6 +: 6] <= d[5:0];
@@ -255,7 +315,7 @@ module traj_link_proto #(
   logic        crc_ok_q;   // the CRC residue of a good body
   logic        cbad_end_q; // the length or a whole field is wrong for the type (cbad_end)
   logic [2:0]  code;      // 0 ACK, 1..5 NAK reason
-  logic        answer, store, want_stat, do_reset, do_config, do_start, do_stop, do_resume, do_end, ooo;
+  logic        answer, store, want_stat, do_reset, do_config, do_start, do_stop, do_resume, do_end, do_feed, ooo;
   logic        playing_q, halt_q, stop_q, end_q, ended_q;
 
   assign fend         = is_flag && !hunt_q && (idx_q != '0);
@@ -265,8 +325,11 @@ module traj_link_proto #(
   always_comb begin
     case (type_q)
       TSegment: cbad_end = (len_q != 12'(RecBytes)) || kz_q;
-      TConfig:  cbad_end = (len_q != 12'd24) || (sh_pulse_q == '0)
-                        || (sh_tick_q != '0 && sh_tick_q < 32'(MinTickPeriod));
+      TConfig:  cbad_end = (len_q != 12'(CfgLen)) || (sh_pulse_q == '0)
+                        || (sh_tick_q != '0 && sh_tick_q < 32'(MinTickPeriod))
+                        || ((sh_m_q == '0) ? (sh_smax_q != '0 || sh_ovr_q != '0 || sh_shl_q != '0 || sh_auto_q)
+                                           : (too_wide(sh_m_q) || too_wide(sh_smax_q) || too_wide(sh_ovr_q)));
+      TFeed:    cbad_end = (len_q != 12'(FeedLen)) || too_wide(sh_ovr_q);
       default:  cbad_end = (len_q != '0);
     endcase
   end
@@ -274,6 +337,7 @@ module traj_link_proto #(
   always_comb begin
     code = 3'd0; answer = 1'b0; store = 1'b0; want_stat = 1'b0; ooo = 1'b0;
     do_reset = 1'b0; do_config = 1'b0; do_start = 1'b0; do_stop = 1'b0; do_resume = 1'b0; do_end = 1'b0;
+    do_feed = 1'b0;
     if (fend) begin
       answer = 1'b1;
       if (!good) code = 3'd1;
@@ -285,6 +349,7 @@ module traj_link_proto #(
           TStart:   do_start = 1'b1;
           TStop:    do_stop = 1'b1;
           TResume:  do_resume = 1'b1;
+          TFeed:    do_feed = 1'b1;
           TStatReq: begin answer = 1'b0; want_stat = 1'b1; end
           TSegment:
             if (seq_eq_q) begin
@@ -303,19 +368,19 @@ module traj_link_proto #(
   // body's registers it reads (seq, the CONFIG shadow) hold, since the next
   // byte comes two cycles after the flag at the earliest.
   logic       v_answer_q, v_store_q, v_want_stat_q, v_ooo_q, v_bad_q, v_fend_q;
-  logic       v_reset_q, v_config_q, v_start_q, v_stop_q, v_resume_q, v_end_q;
+  logic       v_reset_q, v_config_q, v_start_q, v_stop_q, v_resume_q, v_end_q, v_feed_q;
   logic [2:0] v_code_q;
   always_ff @(posedge clk_i) begin
     if (!rst_ni) begin
       v_answer_q <= 1'b0; v_store_q <= 1'b0; v_want_stat_q <= 1'b0; v_ooo_q <= 1'b0;
       v_bad_q    <= 1'b0; v_fend_q  <= 1'b0; v_reset_q     <= 1'b0; v_config_q <= 1'b0;
       v_start_q  <= 1'b0; v_stop_q  <= 1'b0; v_resume_q    <= 1'b0; v_end_q    <= 1'b0;
-      v_code_q   <= '0;
+      v_feed_q   <= 1'b0; v_code_q  <= '0;
     end else begin
       v_answer_q <= answer; v_store_q <= store; v_want_stat_q <= want_stat; v_ooo_q <= ooo;
       v_bad_q    <= fend && !good; v_fend_q <= fend; v_reset_q <= do_reset; v_config_q <= do_config;
       v_start_q  <= do_start; v_stop_q <= do_stop; v_resume_q <= do_resume; v_end_q <= do_end;
-      v_code_q   <= code;
+      v_feed_q   <= do_feed; v_code_q <= code;
     end
   end
 
@@ -388,6 +453,9 @@ module traj_link_proto #(
   logic [Axes*6-1:0] cfg_shift_q;
   logic [15:0]       cfg_pulse_q, cfg_setup_q;
   logic              cfg_en_q;
+  logic [31:0]       cfg_m_q, cfg_smax_q, cfg_ovr_q;
+  logic [5:0]        cfg_shl_q;
+  logic              cfg_auto_q, hold_q;
   logic [31:0]       n_played_q, n_ticks_q, n_under_q, n_bad_q, n_ooo_q, n_bytes_q;
   logic              ans_pend_q, stat_pend_q, tick_d1_q, tick_d2_q;
   logic [2:0]        ans_code_q;
@@ -410,6 +478,12 @@ module traj_link_proto #(
       cfg_pulse_q <= 16'd1;
       cfg_setup_q <= '0;
       cfg_en_q    <= 1'b0;
+      cfg_m_q     <= '0;
+      cfg_smax_q  <= '0;
+      cfg_ovr_q   <= '0;
+      cfg_shl_q   <= '0;
+      cfg_auto_q  <= 1'b0;
+      hold_q      <= 1'b0;
       stat_cnt_q  <= '0;
       n_played_q  <= '0;
       n_ticks_q   <= '0;
@@ -423,7 +497,7 @@ module traj_link_proto #(
       tick_d1_q   <= 1'b0;
       tick_d2_q   <= 1'b0;
     end else begin
-      tick_d1_q <= tick_i;
+      tick_d1_q <= eng_tick_i;
       tick_d2_q <= tick_d1_q;
       // verdicts
       if (v_store_q) next_seq_q <= next_seq_q + 1'b1;
@@ -441,6 +515,15 @@ module traj_link_proto #(
         cfg_pulse_q <= sh_pulse_q;
         cfg_setup_q <= sh_setup_q;
         cfg_en_q    <= sh_en_q;
+        cfg_m_q     <= sh_m_q;
+        cfg_smax_q  <= sh_smax_q;
+        cfg_ovr_q   <= sh_ovr_q;
+        cfg_shl_q   <= sh_shl_q;
+        cfg_auto_q  <= sh_auto_q;
+      end
+      if (v_feed_q) begin
+        cfg_ovr_q <= sh_ovr_q;
+        hold_q    <= sh_hold_q;
       end
       if (v_start_q && !halt_q) begin
         playing_q <= 1'b1;
@@ -526,7 +609,7 @@ module traj_link_proto #(
     assign samp_hi[a*32 +: 32] = s64[63:32];
   end
   logic [7:0] flags;
-  assign flags = {2'b00, fifo_level_i == '0, cfg_en_q, tick_err_i, ended_q, halt_q, playing_q};
+  assign flags = {held_i, starved_i, fifo_level_i == '0, cfg_en_q, tick_err_i, ended_q, halt_q, playing_q};
   always_comb begin
     word_next = '0;
     if (tx_w_q == 6'd0) begin
@@ -547,11 +630,13 @@ module traj_link_proto #(
         6'd8:  word_next = n_bytes_q;
         6'd9:  word_next = {16'h0, fifo_credits_i};
         6'd10: word_next = 32'(ClkHz);
-        6'd11: word_next = '0;
+        6'd11: word_next = scale_s_i;
+        6'd12: word_next = {16'h0, starved_count_i};
+        6'd13: word_next = ahead_i;
         default: begin
           for (int a = 0; a < Axes; a++) begin
-            if (tx_w_q == 6'(12 + 2 * a)) word_next = samp_lo[a*32 +: 32];
-            if (tx_w_q == 6'(13 + 2 * a)) word_next = samp_hi[a*32 +: 32];
+            if (tx_w_q == 6'(14 + 2 * a)) word_next = samp_lo[a*32 +: 32];
+            if (tx_w_q == 6'(15 + 2 * a)) word_next = samp_hi[a*32 +: 32];
           end
         end
       endcase
@@ -702,13 +787,25 @@ module traj_link_proto #(
   assign fifo_commit_o   = v_store_q;
   assign fifo_rollback_o = v_fend_q && !v_store_q;
   assign fifo_clear_o    = v_reset_q;
-  assign release_o       = playing_q && !halt_q && !stop_q && !tick_i && !tick_d1_q && !tick_d2_q && !underrun_i;
+  // with time scaling STOP is a hold: the engine keeps its data while it stops
+  assign release_o       = playing_q && !halt_q && (!stop_q || cfg_m_q != '0)
+                        && !eng_tick_i && !tick_d1_q && !tick_d2_q && !underrun_i;
   assign run_o           = playing_q && !halt_q;
   assign tick_period_o   = cfg_tick_q;
   assign step_shift_o    = cfg_shift_q;
   assign pulse_o         = cfg_pulse_q;
   assign setup_o         = cfg_setup_q;
   assign enable_o        = cfg_en_q;
+  assign scale_m_o        = cfg_m_q;
+  assign scale_s_max_o    = cfg_smax_q;
+  assign scale_override_o = cfg_ovr_q;
+  assign scale_shift_o    = cfg_shl_q;
+  assign scale_auto_o     = cfg_auto_q;
+  assign hold_o           = hold_q;
+  assign stop_o           = stop_q;
+  assign end_o            = end_q;
+  assign resume_o         = v_resume_q;
+  assign stored_k_o       = sh_k_q;
 
 endmodule
 

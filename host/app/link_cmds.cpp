@@ -9,22 +9,15 @@
 #include <cstdio>
 #include <fstream>
 
-#include <cstdarg>
 
 #include "board/step_check.hpp"
+#include "fd/fd_ticker.hpp"
+#include "util/format.hpp"
 
 namespace traj::app {
 namespace {
 
-std::string strf(const char* f, ...) __attribute__((format(printf, 1, 2)));
-std::string strf(const char* f, ...) {
-  char b[512];
-  va_list ap;
-  va_start(ap, f);
-  std::vsnprintf(b, sizeof b, f, ap);
-  va_end(ap);
-  return b;
-}
+using util::strf;
 
 std::atomic<bool> g_interrupted{false};
 void on_signal(int) { g_interrupted.store(true); }
@@ -34,6 +27,16 @@ void catch_signals(std::initializer_list<int> sigs) {
   sa.sa_handler = on_signal;
   sigemptyset(&sa.sa_mask);
   for (int s : sigs) sigaction(s, &sa, nullptr);
+}
+
+// The effective feed s = S 2^-sb from STATUS, the target, the flags.
+std::string feed_text(const link::FeedState& f) {
+  std::string flags = f.hold ? ", hold" : "";
+  if (f.held) flags += ", held";
+  if (f.starved) flags += ", starved";
+  return strf(", feed %s (target %.1f %%%s), starved holds %u",
+              f.have_status ? strf("%.1f %%", f.effective_percent()).c_str() : "?", f.target_percent(),
+              flags.c_str(), f.starved_holds);
 }
 
 // Live status on stderr: on a terminal one line updated 5 times a second,
@@ -50,13 +53,19 @@ class StatusLine {
       for (size_t a = 0; a < p.status.sample.size(); ++a)
         pos += strf("%s%.4f", a ? " " : "", double(p.status.sample[a]) * lsb_);
     const std::string line = strf(
-        "[upload] %llu segments stored%s, %u played, FIFO %u, position %s %s, underruns %u, re-sends %llu",
+        "[upload] %llu segments stored%s, %u played, FIFO %u, position %s %s, underruns %u, re-sends %llu%s",
         static_cast<unsigned long long>(p.acked),
         p.stream_done ? strf(" of %llu", static_cast<unsigned long long>(p.read)).c_str() : "",
         p.status.segments_played, p.status.fifo_level, pos.empty() ? "?" : pos.c_str(), units_.c_str(),
-        p.status.underruns, static_cast<unsigned long long>(p.resends));
+        p.status.underruns, static_cast<unsigned long long>(p.resends),
+        p.time_scaling ? feed_text(p.feed).c_str() : "");
     std::fprintf(stderr, tty_ ? "\r%s   " : "%s\n", line.c_str());
     shown_ = true;
+  }
+  // A message between status lines (what a key did).
+  void say(const std::string& what) {
+    std::fprintf(stderr, tty_ && shown_ ? "\r[upload] %s\033[K\n" : "[upload] %s\n", what.c_str());
+    last_ = {};
   }
   ~StatusLine() {
     if (tty_ && shown_) std::fprintf(stderr, "\n");
@@ -101,8 +110,21 @@ void add_upload(CLI::App& app, LinkCommands& lc) {
       ->capture_default_str();
   c->add_option("--retries", a.opt.max_retries, "re-sends of one segment or unanswered requests before giving up")
       ->capture_default_str();
+  c->add_option("--feed", a.feed_percent,
+                "time scaling: the initial feed override, % of the planned speed (0 .. the plan's --time-scale x 100; "
+                "default 100)");
+  c->add_option("--servo-period", a.servo_period,
+                "time scaling: the servo tick, s: the engine tick x 2^p (default: the largest within 1 ms)");
+  c->add_flag("--no-auto-resume", a.no_auto_resume,
+              "time scaling: after a starved hold (data ran out) resume only on a feed change or RESUME, not by "
+              "itself");
+  c->add_option("--control", a.control,
+                "time scaling: a Unix-domain socket to create at this path for live feed control: lines `feed "
+                "<percent>`, `hold`, `resume`, `status`, each answered `ok ...` or `error: ...`");
   c->footer("Exit status 0 once the board has played the whole job; otherwise a message names what failed. Ctrl-C "
-            "sends STOP: the board stops at the end of the segment it plays.");
+            "sends STOP: the board stops at the end of the segment it plays (time scaling: on the path). A stream "
+            "planned with --time-scale on a terminal (not read from standard input): keys h or space hold/resume, "
+            "+ / - feed +/-10 %, 1 feed 100 %, q stop.");
 }
 
 void add_board(CLI::App& app, LinkCommands& lc) {
@@ -141,6 +163,15 @@ void add_board(CLI::App& app, LinkCommands& lc) {
   c->add_option("--seed", f.seed, "fault random seed")->capture_default_str();
   c->add_flag("--once", a.once, "exit after one job's end (and the tool's last request)");
   c->add_option("--played", a.played, "write the bytes of every record the board plays to this file");
+  c->add_option("--hold", a.holds,
+                "simulated board, time scaling: AT:FOR, the hold pin (a button) pressed at AT s of playback for FOR s "
+                "(repeatable)");
+  c->add_option("--feed", a.feeds,
+                "simulated board, time scaling: AT:PERCENT, a FEED frame (feed override) at AT s of playback, as if "
+                "from the host (needs --expect: the stream's engine tick gives S) (repeatable)");
+  c->add_option("--starve", a.starves,
+                "simulated board, time scaling: AT:FOR, the link paused from AT s of playback for FOR s: the host's "
+                "bytes held back, then delivered (the tool needs --retries to outlast it) (repeatable)");
   c->footer("Prints the port for --port on standard output, a summary on standard error at exit (SIGINT, SIGTERM, "
             "or --once).");
 }
@@ -152,13 +183,51 @@ void add_link_commands(CLI::App& app, LinkCommands& lc) {
   add_board(app, lc);
 }
 
-int upload_command(const UploadArgs& a) {
-  link::RecordSource src(a.input, a.max_engine_tick);
-  auto port = link::open_port(a.port, a.opt.baud);
-  catch_signals({SIGINT, SIGTERM});
+namespace {
+
+link::UploadOptions upload_options(const UploadArgs& a) {
   link::UploadOptions o = a.opt;
   o.interrupted = &g_interrupted;
+  if (!std::isnan(a.feed_percent)) o.feed_percent = a.feed_percent;
+  if (!std::isnan(a.servo_period)) o.servo_period_s = a.servo_period;
+  o.auto_resume = !a.no_auto_resume;
+  return o;
+}
+
+// Keys only from a terminal this process has in the foreground, and not when
+// the stream comes from standard input.
+bool keyboard_wanted(const UploadArgs& a) {
+  return a.input != "-" && ::isatty(0) && ::tcgetpgrp(0) == ::getpgrp();
+}
+
+}  // namespace
+
+int upload_command(const UploadArgs& a) {
+  link::RecordSource src(a.input, a.max_engine_tick);
+  link::UploadOptions o = upload_options(a);
+  link::FeedControls controls;
+  if (!a.control.empty()) o.feed_control = &controls;
   const auto& h = src.header();
+  const link::TimeScaleSetup ts = link::time_scale_setup(h, o);  // refused options before the port is opened
+  auto port = link::open_port(a.port, a.opt.baud);
+  StatusLine line(std::ldexp(1.0, -h.frac_bits), h.units);
+  catch_signals({SIGINT, SIGTERM});
+  if (ts.on) {
+    if (!a.control.empty()) controls.add(std::make_unique<link::ControlSocket>(a.control));
+    if (keyboard_wanted(a)) {
+      catch_signals({SIGHUP, SIGQUIT});  // the terminal's mode is restored on the way out
+      controls.add(std::make_unique<link::KeyboardControl>(0, g_interrupted,
+                                                           [&](const std::string& m) { line.say(m); }));
+      std::fprintf(stderr, "upload: %s\n", link::KeyboardControl::help());
+    }
+    std::fprintf(stderr,
+                 "upload: time scaling: servo tick %g ms (2^%d engine ticks), scale bits %d, m %lld, S_max %lld "
+                 "(%g %%), feed %.2f %%%s\n",
+                 ts.servo_period * 1e3, ts.p, ts.bounds.scale_bits, static_cast<long long>(ts.bounds.m),
+                 static_cast<long long>(ts.bounds.s_max), ts.max_percent, ts.feed().target_percent(),
+                 ts.auto_resume ? "" : ", no auto-resume");
+  }
+  o.feed_control = controls.empty() ? nullptr : &controls;
   if (src.engine_ticks_per_tick() > 1)
     std::fprintf(stderr,
                  "upload: stream tick %g ms played at %u engine ticks per tick (%g ms), the segments re-compiled "
@@ -169,11 +238,11 @@ int upload_command(const UploadArgs& a) {
                  "upload: note: tick period %g ms: the board's step edges are within 10 us of the motion's "
                  "boundary crossings only for engine ticks up to 1 ms (leave out --max-engine-tick 0)\n",
                  h.period * 1e3);
-  StatusLine line(std::ldexp(1.0, -h.frac_bits), h.units);
   const auto r = link::upload(*port, src, o, [&](const link::UploadProgress& p) { line.show(p, false); });
   line.show(r.progress, true);
   std::fprintf(stderr, "\n");
-  const double motion = double(r.progress.status.ticks_played) * h.period;
+  // STATUS counts servo ticks: with time scaling 2^p engine ticks each at s = 1
+  const double motion = double(r.progress.status.ticks_played) * (ts.on ? ts.servo_period : h.period);
   std::printf("upload: %llu segments%s to %s in %.2f s (%.0f segments/s), %u played, %.3f s of motion; re-sends "
               "%llu, NAKs %llu, timeouts %llu; board: bad frames %u, out of order %u, underruns %u\n",
               static_cast<unsigned long long>(r.records - r.first_seq),
@@ -248,7 +317,7 @@ int loopback_board_command(const BoardArgs& a) {
 // the engine tick the tool configured was re-ticked by the tool
 // (link::RecordSource), the same way here.
 stream::ReadResult as_played(stream::ReadResult expect, const board::SimulatedBoard& b) {
-  if (b.tick_clocks() == 0) return expect;
+  if (b.tick_clocks() == 0 || b.time_scaling()) return expect;
   const double engine_tick = double(b.tick_clocks()) / board::BoardBuild::kClkHz;
   const double ratio = expect.header.period / engine_tick;
   const long n = std::lround(ratio);
@@ -259,13 +328,64 @@ stream::ReadResult as_played(stream::ReadResult expect, const board::SimulatedBo
   return stream::retick(expect, static_cast<uint32_t>(n));
 }
 
+// A time-scaled job: the pins against the board's own output samples, and
+// those on the path of the stream's exact prediction (re-timed: at most
+// s_max engine ticks per engine tick apart, from the CONFIG the tool sent).
+int check_time_scaled(const stream::ReadResult& expect, const board::SimulatedBoard& board) {
+  const int axes = board::BoardBuild::kAxes;
+  std::vector<int64_t> engine;
+  fd::FdTicker t(expect.header.width, expect.header.guard_bits);
+  for (const auto& rec : expect.records) {
+    t.load(rec.regs);
+    for (uint32_t k = 0; k < rec.ticks; ++k)
+      for (int a = 0; a < axes; ++a) engine.push_back(a < expect.header.axes ? t.sample_and_step(a) : 0);
+  }
+  const board::StepCheck c = board::check_steps_scaled(board.step_shifts(), board);
+  std::fprintf(stderr, "%s", board::describe(c).c_str());
+  // S_max 2^(shift - 32) = s_max 2^p: the most engine ticks a servo tick advances
+  const link::Config& cfg = board.config();
+  const double advance = std::ldexp(double(cfg.scale_s_max), int(cfg.scale_shift) - 32);
+  // 2 LSB: the engine samples' own rounding and the interpolation's floor
+  const board::PathCheck p = board::check_on_path(engine, board.samples(), axes, 2.0, advance);
+  std::fprintf(stderr, "%s", board::describe(p).c_str());
+  return c.ok() && p.ok() ? 0 : 1;
+}
+
+// "AT:X" of --hold, --feed, --starve: two numbers, AT >= 0 and X within [lo, hi].
+std::pair<double, double> event_arg(const std::string& opt, const std::string& v, double lo, double hi) {
+  const size_t c = v.find(':');
+  char* end = nullptr;
+  const double at = c == std::string::npos ? NAN : std::strtod(v.c_str(), &end);
+  const bool at_ok = c != std::string::npos && end == v.c_str() + c;
+  const double x = at_ok ? std::strtod(v.c_str() + c + 1, &end) : NAN;
+  if (!at_ok || *end != '\0' || c + 1 == v.size() || !(at >= 0 && std::isfinite(at)) || !(x >= lo && x <= hi))
+    throw std::runtime_error(opt + " " + v + ": expected AT:" + (opt == "--feed" ? "PERCENT" : "FOR") +
+                             " (seconds of playback, AT >= 0; " + (opt == "--feed" ? "PERCENT 0..200" : "FOR > 0") + ")");
+  return {at, x};
+}
+
 int simulated_board_command(const BoardArgs& a) {
   stream::ReadResult expect;
   if (!a.expect.empty()) {
     expect = stream::read_file(a.expect);
     if (!expect.complete) throw std::runtime_error(expect.error);
   }
+  if (!a.feeds.empty() && a.expect.empty())
+    throw std::runtime_error("--feed needs --expect: the stream's engine tick gives the override's S");
   board::SimulatedBoard board;
+  for (const auto& v : a.holds) {
+    const auto [at, len] = event_arg("--hold", v, 1e-9, 1e9);
+    board.schedule_hold(at, len);
+  }
+  for (const auto& v : a.starves) {
+    const auto [at, len] = event_arg("--starve", v, 1e-9, 1e9);
+    board.schedule_starve(at, len);
+  }
+  for (const auto& v : a.feeds) {
+    const auto [at, pct] = event_arg("--feed", v, 0, 200);
+    board.schedule_feed(at, pct, expect.header.period);
+  }
+  board.keep_samples(!a.expect.empty());  // a time-scaled job is checked on them
   std::fprintf(stderr, "board: rtl/traj_board.sv Verilated, %.0f MHz, %u baud\n", board::BoardBuild::kClkHz / 1e6,
                board::BoardBuild::kBaud);
   const link::ServeStats stats = serve_tools(a, board);
@@ -277,7 +397,11 @@ int simulated_board_command(const BoardArgs& a) {
                s.segments_played, s.ticks_played, s.next_seq, board.end_reached() ? "reached" : "not reached",
                s.underruns, s.bad_frames, s.out_of_order, double(board.cycles()) / board::BoardBuild::kClkHz,
                fault_summary(stats).c_str());
+  for (const std::string& e : board.event_log()) std::fprintf(stderr, "board: %s\n", e.c_str());
+  if (board.time_scaling())
+    std::fprintf(stderr, "board: time scaling: S %u at the end, %u starved holds\n", s.scale_s, s.starved_holds);
   if (a.expect.empty()) return 0;
+  if (board.time_scaling()) return check_time_scaled(expect, board);
   const board::StepCheck c = board::check_steps(as_played(std::move(expect), board), board.step_shifts(), board);
   std::fprintf(stderr, "%s", board::describe(c).c_str());
   return c.ok() ? 0 : 1;

@@ -5,6 +5,7 @@
 #pragma once
 #include <CLI/CLI.hpp>
 
+#include <limits>
 #include <string>
 
 #include "link/board.hpp"
@@ -19,6 +20,11 @@ struct UploadArgs {
   std::string port;
   link::UploadOptions opt;
   double max_engine_tick = stream::kMaxStepEngineTick;  // 0: the stream's own tick
+  // time scaling; NaN: not given
+  double feed_percent = std::numeric_limits<double>::quiet_NaN();
+  double servo_period = std::numeric_limits<double>::quiet_NaN();
+  bool no_auto_resume = false;
+  std::string control;               // the control socket's path ("": none)
 };
 
 struct BoardArgs {
@@ -30,6 +36,9 @@ struct BoardArgs {
   bool once = false;                 // exit after one job's end
   std::string played;                // file: the bytes of every played record, in order
   std::string expect;                // simulated board: the stream whose prediction the pins are checked against
+  // simulated board, time scaling: "AT:FOR" (s) hold pin and starved link,
+  // "AT:PERCENT" FEED, in board seconds after playback starts
+  std::vector<std::string> holds, starves, feeds;
 };
 
 struct LinkCommands {

@@ -3,8 +3,11 @@
 
 #include <verilated.h>
 
+#include <cmath>
+
 #include "Vtraj_board.h"
 #include "Vtraj_board___024root.h"
+#include "util/format.hpp"
 
 namespace traj::board {
 
@@ -18,6 +21,7 @@ static_assert(TRAJ_BOARD_CLK_HZ % TRAJ_BOARD_BAUD == 0, "the simulated UART need
 // At most this many cycles per advance(), so that the server reads the port often.
 constexpr uint64_t kCyclesPerAdvance = TRAJ_BOARD_CLK_HZ / 1000;
 constexpr int kResetCycles = 8;
+using util::strf;
 }  // namespace
 
 struct SimulatedBoard::Rtl {
@@ -29,6 +33,19 @@ struct SimulatedBoard::Rtl {
   }
   ~Rtl() { top->final(); }
   bool tick() const { return top->rootp->traj_board__DOT__u_tick__DOT__tick_q; }  // traj_tick_gen: tick_o = tick_q
+  bool out_valid() const { return top->rootp->traj_board__DOT__out_valid; }
+  // axis a of the output sample, sign-extended (OutWidth = Width - GuardBits bits)
+  int64_t out_sample(int a) const {
+    const int w = BoardBuild::kWidth - BoardBuild::kGuardBits;
+    const auto& words = top->rootp->traj_board__DOT__out_sample;
+    uint64_t v = 0;
+    for (int b = 0; b < w; ++b) {
+      const int bit = a * w + b;
+      if ((words[bit / 32] >> (bit % 32)) & 1) v |= uint64_t{1} << b;
+    }
+    if (w < 64 && ((v >> (w - 1)) & 1)) v |= ~uint64_t{0} << w;
+    return static_cast<int64_t>(v);
+  }
 };
 
 SimulatedBoard::SimulatedBoard()
@@ -48,6 +65,7 @@ void SimulatedBoard::reset() {
   rtl_->top->rst_ni = 0;
   rtl_->top->rx_i = 1;
   rtl_->top->tick_ext_i = 0;
+  rtl_->top->hold_i = 0;
   for (int i = 0; i < kResetCycles; ++i) clock(none);
   rtl_->top->rst_ni = 1;
   // The line idles a character time after reset before the host's first
@@ -59,10 +77,16 @@ void SimulatedBoard::reset() {
 
 void SimulatedBoard::clock(link::Bytes& out) {
   auto& t = *rtl_->top;
+  if (!holds_.empty() || !feeds_.empty() || !starves_.empty()) run_events();
   t.rx_i = quiet_ ? (--quiet_, true) : rx_.next();
+  t.hold_i = hold_pin_;
   t.clk_i = 0;
   t.eval();
   if (rtl_->tick() && t.rst_ni) ticks_.push_back(cycle_);
+  if (keep_samples_ && rtl_->out_valid() && t.rst_ni) {
+    for (int a = 0; a < BoardBuild::kAxes; ++a) samples_.push_back(rtl_->out_sample(a));
+    sample_cycles_.push_back(cycle_);
+  }
   for (int a = 0; a < BoardBuild::kAxes; ++a) decoders_[a].sample(cycle_, (t.step_o >> a) & 1, (t.dir_o >> a) & 1);
   if (auto b = tx_.sample(t.tx_o)) out.push_back(*b);
   t.clk_i = 1;
@@ -71,8 +95,76 @@ void SimulatedBoard::clock(link::Bytes& out) {
 }
 
 void SimulatedBoard::receive(const uint8_t* p, size_t n, link::Bytes&) {
-  for (size_t i = 0; i < n; ++i) rx_.push(p[i]);
+  // whole frames (up to and with their closing flag) to the RX line, so that
+  // a scheduled FEED goes between two
+  for (size_t i = 0; i < n; ++i) {
+    frame_in_.push_back(p[i]);
+    if (p[i] == link::kFlag) {
+      pass_frame(frame_in_);
+      frame_in_.clear();
+    }
+  }
   watch_requests(p, n);
+}
+
+void SimulatedBoard::pass_frame(const link::Bytes& raw) {
+  if (starving() || !held_back_.empty()) {
+    held_back_.insert(held_back_.end(), raw.begin(), raw.end());
+    return;
+  }
+  for (uint8_t c : raw) rx_.push(c);
+}
+
+double SimulatedBoard::play_time() const {
+  return play_start_ < 0 ? -1.0 : double(int64_t(cycle_) - play_start_) / BoardBuild::kClkHz;
+}
+
+bool SimulatedBoard::starving() const {
+  const double t = play_time();
+  if (t < 0) return false;
+  for (const Window& w : starves_)
+    if (t >= w.at && t < w.at + w.for_s) return true;
+  return false;
+}
+
+// The scheduled events at this cycle (called every cycle: cheap while none are due).
+void SimulatedBoard::run_events() {
+  if (play_start_ < 0) {
+    if (!rtl_->top->run_o) return;
+    play_start_ = static_cast<int64_t>(cycle_);
+  }
+  const double t = play_time();
+  bool hold = false;
+  for (const Window& w : holds_) hold = hold || (t >= w.at && t < w.at + w.for_s);
+  if (hold != was_holding_) {
+    event_log_.push_back(strf("%.3f s: hold pin %s", t, hold ? "pressed" : "released"));
+    was_holding_ = hold;
+  }
+  hold_pin_ = hold;
+  const bool starve = starving();
+  if (starve != was_starving_) {
+    event_log_.push_back(strf("%.3f s: link %s", t, starve ? "paused (the host's frames held back)" : "delivering again"));
+    was_starving_ = starve;
+    if (!starve) {
+      for (uint8_t c : held_back_) rx_.push(c);
+      held_back_.clear();
+    }
+  }
+  while (feeds_done_ < feeds_.size() && t >= feeds_[feeds_done_].at) {
+    const FeedAt& f = feeds_[feeds_done_++];
+    if (config_.scale_m == 0) {
+      event_log_.push_back(strf("%.3f s: feed %g %% not sent: the job has no time scaling", t, f.percent));
+      continue;
+    }
+    const double servo = double(config_.tick_clocks) / BoardBuild::kClkHz;
+    const int p = static_cast<int>(std::lround(std::log2(servo / f.engine_tick)));
+    const int sb = 32 + p - config_.scale_shift;
+    link::Feed feed;
+    feed.override_s = static_cast<uint32_t>(std::llround(std::ldexp(f.percent / 100, sb)));
+    const link::Bytes b = link::encode_frame(link::Type::kFeed, 0, link::encode_feed(feed));
+    for (uint8_t c : b) rx_.push(c);
+    event_log_.push_back(strf("%.3f s: FEED %g %% (S %u)", t, f.percent, feed.override_s));
+  }
 }
 
 // The host's CONFIG, decoded apart from the RTL: the step shifts for the

@@ -12,6 +12,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "board/step_decoder.hpp"
@@ -56,11 +57,42 @@ class SimulatedBoard : public link::Board {
   std::vector<int> step_shifts() const;
   // The engine's tick period in clocks from the last good CONFIG (0: none yet).
   uint32_t tick_clocks() const { return config_.tick_clocks; }
+  // Whether the last good CONFIG turned time scaling on (m != 0): the tick is the servo tick.
+  bool time_scaling() const { return config_.scale_m != 0; }
+  const link::Config& config() const { return config_; }
   // Step/dir of each axis, decoded from the pins.
   const StepDecoder& axis(int a) const { return decoders_.at(a); }
   void set_step_timing(StepTiming t);
   // The cycle of every tick strobe the engine received (its samples' times).
   const std::vector<uint64_t>& tick_cycles() const { return ticks_; }
+  // The board's hold pin (a button; with time scaling it holds as FEED's hold does).
+  void set_hold_pin(bool on) { hold_pin_ = on; }
+  bool hold_pin() const { return hold_pin_; }
+  // Every output sample the step generator took (the engine's, or with time
+  // scaling the unit's interpolated one, one per servo tick), axis-major per
+  // sample, and its cycle; kept only after keep_samples(true).
+  void keep_samples(bool on) { keep_samples_ = on; }
+
+  // Scheduled events (`trajcore board --hold/--feed/--starve`), in seconds
+  // of board time after playback first starts (START):
+  //   hold:   the hold pin pressed for `for_s`;
+  //   feed:   a FEED frame (override `percent`, hold off) put on the RX line
+  //           between the host's frames, as if the host had sent it; its S
+  //           from the CONFIG's time scaling and the stream's engine tick
+  //           (s = 1 at S = 2^sb, sb = 32 + p - shift, 2^p engine ticks per
+  //           servo tick);
+  //   starve: the link paused for `for_s`: the host's bytes held back, then
+  //           delivered in order (the board plays on from its FIFO; a host
+  //           that re-sends meanwhile needs retries for the pause).
+  void schedule_hold(double at_s, double for_s) { holds_.push_back({at_s, for_s}); }
+  void schedule_feed(double at_s, double percent, double engine_tick_s) {
+    feeds_.push_back({at_s, percent, engine_tick_s});
+  }
+  void schedule_starve(double at_s, double for_s) { starves_.push_back({at_s, for_s}); }
+  // What the scheduled events did, a line each.
+  const std::vector<std::string>& event_log() const { return event_log_; }
+  const std::vector<int64_t>& samples() const { return samples_; }
+  const std::vector<uint64_t>& sample_cycles() const { return sample_cycles_; }
   uint64_t cycles() const { return cycle_; }
   uint64_t tx_framing_errors() const { return tx_.framing_errors(); }
 
@@ -81,6 +113,28 @@ class SimulatedBoard : public link::Board {
   uint32_t next_seq_ = 0;
   uint64_t stored_total_ = 0, cycle_ = 0;
   uint32_t quiet_ = 0;  // cycles the RX line idles before the queue is sent
+  void run_events();
+  bool starving() const;
+  void pass_frame(const link::Bytes& raw);
+  double play_time() const;  // board seconds since playback first started (< 0 before)
+
+  bool hold_pin_ = false, keep_samples_ = false;
+  struct Window {
+    double at, for_s;
+  };
+  struct FeedAt {
+    double at, percent, engine_tick;
+  };
+  std::vector<Window> holds_, starves_;
+  std::vector<FeedAt> feeds_;
+  size_t feeds_done_ = 0;
+  std::vector<std::string> event_log_;
+  int64_t play_start_ = -1;   // the cycle playback first started
+  link::Bytes frame_in_;       // the host's frame in progress (raw, stuffed)
+  link::Bytes held_back_;      // the host's frames held back while the link is paused
+  bool was_starving_ = false, was_holding_ = false;
+  std::vector<int64_t> samples_;
+  std::vector<uint64_t> sample_cycles_;
 };
 
 }  // namespace traj::board

@@ -31,9 +31,11 @@ std::vector<int64_t> predicted_samples(const stream::ReadResult& r, int axis) {
 
 class AxisChecker {
  public:
-  AxisChecker(const std::vector<uint64_t>& ticks, const StepDecoder& d, int shift, StepCheck& c, AxisSteps& a)
+  // period: the step generator's tick period in clocks (0: the spacing of `ticks`)
+  AxisChecker(const std::vector<uint64_t>& ticks, const StepDecoder& d, int shift, StepCheck& c, AxisSteps& a,
+              uint64_t period = 0)
       : ticks_(ticks), edges_(d.edges()), sh_(shift), c_(c), a_(a),
-        pair_clocks_(2.0 * d.timing().setup + 3.0 * d.timing().pulse + 8) {}
+        pair_clocks_(2.0 * d.timing().setup + 3.0 * d.timing().pulse + 8), period_(period) {}
 
   void run(const std::vector<int64_t>& s) {
     const size_t n_max = std::min(s.size(), ticks_.size());
@@ -58,7 +60,7 @@ class AxisChecker {
   // starts from q_0's step boundary with D2 = 0). Each sub-chord takes
   // P / M clocks; every boundary it crosses is one step.
   void tick(size_t n, const std::vector<int64_t>& q) {
-    const uint64_t p = n + 1 < ticks_.size() ? ticks_[n + 1] - ticks_[n] : ticks_[n] - ticks_[n - 1];
+    const uint64_t p = period_ ? period_ : n + 1 < ticks_.size() ? ticks_[n + 1] - ticks_[n] : ticks_[n] - ticks_[n - 1];
     const int m = BoardStepGen::sub_bits(static_cast<uint32_t>(std::min<uint64_t>(p, (1u << 16) - 1)));
     const int64_t M = int64_t{1} << m;
     const int64_t q0 = n == 1 ? floor_shift(q[0], kFrac) << kFrac : q[n - 1];
@@ -129,6 +131,7 @@ class AxisChecker {
   StepCheck& c_;
   AxisSteps& a_;
   double pair_clocks_;
+  uint64_t period_;
   std::vector<Step> steps_;
 };
 
@@ -154,10 +157,94 @@ StepCheck check_steps(const stream::ReadResult& expected, const std::vector<int>
   return c;
 }
 
+StepCheck check_steps_scaled(const std::vector<int>& shifts, const SimulatedBoard& board) {
+  StepCheck c;
+  c.scaled = true;
+  const std::vector<uint64_t>& at = board.sample_cycles();
+  c.ticks_seen = c.ticks_expected = at.size();
+  c.axes.resize(BoardBuild::kAxes);
+  for (int a = 0; a < BoardBuild::kAxes; ++a) {
+    std::vector<int64_t> s(at.size());
+    for (size_t n = 0; n < at.size(); ++n) s[n] = board.samples()[n * BoardBuild::kAxes + a];
+    AxisChecker(at, board.axis(a), shifts.at(a), c, c.axes[a], board.tick_clocks()).run(s);
+    c.violations += board.axis(a).violations();
+    if (board.axis(a).violations() && c.first_problem.empty())
+      c.first_problem = "axis " + std::to_string(a) + ": " + board.axis(a).first_violation();
+  }
+  return c;
+}
+
+PathCheck check_on_path(const std::vector<int64_t>& engine, const std::vector<int64_t>& out, int axes,
+                        double tol_lsb, double max_advance) {
+  PathCheck c;
+  const uint64_t n = engine.size() / axes, m = out.size() / axes;
+  c.samples = m;
+  if (n == 0 || m == 0) {
+    c.first_problem = "no samples";
+    return c;
+  }
+  auto y = [&](uint64_t k, int a) { return engine[k * axes + a]; };
+  uint64_t i = 0;      // the engine interval [i, i+1] of the last output
+  double pos_prev = 0;  // its position, engine ticks
+  const uint64_t reach = static_cast<uint64_t>(std::ceil(max_advance)) + 2;
+  for (uint64_t t = 0; t < m && c.first_problem.empty(); ++t) {
+    const int64_t* o = &out[t * axes];
+    bool found = false;
+    for (uint64_t k = i; k < n && k <= i + reach && !found; ++k) {
+      double f = 0;
+      if (k + 1 < n) {  // the fraction along [k, k+1] from the axis that moves most
+        int big = 0;
+        for (int a = 1; a < axes; ++a)
+          if (std::llabs(y(k + 1, a) - y(k, a)) > std::llabs(y(k + 1, big) - y(k, big))) big = a;
+        const double d = static_cast<double>(y(k + 1, big) - y(k, big));
+        f = d == 0 ? 0 : static_cast<double>(o[big] - y(k, big)) / d;
+        if (f < -1e-9 || f > 1 + 1e-9) continue;
+        f = std::clamp(f, 0.0, 1.0);
+      }
+      double off = 0;
+      for (int a = 0; a < axes; ++a) {
+        const double next = k + 1 < n ? static_cast<double>(y(k + 1, a) - y(k, a)) : 0.0;
+        off = std::max(off, std::fabs(static_cast<double>(y(k, a)) + f * next - static_cast<double>(o[a])));
+      }
+      const double pos = static_cast<double>(k) + f;
+      if (off > tol_lsb + 1e-6 || pos + 1e-6 < pos_prev) continue;
+      c.worst_lsb = std::max(c.worst_lsb, off);
+      if (t > 0) c.largest_advance = std::max(c.largest_advance, pos - pos_prev);
+      pos_prev = pos;
+      i = k;
+      found = true;
+    }
+    if (!found)
+      c.first_problem = "output sample " + std::to_string(t) + " is not on the path within " +
+                        std::to_string(tol_lsb) + " LSB after engine tick " + std::to_string(i);
+  }
+  if (c.first_problem.empty() && c.largest_advance > max_advance + 0.01)
+    c.first_problem = "the output advanced " + std::to_string(c.largest_advance) + " engine ticks in one sample (at most " +
+                      std::to_string(max_advance) + ")";
+  c.ends_on_last = std::equal(out.end() - axes, out.end(), engine.end() - axes);
+  if (c.first_problem.empty() && !c.ends_on_last) c.first_problem = "the last output is not the trajectory's last sample";
+  return c;
+}
+
+std::string describe(const PathCheck& c) {
+  char line[512];
+  std::snprintf(line, sizeof line,
+                "output samples on the path of the exact prediction (re-timed): %s: %llu samples within %.2f LSB of "
+                "the polyline through the engine samples, at most %.3f engine ticks apart, %s\n",
+                c.ok() ? "yes" : "NO", static_cast<unsigned long long>(c.samples), c.worst_lsb, c.largest_advance,
+                c.ends_on_last ? "ending on the last sample" : "NOT ending on the last sample");
+  std::string s = line;
+  if (!c.first_problem.empty()) s += "  first problem: " + c.first_problem + "\n";
+  return s;
+}
+
 std::string describe(const StepCheck& c) {
-  std::string s = "step/dir pins decoded against the exact prediction of " + std::to_string(c.ticks_expected) +
-                  " ticks (" + std::to_string(c.ticks_seen) + " ticks seen): " + (c.ok() ? "identical" : "DIFFERENT") +
-                  "\n";
+  std::string s = c.scaled ? "step/dir pins decoded against the board's time-scaled output samples (" +
+                                 std::to_string(c.ticks_seen) + " servo ticks): " + (c.ok() ? "identical" : "DIFFERENT") +
+                                 "\n"
+                           : "step/dir pins decoded against the exact prediction of " + std::to_string(c.ticks_expected) +
+                                 " ticks (" + std::to_string(c.ticks_seen) + " ticks seen): " +
+                                 (c.ok() ? "identical" : "DIFFERENT") + "\n";
   for (size_t a = 0; a < c.axes.size(); ++a) {
     const auto& x = c.axes[a];
     char line[256];

@@ -41,6 +41,7 @@ struct AxisSteps {
 };
 
 struct StepCheck {
+  bool scaled = false;  // check_steps_scaled: against the board's own output samples
   uint64_t ticks_expected = 0, ticks_seen = 0;
   std::vector<AxisSteps> axes;
   uint64_t mismatches = 0;   // expected steps not matched by an edge of the same direction
@@ -51,6 +52,32 @@ struct StepCheck {
 
 StepCheck check_steps(const stream::ReadResult& expected, const std::vector<int>& shifts,
                       const SimulatedBoard& board);
+
+// With time scaling (CONFIG's m != 0) the board's output is the stream's
+// trajectory re-timed, so the pins are checked against the path the step
+// generator makes through the board's own output samples (kept by
+// SimulatedBoard::keep_samples, one per servo tick, timed from each
+// sample's cycle), and those samples against the prediction by
+// check_on_path.
+StepCheck check_steps_scaled(const std::vector<int>& shifts, const SimulatedBoard& board);
+
+// Time-scaled output samples (axis-major, `axes` per sample) against the
+// trajectory's engine samples (the same layout): each output lies on the
+// polyline through the engine samples within `tol_lsb` per axis, at a
+// position (in engine ticks) that never goes back and advances by at most
+// `max_advance` per output sample; the last output is the last engine
+// sample (nothing lost).
+struct PathCheck {
+  uint64_t samples = 0;
+  double worst_lsb = 0;        // largest distance from the polyline, per axis
+  double largest_advance = 0;  // engine ticks between consecutive outputs
+  bool ends_on_last = false;
+  std::string first_problem;
+  bool ok() const { return first_problem.empty() && ends_on_last; }
+};
+PathCheck check_on_path(const std::vector<int64_t>& engine, const std::vector<int64_t>& out, int axes,
+                        double tol_lsb, double max_advance);
+std::string describe(const PathCheck& c);
 
 // The report's paragraph.
 std::string describe(const StepCheck& c);

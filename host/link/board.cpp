@@ -73,14 +73,10 @@ void LoopbackBoard::on_frame(const Frame& f, Bytes& out) {
       next_seq_ = f.seq;
       return ack(out);
     case Type::kConfig: {
+      if (f.payload.size() != kConfigBytes || !config_good(decode_config(f.payload)))
+        return nak(NakReason::kBadContent, out);
       if (playing_) return nak(NakReason::kPlaying, out);
-      if (f.payload.size() != 24) return nak(NakReason::kBadContent, out);
-      const Config c = decode_config(f.payload);
-      bool ok = c.tick_clocks == 0 || c.tick_clocks >= o_.min_tick_clocks;
-      for (int a = 0; a < 8; ++a) ok = ok && c.step_shift[a] <= 63;
-      ok = ok && c.pulse_clocks >= 1 && c.reserved[0] == 0 && c.reserved[1] == 0 && c.reserved[2] == 0;
-      if (!ok) return nak(NakReason::kBadContent, out);
-      cfg_ = c;
+      cfg_ = decode_config(f.payload);
       configured_ = true;
       next_status_tick_ = st_.ticks_played + cfg_.status_ticks;
       return ack(out);
@@ -99,6 +95,8 @@ void LoopbackBoard::on_frame(const Frame& f, Bytes& out) {
         playing_ = true;
       }
       return ack(out);
+    case Type::kFeed:  // a build without the time-scale unit
+      return nak(NakReason::kBadContent, out);
     case Type::kStatusReq: {
       const Bytes s = encode_frame(Type::kStatus, next_seq_, encode_status(status()));
       out.insert(out.end(), s.begin(), s.end());
@@ -117,6 +115,16 @@ void LoopbackBoard::on_frame(const Frame& f, Bytes& out) {
       ++st_.bad_frames;
       return nak(NakReason::kBadFrame, out);
   }
+}
+
+// A build without the time-scale unit: time scaling (m != 0) is refused, and
+// m = 0 needs bytes 28..39 zero.
+bool LoopbackBoard::config_good(const Config& c) const {
+  bool ok = c.tick_clocks == 0 || c.tick_clocks >= o_.min_tick_clocks;
+  for (int a = 0; a < 8; ++a) ok = ok && c.step_shift[a] <= 63;
+  ok = ok && c.pulse_clocks >= 1 && c.reserved[0] == 0 && c.reserved[1] == 0 && c.reserved[2] == 0;
+  return ok && c.scale_m == 0 && c.scale_s_max == 0 && c.scale_override == 0 && c.scale_shift == 0 &&
+         c.scale_flags == 0 && c.scale_reserved == 0;
 }
 
 bool LoopbackBoard::content_good(const Frame& f) const {

@@ -1,9 +1,11 @@
 // The loopback board: a host-side model of the board's protocol behaviour
 // (rtl/board/LINK.md): a FIFO of whole segment records, next_seq, ACK/NAK with
-// credits, CONFIG/START/STOP/RESUME/END, underrun halt, STATUS. It plays
-// records by their tick counts (it does not evaluate the polynomials), either
-// paced at a tick rate or as fast as the link feeds it. It is the reference of
-// the protocol for the host and the device of long uploads.
+// credits, CONFIG/START/STOP/RESUME/END, underrun halt, STATUS. It models a
+// build without the time-scale unit: CONFIG with time scaling and FEED are
+// refused (NAK 4), STATUS reports S = 0. It plays records by their tick
+// counts (it does not evaluate the polynomials), either paced at a tick rate
+// or as fast as the link feeds it. It is the reference of the protocol for
+// the host and the device of long uploads.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -71,6 +73,7 @@ class LoopbackBoard : public Board {
   void on_frame(const Frame& f, Bytes& out);
   void on_segment(const Frame& f, Bytes& out);
   bool content_good(const Frame& f) const;
+  bool config_good(const Config& c) const;
   void ack(Bytes& out) const;
   void nak(NakReason r, Bytes& out) const;
   uint16_t credits() const;

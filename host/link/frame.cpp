@@ -7,8 +7,8 @@ namespace traj::link {
 bool known_type(uint8_t t) {
   switch (static_cast<Type>(t)) {
     case Type::kReset: case Type::kConfig: case Type::kStart: case Type::kStop: case Type::kResume:
-    case Type::kStatusReq: case Type::kSegment: case Type::kEnd: case Type::kAck: case Type::kNak:
-    case Type::kStatus:
+    case Type::kStatusReq: case Type::kFeed: case Type::kSegment: case Type::kEnd: case Type::kAck:
+    case Type::kNak: case Type::kStatus:
       return true;
   }
   return false;
@@ -22,6 +22,7 @@ const char* type_name(Type t) {
     case Type::kStop: return "STOP";
     case Type::kResume: return "RESUME";
     case Type::kStatusReq: return "STATUS_REQ";
+    case Type::kFeed: return "FEED";
     case Type::kSegment: return "SEGMENT";
     case Type::kEnd: return "END";
     case Type::kAck: return "ACK";
@@ -146,11 +147,18 @@ Bytes encode_config(const Config& c) {
   put_u16(b, c.dir_setup_clocks);
   b.push_back(c.enable);
   b.insert(b.end(), c.reserved, c.reserved + 3);
+  put_u32(b, c.scale_m);
+  put_u32(b, c.scale_s_max);
+  put_u32(b, c.scale_override);
+  b.push_back(c.scale_shift);
+  b.push_back(c.scale_flags);
+  put_u16(b, c.scale_reserved);
   return b;
 }
 
 Config decode_config(const Bytes& p) {
-  if (p.size() != 24) throw LinkError("CONFIG payload of " + std::to_string(p.size()) + " bytes, not 24");
+  if (p.size() != kConfigBytes)
+    throw LinkError("CONFIG payload of " + std::to_string(p.size()) + " bytes, not " + std::to_string(kConfigBytes));
   Config c;
   c.tick_clocks = get_u32(&p[0]);
   c.status_ticks = get_u32(&p[4]);
@@ -159,7 +167,29 @@ Config decode_config(const Bytes& p) {
   c.dir_setup_clocks = get_u16(&p[18]);
   c.enable = p[20];
   for (int i = 0; i < 3; ++i) c.reserved[i] = p[21 + i];
+  c.scale_m = get_u32(&p[24]);
+  c.scale_s_max = get_u32(&p[28]);
+  c.scale_override = get_u32(&p[32]);
+  c.scale_shift = p[36];
+  c.scale_flags = p[37];
+  c.scale_reserved = get_u16(&p[38]);
   return c;
+}
+
+Bytes encode_feed(const Feed& f) {
+  Bytes b;
+  put_u32(b, f.override_s);
+  b.push_back(f.hold ? feed_flag::kHold : 0);
+  b.insert(b.end(), 3, 0);
+  return b;
+}
+
+Feed decode_feed(const Bytes& p) {
+  if (p.size() != kFeedBytes)
+    throw LinkError("FEED payload of " + std::to_string(p.size()) + " bytes, not " + std::to_string(kFeedBytes));
+  if ((p[4] & ~feed_flag::kHold) != 0 || p[5] != 0 || p[6] != 0 || p[7] != 0)
+    throw LinkError("FEED with reserved bits set (flags byte " + std::to_string(p[4]) + ")");
+  return {get_u32(&p[0]), (p[4] & feed_flag::kHold) != 0};
 }
 
 Bytes encode_ack(const Ack& a) {
@@ -178,7 +208,7 @@ Bytes encode_status(const Status& s) {
   Bytes b{s.axes, s.flags};
   put_u16(b, s.fifo_level);
   for (uint32_t v : {s.segments_played, s.ticks_played, s.underruns, s.bad_frames, s.out_of_order, s.bytes_received,
-                     s.credits, s.clock_hz, 0u})
+                     s.credits, s.clock_hz, s.scale_s, s.starved_holds, s.ticks_ahead})
     put_u32(b, v);
   for (int a = 0; a < s.axes; ++a) {
     const uint64_t v = static_cast<uint64_t>(a < static_cast<int>(s.sample.size()) ? s.sample[a] : 0);
@@ -208,12 +238,14 @@ Nak decode_nak(const Frame& f) {
 }
 
 Status decode_status(const Frame& f) {
-  if (f.type != Type::kStatus || f.payload.size() < 40) throw LinkError("malformed STATUS frame");
+  if (f.type != Type::kStatus || f.payload.size() < kStatusFixedBytes)
+    throw LinkError("malformed STATUS frame (" + std::to_string(f.payload.size()) + " bytes, at least " +
+                    std::to_string(kStatusFixedBytes) + ")");
   const uint8_t* p = f.payload.data();
   Status s;
   s.next_seq = f.seq;
   s.axes = p[0];
-  expect(f, Type::kStatus, 40 + 8 * size_t(s.axes));
+  expect(f, Type::kStatus, kStatusFixedBytes + 8 * size_t(s.axes));
   s.flags = p[1];
   s.fifo_level = get_u16(p + 2);
   s.segments_played = get_u32(p + 4);
@@ -224,8 +256,12 @@ Status decode_status(const Frame& f) {
   s.bytes_received = get_u32(p + 24);
   s.credits = get_u32(p + 28);
   s.clock_hz = get_u32(p + 32);
+  s.scale_s = get_u32(p + 36);
+  s.starved_holds = get_u32(p + 40);
+  s.ticks_ahead = get_u32(p + 44);
+  const uint8_t* q = p + kStatusFixedBytes;
   for (int a = 0; a < s.axes; ++a)
-    s.sample.push_back(static_cast<int64_t>(get_u32(p + 40 + 8 * a) | uint64_t(get_u32(p + 44 + 8 * a)) << 32));
+    s.sample.push_back(static_cast<int64_t>(get_u32(q + 8 * a) | uint64_t(get_u32(q + 4 + 8 * a)) << 32));
   return s;
 }
 

@@ -1,6 +1,7 @@
 // The host link's frames (rtl/board/LINK.md): HDLC byte stuffing, the 8-byte
 // header, zlib's CRC-32, a streaming decoder that resynchronises on the next
-// 0x7E after any garbage, and the payloads of CONFIG, ACK, NAK and STATUS.
+// 0x7E after any garbage, and the payloads of CONFIG, FEED, ACK, NAK and
+// STATUS.
 // One codec for both ends: the upload tool and the loopback board.
 #pragma once
 #include <cstddef>
@@ -33,6 +34,7 @@ enum class Type : uint8_t {
   kStop = 0x04,
   kResume = 0x05,
   kStatusReq = 0x06,
+  kFeed = 0x07,
   kSegment = 0x10,
   kEnd = 0x11,
   kAck = 0x81,
@@ -78,7 +80,8 @@ class FrameDecoder {
 // Checks an unstuffed body; on success fills `f` and returns "", otherwise why it is bad.
 std::string parse_body(const Bytes& body, Frame& f);
 
-// CONFIG payload, 24 bytes.
+// CONFIG payload, 40 bytes. With time scaling (scale_m != 0) the tick is the
+// servo tick; s = S 2^-sb, s = 1 at S = 2^sb.
 struct Config {
   uint32_t tick_clocks = 0;      // 0: external tick input
   uint32_t status_ticks = 0;     // 0: STATUS only on request
@@ -87,10 +90,33 @@ struct Config {
   uint16_t dir_setup_clocks = 0;
   uint8_t enable = 1;
   uint8_t reserved[3] = {};
+  uint32_t scale_m = 0;          // largest change of S per servo tick; 0: no time scaling (the rest must be 0)
+  uint32_t scale_s_max = 0;      // S never exceeds it
+  uint32_t scale_override = 0;   // the target S, as FEED sets it
+  uint8_t scale_shift = 0;       // 32 - sb + p: 2^p engine ticks per servo tick at s = 1 (0..40)
+  uint8_t scale_flags = 0;       // config_flag::kAutoResume; bits 1..7 reserved
+  uint16_t scale_reserved = 0;
 };
+namespace config_flag {
+constexpr uint8_t kAutoResume = 1;  // resume by itself after a starved hold
+}
+constexpr size_t kConfigBytes = 40;
 Bytes encode_config(const Config& c);
-// Throws LinkError if the payload is not 24 bytes.
+// Throws LinkError if the payload is not 40 bytes.
 Config decode_config(const Bytes& p);
+
+// FEED payload, 8 bytes: feed override and hold, taken by the next servo tick.
+struct Feed {
+  uint32_t override_s = 0;  // the target S (as CONFIG's scale_override)
+  bool hold = false;        // target 0: the machine stops on the path; clearing it resumes
+};
+constexpr size_t kFeedBytes = 8;
+namespace feed_flag {
+constexpr uint8_t kHold = 1;
+}
+Bytes encode_feed(const Feed& f);
+// Throws LinkError if the payload is not 8 bytes or a reserved bit or byte is set.
+Feed decode_feed(const Bytes& p);
 
 struct Ack {
   uint32_t next_seq = 0;
@@ -103,15 +129,22 @@ struct Nak {
 };
 
 namespace status_flag {
-constexpr uint8_t kPlaying = 1, kUnderrunHalt = 2, kEndReached = 4, kTickError = 8, kEnabled = 16, kFifoEmpty = 32;
+constexpr uint8_t kPlaying = 1, kUnderrunHalt = 2, kEndReached = 4, kTickError = 8, kEnabled = 16, kFifoEmpty = 32,
+                  kStarved = 64,  // time scaling: a starved hold (the data ahead did not cover a stop)
+                  kHeld = 128;    // FEED hold or the hold pin
 }
 
+// STATUS payload, 48 + 8 axes bytes.
+constexpr size_t kStatusFixedBytes = 48;
 struct Status {
   uint32_t next_seq = 0;
   uint8_t axes = 0, flags = 0;
   uint16_t fifo_level = 0;
   uint32_t segments_played = 0, ticks_played = 0, underruns = 0, bad_frames = 0, out_of_order = 0, bytes_received = 0,
            credits = 0, clock_hz = 0;
+  // time scaling (0 without): the current S, starved holds since reset (mod
+  // 2^16), engine ticks stored beyond those played
+  uint32_t scale_s = 0, starved_holds = 0, ticks_ahead = 0;
   std::vector<int64_t> sample;  // per axis, output LSB
 };
 

@@ -3,17 +3,111 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <deque>
 #include <optional>
+#include <stdexcept>
+
+#include "util/format.hpp"
 
 namespace traj::link {
+namespace {
+
+using util::num;
+
+[[noreturn]] void refuse(const std::string& what) { throw UploadError(what); }
+
+// p of the servo tick engine_tick x 2^p: the option's, or the largest within
+// kDefaultServoPeriod (p >= 0).
+int servo_exponent(double engine_tick, const std::optional<double>& given) {
+  if (!given) {
+    int p = 0;
+    while (p < 30 && std::ldexp(engine_tick, p + 1) <= kDefaultServoPeriod * (1 + 1e-9)) ++p;
+    return p;
+  }
+  const double r = *given / engine_tick;
+  const int p = r >= 1 ? static_cast<int>(std::lround(std::log2(r))) : -1;
+  if (p < 0 || p > 30 || std::fabs(r / std::ldexp(1.0, p) - 1) > 1e-6)
+    refuse("--servo-period " + num(*given) + " s is not the engine tick (" + num(engine_tick) +
+           " s, the stream's tick or its re-ticked one: --max-engine-tick) times a power of two 2^p, p >= 0");
+  return p;
+}
+
+// A feed the plan allows: 0 .. its scale_max, which the header holds rounded
+// down to 1/4096 (`--time-scale 1.2` is 1.19995: 120 % is taken, as S_max).
+bool feed_in_plan(double percent, double max_percent) {
+  return percent >= 0 && percent < max_percent + 100.0 / stream::kScaleMaxUnit;
+}
+
+std::string plan_range(double max_percent) { return "the stream was planned for 0 .. " + num(max_percent) + " %"; }
+
+}  // namespace
+
+FeedState TimeScaleSetup::feed() const {
+  FeedState f;
+  f.scale_bits = bounds.scale_bits;
+  f.s_max = bounds.s_max;
+  f.max_percent = max_percent;
+  f.target_s = override_s;
+  return f;
+}
+
+void TimeScaleSetup::apply(Config& c) const {
+  if (!on) return;
+  c.scale_m = static_cast<uint32_t>(bounds.m);
+  c.scale_s_max = static_cast<uint32_t>(bounds.s_max);
+  c.scale_override = static_cast<uint32_t>(override_s);
+  c.scale_shift = static_cast<uint8_t>(shift());
+  c.scale_flags = auto_resume ? config_flag::kAutoResume : 0;
+}
+
+TimeScaleSetup time_scale_setup(const stream::Header& h, const UploadOptions& o) {
+  TimeScaleSetup t;
+  t.engine_tick = t.servo_period = h.period;
+  t.auto_resume = o.auto_resume;
+  if (!h.has_time_scaling()) {
+    const char* given = o.feed_percent     ? "--feed"
+                        : o.servo_period_s ? "--servo-period"
+                        : !o.auto_resume   ? "--no-auto-resume"
+                        : o.feed_control   ? "live feed control (--control)"
+                                           : nullptr;
+    if (given)
+      refuse(std::string(given) + ": the stream was planned without --time-scale (no feed override or hold; plan it "
+             "with `trajcore plan --time-scale S_MAX`)");
+    return t;
+  }
+  t.on = true;
+  t.p = servo_exponent(h.period, o.servo_period_s);
+  t.servo_period = std::ldexp(h.period, t.p);
+  const std::string at = " (servo tick " + num(t.servo_period * 1e3) + " ms = 2^" + std::to_string(t.p) +
+                         " engine ticks of " + num(h.period * 1e3) + " ms; --servo-period)";
+  try {
+    t.bounds = timescale::integer_bounds({h.scale_max, h.scale_rate, h.scale_accel}, t.servo_period);
+  } catch (const std::invalid_argument& e) {
+    refuse(e.what() + at);
+  }
+  if (t.shift() < 0 || t.shift() > 40)
+    refuse("time scaling: shift = 32 - sb + p = 32 - " + std::to_string(t.bounds.scale_bits) + " + " +
+           std::to_string(t.p) + " = " + std::to_string(t.shift()) + " is outside the unit's 0..40" + at);
+  if (t.bounds.m > 0xFFFFFFFF || t.bounds.s_max > 0xFFFFFFFF)
+    refuse("time scaling: m " + std::to_string(t.bounds.m) + " or S_max " + std::to_string(t.bounds.s_max) +
+           " does not fit CONFIG's 32 bits" + at);
+  t.max_percent = 100 * h.scale_max;
+  const double feed = o.feed_percent.value_or(std::min(100.0, t.max_percent));
+  if (!feed_in_plan(feed, t.max_percent))
+    refuse("--feed " + num(feed) + " %: " + plan_range(t.max_percent) + " (`trajcore plan --time-scale " +
+           num(h.scale_max) + "`)");
+  t.override_s = scale_of_percent(feed, t.bounds.scale_bits, t.bounds.s_max);
+  return t;
+}
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
 
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-class Uploader {
+class Uploader : public FeedPort {
  public:
   Uploader(Transport& port, RecordSource& src, const UploadOptions& o,
            const std::function<void(const UploadProgress&)>& cb)
@@ -21,7 +115,11 @@ class Uploader {
 
   UploadResult run() {
     const auto t0 = Clock::now();
-    config_ = make_config(o_.clock_hz > 0 ? o_.clock_hz : kDefaultBoardClockHz);  // refused options before the board is touched
+    // refused options before the board is touched
+    ts_ = time_scale_setup(src_.header(), o_);
+    prog_.time_scaling = ts_.on;
+    prog_.feed = ts_.feed();
+    config_ = make_config(o_.clock_hz > 0 ? o_.clock_hz : kDefaultBoardClockHz);
     drain_input();
     const Status s = query_status();
     if (o_.resume && !(s.next_seq == 0 && s.segments_played == 0)) {
@@ -151,6 +249,14 @@ class Uploader {
     prog_.status = s;
     prog_.have_status = true;
     ++statuses_;
+    if (ts_.on) {
+      FeedState& f = prog_.feed;
+      f.have_status = true;
+      f.s = s.scale_s;
+      f.held = s.flags & status_flag::kHeld;
+      f.starved = s.flags & status_flag::kStarved;
+      f.starved_holds = s.starved_holds;
+    }
     if (!watching_) return;
     if (s.flags & status_flag::kTickError) fail("the board reports a tick error (ticks faster than the engine)");
     if ((s.flags & status_flag::kUnderrunHalt) || s.underruns != underruns_at_start_)
@@ -185,8 +291,9 @@ class Uploader {
          "this baud rate?)");
   }
 
-  // A control command answered by ACK; NAK 1 (damaged on the way) is re-sent.
-  void command(Type t, uint32_t seq, const Bytes& payload = {}) {
+  // A control command: 0 for its ACK, or the NAK reason 4 or 5; other NAKs
+  // (1: damaged on the way) and silence re-send it.
+  uint8_t request(Type t, uint32_t seq, const Bytes& payload = {}) {
     for (int attempt = 0; attempt <= o_.max_retries; ++attempt) {
       last_answer_.reset();
       send(t, seq, payload);
@@ -196,15 +303,81 @@ class Uploader {
         ++prog_.timeouts;
         continue;
       }
-      if (last_answer_->ack) return;
-      if (last_answer_->reason == uint8_t(NakReason::kPlaying))
-        fail(std::string("the board refuses ") + type_name(t) + " while playing");
-      if (last_answer_->reason == uint8_t(NakReason::kBadContent))
-        fail(std::string("the board refuses ") + type_name(t) + " as bad content" +
-             (t == Type::kConfig ? " (a tick period below its engine's update time, or a step shift out of range)"
-                                 : ""));
+      if (last_answer_->ack) return 0;
+      if (last_answer_->reason == uint8_t(NakReason::kPlaying) ||
+          last_answer_->reason == uint8_t(NakReason::kBadContent))
+        return last_answer_->reason;
     }
     fail(std::string("no ACK to ") + type_name(t) + " after " + std::to_string(o_.max_retries + 1) + " attempts");
+  }
+
+  // A control command that must be acknowledged.
+  void command(Type t, uint32_t seq, const Bytes& payload = {}) {
+    const uint8_t nak = request(t, seq, payload);
+    if (nak == uint8_t(NakReason::kPlaying))
+      fail(std::string("the board refuses ") + type_name(t) + " while playing");
+    if (nak == uint8_t(NakReason::kBadContent))
+      fail(std::string("the board refuses ") + type_name(t) + " as bad content" +
+           (t == Type::kConfig ? config_refusal() : std::string()));
+  }
+
+  std::string config_refusal() const {
+    const std::string other = "a tick period below its engine's update time, or a step shift out of range";
+    if (!ts_.on) return " (" + other + ")";
+    return ": time scaling m " + std::to_string(config_.scale_m) + ", S_max " + std::to_string(config_.scale_s_max) +
+           ", override " + std::to_string(config_.scale_override) + ", shift " +
+           std::to_string(config_.scale_shift) + " (scale bits " + std::to_string(ts_.bounds.scale_bits) +
+           ", servo tick " + num(ts_.servo_period * 1e3) + " ms = 2^" + std::to_string(ts_.p) +
+           " engine ticks). A build without the time-scale unit (the loopback board is one) refuses any time "
+           "scaling; a build with it refuses values at or above 2^SW (SW = 20 on the simulated board: a longer "
+           "--servo-period makes the scale bits, m and S_max smaller); or " + other;
+  }
+
+  // ---- live feed control (FeedPort) -------------------------------------
+
+  FeedState feed_state() const override { return prog_.feed; }
+
+  void set_feed(double percent, bool hold) override {
+    if (!ts_.on) throw FeedRefused("the stream was planned without --time-scale: no feed override or hold");
+    if (!feed_in_plan(percent, ts_.max_percent))
+      throw FeedRefused("feed " + num(percent) + " %: " + plan_range(ts_.max_percent));
+    const int64_t s = scale_of_percent(percent, ts_.bounds.scale_bits, ts_.bounds.s_max);
+    send_feed(s, hold);
+  }
+
+  void send_feed(int64_t s, bool hold) {
+    quiesce();
+    const uint8_t nak = request(Type::kFeed, 0, encode_feed({static_cast<uint32_t>(s), hold}));
+    if (nak != 0)
+      throw FeedRefused("the board refuses FEED override " + std::to_string(s) + " (" +
+                        num(scale_percent(s, ts_.bounds.scale_bits)) + " %)" + (hold ? " with hold" : "") + ": " +
+                        nak_name(nak) + (nak == uint8_t(NakReason::kBadContent)
+                                             ? " (a build without the time-scale unit, or an override at or above "
+                                               "2^SW of the build)"
+                                             : ""));
+    prog_.feed.target_s = s;
+    prog_.feed.hold = hold;
+    report();
+  }
+
+  // An ACK does not tell which frame it answers: a FEED goes out once every
+  // segment sent was answered (or a timeout passed: go-back-N heals the rest).
+  void quiesce() {
+    const auto t = Clock::now();
+    while (tracking_ && send_next_ != base_ && since(t) * 1e3 < answer_timeout_ms()) pump(5);
+  }
+
+  // --resume: the board's feed as this tool shows it (--feed, no hold).
+  void resume_feed() {
+    try {
+      send_feed(ts_.override_s, false);
+    } catch (const FeedRefused& e) {
+      fail(std::string(e.what()) + "; --resume of a time-scaled job needs a board whose CONFIG has time scaling");
+    }
+  }
+
+  void poll_controls() {
+    if (ts_.on && o_.feed_control) o_.feed_control->poll(*this);
   }
 
   // ---- sending --------------------------------------------------------
@@ -260,6 +433,10 @@ class Uploader {
     const auto t = Clock::now();
     while (since(t) * 1e3 < answer_timeout_ms()) pump(5);
     command(Type::kStop, 0);
+    if (ts_.on)
+      fail("interrupted: STOP sent and acknowledged; the board holds: it slows along its S-curve and stops on the "
+           "path, then stops playing (" + std::to_string(prog_.status.segments_played) + " of " +
+           std::to_string(base_) + " stored segments started); START (`--resume`) continues the job where it stopped");
     fail("interrupted: STOP sent and acknowledged; the board stops at the end of the segment it plays (" +
          std::to_string(prog_.status.segments_played) + " of " + std::to_string(base_) +
          " stored segments started); `--resume` continues the job");
@@ -276,7 +453,8 @@ class Uploader {
       } catch (const LinkError&) {
         fail(why + "; STOP could not be sent: the board stops when its FIFO runs empty");
       }
-      fail(why + "; STOP sent: the board stops at the end of the segment it plays");
+      fail(why + (ts_.on ? "; STOP sent: the board stops on the path (a hold), START (`--resume`) continues"
+                         : "; STOP sent: the board stops at the end of the segment it plays"));
     }
     throw UploadError(why);
   }
@@ -338,6 +516,7 @@ class Uploader {
     underruns_at_start_ = s.underruns;
     tracking_ = true;
     if (s.flags & status_flag::kEndReached) return;
+    if (ts_.on) resume_feed();
     if (s.flags & status_flag::kPlaying) {
       watching_ = true;
       return;
@@ -360,16 +539,18 @@ class Uploader {
     return s.clock_hz;
   }
 
+  // The tick CONFIG gives: the servo tick with time scaling, else the engine tick.
   Config make_config(double clock_hz) const {
     Config c;
-    const double tick_clocks = std::round(src_.header().period * clock_hz);
+    const double tick = ts_.servo_period;
+    const double tick_clocks = std::round(tick * clock_hz);
     if (tick_clocks < 1 || tick_clocks > 4294967295.0)
-      fail("tick period " + std::to_string(src_.header().period) + " s at " + std::to_string(clock_hz) +
+      fail("tick period " + std::to_string(tick) + " s at " + std::to_string(clock_hz) +
            " Hz is not a 32-bit clock count");
     c.tick_clocks = static_cast<uint32_t>(tick_clocks);
-    c.status_ticks = o_.status_period_s > 0
-                         ? static_cast<uint32_t>(std::max(1.0, std::round(o_.status_period_s / src_.header().period)))
-                         : 0;
+    c.status_ticks =
+        o_.status_period_s > 0 ? static_cast<uint32_t>(std::max(1.0, std::round(o_.status_period_s / tick))) : 0;
+    ts_.apply(c);
     const size_t axes = static_cast<size_t>(src_.header().axes);
     if (o_.step_shift.size() > 1 && o_.step_shift.size() != axes)
       fail("--step-shift has " + std::to_string(o_.step_shift.size()) + " values for a stream of " +
@@ -393,6 +574,7 @@ class Uploader {
     auto last = Clock::now();
     for (;;) {
       check_interrupt();
+      poll_controls();
       send_allowed(limit);
       const bool full = seq_diff(send_next_, limit) >= 0 || seq_diff(send_next_, allowed_end_) >= 0;
       if (send_next_ == base_ && (full || prog_.stream_done)) break;
@@ -419,6 +601,7 @@ class Uploader {
     auto last_poll = Clock::now();
     while (!all_sent_and_stored()) {
       check_interrupt();
+      poll_controls();
       send_allowed(base_ + 0x7FFFFFFF);
       wait_answers(last);
       // blocked by credits and nothing in flight: ask, the board may have made room
@@ -451,7 +634,10 @@ class Uploader {
       silent = 0;
       if (prog_.status.flags & status_flag::kEndReached) break;
       const auto wait = Clock::now();
-      while (since(wait) < 0.1) pump(5);  // periodic STATUS frames keep the progress current
+      while (since(wait) < 0.1) {  // periodic STATUS frames keep the progress current
+        pump(5);
+        poll_controls();
+      }
     }
     report();
   }
@@ -476,6 +662,7 @@ class Uploader {
   std::optional<Answer> last_answer_;
   UploadProgress prog_;
   Config config_;
+  TimeScaleSetup ts_;
 };
 
 }  // namespace

@@ -2,17 +2,24 @@
 // loopback board) over a Transport, as rtl/board/LINK.md defines: RESET,
 // CONFIG, prefill, START, credits, go-back-N re-sends on NAK or timeout, END,
 // then waits until the board has played the job. `--resume` continues a job
-// from the board's next_seq after the tool was restarted.
+// from the board's next_seq after the tool was restarted. A stream planned
+// with time scaling (`trajcore plan --time-scale`) is played at a servo tick
+// with the feed override and hold of LINK.md (CONFIG's time-scaling fields,
+// FEED), changed live through FeedControls (feed_control.hpp).
 #pragma once
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "link/feed_control.hpp"
 #include "link/frame.hpp"
 #include "link/record_source.hpp"
 #include "link/transport.hpp"
+#include "stream/segment_stream.hpp"
+#include "timescale/time_scale.hpp"
 
 namespace traj::link {
 
@@ -27,7 +34,44 @@ struct UploadOptions {
   int baud = 1000000;              // for the transmission time (pseudo-terminals and TCP are faster)
   int max_retries = 20;            // re-sends of one segment, or unanswered requests, before giving up
   const std::atomic<bool>* interrupted = nullptr;  // set by SIGINT: STOP and exit
+  // Time scaling: only for a stream planned with it (refused otherwise).
+  std::optional<double> feed_percent;    // --feed: the initial override, % of the planned speed (default 100)
+  std::optional<double> servo_period_s;  // --servo-period: engine tick x 2^p (default: the largest <= 1 ms)
+  bool auto_resume = true;               // resume by itself after a starved hold (--no-auto-resume)
+  FeedControl* feed_control = nullptr;   // live controls (keyboard, --control), polled every turn
 };
+
+// Thrown with a message naming what failed; the board is left stopped or
+// holding (no motion jumps).
+class UploadError : public LinkError {
+ public:
+  using LinkError::LinkError;
+};
+
+// The servo tick by default: the largest engine_tick x 2^p <= 1 ms, p >= 0.
+constexpr double kDefaultServoPeriod = 1e-3;
+
+// CONFIG's time-scaling fields for a stream and the options: the servo tick
+// (2^p engine ticks at s = 1), timescale::integer_bounds of the header's ramp
+// bounds at that tick, the initial override. Without time scaling in the
+// header: off, the servo tick is the engine tick, and every time-scaling
+// option is refused.
+struct TimeScaleSetup {
+  bool on = false;
+  double engine_tick = 0, servo_period = 0;  // s
+  int p = 0;                                 // 2^p engine ticks per servo tick at s = 1
+  timescale::IntBounds bounds;               // scale_bits (sb), m, s_max
+  int64_t override_s = 0;                    // the initial target S
+  double max_percent = 0;                    // the header's scale_max, %
+  bool auto_resume = true;
+
+  int shift() const { return 32 - bounds.scale_bits + p; }
+  FeedState feed() const;                    // the feed as CONFIG sets it
+  void apply(Config& c) const;               // CONFIG's bytes 24..39
+};
+// Throws UploadError naming the option or the value that does not fit
+// (scale bits, shift 0..40, u32 fields).
+TimeScaleSetup time_scale_setup(const stream::Header& h, const UploadOptions& o);
 
 struct UploadProgress {
   uint64_t acked = 0;         // records the board has stored (next_seq)
@@ -36,19 +80,14 @@ struct UploadProgress {
   uint64_t resends = 0, naks = 0, timeouts = 0;
   bool have_status = false;
   Status status;              // the latest STATUS
+  bool time_scaling = false;
+  FeedState feed;             // time scaling: the feed sent and the board's (from `status`)
 };
 
 struct UploadResult {
   uint64_t records = 0, first_seq = 0;  // first_seq > 0 after --resume
   UploadProgress progress;
   double seconds = 0;
-};
-
-// Thrown with a message naming what failed; the board is left stopped or
-// holding (no motion jumps).
-class UploadError : public LinkError {
- public:
-  using LinkError::LinkError;
 };
 
 UploadResult upload(Transport& port, RecordSource& src, const UploadOptions& o,

@@ -9,6 +9,9 @@ namespace traj::util {
 // printf-style formatting of one double, e.g. fmt("%.4g", v).
 std::string fmt(const char* printf_format, double v);
 
+// printf-style formatting of a line (at most 511 bytes).
+std::string strf(const char* printf_format, ...) __attribute__((format(printf, 1, 2)));
+
 // "%g": six significant digits, the default for numbers in error messages.
 inline std::string num(double v) { return fmt("%g", v); }
 

@@ -68,6 +68,7 @@ module traj_icebreaker_top #(
   ) u_board (
     .clk_i(clk), .rst_ni(rst_n), .rx_i(rx_q[1]), .tx_o,
     .tick_ext_i(tick_pin),
+    .hold_i(1'b0),  // TimeScale = 0: the unit does not fit beside the board logic yet (rtl/README.md)
     .step_o, .dir_o, .enable_o,
     .run_o(run), .err_o(err), .heartbeat_o(beat)
   );

@@ -191,5 +191,46 @@ TEST_F(BoardTest, StatusOnRequestAndPeriodic) {
   EXPECT_EQ(statuses, 2u);  // at 4 and 8 ticks played (10 ticks in all)
 }
 
+// A build without the time-scale unit (LINK.md): CONFIG with m != 0 is
+// refused, and with m = 0 every byte 28..39 must be 0; FEED is refused
+// (NAK 4, before NAK 5: the verdict order); STATUS reports no time scaling.
+TEST_F(BoardTest, WithoutTheTimeScaleUnit) {
+  send(Type::kReset, 0);
+  const Bytes whole = config();
+  expect_one(send(Type::kConfig, 0, Bytes(whole.begin(), whole.begin() + 24)), Type::kNak, 0, 4, 3);
+  Config c;
+  c.tick_clocks = 1000;
+  c.scale_m = 1;
+  expect_one(send(Type::kConfig, 0, encode_config(c)), Type::kNak, 0, 4, 3);
+  for (size_t at = 28; at < 40; ++at) {
+    Bytes p = config();
+    p[at] = 1;
+    expect_one(send(Type::kConfig, 0, p), Type::kNak, 0, 4, 3);
+  }
+  Bytes m_only = config();
+  m_only[27] = 0x80;  // m's top byte
+  expect_one(send(Type::kConfig, 0, m_only), Type::kNak, 0, 4, 3);
+  expect_one(send(Type::kFeed, 0, encode_feed({1, false})), Type::kNak, 0, 4, 3);
+  expect_one(send(Type::kConfig, 0, config()), Type::kAck, 0, 0, 3);
+  send(Type::kSegment, 0, record(0, 10));
+  send(Type::kStart, 0);
+  ASSERT_TRUE(board_.playing());
+  expect_one(send(Type::kFeed, 0, encode_feed({1, true})), Type::kNak, 1, 4, 2);
+  expect_one(send(Type::kConfig, 0, encode_config(c)), Type::kNak, 1, 4, 2);  // bad content before "playing"
+  expect_one(send(Type::kConfig, 0, config()), Type::kNak, 1, 5, 2);
+  Bytes out;
+  board_.advance(0.0, out);
+  board_.advance(0.004, out);
+  const auto a = send(Type::kStatusReq, 0);
+  ASSERT_EQ(a.size(), 1u);
+  const Status s = board_.status();
+  EXPECT_EQ(s.scale_s, 0u);
+  EXPECT_EQ(s.starved_holds, 0u);
+  EXPECT_EQ(s.ticks_ahead, 0u);
+  EXPECT_EQ(s.flags & (status_flag::kStarved | status_flag::kHeld), 0);
+  EXPECT_TRUE(s.flags & status_flag::kPlaying);
+  EXPECT_EQ(board_.config().tick_clocks, 1000u);  // the refused CONFIGs changed nothing
+}
+
 }  // namespace
 }  // namespace traj::link

@@ -153,8 +153,8 @@ TEST(Frame, StatusAndConfigRoundTrip) {
   s.credits = 9;
   s.sample = {-1, INT64_MIN, (int64_t(1) << 47) - 1};
   const Bytes p = encode_status(s);
-  ASSERT_EQ(p.size(), 40u + 8 * 3);
-  EXPECT_EQ(p[40], 0xFF);  // -1, little-endian
+  ASSERT_EQ(p.size(), 48u + 8 * 3);
+  EXPECT_EQ(p[48], 0xFF);  // -1, little-endian
   const Status t = decode_status({Type::kStatus, 77, p});
   EXPECT_EQ(t.sample, s.sample);
   EXPECT_EQ(t.fifo_level, 513);
@@ -165,11 +165,104 @@ TEST(Frame, StatusAndConfigRoundTrip) {
   c.step_shift[2] = 63;
   c.pulse_clocks = 96;
   const Bytes cp = encode_config(c);
-  ASSERT_EQ(cp.size(), 24u);
+  ASSERT_EQ(cp.size(), 40u);
   EXPECT_EQ(cp[0] | cp[1] << 8 | cp[2] << 16, 48000);
   EXPECT_EQ(cp[10], 63);
+  EXPECT_EQ(Bytes(cp.begin() + 24, cp.end()), Bytes(16, 0));  // no time scaling: bytes 24..39 are 0
   EXPECT_EQ(decode_config(cp).pulse_clocks, 96);
-  EXPECT_THROW(decode_status({Type::kStatus, 0, Bytes(41)}), LinkError);
+  EXPECT_THROW(decode_status({Type::kStatus, 0, Bytes(49)}), LinkError);
+}
+
+// LINK.md's STATUS layout, byte by byte: S at 36, starved holds at 40, engine
+// ticks ahead at 44, the samples from 48; flags bit 6 starved, bit 7 held.
+TEST(Frame, StatusTimeScalingFieldsAtTheirOffsets) {
+  Bytes p(48 + 8 * 2, 0);
+  p[0] = 2;
+  p[1] = 0x80 | 0x40 | 0x01;
+  const auto put = [&](size_t at, uint32_t v) {
+    for (int i = 0; i < 4; ++i) p[at + size_t(i)] = uint8_t(v >> (8 * i));
+  };
+  put(36, 0x00080000);  // S = 2^19
+  put(40, 3);
+  put(44, 0x12345678);
+  put(48, 5);           // axis 0: 5
+  put(56, 0xFFFFFFFE);  // axis 1: -2
+  put(60, 0xFFFFFFFF);
+  const Status s = decode_status({Type::kStatus, 9, p});
+  EXPECT_EQ(s.scale_s, 0x80000u);
+  EXPECT_EQ(s.starved_holds, 3u);
+  EXPECT_EQ(s.ticks_ahead, 0x12345678u);
+  EXPECT_EQ(s.sample, (std::vector<int64_t>{5, -2}));
+  EXPECT_EQ(status_flag::kStarved, 0x40);
+  EXPECT_EQ(status_flag::kHeld, 0x80);
+  EXPECT_TRUE(s.flags & status_flag::kHeld);
+  EXPECT_TRUE(s.flags & status_flag::kStarved);
+  EXPECT_EQ(encode_status(s), p);
+  // the layout of 40 + 8 axes bytes is refused, naming the sizes
+  Bytes old_layout(40 + 8 * 2, 0);
+  old_layout[0] = 2;
+  try {
+    decode_status({Type::kStatus, 9, old_layout});
+    FAIL() << "a 56-byte STATUS for 2 axes was taken";
+  } catch (const LinkError& e) {
+    EXPECT_NE(std::string(e.what()).find("not 64"), std::string::npos) << e.what();
+  }
+}
+
+// CONFIG's time-scaling fields at LINK.md's offsets; sizes other than 40 refused.
+TEST(Frame, ConfigTimeScalingFieldsAtTheirOffsets) {
+  Config c;
+  c.scale_m = 0x01020304;
+  c.scale_s_max = 0x000C0000;
+  c.scale_override = 0x00080000;
+  c.scale_shift = 18;
+  c.scale_flags = config_flag::kAutoResume;
+  const Bytes p = encode_config(c);
+  ASSERT_EQ(p.size(), 40u);
+  EXPECT_EQ(Bytes(p.begin() + 24, p.end()),
+            (Bytes{0x04, 0x03, 0x02, 0x01, 0x00, 0x00, 0x0C, 0x00, 0x00, 0x00, 0x08, 0x00, 18, 1, 0, 0}));
+  Bytes q = p;
+  q[38] = 0x34;
+  q[39] = 0x12;
+  const Config d = decode_config(q);
+  EXPECT_EQ(d.scale_m, 0x01020304u);
+  EXPECT_EQ(d.scale_s_max, 0xC0000u);
+  EXPECT_EQ(d.scale_override, 0x80000u);
+  EXPECT_EQ(d.scale_shift, 18);
+  EXPECT_EQ(d.scale_flags, 1);
+  EXPECT_EQ(d.scale_reserved, 0x1234);  // decoded as is: the board judges it
+  EXPECT_EQ(encode_config(d), q);
+  for (size_t n : {24u, 39u, 41u}) {
+    try {
+      decode_config(Bytes(n, 0));
+      FAIL() << "a CONFIG of " << n << " bytes was taken";
+    } catch (const LinkError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::to_string(n) + " bytes, not 40"), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(Frame, FeedPayloadAndType) {
+  EXPECT_TRUE(known_type(0x07));
+  EXPECT_STREQ(type_name(Type::kFeed), "FEED");
+  EXPECT_EQ(static_cast<uint8_t>(Type::kFeed), 0x07);
+  EXPECT_EQ(encode_feed({0x00012345, true}), (Bytes{0x45, 0x23, 0x01, 0x00, 0x01, 0, 0, 0}));
+  EXPECT_EQ(encode_feed({7, false}), (Bytes{7, 0, 0, 0, 0, 0, 0, 0}));
+  const Feed f = decode_feed({0x00, 0x00, 0x08, 0x00, 0x01, 0, 0, 0});
+  EXPECT_EQ(f.override_s, 0x80000u);
+  EXPECT_TRUE(f.hold);
+  EXPECT_FALSE(decode_feed({1, 0, 0, 0, 0, 0, 0, 0}).hold);
+  // a FEED frame decodes as a good frame of its type
+  const auto got = decode_all(encode_frame(Type::kFeed, 0, encode_feed({100, false})));
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_EQ(got[0].type, Type::kFeed);
+  EXPECT_EQ(decode_feed(got[0].payload).override_s, 100u);
+  // refused: other sizes, reserved flag bits, reserved bytes
+  EXPECT_THROW(decode_feed(Bytes(7, 0)), LinkError);
+  EXPECT_THROW(decode_feed(Bytes(9, 0)), LinkError);
+  EXPECT_THROW(decode_feed({0, 0, 0, 0, 0x02, 0, 0, 0}), LinkError);
+  EXPECT_THROW(decode_feed({0, 0, 0, 0, 0x01, 0, 0, 1}), LinkError);
+  EXPECT_THROW(decode_feed({0, 0, 0, 0, 0x00, 1, 0, 0}), LinkError);
 }
 
 }  // namespace

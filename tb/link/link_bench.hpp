@@ -28,7 +28,9 @@ namespace linktest {
 
 constexpr int kAxes = LINK_AXES, kDegree = LINK_DEGREE, kWidth = LINK_WIDTH, kChunk = LINK_CHUNK;
 constexpr int kGuard = LINK_GUARD, kOutWidth = kWidth - kGuard;
-using Model = traj::Link<LINK_CLK, LINK_BAUD, kAxes, kDegree, kWidth, kChunk, kGuard, LINK_FIFO, LINK_MINTICK>;
+constexpr int kScaleWidth = LINK_SCALE;
+using Model =
+    traj::Link<LINK_CLK, LINK_BAUD, kAxes, kDegree, kWidth, kChunk, kGuard, LINK_FIFO, LINK_MINTICK, kScaleWidth>;
 constexpr int kDiv = Model::kDiv;
 constexpr int kSegWords = Model::kSegWords;
 constexpr int kCap = Model::kCap;
@@ -170,6 +172,7 @@ class Bench {
   int tick_period = 300;                        // clocks between ticks while run_o
   int tready_percent = 70;
   uint32_t seg_starts = 0, underruns = 0, ticks = 0;
+  std::vector<uint32_t> stored_ks;              // the K of each record stored (stored_o)
 
   // ---- comparison ------------------------------------------------------
   bool ok() const { return why_.empty(); }
@@ -221,6 +224,12 @@ class Bench {
     rtl_->seg_start_i = in.seg_start;
     rtl_->underrun_i = in.underrun;
     rtl_->tick_err_i = in.tick_err;
+    rtl_->eng_tick_i = in.eng_tick;
+    rtl_->scale_s_i = in.scale_s;
+    rtl_->starved_count_i = in.starved_count;
+    rtl_->ahead_i = in.ahead;
+    rtl_->starved_i = in.starved;
+    rtl_->held_i = in.held;
     set_sample(in);
   }
   void set_sample(const typename Model::In& in) {
@@ -261,6 +270,18 @@ class Bench {
     port("pulse_o", rtl_->pulse_o, m.pulse);
     port("setup_o", rtl_->setup_o, m.setup);
     port("enable_o", rtl_->enable_o, m.enable);
+    port("scale_m_o", rtl_->scale_m_o, m.scale_m);
+    port("scale_s_max_o", rtl_->scale_s_max_o, m.scale_s_max);
+    port("scale_override_o", rtl_->scale_override_o, m.scale_override);
+    port("scale_shift_o", rtl_->scale_shift_o, m.scale_shift);
+    port("scale_auto_o", rtl_->scale_auto_o, m.scale_auto);
+    port("hold_o", rtl_->hold_o, m.hold);
+    port("stop_o", rtl_->stop_o, m.stop);
+    port("end_o", rtl_->end_o, m.end);
+    port("resume_o", rtl_->resume_o, m.resume);
+    port("stored_o", rtl_->stored_o, m.stored);
+    port("cleared_o", rtl_->cleared_o, m.cleared);
+    if (m.stored) port("stored_k_o", rtl_->stored_k_o, m.stored_k);
     if (!s.str().empty()) why_ = s.str();
   }
   void fail(const std::string& w) {
@@ -282,6 +303,13 @@ class Bench {
       tick_cnt_ = 0;
     }
     for (int a = 0; a < kAxes; ++a) in.sample[a] = (pos_ + a * 1000) & traj::mask(kOutWidth);
+    in.eng_tick = in.tick;
+    // the time-scale unit's state as STATUS reports it: values that move
+    in.scale_s = static_cast<uint32_t>(pos_ * 7 + 3);
+    in.starved_count = static_cast<uint16_t>(underruns + 1);
+    in.ahead = static_cast<uint32_t>(left_ + 5);
+    in.starved = (pos_ & 1) != 0;
+    in.held = (pos_ & 2) != 0;
     in_tick_ = in.tick;
     if (in.tick && active_ && left_ == static_cast<int64_t>(k_)) in.seg_start = true;
     seg_start_now_ = in.seg_start;
@@ -291,6 +319,7 @@ class Bench {
     under_pipe_[1] = under_pipe_[0];
     under_pipe_[0] = false;
     if (in.underrun) ++underruns;
+    if (mo.stored) stored_ks.push_back(mo.stored_k);
     if (seg_start_now_) ++seg_starts;
     if (mo.tvalid && tready_now_) {
       loading_.push_back(mo.tdata);

@@ -13,8 +13,13 @@ namespace {
 
 using namespace linktest;
 
+struct Scale {
+  uint32_t m = 0, s_max = 0, override_s = 0;
+  uint8_t shift = 0, flags = 0;
+};
+
 std::vector<uint8_t> config_payload(uint32_t tick, uint32_t stat, uint8_t shift, uint16_t pulse, uint16_t setup,
-                                    uint8_t enable) {
+                                    uint8_t enable, const Scale& sc = {}) {
   std::vector<uint8_t> p;
   put_le(p, tick, 4);
   put_le(p, stat, 4);
@@ -23,6 +28,22 @@ std::vector<uint8_t> config_payload(uint32_t tick, uint32_t stat, uint8_t shift,
   put_le(p, setup, 2);
   p.push_back(enable);
   p.push_back(0);
+  p.push_back(0);
+  p.push_back(0);
+  put_le(p, sc.m, 4);
+  put_le(p, sc.s_max, 4);
+  put_le(p, sc.override_s, 4);
+  p.push_back(sc.shift);
+  p.push_back(sc.flags);
+  put_le(p, 0, 2);
+  return p;
+}
+
+std::vector<uint8_t> feed_payload(uint32_t override_s, uint8_t flags, uint8_t reserved = 0) {
+  std::vector<uint8_t> p;
+  put_le(p, override_s, 4);
+  p.push_back(flags);
+  p.push_back(reserved);
   p.push_back(0);
   p.push_back(0);
   return p;
@@ -132,7 +153,7 @@ TEST(LinkCosim, FramesFaultsAndPlayback) {
     EXPECT_NAK(bench.await_answer(), 4, seq);
   }
   // unknown type, nonzero flags
-  EXPECT_NAK(bench.transact(0x07, 0), 1, seq);
+  EXPECT_NAK(bench.transact(0x08, 0), 1, seq);
   {
     auto b = body(0x03, 0, {});
     b[1] = 1;
@@ -155,7 +176,7 @@ TEST(LinkCosim, FramesFaultsAndPlayback) {
     const Answer st = bench.await_answer();
     ASSERT_TRUE(bench.ok()) << bench.why();
     ASSERT_EQ(st.type, 0x83);
-    ASSERT_EQ(st.payload.size(), 40u + 8 * kAxes);
+    ASSERT_EQ(st.payload.size(), 48u + 8 * kAxes);
     EXPECT_EQ(st.payload[0], kAxes);
     EXPECT_EQ(st.payload[1] & 1, 0);                       // not playing
     EXPECT_EQ(get_le(st.payload, 2, 2), uint64_t(kCap));   // level
@@ -317,13 +338,101 @@ TEST(LinkCosim, PeriodicStatus) {
     if (a.type != 0x83) continue;
     ++statuses;
     for (int ax = 0; ax < kAxes; ++ax) {
-      const uint64_t v = get_le(a.payload, 40 + 8 * ax, 8);
+      const uint64_t v = get_le(a.payload, 48 + 8 * ax, 8);
       const uint64_t hi = v >> (kOutWidth - 1);  // all ones or all zeros above the sign
       EXPECT_TRUE(hi == 0 || hi == (~uint64_t{0} >> (kOutWidth - 1))) << std::hex << v;
     }
   }
   // at ticks 4, 8 and 12; the last two are pending together while the first is sent
   EXPECT_EQ(statuses, 2);
+}
+
+}  // namespace
+
+namespace {
+
+using namespace linktest;
+
+// Time scaling (LINK.md): CONFIG's fields and FEED are taken by a build with
+// the unit (within its ScaleWidth) and refused by one without; FEED also
+// while playing; STATUS carries the unit's state; each stored record's K
+// reaches the board (its count of engine ticks ahead).
+TEST(LinkCosim, TimeScaleConfigAndFeed) {
+  const uint64_t seed = traj::test::test_seed(4);
+  std::mt19937_64 rng(seed);
+  Bench bench(seed);
+  bench.tick_period = 300;
+  bench.reset();
+  bench.send_raw({0x7E});
+  EXPECT_ACK(bench.transact(0x01, 0), 0u);
+  const Scale good{5, 3000, 2048, 17, 1};
+  if (kScaleWidth == 0) {
+    EXPECT_NAK(bench.transact(0x02, 0, config_payload(300, 0, 0, 1, 0, 0, good)), 4, 0u);
+    EXPECT_NAK(bench.transact(0x07, 0, feed_payload(100, 0)), 4, 0u);
+    EXPECT_EQ(bench.rtl().scale_m_o, 0u);
+  } else {
+    const uint32_t wide = 1u << kScaleWidth;
+    EXPECT_NAK(bench.transact(0x02, 0, config_payload(300, 0, 0, 1, 0, 0, {wide, 3000, 2048, 17, 1})), 4, 0u);
+    EXPECT_NAK(bench.transact(0x02, 0, config_payload(300, 0, 0, 1, 0, 0, {5, wide, 2048, 17, 1})), 4, 0u);
+    EXPECT_NAK(bench.transact(0x02, 0, config_payload(300, 0, 0, 1, 0, 0, {5, 3000, wide, 17, 1})), 4, 0u);
+    EXPECT_NAK(bench.transact(0x02, 0, config_payload(300, 0, 0, 1, 0, 0, {5, 3000, 2048, 41, 1})), 4, 0u);
+    EXPECT_NAK(bench.transact(0x02, 0, config_payload(300, 0, 0, 1, 0, 0, {5, 3000, 2048, 17, 2})), 4, 0u);
+    EXPECT_EQ(bench.rtl().scale_m_o, 0u);
+    EXPECT_ACK(bench.transact(0x02, 0, config_payload(300, 0, 0, 1, 0, 0, good)), 0u);
+    EXPECT_EQ(bench.rtl().scale_m_o, 5u);
+    EXPECT_EQ(bench.rtl().scale_s_max_o, 3000u);
+    EXPECT_EQ(bench.rtl().scale_override_o, 2048u);
+    EXPECT_EQ(bench.rtl().scale_shift_o, 17u);
+    EXPECT_EQ(bench.rtl().scale_auto_o, 1u);
+    EXPECT_EQ(bench.rtl().hold_o, 0u);
+    EXPECT_NAK(bench.transact(0x07, 0, feed_payload(wide, 0)), 4, 0u);
+    EXPECT_NAK(bench.transact(0x07, 0, feed_payload(100, 2)), 4, 0u);
+    EXPECT_NAK(bench.transact(0x07, 0, feed_payload(100, 0, 1)), 4, 0u);
+    EXPECT_NAK(bench.transact(0x07, 0, std::vector<uint8_t>(4, 0)), 4, 0u);
+    EXPECT_ACK(bench.transact(0x07, 0, feed_payload(1234, 1)), 0u);
+    EXPECT_EQ(bench.rtl().scale_override_o, 1234u);
+    EXPECT_EQ(bench.rtl().hold_o, 1u);
+  }
+  // with m = 0 every other time-scaling byte must be 0
+  EXPECT_NAK(bench.transact(0x02, 0, config_payload(300, 0, 0, 1, 0, 0, {0, 3000, 0, 0, 0})), 4, 0u);
+  EXPECT_NAK(bench.transact(0x02, 0, config_payload(300, 0, 0, 1, 0, 0, {0, 0, 0, 0, 1})), 4, 0u);
+  // the old 24-byte CONFIG is refused
+  {
+    std::vector<uint8_t> p = config_payload(300, 0, 0, 1, 0, 0);
+    p.resize(24);
+    EXPECT_NAK(bench.transact(0x02, 0, p), 4, 0u);
+  }
+  if (kScaleWidth != 0) EXPECT_ACK(bench.transact(0x02, 0, config_payload(300, 0, 0, 1, 0, 0, good)), 0u);
+  else EXPECT_ACK(bench.transact(0x02, 0, config_payload(300, 0, 0, 1, 0, 0)), 0u);
+
+  // records with random K: each stored one's K comes out with stored_o
+  std::vector<uint32_t> ks;
+  for (uint32_t s = 0; s < 3; ++s) {
+    Record r = random_record(rng, s, 1);
+    r.K = static_cast<uint32_t>(1 + rng() % 0x01000000);
+    ks.push_back(r.K);
+    bench.send_record(r);
+    EXPECT_ACK(bench.await_answer(), s + 1);
+  }
+  EXPECT_EQ(bench.stored_ks, ks);
+  EXPECT_ACK(bench.transact(0x03, 0), 3u);
+  EXPECT_EQ(bench.rtl().run_o, 1u);
+  bench.run(3000);
+  // FEED while playing (no NAK 5), and STATUS with the unit's state
+  if (kScaleWidth != 0) {
+    EXPECT_ACK(bench.transact(0x07, 0, feed_payload(4000, 0)), 3u);
+    EXPECT_EQ(bench.rtl().hold_o, 0u);
+    EXPECT_EQ(bench.rtl().scale_override_o, 4000u);
+  }
+  const Answer st = bench.transact(0x06, 0);
+  ASSERT_TRUE(bench.ok()) << bench.why();
+  ASSERT_EQ(st.type, 0x83);
+  ASSERT_EQ(st.payload.size(), 48u + 8 * kAxes);
+  const uint64_t s_now = get_le(st.payload, 36, 4);
+  EXPECT_EQ((s_now - 3) % 7, 0u) << s_now;  // the bench's S = 7 pos + 3
+  EXPECT_EQ(get_le(st.payload, 40, 4), 1u);  // starved holds: the bench reports underruns + 1
+  EXPECT_GE(get_le(st.payload, 44, 4), 5u);  // ahead: the bench's rest + 5
+  ASSERT_TRUE(bench.ok()) << bench.why();
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# upload_cli.sh TRAJCORE DIR pipe|interrupt
+# upload_cli.sh TRAJCORE DIR pipe|interrupt|time_scale
 # pipe (upload.cli.raster_pipe): `trajcore plan --raster 2000 -o - | trajcore
 #   upload -` against `trajcore board --loopback` on a pseudo-terminal, then on
 #   TCP with faults.
@@ -7,11 +7,53 @@
 #   SIGINT (non-zero exit, the STOP message), then `--resume` to the end.
 # Either way the bytes the board played must equal the records of the same plan
 # written to a file (header 64 bytes and end record 16 bytes cut off).
+# time_scale (upload.cli.time_scale): a stream planned with --time-scale to the
+#   loopback board (no time-scale unit): its NAK 4 to CONFIG named with the
+#   values, nothing played, the control socket removed; the time-scaling
+#   options refused by name.
 set -euo pipefail
 T=$1
 dir=$2
 mode=${3:-pipe}
+assets=$(cd "$(dirname "$0")/../../host/assets" && pwd)
 rm -rf "$dir" && mkdir -p "$dir" && cd "$dir"
+
+if [ "$mode" = time_scale ]; then
+  "$T" plan "$assets/butterfly_nurbs.json" --time-scale 1.2 --period 3.125e-5 -o ts.trj > ts.txt 2>&1
+  "$T" plan --raster 5 -o plain.trj > plain.txt 2>&1
+  board=
+  trap '[ -n "$board" ] && kill "$board" 2>/dev/null; true' EXIT
+  "$T" board --loopback --speed 0 > ts.port 2> ts.board &
+  board=$!
+  for _ in $(seq 50); do [ -s ts.port ] && break; sleep 0.1; done
+  refused() {  # refused WHAT-IT-SAYS UPLOAD-ARGS...: non-zero exit, the message on stderr
+    local says=$1
+    shift
+    if "$T" upload "$@" --port "$(cat ts.port)" > out.txt 2> err.txt; then
+      echo "accepted: upload $*"
+      exit 1
+    fi
+    grep -v '^\[upload' err.txt
+    grep -qF -- "$says" err.txt || { echo "upload $*: the message does not say: $says"; exit 1; }
+  }
+  refused "refuses CONFIG as bad content: time scaling m 41, S_max 9830, override 6554, shift 24" ts.trj --feed 80 \
+    --control ts.sock
+  grep -qF "A build without the time-scale unit" err.txt
+  test ! -e ts.sock || { echo "the control socket was not removed"; exit 1; }
+  refused "--feed 200 %: the stream was planned for 0 .. 119.995 %" ts.trj --feed 200
+  refused "--servo-period 0.0007 s is not the engine tick" ts.trj --servo-period 0.0007
+  for opt in "--feed 80" "--servo-period 0.001" --no-auto-resume "--control plain.sock"; do
+    refused "the stream was planned without --time-scale" plain.trj $opt
+    grep -qF -- "${opt%% *}" err.txt
+  done
+  test ! -e plain.sock
+  kill -INT "$board"
+  wait "$board" || true
+  board=
+  grep -q "^board: 0 segments played" ts.board
+  echo "time_scale: the board without the unit refused the time-scaled job by name; the options were refused"
+  exit 0
+fi
 "$T" plan --raster 2000 -o plan.trj > plan.txt
 tail -c +65 plan.trj | head -c -16 > records.bin
 

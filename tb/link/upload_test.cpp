@@ -7,6 +7,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -22,22 +23,38 @@
 namespace traj::link {
 namespace {
 
-// A raster job of `pieces` pieces planned into a stream file once per size.
-const std::string& raster_stream(size_t pieces) {
-  static std::map<size_t, std::string> made;
-  auto it = made.find(pieces);
+// Time-scaling fields written into a stream header (as `trajcore plan
+// --time-scale` writes them); scale_max 0: none.
+struct ScaleHeader {
+  double scale_max = 0;
+  float rate = 0, accel = 0;
+  double period = 0;  // the engine tick written (0: the machine's)
+};
+
+// A raster job of `pieces` pieces planned into a stream file once per size
+// (and header).
+const std::string& raster_stream(size_t pieces, const ScaleHeader& ts = {}) {
+  static std::map<std::string, std::string> made;
+  const std::string key = std::to_string(pieces) + "_" + std::to_string(ts.scale_max) + "_" +
+                          std::to_string(ts.rate) + "_" + std::to_string(ts.accel) + "_" + std::to_string(ts.period);
+  auto it = made.find(key);
   if (it != made.end()) return it->second;
-  const std::string path =
-      (std::filesystem::temp_directory_path() / ("traj_link_raster_" + std::to_string(pieces) + "_" +
-                                                 std::to_string(::getpid()) + ".trj"))
-          .string();
+  const std::string path = (std::filesystem::temp_directory_path() /
+                            ("traj_link_raster_" + std::to_string(made.size()) + "_" + std::to_string(pieces) + "_" +
+                             std::to_string(::getpid()) + ".trj"))
+                               .string();
   job::JobConfig cfg;
   input::RasterSource src(pieces);
-  stream::StreamWriter w(path, cfg.machine.header());
+  stream::Header h = cfg.machine.header();
+  h.scale_max = ts.scale_max;
+  h.scale_rate = ts.rate;
+  h.scale_accel = ts.accel;
+  if (ts.period > 0) h.period = ts.period;  // records count ticks: any tick period plays them
+  stream::StreamWriter w(path, h);
   job::run_streaming(src, cfg, job::StreamOptions{},
                      [&](const fd::Compiled& c, const plan::TimeSegment&) { w.add({c.ticks, c.regs}); });
   w.finish();
-  return made[pieces] = path;
+  return made[key] = path;
 }
 
 std::vector<Bytes> file_records(const std::string& path) {
@@ -50,10 +67,115 @@ std::vector<Bytes> file_records(const std::string& path) {
   return out;
 }
 
-// The loopback board serving one end of an in-process pipe in its own thread.
+// A board with the time-scale unit as far as the host sees it: the loopback
+// board behind a filter that takes CONFIG's time-scaling fields (recorded,
+// then zeroed for the loopback), answers FEED itself (recorded; ACK, or NAK 4
+// when told to), and reports in STATUS the S of the last FEED or CONFIG (0
+// and the held flag while held).
+class TimeScaleShim : public Board {
+ public:
+  explicit TimeScaleShim(LoopbackBoard& inner) : inner_(inner) {}
+  void receive(const uint8_t* p, size_t n, Bytes& out) override {
+    events_.clear();
+    dec_.feed(p, n, events_);
+    for (auto& e : events_) {
+      if (!e.good) {
+        const Bytes bad = {kFlag, 0x01, kFlag};  // a bad body: the board's NAK 1
+        inner_.receive(bad.data(), bad.size(), out);
+        continue;
+      }
+      Frame f = e.frame;
+      if (f.type == Type::kFeed) {
+        on_feed(f, out);
+        continue;
+      }
+      if (f.type == Type::kConfig && f.payload.size() == kConfigBytes) on_config(f);
+      const size_t from = out.size();
+      const Bytes w = encode_frame(f);
+      inner_.receive(w.data(), w.size(), out);
+      patch_status(out, from);
+    }
+  }
+  void advance(double now, Bytes& out) override {
+    const size_t from = out.size();
+    inner_.advance(now, out);
+    patch_status(out, from);
+  }
+  void reset() override { inner_.reset(); }
+  bool end_reached() const override { return inner_.end_reached(); }
+  bool playing() const override { return inner_.playing(); }
+  uint64_t stored_total() const override { return inner_.stored_total(); }
+
+  std::vector<Config> configs() {
+    std::lock_guard<std::mutex> l(m_);
+    return configs_;
+  }
+  std::vector<Feed> feeds() {
+    std::lock_guard<std::mutex> l(m_);
+    return feeds_;
+  }
+  std::atomic<bool> refuse_feed{false};
+
+ private:
+  void on_config(Frame& f) {
+    std::lock_guard<std::mutex> l(m_);
+    configs_.push_back(decode_config(f.payload));
+    s_ = configs_.back().scale_override;
+    held_ = false;
+    std::fill(f.payload.begin() + 24, f.payload.end(), 0);
+  }
+  void on_feed(const Frame& f, Bytes& out) {
+    const Status s = inner_.status();
+    if (refuse_feed) {
+      const Bytes w = encode_frame(Type::kNak, s.next_seq, encode_nak({s.next_seq, 4, uint16_t(s.credits)}));
+      out.insert(out.end(), w.begin(), w.end());
+      return;
+    }
+    {
+      std::lock_guard<std::mutex> l(m_);
+      feeds_.push_back(decode_feed(f.payload));
+      s_ = feeds_.back().override_s;
+      held_ = feeds_.back().hold;
+    }
+    const Bytes w = encode_frame(Type::kAck, s.next_seq, encode_ack({s.next_seq, uint16_t(s.credits)}));
+    out.insert(out.end(), w.begin(), w.end());
+  }
+  // The inner board's STATUS frames from `from` on, with S and the held flag.
+  void patch_status(Bytes& out, size_t from) {
+    std::vector<FrameDecoder::Event> ev;
+    FrameDecoder d;
+    d.feed(out.data() + from, out.size() - from, ev);
+    Bytes again;
+    for (auto& e : ev) {
+      if (e.frame.type == Type::kStatus) {
+        Status s = decode_status(e.frame);
+        std::lock_guard<std::mutex> l(m_);
+        s.scale_s = held_ ? 0 : s_;
+        if (held_) s.flags |= status_flag::kHeld;
+        e.frame.payload = encode_status(s);
+      }
+      const Bytes w = encode_frame(e.frame);
+      again.insert(again.end(), w.begin(), w.end());
+    }
+    out.resize(from);
+    out.insert(out.end(), again.begin(), again.end());
+  }
+  LoopbackBoard& inner_;
+  FrameDecoder dec_;
+  std::vector<FrameDecoder::Event> events_;
+  std::mutex m_;
+  std::vector<Config> configs_;
+  std::vector<Feed> feeds_;
+  uint32_t s_ = 0;
+  bool held_ = false;
+};
+
+// The loopback board (or, with time_scale, the loopback board behind the
+// TimeScaleShim) serving one end of an in-process pipe in its own thread.
 class Rig {
  public:
-  Rig(BoardOptions bo, FaultOptions fo) : board_(bo), faults_(fo) {
+  Rig(BoardOptions bo, FaultOptions fo, bool time_scale = false) : board_(bo), faults_(fo) {
+    if (time_scale) shim_ = std::make_unique<TimeScaleShim>(board_);
     board_.on_played = [this](uint32_t, const Bytes& r) {
       std::lock_guard<std::mutex> l(m_);
       played_.push_back(r);
@@ -68,7 +190,8 @@ class Rig {
     host_ = std::move(host);
     dev_ = std::move(dev);
     stop_ = false;
-    thread_ = std::thread([this] { serve(*dev_, board_, stop_, faults_, stats_); });
+    Board& b = shim_ ? static_cast<Board&>(*shim_) : board_;
+    thread_ = std::thread([this, &b] { serve(*dev_, b, stop_, faults_, stats_); });
   }
   void disconnect() {
     if (!thread_.joinable()) return;
@@ -84,9 +207,11 @@ class Rig {
   }
   const ServeStats& stats() const { return stats_; }
   LoopbackBoard& board() { return board_; }
+  TimeScaleShim& shim() { return *shim_; }
 
  private:
   LoopbackBoard board_;
+  std::unique_ptr<TimeScaleShim> shim_;
   FaultOptions faults_;
   ServeStats stats_;
   std::unique_ptr<Transport> host_, dev_;
@@ -396,6 +521,327 @@ TEST(Upload, TruncatedStreamStopsTheBoard) {
   EXPECT_FALSE(s.flags & status_flag::kPlaying);
   EXPECT_EQ(s.underruns, 0u);
   EXPECT_GT(s.fifo_level, 0);  // the rest of the FIFO is kept, not played
+}
+
+}  // namespace
+}  // namespace traj::link
+
+namespace traj::link {
+namespace {
+
+// ---- time scaling ------------------------------------------------------------
+
+// Ramp bounds as `trajcore plan --time-scale 1.5` writes them, at an engine
+// tick of 0.25 ms: at the default servo tick of 1 ms (2^2 engine ticks) the
+// integer bounds are, by hand: scale bits 16 (2^-16 = 1.53e-5 <= accel H^2 =
+// 2e-5 < 2^-15), m = floor(2 x 1e-3 x 2^16) = 131, S_max = 1.5 x 2^16 = 98304,
+// shift = 32 - 16 + 2 = 18.
+const ScaleHeader kScaled{1.5, 2.0f, 20.0f, 0.25e-3};
+
+stream::Header scaled_header(double period = kScaled.period) {
+  stream::Header h;
+  h.period = period;
+  h.scale_max = kScaled.scale_max;
+  h.scale_rate = kScaled.rate;
+  h.scale_accel = kScaled.accel;
+  return h;
+}
+
+std::string setup_error(const stream::Header& h, const UploadOptions& o) {
+  try {
+    time_scale_setup(h, o);
+  } catch (const UploadError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(TimeScaleSetup, FromTheHeaderAtTheDefaultServoTick) {
+  const TimeScaleSetup t = time_scale_setup(scaled_header(), {});
+  ASSERT_TRUE(t.on);
+  EXPECT_DOUBLE_EQ(t.servo_period, 1e-3);
+  EXPECT_EQ(t.p, 2);
+  EXPECT_EQ(t.bounds.scale_bits, 16);
+  EXPECT_EQ(t.bounds.m, 131);
+  EXPECT_EQ(t.bounds.s_max, 98304);
+  EXPECT_EQ(t.shift(), 18);
+  EXPECT_EQ(t.override_s, 65536);  // 100 %
+  Config c;
+  t.apply(c);
+  EXPECT_EQ(c.scale_m, 131u);
+  EXPECT_EQ(c.scale_s_max, 98304u);
+  EXPECT_EQ(c.scale_override, 65536u);
+  EXPECT_EQ(c.scale_shift, 18);
+  EXPECT_EQ(c.scale_flags, 1);  // auto-resume
+  // the largest engine tick x 2^p within 1 ms, p >= 0
+  EXPECT_DOUBLE_EQ(time_scale_setup(scaled_header(0.3e-3), {}).servo_period, 0.6e-3);
+  EXPECT_DOUBLE_EQ(time_scale_setup(scaled_header(1e-3), {}).servo_period, 1e-3);
+  const TimeScaleSetup slow = time_scale_setup(scaled_header(2e-3), {});
+  EXPECT_DOUBLE_EQ(slow.servo_period, 2e-3);
+  EXPECT_EQ(slow.p, 0);
+}
+
+TEST(TimeScaleSetup, Options) {
+  UploadOptions o;
+  o.servo_period_s = 0.5e-3;  // 2 engine ticks: scale bits 18 (2^-18 <= 20 x 0.25e-6 < 2^-17)
+  o.feed_percent = 80;
+  o.auto_resume = false;
+  const TimeScaleSetup t = time_scale_setup(scaled_header(), o);
+  EXPECT_EQ(t.p, 1);
+  EXPECT_EQ(t.bounds.scale_bits, 18);
+  EXPECT_EQ(t.bounds.m, 262);        // floor(2 x 0.5e-3 x 2^18 = 262.1)
+  EXPECT_EQ(t.bounds.s_max, 393216);  // 1.5 x 2^18
+  EXPECT_EQ(t.shift(), 15);
+  EXPECT_EQ(t.override_s, 209715);  // round(0.8 x 2^18 = 209715.2)
+  Config c;
+  t.apply(c);
+  EXPECT_EQ(c.scale_flags, 0);
+  o = {};
+  o.feed_percent = 150;
+  EXPECT_EQ(time_scale_setup(scaled_header(), o).override_s, 98304);
+  o.feed_percent = 0;
+  EXPECT_EQ(time_scale_setup(scaled_header(), o).override_s, 0);
+  // refused, naming the option
+  o.feed_percent = 151;
+  EXPECT_NE(setup_error(scaled_header(), o).find("--feed 151 %: the stream was planned for 0 .. 150 %"),
+            std::string::npos)
+      << setup_error(scaled_header(), o);
+  // the header holds scale_max rounded down to 1/4096: up to that much more is S_max
+  o.feed_percent = 150.02;
+  EXPECT_EQ(time_scale_setup(scaled_header(), o).override_s, 98304);
+  o.feed_percent = 150.03;
+  EXPECT_NE(setup_error(scaled_header(), o).find("--feed 150.03 %"), std::string::npos);
+  o.feed_percent = -1;
+  EXPECT_NE(setup_error(scaled_header(), o).find("--feed -1"), std::string::npos);
+  o = {};
+  for (double bad : {0.75e-3, 0.125e-3, 1.0001e-3}) {
+    o.servo_period_s = bad;
+    EXPECT_NE(setup_error(scaled_header(), o).find("is not the engine tick (0.00025 s"), std::string::npos)
+        << setup_error(scaled_header(), o);
+  }
+  // bounds the unit cannot take: a jerk step below 2^-40 per servo tick
+  stream::Header h = scaled_header();
+  h.scale_accel = 1e-9f;
+  EXPECT_NE(setup_error(h, {}).find("scale bits"), std::string::npos) << setup_error(h, {});
+  EXPECT_NE(setup_error(h, {}).find("--servo-period"), std::string::npos);
+}
+
+TEST(TimeScaleSetup, OptionsRefusedWithoutTimeScaling) {
+  stream::Header h;  // scale_max 0
+  const TimeScaleSetup t = time_scale_setup(h, {});
+  EXPECT_FALSE(t.on);
+  EXPECT_DOUBLE_EQ(t.servo_period, h.period);
+  Config c;
+  t.apply(c);
+  EXPECT_EQ(encode_config(c), encode_config(Config{}));
+  FeedControls none;
+  const std::pair<const char*, std::function<void(UploadOptions&)>> cases[] = {
+      {"--feed", [](UploadOptions& o) { o.feed_percent = 100; }},
+      {"--servo-period", [](UploadOptions& o) { o.servo_period_s = 1e-3; }},
+      {"--no-auto-resume", [](UploadOptions& o) { o.auto_resume = false; }},
+      {"--control", [&](UploadOptions& o) { o.feed_control = &none; }},
+  };
+  for (const auto& [name, set] : cases) {
+    UploadOptions o;
+    set(o);
+    const std::string e = setup_error(h, o);
+    EXPECT_NE(e.find(name), std::string::npos) << e;
+    EXPECT_NE(e.find("the stream was planned without --time-scale"), std::string::npos) << e;
+  }
+}
+
+// The loopback board has no time-scale unit: its NAK 4 to the CONFIG is
+// reported with the values, nothing is played.
+TEST(Upload, TimeScaledStreamOnABoardWithoutTheUnitIsNamed) {
+  const auto& path = raster_stream(10, kScaled);
+  Rig rig(fast_board(), {});
+  try {
+    run(rig, path);
+    FAIL() << "a board without the time-scale unit took a time-scaled job";
+  } catch (const UploadError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("refuses CONFIG as bad content"), std::string::npos) << m;
+    EXPECT_NE(m.find("m 131, S_max 98304, override 65536, shift 18"), std::string::npos) << m;
+    EXPECT_NE(m.find("without the time-scale unit"), std::string::npos) << m;
+  }
+  EXPECT_TRUE(rig.played().empty());
+  EXPECT_EQ(rig.board().status().fifo_level, 0);
+}
+
+TEST(Upload, TimeScalingOptionsAreRefusedBeforeTheBoardIsTouched) {
+  const auto& path = raster_stream(10);
+  Rig rig(fast_board(), {});
+  UploadOptions o = tool();
+  o.feed_percent = 80;
+  try {
+    run(rig, path, o);
+    FAIL() << "--feed was taken for a stream without time scaling";
+  } catch (const UploadError& e) {
+    EXPECT_NE(std::string(e.what()).find("--feed: the stream was planned without --time-scale"), std::string::npos)
+        << e.what();
+  }
+  rig.disconnect();
+  EXPECT_EQ(rig.board().status().bytes_received, 0u);
+}
+
+// A scripted operator: each step runs once its condition holds, in order.
+class Script : public FeedControl {
+ public:
+  struct Step {
+    std::function<bool(const FeedState&)> when;
+    std::function<void(FeedPort&)> act;
+  };
+  std::vector<Step> steps;
+  size_t done = 0;
+  std::vector<std::string> refused;
+  void poll(FeedPort& port) override {
+    if (done >= steps.size() || !steps[done].when(port.feed_state())) return;
+    try {
+      steps[done].act(port);
+    } catch (const FeedRefused& e) {
+      refused.push_back(e.what());
+    }
+    ++done;
+  }
+};
+
+BoardOptions paced_board() {
+  BoardOptions bo = fast_board(16);
+  bo.speed = 20;  // 450 records in about 0.8 s; the board's STATUS every 5 ms
+  return bo;
+}
+
+// CONFIG carries the servo tick and the time-scaling fields; feed changes
+// while playing go out as FEED (each acknowledged), the board's S and held
+// flag come back in the progress; every record is played once, in order.
+TEST(Upload, TimeScaledJobWithLiveFeedChanges) {
+  const auto& path = raster_stream(40, kScaled);
+  Rig rig(paced_board(), {}, true);
+  Script op;
+  std::vector<FeedState> seen;
+  op.steps = {
+      {[](const FeedState& f) { return f.have_status; }, [](FeedPort& p) { p.set_feed(50, false); }},
+      {[](const FeedState& f) { return f.s == 32768; }, [](FeedPort& p) { p.set_feed(50, true); }},
+      {[](const FeedState& f) { return f.held; }, [](FeedPort& p) { p.set_feed(151, false); }},
+      {[](const FeedState&) { return true; }, [](FeedPort& p) { p.set_feed(120, false); }},
+  };
+  UploadOptions o = tool();
+  o.feed_control = &op;
+  RecordSource src(path);
+  const auto r = upload(rig.port(), src, o, [&](const UploadProgress& p) { seen.push_back(p.feed); });
+  rig.disconnect();
+  EXPECT_TRUE(rig.played() == file_records(path));
+  ASSERT_EQ(op.done, op.steps.size());
+  ASSERT_EQ(op.refused.size(), 1u);
+  EXPECT_NE(op.refused[0].find("feed 151 %: the stream was planned for 0 .. 150 %"), std::string::npos)
+      << op.refused[0];
+  const auto configs = rig.shim().configs();
+  ASSERT_EQ(configs.size(), 1u);
+  const Config& c = configs[0];
+  EXPECT_EQ(c.tick_clocks, 30000u);  // the servo tick, 1 ms at 30 MHz
+  EXPECT_EQ(c.status_ticks, 100u);   // 0.1 s in servo ticks
+  EXPECT_EQ(c.scale_m, 131u);
+  EXPECT_EQ(c.scale_s_max, 98304u);
+  EXPECT_EQ(c.scale_override, 65536u);
+  EXPECT_EQ(c.scale_shift, 18);
+  EXPECT_EQ(c.scale_flags, config_flag::kAutoResume);
+  const auto feeds = rig.shim().feeds();
+  ASSERT_EQ(feeds.size(), 3u);
+  EXPECT_EQ(feeds[0].override_s, 32768u);
+  EXPECT_FALSE(feeds[0].hold);
+  EXPECT_EQ(feeds[1].override_s, 32768u);
+  EXPECT_TRUE(feeds[1].hold);
+  EXPECT_EQ(feeds[2].override_s, 78643u);  // round(1.2 x 2^16 = 78643.2)
+  EXPECT_FALSE(feeds[2].hold);
+  EXPECT_TRUE(r.progress.time_scaling);
+  EXPECT_EQ(r.progress.feed.target_s, 78643);
+  EXPECT_FALSE(r.progress.feed.hold);
+  EXPECT_NEAR(r.progress.feed.effective_percent(), 120.0, 1e-3);
+  EXPECT_TRUE(std::any_of(seen.begin(), seen.end(), [](const FeedState& f) { return f.held && f.s == 0; }));
+}
+
+// A FEED the board refuses (NAK 4) is named with its value; the job goes on.
+TEST(Upload, FeedRefusedByTheBoardIsNamedAndTheJobGoesOn) {
+  const auto& path = raster_stream(10, kScaled);
+  Rig rig(fast_board(), {}, true);
+  rig.shim().refuse_feed = true;
+  Script op;
+  op.steps = {{[](const FeedState&) { return true; }, [](FeedPort& p) { p.set_feed(50, false); }}};
+  UploadOptions o = tool();
+  o.feed_control = &op;
+  RecordSource src(path);
+  const auto r = upload(rig.port(), src, o);
+  rig.disconnect();
+  ASSERT_EQ(op.refused.size(), 1u);
+  EXPECT_NE(op.refused[0].find("the board refuses FEED override 32768 (50 %): bad content"), std::string::npos)
+      << op.refused[0];
+  EXPECT_EQ(r.progress.feed.target_s, 65536);  // unchanged
+  EXPECT_TRUE(rig.played() == file_records(path));
+}
+
+// Ctrl-C with time scaling: STOP is a hold on the path, the message says so;
+// --resume sends the feed it starts with (--feed) and plays the rest once.
+TEST(Upload, InterruptWithTimeScalingThenResume) {
+  const auto& path = raster_stream(40, kScaled);
+  Rig rig(fast_board(), {}, true);
+  std::atomic<bool> interrupted{false};
+  UploadOptions o = tool();
+  o.interrupted = &interrupted;
+  {
+    RecordSource src(path);
+    try {
+      upload(rig.port(), src, o, [&](const UploadProgress& p) {
+        if (p.acked >= 150) interrupted = true;
+      });
+      FAIL() << "the interrupted upload succeeded";
+    } catch (const UploadError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("interrupted: STOP sent and acknowledged; the board holds"), std::string::npos) << m;
+      EXPECT_NE(m.find("stops on the path"), std::string::npos) << m;
+      EXPECT_NE(m.find("START (`--resume`) continues"), std::string::npos) << m;
+    }
+  }
+  EXPECT_TRUE(rig.shim().feeds().empty());
+  rig.connect();
+  UploadOptions again = tool();
+  again.resume = true;
+  again.feed_percent = 70;
+  const auto r = run(rig, path, again);
+  EXPECT_GE(r.first_seq, 150u);
+  rig.disconnect();
+  EXPECT_TRUE(rig.played() == file_records(path));
+  const auto feeds = rig.shim().feeds();
+  ASSERT_EQ(feeds.size(), 1u);
+  EXPECT_EQ(feeds[0].override_s, 45875u);  // round(0.7 x 2^16 = 45875.2)
+  EXPECT_FALSE(feeds[0].hold);
+}
+
+// --resume with a time-scaled stream on a board whose job has no time
+// scaling (the loopback board): its NAK 4 to the FEED is named.
+TEST(Upload, ResumeWithTimeScalingOnABoardWithoutItIsNamed) {
+  Rig rig(fast_board(), {});
+  std::atomic<bool> interrupted{false};
+  UploadOptions o = tool();
+  o.interrupted = &interrupted;
+  {
+    RecordSource src(raster_stream(40));
+    EXPECT_THROW(upload(rig.port(), src, o, [&](const UploadProgress& p) { interrupted = p.acked >= 150; }),
+                 UploadError);
+  }
+  const size_t before = rig.played().size();
+  rig.connect();
+  UploadOptions again = tool();
+  again.resume = true;
+  try {
+    run(rig, raster_stream(40, kScaled), again);
+    FAIL() << "a time-scaled --resume went on without the board's FEED";
+  } catch (const UploadError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("the board refuses FEED override 65536 (100 %): bad content"), std::string::npos) << m;
+    EXPECT_NE(m.find("--resume of a time-scaled job"), std::string::npos) << m;
+  }
+  rig.disconnect();
+  EXPECT_EQ(rig.played().size(), before);
 }
 
 }  // namespace

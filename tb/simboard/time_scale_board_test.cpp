@@ -1,0 +1,310 @@
+// SPDX-License-Identifier: Apache-2.0
+// Time scaling on the simulated board (rtl/traj_board.sv with its
+// traj_time_scale, Verilated): feed override and feed hold over the link
+// (FEED), a hold from the board's pin, and starvation (the host stops
+// sending for a while), each at random servo ticks of the butterfly and of a
+// G1 polyline with blended corners. A small sender in this file plays the
+// role of the upload tool, in board time, so that every run is reproducible
+// from its seed. Checked on the board's own output samples (one per servo
+// tick, the step generator's input), apart from the code that plans and the
+// unit's reference:
+//   * on the path: every sample lies on the polyline through the unscaled
+//     trajectory's engine samples (the host's exact prediction), within
+//     2 LSB per axis, at a position that never goes back and advances by at
+//     most s_max engine ticks per engine tick: the same points, re-timed;
+//   * limits: per-axis velocity, acceleration and jerk from the samples'
+//     differences at the servo tick <= 1.00 x the machine's limits (the plan
+//     keeps 70 % / 40 % of them, the ramp bounds the rest);
+//   * no underrun, no tick error; a starved hold is counted and resumes;
+//     a hold comes to rest (S = 0, the output still) and resumes from there;
+//   * the job ends on its last sample (nothing lost) with the end reported.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <random>
+#include <sstream>
+
+#include "board/sim_board.hpp"
+#include "board/step_check.hpp"
+#include "input/gcode.hpp"
+#include "job/toolpath_job.hpp"
+#include "link/frame.hpp"
+#include "link/record_source.hpp"
+#include "stream/segment_stream.hpp"
+#include "test_seed.hpp"
+#include "timescale/scaled_butterfly.hpp"
+
+namespace traj {
+namespace {
+
+using board::BoardBuild;
+using board::SimulatedBoard;
+
+constexpr double kServo = 1e-3;  // servo tick, s
+constexpr int kP = 3;            // 2^3 engine ticks of 125 us per servo tick
+constexpr double kEngineTick = kServo / (1 << kP);
+constexpr double kSMax = 1.2;
+
+// What happens when, in servo ticks after START.
+struct Event {
+  enum Kind { kOverride, kFeedHold, kPinHold, kStarve } kind;
+  uint64_t at, length;  // hold and starve: for `length` servo ticks
+  double value = 0;     // override: the new s
+};
+
+struct Run {
+  std::vector<int64_t> out;  // output samples, 3 per servo tick
+  std::vector<link::Status> statuses;
+  link::Status last;
+  bool ended = false;
+  uint64_t servo_ticks = 0;
+};
+
+// The stream of `p` with its time-scaling fields, written where the link's
+// record source reads it.
+std::string write_stream(ScaledPlan& p, const timescale::RampBounds& rb, const std::string& name) {
+  p.res.header.scale_max = std::floor(kSMax * stream::kScaleMaxUnit) / stream::kScaleMaxUnit;
+  p.res.header.scale_rate = static_cast<float>(rb.rate);
+  p.res.header.scale_accel = static_cast<float>(rb.accel);
+  const std::string path = (std::filesystem::temp_directory_path() / (name + "_" + std::to_string(::getpid()) + ".trj")).string();
+  stream::write_file(path, p.res.header, job::records_of(p.res));
+  return path;
+}
+
+// Plays `stream_path` on a simulated board with the events, as the upload
+// tool would (RESET, CONFIG with time scaling, records kept `ahead_ticks`
+// engine ticks ahead of the board, START, END), in board time.
+Run play(const std::string& stream_path, const timescale::IntBounds& ib, const std::vector<Event>& events,
+         uint64_t ahead_ticks) {
+  SimulatedBoard b;
+  b.keep_samples(true);
+  link::FrameDecoder dec;
+  Run r;
+  uint32_t acked = 0;
+  link::Bytes out;
+  auto send = [&](link::Type t, uint32_t seq, const link::Bytes& payload = {}) {
+    const link::Bytes f = link::encode_frame(t, seq, payload);
+    b.receive(f.data(), f.size(), out);
+  };
+  auto step = [&](uint64_t cycles) {
+    out.clear();
+    b.run(cycles, out);
+    std::vector<link::FrameDecoder::Event> ev;
+    dec.feed(out.data(), out.size(), ev);
+    for (const auto& e : ev) {
+      ASSERT_TRUE(e.good) << e.why;
+      const link::Frame& f = e.frame;
+      if (f.type == link::Type::kNak) FAIL() << "NAK " << int(link::decode_nak(f).reason) << " at seq " << f.seq;
+      if (f.type == link::Type::kAck) acked = f.seq;
+      if (f.type == link::Type::kStatus) {
+        r.last = link::decode_status(f);
+        acked = f.seq;
+        r.statuses.push_back(r.last);
+      }
+    }
+  };
+  const uint64_t clocks = std::llround(kServo * BoardBuild::kClkHz);
+  send(link::Type::kReset, 0);
+  step(20000);
+  link::Config c;
+  c.tick_clocks = static_cast<uint32_t>(clocks);
+  c.status_ticks = 5;
+  for (int a = 0; a < 8; ++a) c.step_shift[a] = 26;
+  c.pulse_clocks = 30;
+  c.dir_setup_clocks = 60;
+  c.enable = 1;
+  c.scale_m = static_cast<uint32_t>(ib.m);
+  c.scale_s_max = static_cast<uint32_t>(ib.s_max);
+  c.scale_override = 1u << ib.scale_bits;
+  c.scale_shift = static_cast<uint8_t>(32 - ib.scale_bits + kP);
+  c.scale_flags = link::config_flag::kAutoResume;
+  send(link::Type::kConfig, 0, link::encode_config(c));
+  step(20000);
+
+  link::RecordSource src(stream_path, 0);
+  link::Bytes rec;
+  uint32_t sent = 0;
+  bool more = true, end_sent = false;
+  uint64_t ahead_known = 0;  // engine ticks ahead, from the last STATUS
+  auto feed = [&](double s, bool hold) {
+    link::Feed f;
+    f.override_s = static_cast<uint32_t>(std::llround(std::ldexp(s, ib.scale_bits)));
+    f.hold = hold;
+    send(link::Type::kFeed, 0, link::encode_feed(f));
+  };
+  // prefill: one second of motion, then START
+  uint64_t queued = 0;
+  while (more && queued < ahead_ticks && (more = src.next(rec))) {
+    send(link::Type::kSegment, sent++, rec);
+    queued += link::get_u32(&rec[4]);
+    step(4000);
+  }
+  send(link::Type::kStart, 0);
+  uint64_t tick = 0;
+  bool feed_hold = false;
+  double override_s = 1;
+  const uint64_t limit_ticks = 120000;
+  while (tick < limit_ticks) {
+    // the events of this servo tick
+    bool starving = false;
+    for (const Event& e : events) {
+      const bool in = tick >= e.at && tick < e.at + e.length;
+      switch (e.kind) {
+        case Event::kOverride:
+          if (tick == e.at) feed(override_s = e.value, feed_hold);
+          break;
+        case Event::kFeedHold:
+          if (tick == e.at) feed(override_s, feed_hold = true);
+          if (tick == e.at + e.length) feed(override_s, feed_hold = false);
+          break;
+        case Event::kPinHold:
+          if (tick == e.at) b.set_hold_pin(true);
+          if (tick == e.at + e.length) b.set_hold_pin(false);
+          break;
+        case Event::kStarve:
+          starving = starving || in;
+          break;
+      }
+    }
+    // keep the board `ahead_ticks` engine ticks ahead (by its STATUS; the
+    // records in flight count as sent), unless starving it
+    ahead_known = r.last.ticks_ahead;
+    if (!starving && more && acked == sent && ahead_known < ahead_ticks) {
+      if ((more = src.next(rec))) send(link::Type::kSegment, sent++, rec);
+    }
+    if (!more && !end_sent && acked == sent) {
+      send(link::Type::kEnd, sent);
+      end_sent = true;
+    }
+    // after END, ask: the periodic STATUS stops with the ticks
+    if (end_sent && tick % 50 == 0) send(link::Type::kStatusReq, 0);
+    step(clocks);
+    ++tick;
+    if (r.last.flags & link::status_flag::kEndReached) break;
+  }
+  EXPECT_LT(tick, limit_ticks) << "the job did not end";
+  b.drain();
+  r.ended = (r.last.flags & link::status_flag::kEndReached) != 0;
+  r.out = b.samples();
+  r.servo_ticks = b.sample_cycles().size();
+  return r;
+}
+
+// The checks above, on the run's output against the unscaled engine samples.
+void check(const ScaledPlan& p, const timescale::IntBounds& ib, const Run& r, const std::vector<Event>& events) {
+  ASSERT_TRUE(r.ended);
+  EXPECT_EQ(r.last.underruns, 0u);
+  EXPECT_EQ(r.last.flags & (link::status_flag::kTickError | link::status_flag::kUnderrunHalt), 0);
+  const uint64_t m = r.out.size() / 3;
+  ASSERT_GT(m, 10u);
+  // on the path (2 LSB: the engine samples' rounding and the interpolation's
+  // floor), at most s_max 2^p engine ticks per servo tick, ending on the last sample
+  const board::PathCheck pc = board::check_on_path(p.samples, r.out, 3, 2.0, kSMax * (1 << kP));
+  std::printf("  %s", board::describe(pc).c_str());
+  EXPECT_TRUE(pc.ok()) << pc.first_problem;
+  // limits at the servo tick
+  double worst[3] = {0, 0, 0};
+  const char* names[3] = {"velocity", "acceleration", "jerk"};
+  for (uint64_t t = 3; t < m; ++t)
+    for (int a = 0; a < 3; ++a) {
+      auto x = [&](uint64_t k) { return static_cast<double>(r.out[3 * k + a]) * p.lsb; };
+      const double d1 = x(t) - x(t - 1), d2 = d1 - (x(t - 1) - x(t - 2)), d3 = d2 - (x(t - 1) - 2 * x(t - 2) + x(t - 3));
+      const double H = kServo;
+      worst[0] = std::max(worst[0], std::fabs(d1) / H / p.limits[a].v);
+      worst[1] = std::max(worst[1], std::fabs(d2) / (H * H) / p.limits[a].a);
+      worst[2] = std::max(worst[2], std::fabs(d3) / (H * H * H) / p.limits[a].j);
+    }
+  for (int i2 = 0; i2 < 3; ++i2) {
+    std::printf("  %s: %.3f of the limit at most\n", names[i2], worst[i2]);
+    EXPECT_LE(worst[i2], 1.0) << names[i2];
+  }
+  // holds come to rest (S = 0) and resume; starvation is counted
+  bool starve = false, hold = false;
+  for (const Event& e : events) {
+    starve = starve || e.kind == Event::kStarve;
+    hold = hold || e.kind == Event::kFeedHold || e.kind == Event::kPinHold;
+  }
+  bool starved_flag = false;
+  uint32_t s_max_seen = 0;
+  for (const link::Status& s : r.statuses) {
+    starved_flag = starved_flag || (s.flags & link::status_flag::kStarved);
+    s_max_seen = std::max(s_max_seen, s.scale_s);
+  }
+  EXPECT_LE(s_max_seen, ib.s_max);
+  // each hold is at rest (S = 0, held) by its end; STATUS counts servo ticks
+  // from START as the events do
+  for (const Event& e : events) {
+    if (e.kind != Event::kFeedHold && e.kind != Event::kPinHold) continue;
+    bool rest = false;
+    for (const link::Status& s : r.statuses)
+      if (s.ticks_played >= e.at && s.ticks_played < e.at + e.length && s.scale_s == 0 &&
+          (s.flags & link::status_flag::kHeld))
+        rest = true;
+    EXPECT_TRUE(rest) << "the hold at servo tick " << e.at << " did not come to rest";
+  }
+  (void)hold;
+  if (starve) {
+    EXPECT_GE(r.last.starved_holds, 1u);
+    EXPECT_TRUE(starved_flag);
+  }
+  std::printf("  %llu servo ticks, %u starved holds, largest S %u (s %.3f)\n",
+              static_cast<unsigned long long>(r.servo_ticks), r.last.starved_holds, s_max_seen,
+              std::ldexp(static_cast<double>(s_max_seen), -ib.scale_bits));
+}
+
+// Random event ticks over the motion (the unscaled duration in servo ticks).
+std::vector<Event> random_events(std::mt19937_64& rng, uint64_t motion_ticks) {
+  auto at = [&](double lo, double hi) {
+    return static_cast<uint64_t>(motion_ticks * (lo + (hi - lo) * std::uniform_real_distribution<double>(0, 1)(rng)));
+  };
+  std::vector<Event> e;
+  e.push_back({Event::kOverride, at(0.05, 0.15), 0, 1.2});
+  e.push_back({Event::kFeedHold, at(0.2, 0.3), 900, 0});
+  e.push_back({Event::kOverride, at(0.35, 0.45), 0, 0.5});
+  e.push_back({Event::kPinHold, at(0.5, 0.6), 900, 0});
+  e.push_back({Event::kOverride, at(0.62, 0.65), 0, 1.0});
+  e.push_back({Event::kStarve, at(0.7, 0.8), 2500, 0});
+  for (const Event& x : e)
+    std::printf("  event %d at servo tick %llu for %llu (%g)\n", x.kind, static_cast<unsigned long long>(x.at),
+                static_cast<unsigned long long>(x.length), x.value);
+  return e;
+}
+
+void run_case(ScaledPlan p, const std::string& name, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  const timescale::OutputError err{kEngineTick, kServo, p.lsb};
+  const timescale::RampBounds rb = timescale::derive_ramp_bounds(p.peaks, p.limits, kSMax, err);
+  const timescale::IntBounds ib = timescale::integer_bounds(rb, kServo);
+  std::printf("  ramp bounds: |ds/dt| <= %.4g /s, |d2s/dt2| <= %.4g /s^2; scale bits %d, m %lld, S_max %lld\n", rb.rate,
+              rb.accel, ib.scale_bits, static_cast<long long>(ib.m), static_cast<long long>(ib.s_max));
+  const std::string path = write_stream(p, rb, name);
+  const uint64_t motion_ticks = p.n >> kP;
+  const std::vector<Event> events = random_events(rng, motion_ticks);
+  // 1 s of motion ahead (twice the longest stop and more, so that a starved
+  // hold resumes once the data is back): a starvation of 2.5 s empties it
+  const Run r = play(path, ib, events, 8 * 1000);
+  std::filesystem::remove(path);
+  check(p, ib, r, events);
+}
+
+TEST(SimBoardTimeScale, ButterflyHoldOverrideStarvation) {
+  ScaledPlan p = scaled_plan(butterfly_path(), job::JobConfig{}, kEngineTick, 96);
+  run_case(std::move(p), "butterfly", test::test_seed(16));
+}
+
+TEST(SimBoardTimeScale, G1PolylineHoldOverrideStarvation) {
+  // a zigzag of G1 moves, its corners blended (G64 P0.01)
+  std::istringstream g(
+      "G21 G90 G64 P0.01 F3000\nG1 X0 Y0\nG1 X20 Y5\nG1 X5 Y15\nG1 X30 Y20\nG1 X10 Y35\nG1 X40 Y40\nG1 X0 Y45\n"
+      "G1 X25 Y60\nM2\n");
+  const input::Toolpath tp = input::read_gcode(g, "zigzag.ngc");
+  const job::ToolpathPlan tpp = job::toolpath_plan(tp, job::JobConfig{});
+  ScaledPlan p = scaled_plan(tpp.path, tpp.cfg, kEngineTick, 96);
+  run_case(std::move(p), "zigzag", test::test_seed(17));
+}
+
+}  // namespace
+}  // namespace traj
