@@ -20,7 +20,8 @@
 //   * before the step, unless `end`: one more servo tick at the target then a
 //     stop (simulated, one S-curve step per clock) must fit within the
 //     samples ahead, else the unit holds by itself (starved, counted); once
-//     starved, it resumes (auto_resume) when twice that fits;
+//     starved, it resumes (auto_resume) when twice a tick at the target
+//     and a stop from it (simulated from S = target, k = 0) fit;
 //   * the engine is ticked (eng_tick_o, one strobe, the next after its
 //     eng_valid_i) until the window (y0, y1) holds samples index(phi) and
 //     index(phi) + 1; the first servo tick with 2 samples available primes
@@ -134,8 +135,14 @@ class TimeScale {
           sim_tgt_q_ = tgt0;
           st_d = kAhead;
         } else if (in.auto_resume && !in.hold) {
+          // resume when twice a tick at the target and a stop from it fit:
+          // the stop simulated from S = the target, k = 0
           resume_q_ = true;
           sim_tgt_q_ = ov;
+          sim_s_q_ = ov;
+          sim_k_q_ = 0;
+          sim_b_q_ = 0;
+          sum_q_ = static_cast<uint64_t>(ov);
           st_d = kAhead;
         } else {
           st_d = kStA;
@@ -150,7 +157,7 @@ class TimeScale {
       }
       case kShr:  // room = ahead >> shift, a bit per clock
         if (sc_q_ == 0) {
-          mode_q_ = kFirst;
+          mode_q_ = resume_q_ ? kLoop : kFirst;
           st_d = kStA;
         } else {
           room_q_ >>= 1;

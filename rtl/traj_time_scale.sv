@@ -11,7 +11,8 @@
 //   * unless end_i: one more tick at the target then a stop, simulated one
 //     S-curve step per clock, must fit within the samples ahead
 //     (sum << shift_i <= ahead), else the unit holds by itself (starved_o,
-//     starved_count_o); starved, it resumes (auto_resume_i) when twice fits;
+//     starved_count_o); starved, it resumes (auto_resume_i) when twice a tick
+//     at the target and a stop from it fit;
 //   * trajectory time phi (32.32 engine samples) += S << shift_i (the shift
 //     a bit per clock, as ahead >> shift_i for the check); the engine
 //     is ticked (eng_tick_o; the next strobe only after eng_valid_i) until
@@ -270,6 +271,9 @@ module traj_time_scale #(
           end else if (auto_resume_i && !hold_i) begin
             resume_q  <= 1'b1;
             sim_tgt_q <= ov;
+            // twice a tick at the target and a stop from it (S = target,
+            // k = 0: the stop's start below)
+            sum_q     <= SumW'(ov);
             st_q      <= StAhead;
           end else begin
             st_q <= StA;
@@ -285,7 +289,7 @@ module traj_time_scale #(
         end
         StShr: begin
           if (sc_q == '0) begin
-            mode_q <= MdFirst;
+            mode_q <= resume_q ? MdLoop : MdFirst;
             st_q   <= StA;
           end else begin
             room_q <= room_q >> 1;
@@ -402,6 +406,10 @@ module traj_time_scale #(
       sim_s_q <= c_ns;
       sim_k_q <= pb_k_q;
       sim_b_q <= pb_b_q;
+    end else if (st_q == StTick && !end_i && starved_q && auto_resume_i && !hold_i) begin
+      sim_s_q <= ov;  // the resume check's stop starts at the target, at rest in k
+      sim_k_q <= '0;
+      sim_b_q <= '0;
     end
     if (st_q == StAdv) ax_q <= '0;
     if (st_q == StMulD) begin
@@ -505,6 +513,10 @@ module traj_time_scale #(
         assert (!pa_away_q || pa_k_q != '0);
       end
       if (st_q == StC) assert ($signed({pb_k_q[KW-1], pb_k_q}) <= f_m && -$signed({pb_k_q[KW-1], pb_k_q}) <= f_m);
+      // the simulated stop's rate too: from a step, or 0 for the resume check
+      if (resume_q && (st_q == StAhead || st_q == StShr)) assert (sim_k_q == '0);
+      if (st_q == StA && mode_q == MdLoop)
+        assert ($signed({sim_k_q[KW-1], sim_k_q}) <= f_m && -$signed({sim_k_q[KW-1], sim_k_q}) <= f_m);
       if (st_q == StC && mode_q == MdReal) assert (pa_k_q == cur_k_q);
       // strobes: one cycle each; an engine tick only into a wait state that
       // holds until the engine's answer (one tick outstanding at most)

@@ -164,10 +164,10 @@ std::vector<int64_t> TimeScaler::tick(const std::vector<int64_t>& samples, uint6
       ++starved_holds_;
       curve_.set_target(0);
     } else if (starved_ && auto_resume_ && !hold_) {
-      SCurve probe = curve_;
-      probe.set_target(override_);
-      probe.step();
-      if (to_phi((probe.s() + probe.stop_travel()) * n_) * 2 <= ahead) {  // hysteresis: twice the stop
+      // hysteresis: the data covers twice a tick at the target and a stop
+      // from it (else a trickle of data would start and stop the machine by
+      // a few samples at a time)
+      if (to_phi((override_ + SCurve(b_, override_).stop_travel()) * n_) * 2 <= ahead) {
         starved_ = false;
         curve_.set_target(override_);
       }
