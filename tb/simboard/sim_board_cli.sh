@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
-# sim_board_cli.sh TRAJCORE DIR clean|faults|restart|reset|coarse
+# sim_board_cli.sh TRAJCORE DIR clean|faults|restart|reset|coarse|timescale
 # `trajcore plan` -> `trajcore upload` -> `trajcore board` (the simulated
 # board: rtl/traj_board.sv Verilated, pins driven and decoded), on a
 # pseudo-terminal as a user runs them, with a short raster (2 pieces, 0.77 s of
@@ -14,6 +14,13 @@
 #   coarse: planned at 2 ms ticks: the tool plays it at 2 engine ticks of 1 ms
 #           (the segments re-compiled), and the pins equal the prediction of
 #           the re-compiled stream, twice as many ticks.
+#   timescale: a G1 zigzag planned with --time-scale 1.2 at a 125 us engine
+#           tick; the board overrides to 120 % (FEED), holds by its pin and
+#           pauses the link at given times, the tool sets 50 % and holds and
+#           resumes through its control socket; the board's check: the pins
+#           equal the path through its re-timed output, which lies on the
+#           stream's exact prediction and ends on its last sample, and a
+#           starved hold happened and resumed.
 set -euo pipefail
 T=$1
 dir=$2
@@ -21,7 +28,13 @@ mode=${3:-clean}
 rm -rf "$dir" && mkdir -p "$dir" && cd "$dir"
 period=0.001
 [ "$mode" = coarse ] && period=0.002
-"$T" plan --raster 2 --period $period -o plan.trj > plan.txt
+if [ "$mode" = timescale ]; then
+  printf 'G21 G90 G64 P0.01 F3000\nG1 X0 Y0\nG1 X20 Y5\nG1 X5 Y15\nG1 X30 Y20\nG1 X10 Y35\nG1 X40 Y40\nG1 X0 Y45\nG1 X25 Y60\nM2\n' \
+    > zigzag.ngc
+  "$T" plan zigzag.ngc --period 1.25e-4 --engine-width 96 --time-scale 1.2 -o plan.trj > plan.txt
+else
+  "$T" plan --raster 2 --period $period -o plan.trj > plan.txt
+fi
 
 board=
 trap '[ -n "$board" ] && kill "$board" 2>/dev/null; true' EXIT
@@ -71,6 +84,34 @@ clean | faults | restart | coarse)
   if [ "$mode" = faults ]; then
     grep -q "faults: [1-9][0-9]* bytes corrupted, [1-9][0-9]* dropped, [1-9][0-9]* frames duplicated" board.txt
   fi
+  ;;
+timescale)
+  start_board --once --feed 0.1:120 --hold 0.3:0.4 --starve 0.8:6
+  "$T" upload plan.trj --port "$(cat port)" --step-shift 26 --timeout-ms 3000 --retries 1000 \
+    --control "$PWD/feed.sock" > upload.txt 2> upload.err &
+  tool=$!
+  ask() { echo "$1" | socat -t 20 - UNIX-CONNECT:feed.sock; }  # one command, its answer
+  for _ in $(seq 100); do [ -S feed.sock ] && break; sleep 0.1; done
+  # at the start of the job, before the link pauses
+  for c in "feed 50" hold resume "feed 250" status; do ask "$c" | tee -a answers.txt; done
+  rc=0
+  wait "$tool" || rc=$?
+  [ "$rc" -eq 0 ] || { cat upload.err board.txt; exit 1; }
+  wait "$board" || rc=$?
+  board=
+  cat upload.txt board.txt answers.txt
+  [ "$rc" -eq 0 ] || { echo "the board's check failed (exit $rc)"; exit 1; }
+  grep -q "^ok feed 50.00 %" answers.txt
+  grep -q "^ok hold" answers.txt
+  grep -q "^ok resume" answers.txt
+  grep -q "^error: feed 250 %" answers.txt
+  grep -q "^ok feed .*(target 50.00 %), hold off" answers.txt
+  grep -q "FEED 120 %" board.txt
+  grep -q "hold pin pressed" board.txt
+  grep -q "link paused" board.txt
+  grep -q "time scaling: S [0-9]* at the end, [1-9][0-9]* starved holds" board.txt
+  grep -q "pins decoded against the board's time-scaled output samples .*: identical" board.txt
+  grep -q "on the path of the exact prediction (re-timed): yes: .* ending on the last sample" board.txt
   ;;
 reset)
   start_board --reset-after 10
