@@ -21,6 +21,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -193,6 +194,26 @@ Run play(const std::string& stream_path, const timescale::IntBounds& ib, const s
   return r;
 }
 
+const char* const kQuantity[3] = {"velocity", "acceleration", "jerk"};
+
+// The largest share of each per-axis limit (velocity, acceleration, jerk)
+// in the output's differences at the servo tick.
+std::array<double, 3> worst_of_limits(const ScaledPlan& p, const Run& r) {
+  std::array<double, 3> worst{0, 0, 0};
+  const uint64_t m = r.out.size() / 3;
+  const double H = kServo;
+  for (uint64_t t = 3; t < m; ++t)
+    for (int a = 0; a < 3; ++a) {
+      auto x = [&](uint64_t k) { return static_cast<double>(r.out[3 * k + a]) * p.lsb; };
+      const double d1 = x(t) - x(t - 1), d2 = d1 - (x(t - 1) - x(t - 2)), d3 = d2 - (x(t - 1) - 2 * x(t - 2) + x(t - 3));
+      worst[0] = std::max(worst[0], std::fabs(d1) / H / p.limits[a].v);
+      worst[1] = std::max(worst[1], std::fabs(d2) / (H * H) / p.limits[a].a);
+      worst[2] = std::max(worst[2], std::fabs(d3) / (H * H * H) / p.limits[a].j);
+    }
+  for (int i = 0; i < 3; ++i) std::printf("  %s: %.3f of the limit at most\n", kQuantity[i], worst[i]);
+  return worst;
+}
+
 // The checks above, on the run's output against the unscaled engine samples.
 void check(const ScaledPlan& p, const timescale::IntBounds& ib, const Run& r, const std::vector<Event>& events) {
   ASSERT_TRUE(r.ended);
@@ -206,21 +227,8 @@ void check(const ScaledPlan& p, const timescale::IntBounds& ib, const Run& r, co
   std::printf("  %s", board::describe(pc).c_str());
   EXPECT_TRUE(pc.ok()) << pc.first_problem;
   // limits at the servo tick
-  double worst[3] = {0, 0, 0};
-  const char* names[3] = {"velocity", "acceleration", "jerk"};
-  for (uint64_t t = 3; t < m; ++t)
-    for (int a = 0; a < 3; ++a) {
-      auto x = [&](uint64_t k) { return static_cast<double>(r.out[3 * k + a]) * p.lsb; };
-      const double d1 = x(t) - x(t - 1), d2 = d1 - (x(t - 1) - x(t - 2)), d3 = d2 - (x(t - 1) - 2 * x(t - 2) + x(t - 3));
-      const double H = kServo;
-      worst[0] = std::max(worst[0], std::fabs(d1) / H / p.limits[a].v);
-      worst[1] = std::max(worst[1], std::fabs(d2) / (H * H) / p.limits[a].a);
-      worst[2] = std::max(worst[2], std::fabs(d3) / (H * H * H) / p.limits[a].j);
-    }
-  for (int i2 = 0; i2 < 3; ++i2) {
-    std::printf("  %s: %.3f of the limit at most\n", names[i2], worst[i2]);
-    EXPECT_LE(worst[i2], 1.0) << names[i2];
-  }
+  const std::array<double, 3> worst = worst_of_limits(p, r);
+  for (int i2 = 0; i2 < 3; ++i2) EXPECT_LE(worst[i2], 1.0) << kQuantity[i2];
   // holds come to rest (S = 0) and resume; starvation is counted
   bool starve = false, hold = false;
   for (const Event& e : events) {
@@ -273,15 +281,33 @@ std::vector<Event> random_events(std::mt19937_64& rng, uint64_t motion_ticks) {
   return e;
 }
 
-void run_case(ScaledPlan p, const std::string& name, uint64_t seed) {
+// ramp_gain_log2 > 0: ramps 2^gain faster than the bounds (the jerk step of
+// s that much larger), which must break a limit while the path still holds.
+void run_case(ScaledPlan p, const std::string& name, uint64_t seed, int ramp_gain_log2 = 0) {
   std::mt19937_64 rng(seed);
   const timescale::OutputError err{kEngineTick, kServo, p.lsb};
   const timescale::RampBounds rb = timescale::derive_ramp_bounds(p.peaks, p.limits, kSMax, err);
-  const timescale::IntBounds ib = timescale::integer_bounds(rb, kServo);
+  timescale::IntBounds ib = timescale::integer_bounds(rb, kServo);
+  if (ramp_gain_log2 > 0) {
+    ib.scale_bits -= ramp_gain_log2;
+    ib.s_max = static_cast<int64_t>(std::floor(std::ldexp(kSMax, ib.scale_bits)));
+  }
   std::printf("  ramp bounds: |ds/dt| <= %.4g /s, |d2s/dt2| <= %.4g /s^2; scale bits %d, m %lld, S_max %lld\n", rb.rate,
               rb.accel, ib.scale_bits, static_cast<long long>(ib.m), static_cast<long long>(ib.s_max));
   const std::string path = write_stream(p, rb, name);
   const uint64_t motion_ticks = p.n >> kP;
+  if (ramp_gain_log2 > 0) {
+    const std::vector<Event> events{{Event::kOverride, motion_ticks / 5, 0, 0.5},
+                                    {Event::kFeedHold, motion_ticks / 2, 300, 0}};
+    const Run r = play(path, ib, events, 8 * 1000);
+    std::filesystem::remove(path);
+    const board::PathCheck pc = board::check_on_path(p.samples, r.out, 3, 2.0, kSMax * (1 << kP));
+    EXPECT_TRUE(pc.ok()) << pc.first_problem;
+    const std::array<double, 3> worst = worst_of_limits(p, r);
+    EXPECT_GT(std::max(worst[1], worst[2]), 1.0) << "ramps " << (1 << ramp_gain_log2)
+                                                  << " times faster than the bounds kept every limit";
+    return;
+  }
   const std::vector<Event> events = random_events(rng, motion_ticks);
   // 1 s of motion ahead (twice the longest stop and more, so that a starved
   // hold resumes once the data is back): a starvation of 2.5 s empties it
@@ -295,16 +321,21 @@ TEST(SimBoardTimeScale, ButterflyHoldOverrideStarvation) {
   run_case(std::move(p), "butterfly", test::test_seed(16));
 }
 
-TEST(SimBoardTimeScale, G1PolylineHoldOverrideStarvation) {
-  // a zigzag of G1 moves, its corners blended (G64 P0.01)
+// a zigzag of G1 moves, its corners blended (G64 P0.01)
+ScaledPlan zigzag() {
   std::istringstream g(
       "G21 G90 G64 P0.01 F3000\nG1 X0 Y0\nG1 X20 Y5\nG1 X5 Y15\nG1 X30 Y20\nG1 X10 Y35\nG1 X40 Y40\nG1 X0 Y45\n"
       "G1 X25 Y60\nM2\n");
   const input::Toolpath tp = input::read_gcode(g, "zigzag.ngc");
   const job::ToolpathPlan tpp = job::toolpath_plan(tp, job::JobConfig{});
-  ScaledPlan p = scaled_plan(tpp.path, tpp.cfg, kEngineTick, 96);
-  run_case(std::move(p), "zigzag", test::test_seed(17));
+  return scaled_plan(tpp.path, tpp.cfg, kEngineTick, 96);
 }
+
+TEST(SimBoardTimeScale, G1PolylineHoldOverrideStarvation) { run_case(zigzag(), "zigzag", test::test_seed(17)); }
+
+// The limit check can fail: the board's ramps 16 times faster than the
+// bounds (an override and a hold) break the acceleration or jerk limit.
+TEST(SimBoardTimeScale, RampsFasterThanTheBoundsBreakALimit) { run_case(zigzag(), "zigzag_fast", 18, 4); }
 
 }  // namespace
 }  // namespace traj
