@@ -326,7 +326,7 @@ class LinkProto {
   // Registered decodes of the position in the body (the RTL's pd_*_q).
   struct Position {
     bool pay, over, k, reg, p0, p13, pseq, p7, ctick, cshift, cpulse, csetup, cen, cres;
-    bool cm, csmax, covr, cshl, cfl, p4, fres;
+    bool cm, csmax, covr, cshl, cfl, p4, fres, cscale;
   };
   static Position position(uint16_t idx, uint16_t len) {
     const int p = (idx - 8) & 0xFFF;
@@ -352,6 +352,7 @@ class LinkProto {
     r.cfl = p == 37;
     r.p4 = p == 4;
     r.fres = p >= 5 && p < 8;
+    r.cscale = p >= 24 && p < 40;
     return r;
   }
 
@@ -411,6 +412,7 @@ class LinkProto {
       if (pd_.cshift) c.cbad_byte = d > 63;
       else if (pd_.cen) c.cbad_byte = d > 1;
       else if (pd_.cres) c.cbad_byte = d != 0;
+      else if (ScaleWidth == 0 && pd_.cscale) c.cbad_byte = d != 0;  // no unit: no time scaling
       else if (pd_.cshl) c.cbad_byte = d > 40;
       else if (pd_.cfl) c.cbad_byte = d > 1;
     } else if (is_feed()) {
@@ -429,8 +431,9 @@ class LinkProto {
         break;
       case kConfig:
         cbad_end = len_q_ != kCfgLen || sh_pulse_q_ == 0 || (sh_tick_q_ != 0 && sh_tick_q_ < uint32_t(MinTickPeriod)) ||
-                   (sh_m_q_ == 0 ? (sh_smax_q_ != 0 || sh_ovr_q_ != 0 || sh_shl_q_ != 0 || sh_auto_q_)
-                                 : (too_wide(sh_m_q_) || too_wide(sh_smax_q_) || too_wide(sh_ovr_q_)));
+                   (ScaleWidth != 0 &&
+                    (sh_m_q_ == 0 ? (sh_smax_q_ != 0 || sh_ovr_q_ != 0 || sh_shl_q_ != 0 || sh_auto_q_)
+                                  : (too_wide(sh_m_q_) || too_wide(sh_smax_q_) || too_wide(sh_ovr_q_))));
         break;
       case kFeed:
         cbad_end = len_q_ != kFeedLen || too_wide(sh_ovr_q_);

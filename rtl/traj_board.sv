@@ -184,39 +184,40 @@ module traj_board #(
   // -------------------------------------------------------------------
   // Time scaling: engine ticks ahead, the unit, the output.
   // -------------------------------------------------------------------
-  localparam int HdrWords = (ChunkWidth < 32) ? 32 / ChunkWidth : 1;
-  localparam int SegWords = HdrWords + Axes * (Degree + 1) * Width / ChunkWidth;
-  localparam int WordBits = $clog2(SegWords + 1);
-  logic [WordBits-1:0] word_q;      // words of the segment leaving the FIFO so far
-  logic [31:0]         hdr_k;       // its K, as its header words pass
-  logic [31:0]         fifo_k_q;    // K of the segments stored, not yet left the FIFO
-  logic [31:0]         eng_k_q;     // samples of the segments in the engine not yet played
-  logic                hdr_done, real_sample;
-  if (ChunkWidth >= 32) begin : g_hdr1
-    assign hdr_k = seg_tdata[31:0];
-  end else begin : g_hdr2
-    logic [15:0] hdr_lo_q;
-    always_ff @(posedge clk_i) begin
-      if (seg_tvalid && seg_tready && word_q == '0) hdr_lo_q <= seg_tdata[15:0];
-    end
-    assign hdr_k = {seg_tdata[15:0], hdr_lo_q};
-  end
-  assign hdr_done    = seg_tvalid && seg_tready && word_q == WordBits'(HdrWords - 1);
-  assign real_sample = sample_valid && !underrun;
-  always_ff @(posedge clk_i) begin
-    if (!rst_ni) begin
-      word_q   <= '0;
-      fifo_k_q <= '0;
-      eng_k_q  <= '0;
-    end else begin
-      if (seg_tvalid && seg_tready) word_q <= (word_q == WordBits'(SegWords - 1)) ? '0 : word_q + 1'b1;
-      fifo_k_q <= (cleared ? 32'h0 : fifo_k_q) + (stored ? stored_k : 32'h0) - (hdr_done ? hdr_k : 32'h0);
-      eng_k_q  <= eng_k_q + (hdr_done ? hdr_k : 32'h0) - {31'h0, real_sample};
-    end
-  end
-  assign ahead = fifo_k_q + eng_k_q;
 
   if (TimeScale != 0) begin : g_scale
+    localparam int HdrWords = (ChunkWidth < 32) ? 32 / ChunkWidth : 1;
+    localparam int SegWords = HdrWords + Axes * (Degree + 1) * Width / ChunkWidth;
+    localparam int WordBits = $clog2(SegWords + 1);
+    logic [WordBits-1:0] word_q;      // words of the segment leaving the FIFO so far
+    logic [31:0]         hdr_k;       // its K, as its header words pass
+    logic [31:0]         fifo_k_q;    // K of the segments stored, not yet left the FIFO
+    logic [31:0]         eng_k_q;     // samples of the segments in the engine not yet played
+    logic                hdr_done, real_sample;
+    if (ChunkWidth >= 32) begin : g_hdr1
+      assign hdr_k = seg_tdata[31:0];
+    end else begin : g_hdr2
+      logic [15:0] hdr_lo_q;
+      always_ff @(posedge clk_i) begin
+        if (seg_tvalid && seg_tready && word_q == '0) hdr_lo_q <= seg_tdata[15:0];
+      end
+      assign hdr_k = {seg_tdata[15:0], hdr_lo_q};
+    end
+    assign hdr_done    = seg_tvalid && seg_tready && word_q == WordBits'(HdrWords - 1);
+    assign real_sample = sample_valid && !underrun;
+    always_ff @(posedge clk_i) begin
+      if (!rst_ni) begin
+        word_q   <= '0;
+        fifo_k_q <= '0;
+        eng_k_q  <= '0;
+      end else begin
+        if (seg_tvalid && seg_tready) word_q <= (word_q == WordBits'(SegWords - 1)) ? '0 : word_q + 1'b1;
+        fifo_k_q <= (cleared ? 32'h0 : fifo_k_q) + (stored ? stored_k : 32'h0) - (hdr_done ? hdr_k : 32'h0);
+        eng_k_q  <= eng_k_q + (hdr_done ? hdr_k : 32'h0) - {31'h0, real_sample};
+      end
+    end
+    assign ahead = fifo_k_q + eng_k_q;
+
     logic             scale_on, done_q, resume_q, ts_valid, ts_busy, ts_tick, ts_eng_tick, ts_starved_q;
     logic             have_q, step_valid_q, under_q;
     logic [Axes*OutWidth-1:0] step_sample_q;
@@ -285,7 +286,7 @@ module traj_board #(
     /* verilator lint_off UNUSEDSIGNAL */
     logic unused_scale;
     assign unused_scale = ^{sc_m, sc_smax, sc_ovr, sc_shift, sc_auto, link_hold, link_stop, link_end,
-                            link_resume, hold_i};
+                            link_resume, hold_i, stored, stored_k, cleared};
     /* verilator lint_on UNUSEDSIGNAL */
     assign eng_tick      = tick;
     assign out_valid     = sample_valid;
@@ -293,6 +294,7 @@ module traj_board #(
     assign link_underrun = underrun;
     assign ts_s          = '0;
     assign ts_count      = '0;
+    assign ahead         = '0;
     assign ts_starved    = 1'b0;
     assign ts_held       = 1'b0;
     assign ts_err        = 1'b0;

@@ -183,7 +183,7 @@ module traj_link_proto #(
   logic        overlong;  // past the CRC
   logic        pd_pay_q, pd_over_q, pd_k_q, pd_reg_q, pd_p0_q, pd_p13_q, pd_pseq_q;
   logic        pd_ctick_q, pd_cshift_q, pd_cpulse_q, pd_csetup_q, pd_cen_q, pd_cres_q;
-  logic        pd_cm_q, pd_csmax_q, pd_covr_q, pd_cshl_q, pd_cfl_q, pd_p4_q, pd_fres_q;
+  logic        pd_cm_q, pd_csmax_q, pd_covr_q, pd_cshl_q, pd_cfl_q, pd_p4_q, pd_fres_q, pd_cscale_q;
   assign p        = idx_q - 12'd8;
   assign in_pay   = pd_pay_q;
   assign overlong = pd_over_q;
@@ -208,6 +208,7 @@ module traj_link_proto #(
     pd_cfl_q    <= (p == 12'd37);
     pd_p4_q     <= (p == 12'd4);
     pd_fres_q   <= (p >= 12'd5) && (p < 12'd8);
+    pd_cscale_q <= (p >= 12'd24) && (p < 12'd40);
   end
 
   logic known;
@@ -253,6 +254,7 @@ module traj_link_proto #(
       if (pd_cshift_q) cbad_byte = (d > 8'd63);
       else if (pd_cen_q) cbad_byte = (d > 8'd1);
       else if (pd_cres_q) cbad_byte = (d != 8'd0);
+      else if (ScaleWidth == 0 && pd_cscale_q) cbad_byte = (d != 8'd0);  // no unit: no time scaling
       else if (pd_cshl_q) cbad_byte = (d > 8'd40);
       else if (pd_cfl_q) cbad_byte = (d > 8'd1);
     end else if (is_feed) begin
@@ -327,8 +329,9 @@ module traj_link_proto #(
       TSegment: cbad_end = (len_q != 12'(RecBytes)) || kz_q;
       TConfig:  cbad_end = (len_q != 12'(CfgLen)) || (sh_pulse_q == '0)
                         || (sh_tick_q != '0 && sh_tick_q < 32'(MinTickPeriod))
-                        || ((sh_m_q == '0) ? (sh_smax_q != '0 || sh_ovr_q != '0 || sh_shl_q != '0 || sh_auto_q)
-                                           : (too_wide(sh_m_q) || too_wide(sh_smax_q) || too_wide(sh_ovr_q)));
+                        || (ScaleWidth != 0
+                            && ((sh_m_q == '0) ? (sh_smax_q != '0 || sh_ovr_q != '0 || sh_shl_q != '0 || sh_auto_q)
+                                               : (too_wide(sh_m_q) || too_wide(sh_smax_q) || too_wide(sh_ovr_q))));
       TFeed:    cbad_end = (len_q != 12'(FeedLen)) || too_wide(sh_ovr_q);
       default:  cbad_end = (len_q != '0);
     endcase
