@@ -114,6 +114,7 @@ void check_good_frame(const link::Frame& f) {
       case link::Type::kNak: link::decode_nak(f); break;
       case link::Type::kStatus: link::decode_status(f); break;
       case link::Type::kConfig: link::decode_config(f.payload); break;
+      case link::Type::kFeed: link::decode_feed(f.payload); break;
       default: break;
     }
   });
