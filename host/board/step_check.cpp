@@ -201,10 +201,12 @@ PathCheck check_on_path(const std::vector<int64_t>& engine, const std::vector<in
         if (f < -1e-9 || f > 1 + 1e-9) continue;
         f = std::clamp(f, 0.0, 1.0);
       }
+      // distances from differences (small integers): the positions
+      // themselves (up to 2^47 LSB) would lose 1e-4 LSB in a double
       double off = 0;
       for (int a = 0; a < axes; ++a) {
         const double next = k + 1 < n ? static_cast<double>(y(k + 1, a) - y(k, a)) : 0.0;
-        off = std::max(off, std::fabs(static_cast<double>(y(k, a)) + f * next - static_cast<double>(o[a])));
+        off = std::max(off, std::fabs(f * next - static_cast<double>(o[a] - y(k, a))));
       }
       const double pos = static_cast<double>(k) + f;
       if (off > tol_lsb + 1e-6 || pos + 1e-6 < pos_prev) continue;
