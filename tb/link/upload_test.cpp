@@ -352,24 +352,32 @@ TEST(Upload, LinkDyingMidJobGivesUpAndTheBoardHolds) {
   for (size_t i = 0; i < got.size(); ++i) ASSERT_TRUE(got[i] == want[i]) << "record " << i;
 }
 
+// An upload of `path` interrupted (Ctrl-C: the interrupted flag) once 150
+// records are stored; the message it ends with ("" if it did not fail).
+std::string interrupted_upload(Rig& rig, const std::string& path) {
+  std::atomic<bool> interrupted{false};
+  UploadOptions o = tool();
+  o.interrupted = &interrupted;
+  RecordSource src(path);
+  try {
+    upload(rig.port(), src, o, [&](const UploadProgress& p) {
+      if (p.acked >= 150) interrupted = true;
+    });
+  } catch (const UploadError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "the interrupted upload succeeded";
+  return "";
+}
+
 // Ctrl-C (the interrupted flag): STOP, a message; a restarted tool with
 // --resume continues from the board's next_seq: every record played once.
 TEST(Upload, InterruptThenResumePlaysEveryRecordOnce) {
   const auto& path = raster_stream(40);
   Rig rig(fast_board(), {});
-  std::atomic<bool> interrupted{false};
-  UploadOptions o = tool();
-  o.interrupted = &interrupted;
   {
-    RecordSource src(path);
-    try {
-      upload(rig.port(), src, o, [&](const UploadProgress& p) {
-        if (p.acked >= 150) interrupted = true;
-      });
-      FAIL() << "the interrupted upload succeeded";
-    } catch (const UploadError& e) {
-      EXPECT_NE(std::string(e.what()).find("interrupted: STOP sent"), std::string::npos) << e.what();
-    }
+    const std::string m = interrupted_upload(rig, path);
+    EXPECT_NE(m.find("interrupted: STOP sent"), std::string::npos) << m;
   }
   const size_t before = rig.played().size();
   EXPECT_LT(before, file_records(path).size());
@@ -784,22 +792,11 @@ TEST(Upload, FeedRefusedByTheBoardIsNamedAndTheJobGoesOn) {
 TEST(Upload, InterruptWithTimeScalingThenResume) {
   const auto& path = raster_stream(40, kScaled);
   Rig rig(fast_board(), {}, true);
-  std::atomic<bool> interrupted{false};
-  UploadOptions o = tool();
-  o.interrupted = &interrupted;
   {
-    RecordSource src(path);
-    try {
-      upload(rig.port(), src, o, [&](const UploadProgress& p) {
-        if (p.acked >= 150) interrupted = true;
-      });
-      FAIL() << "the interrupted upload succeeded";
-    } catch (const UploadError& e) {
-      const std::string m = e.what();
-      EXPECT_NE(m.find("interrupted: STOP sent and acknowledged; the board holds"), std::string::npos) << m;
-      EXPECT_NE(m.find("stops on the path"), std::string::npos) << m;
-      EXPECT_NE(m.find("START (`--resume`) continues"), std::string::npos) << m;
-    }
+    const std::string m = interrupted_upload(rig, path);
+    EXPECT_NE(m.find("interrupted: STOP sent and acknowledged; the board holds"), std::string::npos) << m;
+    EXPECT_NE(m.find("stops on the path"), std::string::npos) << m;
+    EXPECT_NE(m.find("START (`--resume`) continues"), std::string::npos) << m;
   }
   EXPECT_TRUE(rig.shim().feeds().empty());
   rig.connect();
