@@ -58,26 +58,37 @@
 // segment has started, and across segments of K >= Bcu::kBackToBack(d_next)).
 #pragma once
 #include <cstdint>
+#include <type_traits>
 
 #include "traj_bcu_gen.hpp"
 #include "traj_common.hpp"
 #include "traj_fd_engine.hpp"
+#include "traj_fd_tm.hpp"
 
 namespace traj {
 
 template <int Axes, int Degree, int Width, int ChunkWidth, int GuardBits, int CtrlWidth,
-          int BcuGuardBits, int MaxDepth>
+          int BcuGuardBits, int MaxDepth, bool FdTimeMux = false>
 class Core {
  public:
   static constexpr int kAxes = Axes;
   static constexpr int kOutWidth = Width - GuardBits;
-  using Fd = FdEngine<Axes, Degree, Width, ChunkWidth, GuardBits>;
+  // FdTimeMux: the time-multiplexed FD engine (the RTL's traj_fd_tm): the same
+  // stream, ticks and samples, answered after its pass over the registers
+  using Fd = std::conditional_t<FdTimeMux, FdTm<Axes, Degree, Width, ChunkWidth, GuardBits>,
+                                FdEngine<Axes, Degree, Width, ChunkWidth, GuardBits>>;
   using Bcu = BcuGen<Axes, ChunkWidth, CtrlWidth, BcuGuardBits, kOutWidth, MaxDepth>;
   static constexpr int kFdWords = Fd::kWords;
   static constexpr int kBcuWords = Bcu::kSegWords;
+  static constexpr int kFdTickSpacing = FdTimeMux ? FdTm<Axes, Degree, Width, ChunkWidth, GuardBits>::kMinTickClocks + 2
+                                                  : Fd::kWords + 2;
   static constexpr int kMinTickSpacing =
-      Bcu::kStartLatencyMax + 2 > Fd::kWords + 2 ? Bcu::kStartLatencyMax + 2 : Fd::kWords + 2;
+      Bcu::kStartLatencyMax + 2 > kFdTickSpacing ? Bcu::kStartLatencyMax + 2 : kFdTickSpacing;
   static_assert(Fd::kOutWidth == Bcu::kOutWidth, "engine output widths differ");
+  // Clocks from a tick to its sample at the core's output, ticks at least
+  // kMinTickSpacing apart: 2 (the BCU and the parallel FD engine), or the
+  // time-multiplexed FD engine's pass + 2.
+  static constexpr int answer_clocks(bool bcu, bool last_tick) { return bcu ? 2 : Fd::answer_clocks(last_tick); }
 
   enum Kind : uint8_t { kFd = 0, kBcu = 1 };
 

@@ -64,6 +64,8 @@ class FdEngine {
   static constexpr int kChunks = Width / ChunkWidth;
   static constexpr int kOutWidth = Width - GuardBits;
   static constexpr int kRegs = Axes * (Degree + 1);
+  // Clocks from a tick taken at once to its sample_valid (as FdTm's).
+  static constexpr int answer_clocks(bool /*last_tick*/) { return 2; }
   static constexpr int kHdrWords = ChunkWidth < 32 ? 32 / ChunkWidth : 1;
   static constexpr int kWords = kHdrWords + kRegs * kChunks;  // header + registers
 

@@ -60,6 +60,9 @@ class FdTm {
   // per clock when asked: the last tick's pass (r[0] words only, Axes*Chunks),
   // the clock after it, and the next segment's load (kWords).
   static constexpr int kMinTickClocks = Axes * kChunks + 1 + kWords;
+  // Clocks from a tick taken at once to its sample_valid: the pass (kSlots
+  // words, or Axes*Chunks for a segment's last tick) and 2.
+  static constexpr int answer_clocks(bool last_tick) { return (last_tick ? Axes * kChunks : kSlots) + 2; }
   static constexpr int kAxB = fd_tm_clog2(Axes);
   static constexpr int kChB = fd_tm_clog2(kChunks);
   static constexpr int kRgB = fd_tm_clog2(Degree + 1);

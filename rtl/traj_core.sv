@@ -36,6 +36,7 @@ module traj_core #(
   parameter int CtrlWidth    = 40,  // BCU control value width
   parameter int BcuGuardBits = 9,   // BCU control bits below the output LSB
   parameter int MaxDepth     = 12,  // BCU largest depth d (K = 2^d)
+  parameter int FdTimeMux    = 0,   // FD engine: 1 = traj_fd_tm (one adder, registers in block RAM)
   // derived, do not override: the common sample width of both engines
   parameter int OutWidth     = Width - GuardBits
 ) (
@@ -68,6 +69,7 @@ module traj_core #(
   // The engines check their own parameters; the core checks the shared format.
   `TRAJ_PARAM_CHECK(g_bad_outwidth, OutWidth == Width - GuardBits,
                     "traj_core: OutWidth is derived (Width-GuardBits); do not override it")
+  `TRAJ_PARAM_CHECK(g_bad_fdtm, FdTimeMux == 0 || FdTimeMux == 1, "traj_core: FdTimeMux must be 0 or 1")
   `TRAJ_PARAM_CHECK(g_bad_bcu_fit, BcuNarrow <= OutWidth,
                     "traj_core: the BCU sample (CtrlWidth-BcuGuardBits+1 bits) must fit the FD output width")
 
@@ -228,15 +230,40 @@ module traj_core #(
   assign fd_tvalid  = fd_v_q;
   assign bcu_tvalid = bcu_v_q;
 
-  traj_fd_engine #(
-    .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits)
-  ) u_fd (
-    .clk_i, .rst_ni,
-    .s_axis_tdata(out_d_q), .s_axis_tvalid(fd_tvalid), .s_axis_tready(fd_tready),
-    .tick_i(fd_tick),
-    .sample_valid_o(fd_valid), .sample_o(fd_sample),
-    .underrun_o(fd_underrun), .seg_done_o(fd_done), .tick_err_o(fd_err)
-  );
+  // The two FD engines take the same stream and ticks and give the same
+  // samples; traj_fd_tm answers a tick after its pass over the registers
+  // (Axes*Chunks*(Degree+1) + 2 clocks) instead of 2.
+  if (FdTimeMux != 0) begin : g_fd_tm
+    localparam int Chunks   = Width / ChunkWidth;
+    localparam int SampleAW = ($clog2(Axes) + $clog2(Chunks) > 0) ? $clog2(Axes) + $clog2(Chunks) : 1;
+    localparam int TmTick   = Axes * Chunks * (Degree + 2) + FdHdrWords + 1;  // its MinTickClocks
+    logic [SampleAW-1:0] sample_addr;
+    /* verilator lint_off UNUSEDSIGNAL */
+    logic [ChunkWidth-1:0] sample_word;  // the core outputs sample_o whole
+    /* verilator lint_on UNUSEDSIGNAL */
+    assign sample_addr = '0;
+    traj_fd_tm #(
+      .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits),
+      .TickClocks(TmTick)
+    ) u_fd (
+      .clk_i, .rst_ni,
+      .s_axis_tdata(out_d_q), .s_axis_tvalid(fd_tvalid), .s_axis_tready(fd_tready),
+      .tick_i(fd_tick),
+      .sample_valid_o(fd_valid), .sample_o(fd_sample),
+      .sample_addr_i(sample_addr), .sample_word_o(sample_word),
+      .underrun_o(fd_underrun), .seg_done_o(fd_done), .tick_err_o(fd_err)
+    );
+  end else begin : g_fd
+    traj_fd_engine #(
+      .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits)
+    ) u_fd (
+      .clk_i, .rst_ni,
+      .s_axis_tdata(out_d_q), .s_axis_tvalid(fd_tvalid), .s_axis_tready(fd_tready),
+      .tick_i(fd_tick),
+      .sample_valid_o(fd_valid), .sample_o(fd_sample),
+      .underrun_o(fd_underrun), .seg_done_o(fd_done), .tick_err_o(fd_err)
+    );
+  end
 
   traj_bcu_gen #(
     .Axes(Axes), .ChunkWidth(ChunkWidth), .CtrlWidth(CtrlWidth), .GuardBits(BcuGuardBits),

@@ -21,7 +21,8 @@ module traj_core_synth_top #(
   parameter int GuardBits    = 32,  // FD guard bits
   parameter int CtrlWidth    = 40,  // BCU control value width
   parameter int BcuGuardBits = 9,   // BCU control bits below the output LSB
-  parameter int MaxDepth     = 12   // BCU largest depth (K = 4096)
+  parameter int MaxDepth     = 12,  // BCU largest depth (K = 4096)
+  parameter int FdTimeMux    = 0    // FD engine: 1 = traj_fd_tm
 ) (
   input  logic       clk_i,
   input  logic       rst_ni,
@@ -59,7 +60,8 @@ module traj_core_synth_top #(
 
   traj_core #(
     .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits),
-    .CtrlWidth(CtrlWidth), .BcuGuardBits(BcuGuardBits), .MaxDepth(MaxDepth)
+    .CtrlWidth(CtrlWidth), .BcuGuardBits(BcuGuardBits), .MaxDepth(MaxDepth),
+    .FdTimeMux(FdTimeMux)
   ) u_core (
     .clk_i, .rst_ni(rst_nq),
     .s_axis_tdata(word), .s_axis_tuser(word_kind), .s_axis_tvalid(word_valid),

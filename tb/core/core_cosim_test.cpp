@@ -32,7 +32,10 @@
 #include "traj_core.hpp"
 
 using traj::u128;
-using Core = traj::Core<C_AXES, C_DEGREE, C_WIDTH, C_CHUNK, C_GUARD, C_CTRL, C_BGUARD, C_DEPTH>;
+#ifndef C_FDTM
+#define C_FDTM 0
+#endif
+using Core = traj::Core<C_AXES, C_DEGREE, C_WIDTH, C_CHUNK, C_GUARD, C_CTRL, C_BGUARD, C_DEPTH, C_FDTM != 0>;
 constexpr int kOut = Core::kOutWidth;
 
 struct Word {
@@ -57,9 +60,9 @@ int main(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--cycles")) cycles = std::strtoull(argv[++i], nullptr, 0);
   }
   std::printf("cosim_core: Axes=%d Degree=%d Width=%d ChunkWidth=%d GuardBits=%d CtrlWidth=%d "
-              "BcuGuardBits=%d MaxDepth=%d min tick spacing %d, seed=%llu cycles=%llu "
+              "BcuGuardBits=%d MaxDepth=%d FdTimeMux=%d min tick spacing %d, seed=%llu cycles=%llu "
               "(reproduce: --seed %llu or TRAJ_SEED=%llu)\n",
-              C_AXES, C_DEGREE, C_WIDTH, C_CHUNK, C_GUARD, C_CTRL, C_BGUARD, C_DEPTH,
+              C_AXES, C_DEGREE, C_WIDTH, C_CHUNK, C_GUARD, C_CTRL, C_BGUARD, C_DEPTH, C_FDTM,
               Core::kMinTickSpacing, (unsigned long long)seed, (unsigned long long)cycles,
               (unsigned long long)seed, (unsigned long long)seed);
 
