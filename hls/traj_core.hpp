@@ -1,22 +1,23 @@
 // SPDX-License-Identifier: Apache-2.0
 // trajcore hls: the core, one segment stream for both sampling engines.
 // Cycle-accurate model of rtl/traj_core.sv: it instantiates the
-// forward-difference engine (hls/traj_fd_engine.hpp) and the BCU generator
+// forward-difference engine (hls/traj_fd_engine.hpp, or with FdTimeMux the
+// time-multiplexed one, hls/traj_fd_tm.hpp) and the BCU generator
 // (hls/traj_bcu_gen.hpp) and adds a router and an output selector.
 //
 // Segment stream: one ChunkWidth-bit word stream (AXI4-Stream tdata, tvalid,
-// tready; behind a 2-entry register slice, so s_axis_tready is a flop, and so
-// is each engine's tvalid: fd_v_q/bcu_v_q = out_v_q && kind of the word in
-// the slice's output register, kept from the next-state values, a
-// re-encoding for timing that leaves the cycle schedule unchanged) with a
-// 1-bit tuser = segment kind (0: forward differences, 1: BCU),
+// tready) with a 1-bit tuser = segment kind (0: forward differences, 1: BCU),
 // sampled on the FIRST word of every segment (later words' tuser is ignored;
 // the host keeps it constant within a segment). The words of a segment are
 // exactly those of the engine's own stream format, so a segment has a fixed
 // length per kind: FD HdrWords + Axes*(Degree+1)*Width/ChunkWidth words, BCU
 // 1 + 4*Axes*Digits words. The router counts them and forwards each segment
 // to its engine, in stream order, waiting (tready low) while that engine
-// cannot take it. The FD engine takes a segment only when it has none; the BCU
+// cannot take it. Register slices (hls/traj_skid.hpp) cut every handshake
+// path: one in front of the router (s_axis_tready is a flop) and one in front
+// of each engine (an engine's tready reaches its slice and the segment count,
+// not the router); the router's per-engine valids fd_v_q/bcu_v_q are the
+// input slice's valid and the word's kind, registered from the next state. The FD engine takes a segment only when it has none; the BCU
 // generator takes the next one while it plays (up to three of its segments in
 // flight: playing, prepared, loading), so up to four segments are in flight.
 // The next segment of the other kind is loaded while the current one plays.
@@ -24,14 +25,16 @@
 // Ticks go to the engine that owns the current segment: the oldest in flight.
 // In flight: the number of BCU segments (0..3), whether an FD segment is (at
 // most one), and how many of the BCU segments are older than it; a segment is
-// counted when its first word is accepted and dropped on its engine's
-// seg_done (each engine finishes its segments in order). The routing looks at this cycle's pop and push,
+// counted when its engine takes its first word (marked by the router in the
+// engine's slice) and dropped on its engine's seg_done (each engine finishes
+// its segments in order; first words reach the engines in stream order, at
+// most one per clock, because a segment has more words than a slice holds). The routing looks at this cycle's pop and push,
 // so a tick arriving with the seg_done of the previous segment already goes
 // to the next one. With nothing in flight, ticks go to the engine of the last
 // segment (which then reports underrun as it does alone).
 //
 // Output: the engines' registered outputs, combined (no extra latency:
-// tick_i -> sample_valid_o is 2 clocks, as for each engine):
+// tick_i -> sample_valid_o as for each engine, answer_clocks):
 //   underrun_o / seg_done_o = OR of the engines'; tick_err_o = OR of the
 //   engines' and a sticky core flag: a segment ended while its engine still
 //   held a tick and the next segment in flight belongs to the other engine
@@ -52,8 +55,9 @@
 // Requirements for exact, tick-for-tick play: FD segments have K >= 1 (the
 // compiler refuses K = 0), the stream is not starved, and ticks are at least
 // kMinTickSpacing clocks apart: the BCU's start latency at MaxDepth plus the
-// register slice (2), which covers a BCU segment after an FD one of K = 1 and
-// an FD reload (HdrWords + Regs*Chunks + 2 clocks). Within a run of BCU
+// two register slices (3), which covers a BCU segment after an FD one of K = 1
+// and an FD reload (HdrWords + Regs*Chunks + 3 clocks; with FdTimeMux the
+// time-multiplexed engine's kMinTickClocks + 3). Within a run of BCU
 // segments ticks may come on every clock (the generator's guarantee: once a
 // segment has started, and across segments of K >= Bcu::kBackToBack(d_next)).
 #pragma once
@@ -64,6 +68,7 @@
 #include "traj_common.hpp"
 #include "traj_fd_engine.hpp"
 #include "traj_fd_tm.hpp"
+#include "traj_skid.hpp"
 
 namespace traj {
 
@@ -80,10 +85,11 @@ class Core {
   using Bcu = BcuGen<Axes, ChunkWidth, CtrlWidth, BcuGuardBits, kOutWidth, MaxDepth>;
   static constexpr int kFdWords = Fd::kWords;
   static constexpr int kBcuWords = Bcu::kSegWords;
-  static constexpr int kFdTickSpacing = FdTimeMux ? FdTm<Axes, Degree, Width, ChunkWidth, GuardBits>::kMinTickClocks + 2
-                                                  : Fd::kWords + 2;
+  // the engines' own spacing and the two register slices in front of them
+  static constexpr int kFdTickSpacing = FdTimeMux ? FdTm<Axes, Degree, Width, ChunkWidth, GuardBits>::kMinTickClocks + 3
+                                                  : Fd::kWords + 3;
   static constexpr int kMinTickSpacing =
-      Bcu::kStartLatencyMax + 2 > kFdTickSpacing ? Bcu::kStartLatencyMax + 2 : kFdTickSpacing;
+      Bcu::kStartLatencyMax + 3 > kFdTickSpacing ? Bcu::kStartLatencyMax + 3 : kFdTickSpacing;
   static_assert(Fd::kOutWidth == Bcu::kOutWidth, "engine output widths differ");
   // Clocks from a tick to its sample at the core's output, ticks at least
   // kMinTickSpacing apart: 2 (the BCU and the parallel FD engine), or the
@@ -115,17 +121,16 @@ class Core {
     int rem_q = 0;                      // words of the forwarded segment still to come
     int pend_fd_q = 0, pend_bcu_q = 0;  // ticks routed to an engine not yet answered (0..3)
     bool fd_tick_q = false;             // fd_tick of the previous cycle: the FD engine takes rising edges only
+    bool push_q = false, push_b_q = false;  // an engine took a segment's first word (the BCU) last clock
     bool err_q = false;                 // sticky: a segment ended with a tick still pending
-    // input register slice
-    bool out_v_q = false, sk_v_q = false, out_u_q = false, sk_u_q = false;
-    bool fd_v_q = false, bcu_v_q = false;  // out_v_q && the out word's kind is FD / BCU
-    u128 out_d_q = 0, sk_d_q = 0;
+    // the input slice's output word is valid and of kind FD / BCU
+    bool fd_v_q = false, bcu_v_q = false;
   };
 
   // Combinational view of one cycle (needs the inputs: tready depends on tuser
   // on a segment's first word).
   struct Comb {
-    bool kind_now, tready, accept, push, pop_b, pop_f, fdf1, owner1, last1, tick_kind, sel_now;
+    bool kind_now, tready, accept, first, push, push_b, pop_b, pop_f, fdf1, owner1, last1, tick_kind, sel_now;
     int nb1, fpos1;  // after this cycle's pops
   };
 
@@ -136,9 +141,16 @@ class Core {
     // kind of the word in the slice's output register, where it is valid
     // (== in_seg_q ? kind_q : out_u_q; the registered per-engine valids hold it)
     c.kind_now = q.bcu_v_q;
-    c.tready = c.kind_now ? bcu_.tready() : fd_.outputs().tready;  // router side
-    c.accept = (q.fd_v_q && fd_.outputs().tready) || (q.bcu_v_q && bcu_.tready());
-    c.push = c.accept && !q.in_seg_q;
+    c.tready = c.kind_now ? bcu_in_.ready() : fd_in_.ready();  // router side
+    c.accept = (q.fd_v_q && fd_in_.ready()) || (q.bcu_v_q && bcu_in_.ready());
+    // a segment's first word: the router marks it (first), and the segment
+    // is counted in flight the clock after its engine takes that word (push,
+    // registered: push_q)
+    c.first = c.accept && !q.in_seg_q;
+    const bool fd_first = ((fd_in_.data() >> ChunkWidth) & 1) != 0;
+    const bool bcu_first = ((bcu_in_.data() >> ChunkWidth) & 1) != 0;
+    c.push_b = bcu_in_.valid() && bcu_.tready() && bcu_first;
+    c.push = (fd_in_.valid() && fd_.outputs().tready && fd_first) || c.push_b;
     c.pop_b = q.nb_q > 0 && bcu_.seg_done();
     c.pop_f = q.fdf_q && fd_.outputs().seg_done;
     // in flight after this cycle's pops, then the owner of the next tick
@@ -146,11 +158,11 @@ class Core {
     c.fdf1 = q.fdf_q && !c.pop_f;
     c.fpos1 = (c.pop_b && q.fpos_q > 0) ? q.fpos_q - 1 : q.fpos_q;
     c.last1 = c.pop_b ? true : (c.pop_f ? false : q.last_kind_q);
-    c.owner1 = c.fdf1 || c.nb1 > 0 || c.push;  // someone owns the next tick
+    c.owner1 = c.fdf1 || c.nb1 > 0 || q.push_q;  // someone owns the next tick
     c.tick_kind = (c.fdf1 && c.fpos1 == 0) ? false
                   : c.nb1 > 0             ? true
                   : c.fdf1                ? false
-                  : c.push                ? c.kind_now
+                  : q.push_q              ? q.push_b_q
                                           : c.last1;
     const auto fo = fd_.outputs();
     const bool fd_real = fo.sample_valid && !fo.underrun;
@@ -161,7 +173,7 @@ class Core {
 
   // Outputs of the current cycle.
   // s_axis_tready: registered (skid buffer), independent of the inputs.
-  bool tready(const In& = In{}) const { return !r_.sk_v_q; }
+  bool tready(const In& = In{}) const { return in_.ready(); }
   bool sample_valid() const {
     const auto fo = fd_.outputs();
     const bool fd_real = fo.sample_valid && !fo.underrun;
@@ -183,6 +195,7 @@ class Core {
   const Regs& regs() const { return r_; }
   const Fd& fd() const { return fd_; }
   const Bcu& bcu() const { return bcu_; }
+  const Skid& in_slice() const { return in_; }
 
   void clock(const In& in) {
     const Comb c = comb(in);
@@ -209,9 +222,11 @@ class Core {
     }
     // finish (seg_done of their engine), then start
     n.last_kind_q = c.last1;
-    n.nb_q = (c.nb1 + ((c.push && c.kind_now) ? 1 : 0)) & 3;
-    n.fdf_q = c.fdf1 || (c.push && !c.kind_now);
-    n.fpos_q = (c.push && !c.kind_now) ? c.nb1 : c.fpos1;
+    n.nb_q = (c.nb1 + (q.push_b_q ? 1 : 0)) & 3;
+    n.fdf_q = c.fdf1 || (q.push_q && !q.push_b_q);
+    n.fpos_q = (q.push_q && !q.push_b_q) ? c.nb1 : c.fpos1;
+    n.push_q = c.push;
+    n.push_b_q = c.push_b;
     // output selection
     const auto fo = fd_.outputs();
     n.sel_q = c.sel_now;
@@ -231,62 +246,47 @@ class Core {
       n.err_q = true;
 
     // -------------------------------------------------------------------
-    // Input register slice (skid buffer): s_axis_tready is a flop; the router
-    // sees out_*. Valid bits are reset, data is not. Per-engine valid,
-    // registered (timing): the next out word's kind, from the next state.
+    // Input register slice: s_axis_tready is a flop; the router sees its
+    // output. Per-engine valid, registered (timing): the next output word's
+    // kind, from the next state.
     // -------------------------------------------------------------------
-    if (!q.out_v_q || c.accept) {
-      if (q.sk_v_q) {
-        n.out_v_q = true;
-        n.out_d_q = q.sk_d_q;
-        n.out_u_q = q.sk_u_q;
-        n.sk_v_q = false;
-      } else {
-        n.out_v_q = in.tvalid;
-        if (in.tvalid) {
-          n.out_d_q = in.tdata;
-          n.out_u_q = in.tuser;
-        }
-      }
-    } else if (in.tvalid && !q.sk_v_q) {
-      n.sk_v_q = true;
-      n.sk_d_q = in.tdata;
-      n.sk_u_q = in.tuser;
-    }
-    const bool kind_nx = n.in_seg_q ? n.kind_q : n.out_u_q;
-    n.fd_v_q = n.out_v_q && !kind_nx;
-    n.bcu_v_q = n.out_v_q && kind_nx;
+    const u128 data_mask = ~u128(0) >> (128 - ChunkWidth);
+    const u128 in_word = (u128(in.tuser ? 1 : 0) << ChunkWidth) | (in.tdata & data_mask);
+    const Skid::Next nx = in_.next(in.tvalid, in_word, c.accept);
+    const bool out_u_d = ((nx.data >> ChunkWidth) & 1) != 0;
+    const bool kind_nx = n.in_seg_q ? n.kind_q : out_u_d;
+    n.fd_v_q = nx.valid && !kind_nx;
+    n.bcu_v_q = nx.valid && kind_nx;
 
     // -------------------------------------------------------------------
-    // Engines: each takes the slice's word when its registered valid is set.
+    // The engines' register slices take the router's word; each engine
+    // takes the words of its slice.
     // -------------------------------------------------------------------
+    const u128 out_d = (u128(q.in_seg_q ? 0 : 1) << ChunkWidth) | (in_.data() & data_mask);  // {first, word}
+    const bool fd_ready = fd_.outputs().tready, bcu_ready = bcu_.tready();
     typename Fd::In fi;
     fi.rst_n = in.rst_n;
-    fi.tdata = static_cast<uint64_t>(q.out_d_q);
-    fi.tvalid = q.fd_v_q;
+    fi.tdata = static_cast<uint64_t>(fd_in_.data() & data_mask);
+    fi.tvalid = fd_in_.valid();
     fi.tick = fd_tick;
     typename Bcu::In bi;
     bi.rst_n = in.rst_n;
-    bi.tdata = q.out_d_q;
-    bi.tvalid = q.bcu_v_q;
+    bi.tdata = bcu_in_.data() & data_mask;
+    bi.tvalid = bcu_in_.valid();
     bi.tick = bcu_tick;
     fd_.clock(fi);
     bcu_.clock(bi);
+    fd_in_.clock(in.rst_n, q.fd_v_q, out_d, fd_ready);
+    bcu_in_.clock(in.rst_n, q.bcu_v_q, out_d, bcu_ready);
+    in_.clock(in.rst_n, in.tvalid, in_word, c.accept);
 
-    if (!in.rst_n) {  // control only: the slice data registers keep their value
-      const u128 od = n.out_d_q, sd = n.sk_d_q;
-      const bool ou = n.out_u_q, su = n.sk_u_q;
-      n = Regs{};
-      n.out_d_q = od;
-      n.sk_d_q = sd;
-      n.out_u_q = ou;
-      n.sk_u_q = su;
-    }
+    if (!in.rst_n) n = Regs{};  // control only (the slices keep their data)
     r_ = n;
   }
 
  private:
   Regs r_{};
+  Skid in_, fd_in_, bcu_in_;  // input slice ({tuser, tdata}), the engines' slices
   Fd fd_;
   Bcu bcu_;
 };

@@ -1,19 +1,21 @@
 // SPDX-License-Identifier: Apache-2.0
 // trajcore: the core, one segment stream for both sampling engines
-// (traj_fd_engine and traj_bcu_gen). Mirrors hls/traj_core.hpp cycle for
-// cycle; the full description is there and in rtl/README.md. In short:
+// (traj_fd_engine, or with FdTimeMux traj_fd_tm, and traj_bcu_gen). Mirrors
+// hls/traj_core.hpp cycle for cycle; the full description is there and in
+// rtl/README.md. In short:
 //   * one ChunkWidth-bit AXI4-Stream segment input behind a register slice
-//     (skid buffer: s_axis_tready is a flop, and each engine's tvalid is a
-//     flop too: no decode between the slice and the engines' load control);
-//     s_axis_tuser = segment kind
+//     (traj_skid: s_axis_tready is a flop), and a register slice in front of
+//     each engine (an engine's tready reaches its slice and the segment
+//     count, never the router's forwarding); s_axis_tuser = segment kind
 //     (0 = forward differences, 1 = BCU), sampled on the first word of every
 //     segment. Segment lengths are fixed per kind (each engine's own format),
 //     so the router counts words and forwards each segment, in order, to its
 //     engine (back-pressure while that engine cannot take it). The next
 //     segment of the other kind loads while the current one plays; the BCU
 //     generator also takes its own next segments while it plays.
-//   * ticks go to the engine owning the oldest segment in flight (counted on
-//     a segment's first word, dropped on its engine's seg_done, both seen in
+//   * ticks go to the engine owning the oldest segment in flight (counted
+//     when its engine takes the segment's first word, dropped on its
+//     engine's seg_done, both seen in
 //     the same cycle: up to 3 BCU segments and 1 FD segment, with the number
 //     of BCU segments older than the FD one), else to the engine of the last
 //     segment. Within a run of BCU segments ticks may come
@@ -22,7 +24,7 @@
 //     tick_err); the BCU generator takes one tick per cycle its tick is high
 //     (its one-sample-per-clock rate). The core counts FD ticks as the FD
 //     engine does.
-//   * one sample output, same ports and latency (2) as the engines: the
+//   * one sample output, same ports and latency as the engines: the
 //     sample of the engine that emitted last; on an underrun it holds.
 `default_nettype none
 `include "traj_check.svh"
@@ -85,9 +87,20 @@ module traj_core #(
   logic [1:0]         pend_fd_q, pend_bcu_q;
   logic               fd_tick_q;  // fd_tick of the previous cycle: the FD engine takes rising edges only
   logic               err_q;
-  // input register slice
-  logic                  out_v_q, sk_v_q, out_u_q, sk_u_q, fd_v_q, bcu_v_q;
-  logic [ChunkWidth-1:0] out_d_q, sk_d_q;
+  // input register slice (u_in) and the kind of the word in it, registered
+  logic                  out_v_d, out_u_d, fd_v_q, bcu_v_q;
+  logic [ChunkWidth-1:0] out_d_q;
+  /* verilator lint_off UNUSEDSIGNAL */
+  // slice outputs the core does not read: the input slice's valid and kind
+  // (re-encoded in fd_v_q/bcu_v_q) and its next word's data, the engine
+  // slices' next state
+  logic                  out_v_q, out_u_q, fd_nv, bcu_nv;
+  logic [ChunkWidth-1:0] out_dd;
+  logic [ChunkWidth:0]   fd_nd, bcu_nd;
+  /* verilator lint_on UNUSEDSIGNAL */
+  // the engines' register slices (u_fd_in, u_bcu_in)
+  logic                  fd_in_ready, bcu_in_ready, fd_first, bcu_first;
+  logic [ChunkWidth-1:0] fd_tdata, bcu_tdata;
   // engine ports
   logic                     fd_tvalid, fd_tready, fd_tick;
   logic                     fd_valid, fd_underrun, fd_done, fd_err;
@@ -96,8 +109,8 @@ module traj_core #(
   logic                     bcu_valid, bcu_underrun, bcu_done, bcu_err;
   logic [Axes*OutWidth-1:0] bcu_sample;
   // next-state decode
-  logic       load_out, out_v_d, out_u_d, in_seg_d, kind_d, kind_nx;
-  logic       accept, push, pop_b, pop_f, owner1, last1, tick_kind;
+  logic       in_seg_d, kind_d, kind_nx;
+  logic       accept, first, push, push_b, push_q, push_b_q, pop_b, pop_f, owner1, last1, tick_kind;
   logic [1:0] nb1, fpos1, pf, pb;
   logic       fdf1;
   logic       sel_now, fd_real, bcu_real;
@@ -108,20 +121,25 @@ module traj_core #(
   // older than it. Counted on a segment's first word, dropped on its engine's
   // seg_done (each engine finishes in order). State is control: all reset.
   // ---------------------------------------------------------------------
-  assign accept        = (fd_v_q && fd_tready) || (bcu_v_q && bcu_tready);
-  assign push          = accept && !in_seg_q;
+  assign accept        = (fd_v_q && fd_in_ready) || (bcu_v_q && bcu_in_ready);
+  // a segment's first word: the router marks it (first), and the segment is
+  // counted in flight the clock after its engine takes that word (push,
+  // registered: push_q; a tick then cannot find the segment loaded yet)
+  assign first         = accept && !in_seg_q;
+  assign push_b        = bcu_tvalid && bcu_tready && bcu_first;
+  assign push          = (fd_tvalid && fd_tready && fd_first) || push_b;
   assign pop_b         = (nb_q != 2'd0) && bcu_done;
   assign pop_f         = fdf_q && fd_done;
   assign nb1           = nb_q - {1'b0, pop_b};
   assign fdf1          = fdf_q && !pop_f;
   assign fpos1         = (pop_b && fpos_q != 2'd0) ? fpos_q - 1'b1 : fpos_q;
   assign last1         = pop_b ? 1'b1 : (pop_f ? 1'b0 : last_kind_q);
-  assign owner1        = fdf1 || (nb1 != 2'd0) || push;
+  assign owner1        = fdf1 || (nb1 != 2'd0) || push_q;
   always_comb begin
     if (fdf1 && fpos1 == 2'd0) tick_kind = 1'b0;
     else if (nb1 != 2'd0)      tick_kind = 1'b1;
     else if (fdf1)             tick_kind = 1'b0;
-    else if (push)             tick_kind = bcu_v_q;
+    else if (push_q)           tick_kind = push_b_q;
     else                       tick_kind = last1;
   end
 
@@ -137,6 +155,8 @@ module traj_core #(
       fdf_q       <= 1'b0;
       fpos_q      <= '0;
       last_kind_q <= 1'b0;
+      push_q      <= 1'b0;
+      push_b_q    <= 1'b0;
       sel_q       <= 1'b0;
       primed_q    <= 1'b0;
       pend_fd_q   <= '0;
@@ -151,9 +171,11 @@ module traj_core #(
                           : (bcu_v_q ? RemBits'(BcuWords - 1) : RemBits'(FdWords - 1));
       end
       last_kind_q <= last1;
-      nb_q        <= nb1 + {1'b0, push && bcu_v_q};
-      fdf_q       <= fdf1 || (push && !bcu_v_q);
-      fpos_q      <= (push && !bcu_v_q) ? nb1 : fpos1;
+      nb_q        <= nb1 + {1'b0, push_b_q};
+      fdf_q       <= fdf1 || (push_q && !push_b_q);
+      fpos_q      <= (push_q && !push_b_q) ? nb1 : fpos1;
+      push_q      <= push;
+      push_b_q    <= push_b;
       sel_q      <= sel_now;
       primed_q   <= primed_q || fd_real || bcu_real;
       fd_tick_q  <= fd_tick;
@@ -173,62 +195,55 @@ module traj_core #(
   assign pb = pend_bcu_q - {1'b0, bcu_valid || bcu_underrun};
 
   // ---------------------------------------------------------------------
-  // Input register slice (skid buffer): s_axis_tready is a flop; the router
-  // sees out_*. Valid bits are reset, data is not.
+  // Input register slice: s_axis_tready is a flop; the router sees its
+  // output. Per-engine valid, registered (timing): fd_v_q/bcu_v_q hold
+  // exactly out_v_q && kind of the word in the slice's output (in_seg_q ?
+  // kind_q : out_u_q), computed from the next-state values, so the kind
+  // decode is off the router's handshake path. This is a re-encoding, not a
+  // new pipeline stage. Where out_v_q is known to be set (accept, first) the
+  // word's kind is bcu_v_q.
   // ---------------------------------------------------------------------
-  //
-  // Per-engine valid, registered (timing): fd_v_q/bcu_v_q hold exactly
-  //   out_v_q && kind of the word in out_* (in_seg_q ? kind_q : out_u_q)
-  // computed from the next-state values, so each engine's tvalid is a flop
-  // and the kind decode is off the path from the slice into the engines'
-  // load control (the BCU's ring shift enables 1088 flops). This is a
-  // re-encoding, not a new pipeline stage: the cycle schedule is unchanged.
-  // Where out_v_q is known to be set (accept, push) the word's kind is bcu_v_q.
-  assign s_axis_tready = !sk_v_q;
-  assign load_out      = !out_v_q || accept;
-  assign out_v_d       = load_out ? (sk_v_q || s_axis_tvalid) : 1'b1;
-  assign out_u_d       = (load_out && sk_v_q) ? sk_u_q
-                       : ((load_out && s_axis_tvalid) ? s_axis_tuser : out_u_q);
-  assign in_seg_d      = accept ? (!in_seg_q || rem_q != RemBits'(1)) : in_seg_q;
-  assign kind_d        = push ? bcu_v_q : kind_q;
-  assign kind_nx       = in_seg_d ? kind_d : out_u_d;
+  traj_skid #(.Width(ChunkWidth + 1)) u_in (
+    .clk_i, .rst_ni,
+    .data_i({s_axis_tuser, s_axis_tdata}), .valid_i(s_axis_tvalid), .ready_o(s_axis_tready),
+    .data_o({out_u_q, out_d_q}), .valid_o(out_v_q), .ready_i(accept),
+    .valid_d_o(out_v_d), .data_d_o({out_u_d, out_dd})
+  );
+  assign in_seg_d = accept ? (!in_seg_q || rem_q != RemBits'(1)) : in_seg_q;
+  assign kind_d   = first ? bcu_v_q : kind_q;
+  assign kind_nx  = in_seg_d ? kind_d : out_u_d;
   always_ff @(posedge clk_i) begin
     if (!rst_ni) begin
-      out_v_q <= 1'b0;
-      sk_v_q  <= 1'b0;
       fd_v_q  <= 1'b0;
       bcu_v_q <= 1'b0;
     end else begin
-      out_v_q <= out_v_d;
       fd_v_q  <= out_v_d && !kind_nx;
       bcu_v_q <= out_v_d && kind_nx;
-      if (load_out) begin
-        sk_v_q <= 1'b0;
-      end else if (s_axis_tvalid && !sk_v_q) begin
-        sk_v_q <= 1'b1;
-      end
     end
   end
-  always_ff @(posedge clk_i) begin
-    if (load_out) begin
-      if (sk_v_q) begin
-        out_d_q <= sk_d_q;
-      end else if (s_axis_tvalid) begin
-        out_d_q <= s_axis_tdata;
-      end
-    end else if (s_axis_tvalid && !sk_v_q) begin
-      sk_d_q <= s_axis_tdata;
-      sk_u_q <= s_axis_tuser;
-    end
-    out_u_q <= out_u_d;
-  end
-
 
   // ---------------------------------------------------------------------
-  // Engines: each takes the slice's word when its registered valid is set.
+  // The engines' register slices: the router hands a word to the slice of
+  // its kind, with a bit that marks a segment's first word; the engine's
+  // tready reaches no further than its slice and the segment count (the
+  // slices' readies and the engines' tvalids are flops).
   // ---------------------------------------------------------------------
-  assign fd_tvalid  = fd_v_q;
-  assign bcu_tvalid = bcu_v_q;
+  traj_skid #(.Width(ChunkWidth + 1)) u_fd_in (
+    .clk_i, .rst_ni,
+    .data_i({!in_seg_q, out_d_q}), .valid_i(fd_v_q), .ready_o(fd_in_ready),
+    .data_o({fd_first, fd_tdata}), .valid_o(fd_tvalid), .ready_i(fd_tready),
+    .valid_d_o(fd_nv), .data_d_o(fd_nd)
+  );
+  traj_skid #(.Width(ChunkWidth + 1)) u_bcu_in (
+    .clk_i, .rst_ni,
+    .data_i({!in_seg_q, out_d_q}), .valid_i(bcu_v_q), .ready_o(bcu_in_ready),
+    .data_o({bcu_first, bcu_tdata}), .valid_o(bcu_tvalid), .ready_i(bcu_tready),
+    .valid_d_o(bcu_nv), .data_d_o(bcu_nd)
+  );
+
+  // ---------------------------------------------------------------------
+  // Engines: each takes the words of its slice.
+  // ---------------------------------------------------------------------
 
   // The two FD engines take the same stream and ticks and give the same
   // samples; traj_fd_tm answers a tick after its pass over the registers
@@ -247,7 +262,7 @@ module traj_core #(
       .TickClocks(TmTick)
     ) u_fd (
       .clk_i, .rst_ni,
-      .s_axis_tdata(out_d_q), .s_axis_tvalid(fd_tvalid), .s_axis_tready(fd_tready),
+      .s_axis_tdata(fd_tdata), .s_axis_tvalid(fd_tvalid), .s_axis_tready(fd_tready),
       .tick_i(fd_tick),
       .sample_valid_o(fd_valid), .sample_o(fd_sample),
       .sample_addr_i(sample_addr), .sample_word_o(sample_word),
@@ -258,7 +273,7 @@ module traj_core #(
       .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits)
     ) u_fd (
       .clk_i, .rst_ni,
-      .s_axis_tdata(out_d_q), .s_axis_tvalid(fd_tvalid), .s_axis_tready(fd_tready),
+      .s_axis_tdata(fd_tdata), .s_axis_tvalid(fd_tvalid), .s_axis_tready(fd_tready),
       .tick_i(fd_tick),
       .sample_valid_o(fd_valid), .sample_o(fd_sample),
       .underrun_o(fd_underrun), .seg_done_o(fd_done), .tick_err_o(fd_err)
@@ -270,7 +285,7 @@ module traj_core #(
     .OutWidth(OutWidth), .MaxDepth(MaxDepth)
   ) u_bcu (
     .clk_i, .rst_ni,
-    .s_axis_tdata(out_d_q), .s_axis_tvalid(bcu_tvalid), .s_axis_tready(bcu_tready),
+    .s_axis_tdata(bcu_tdata), .s_axis_tvalid(bcu_tvalid), .s_axis_tready(bcu_tready),
     .tick_i(bcu_tick),
     .sample_valid_o(bcu_valid), .sample_o(bcu_sample),
     .underrun_o(bcu_underrun), .seg_done_o(bcu_done), .tick_err_o(bcu_err)
