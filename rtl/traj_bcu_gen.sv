@@ -486,11 +486,20 @@ module traj_bcu_gen #(
     s2_ax_q   <= s1_ax_q;   s2_dg_q <= s1_dg_q;   s2_bank_q <= s1_bank_q;
   end
 
-  // hd: axis multiplexer (or the sign fill of the previous digit)
+  // hd: axis multiplexer (or the sign fill of the previous digit). An OR of
+  // decoded words per lane: an indexed part-select would elaborate into an
+  // index adder and a shifter across all lanes (timing).
+  logic [4*CW-1:0] rd_ax;
+  always_comb begin
+    rd_ax = '0;
+    for (int l = 0; l < 4; l++)
+      for (int a = 0; a < Axes; a++)
+        if (32'(rs_ax_q) == a) rd_ax[l*CW +: CW] = rd_ax[l*CW +: CW] | rd_q[(l*Axes + a)*CW +: CW];
+  end
   always_ff @(posedge clk_i) begin
     for (int l = 0; l < 4; l++) begin
       if (rs_ext_q) hd_q[l*CW +: CW] <= {CW{hd_q[l*CW + CW - 1]}};
-      else          hd_q[l*CW +: CW] <= rd_q[(l*Axes + 32'(rs_ax_q))*CW +: CW];
+      else          hd_q[l*CW +: CW] <= rd_ax[l*CW +: CW];
     end
   end
 

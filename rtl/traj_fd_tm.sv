@@ -141,7 +141,7 @@ module traj_fd_tm #(
   // Control decode (mirrors FdTm::clock).
   // ---------------------------------------------------------------------
   logic ready, accept, header, load_shift, consume, run, walk, fast, step;
-  logic i_wrap, c_wrap, a_wrap, at_last, hdr_last;
+  logic i_wrap, c_wrap, a_wrap, at_last, at_wrap, hdr_last;
   logic tick_new, tick_held;
   // With one word per axis and register pair (Axes = 1, Chunks = 1,
   // Degree = 1) the next pass's first read is the word the last write of a
@@ -168,6 +168,9 @@ module traj_fd_tm #(
   assign c_wrap     = (32'(c_q) == Chunks - 1);
   assign a_wrap     = (32'(a_q) == Axes - 1);
   assign at_last    = (i_wrap || fast) && c_wrap && a_wrap;
+  // the same for a load word: a load never walks (fast is 0), and the load's
+  // decodes then stay off the pass's tick path (timing)
+  assign at_wrap    = i_wrap && c_wrap && a_wrap;
   assign hdr_last   = (HdrWords == 1) || hword_q;
 
   // ---------------------------------------------------------------------
@@ -342,7 +345,7 @@ module traj_fd_tm #(
         if (hdr_last) hdr_q <= 1'b0;
       end
       if (load_shift) begin
-        if (at_last) begin
+        if (at_wrap) begin
           mid_q    <= 1'b0;
           hdr_q    <= 1'b1;
           active_q <= !cnt_zero;
@@ -388,7 +391,7 @@ module traj_fd_tm #(
       count_q   <= count_q - 1'b1;
       cnt_one_q <= cnt_hi_zero && (count_q[1:0] == 2'd2);
     end
-    if (load_shift && at_last) begin
+    if (load_shift && at_wrap) begin
       cnt_one_q <= cnt_hi_zero && (count_q[1:0] == 2'd1);
     end
     if (run) begin
@@ -456,6 +459,7 @@ module traj_fd_tm #(
     if (f_past_valid) begin
       // registered decodes equal what they stand for (the timing fixes)
       if (active_q || busy_q) assert (cnt_one_q == (count_q == CountWidth'(1)));
+      if (load_shift) assert (at_last == at_wrap);
       // state bounds and consistency
       assert (32'(a_q) < Axes && 32'(c_q) < Chunks && 32'(i_q) <= Degree);
       if (busy_q) assert (32'(ra_q) < Axes && 32'(rc_q) < Chunks && 32'(ri_q) <= Degree);
