@@ -164,6 +164,7 @@ module traj_bcu_gen #(
   // ---------------------------------------------------------------------
   logic accept;
   logic top_v, top_end, newer, proc, under, consume, adv;
+  logic adv_t_q, adv_n_q;  // adv with a tick, without one (timing copies)
   logic enter_start, ent_v, ent_last, ent_end, xfer_step;
   assign s_axis_tready = (fsm_q == StIdle) || (fsm_q == StLoad);
   assign accept        = s_axis_tready && s_axis_tvalid;
@@ -179,7 +180,10 @@ module traj_bcu_gen #(
   assign proc    = tick_q && top_v;
   assign under   = tick_q && !top_v && (fsm_q == StIdle) && !s_axis_tvalid && !newer;
   assign consume = proc || under;
-  assign adv     = top_v ? proc : (top_end ? newer : 1'b1);
+  // adv = top_v ? proc : (top_end ? newer : 1), re-encoded for timing (it
+  // enables the whole forward-difference stage): its values with and without
+  // a tick are flops kept from the next state (below), so adv is one LUT
+  assign adv     = tick_q ? adv_t_q : adv_n_q;
   // entering tag: the next step of the feeding segment, else the pending
   // segment's start, else (once) the end tag, else a bubble
   assign enter_start = !frem_q && xpend_q;
@@ -354,6 +358,26 @@ module traj_bcu_gen #(
   end else begin : g_lo1
     assign vlo_d = 1'b0;
     assign slo_d = 1'b0;
+  end
+
+  // the next top tag, pending flag and newer: adv's copies from them
+  logic top_v_n, top_end_n, xpend_n, newer_n;
+  assign top_v_n   = adv ? tag_v_d[C-1] : top_v;
+  assign top_end_n = adv ? tag_end_d[C-1] : top_end;
+  assign xpend_n   = (adv && !frem_q && xpend_q) ? 1'b0 : (hand_off || xpend_q);
+  if (C > 1) begin : g_newer_n
+    assign newer_n = xpend_n || (adv ? vlo_d : vlo_q);
+  end else begin : g_newer_n1
+    assign newer_n = xpend_n;
+  end
+  always_ff @(posedge clk_i) begin
+    if (!rst_ni) begin
+      adv_t_q <= 1'b1;
+      adv_n_q <= 1'b1;
+    end else begin
+      adv_t_q <= !(!top_v_n && top_end_n && !newer_n);
+      adv_n_q <= !top_v_n && (!top_end_n || newer_n);
+    end
   end
 
   always_ff @(posedge clk_i) begin
@@ -742,6 +766,8 @@ module traj_bcu_gen #(
     if (f_past_valid) begin
       // timing copies
       assert (xk1_q == xk_q + 1'b1);
+      assert (adv_t_q == !(!top_v && top_end && !newer));
+      assert (adv_n_q == (!top_v && (!top_end || newer)));
       if (C > 1) begin
         assert (vlo_q == |(tag_v_q & C'((64'd1 << (C - 1)) - 64'd1)));
         assert (slo_q == |(tag_start_q & C'((64'd1 << (C - 1)) - 64'd1)));
