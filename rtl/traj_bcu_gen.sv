@@ -204,15 +204,16 @@ module traj_bcu_gen #(
   /* verilator lint_on CMPCONST */
 
   logic              pass_on, pass_init, issue, hand_off;
-  logic [PcBits-1:0] npass, period;
   logic [DgBits-1:0] dpass_last;
   assign pass_on    = (fsm_q == StDesc) || (fsm_q == StInit);
   assign pass_init  = (fsm_q == StInit);
-  assign npass      = pass_init ? PcBits'(Ni) : PcBits'(N);
-  assign period     = pass_init ? PcBits'(Pi) : PcBits'(Pp);
   assign dpass_last = pass_init ? DgBits'(C - 1) : DgBits'(Digits - 1);
-  assign issue      = pass_on && (pc_q < npass);  // a pass slot is read this cycle
-  assign hand_off   = pass_init && (pc_q == period - 1'b1);
+  // pc_q below the pass's slots (Ni for INIT, else N) and pc_q at the
+  // pass's last clock (period Pi for INIT, else Pp) are kept in flops from
+  // the next state (pc_lt_q, pc_end_q: timing copies, proved equal below)
+  logic pc_lt_q, pc_end_q;
+  assign issue      = pass_on && pc_lt_q;  // a pass slot is read this cycle
+  assign hand_off   = pass_init && pc_end_q;
 
   state_e               fsm_d;
   logic [DepthBits-1:0] depth_d, lvl_d;
@@ -282,7 +283,7 @@ module traj_bcu_gen #(
             sdg_d = sdg_q + 1'b1;
           end
         end
-        if (pc_q == period - 1'b1) begin
+        if (pc_end_q) begin
           pc_d  = '0;
           sdg_d = '0;
           sax_d = '0;
@@ -300,6 +301,27 @@ module traj_bcu_gen #(
         fsm_d = StIdle;
       end
     endcase
+  end
+
+  // Their next values from how pc moves: to 0 (a pass starts: below the
+  // slots, at the end only for a one-clock period: Pp = 1, Pi >= 2), up by
+  // one within a pass (below: still below unless at the last slot; at the
+  // end: one clock before it), else held (pass_init does not change either).
+  logic pc_zero, pc_inc, pass_init_d;
+  assign pc_zero     = ((fsm_q == StWaitx) && !xpend_q && !xbusy_q) || (pass_on && pc_end_q);
+  assign pc_inc      = pass_on && !pc_end_q;
+  assign pass_init_d = (fsm_d == StInit);
+  always_ff @(posedge clk_i) begin
+    if (!rst_ni) begin
+      pc_lt_q  <= 1'b1;       // pc 0 < N (N >= 1)
+      pc_end_q <= (Pp == 1);  // pc 0 == Pp - 1
+    end else if (pc_zero) begin
+      pc_lt_q  <= 1'b1;
+      pc_end_q <= (Pp == 1) && !pass_init_d;
+    end else if (pc_inc) begin
+      pc_lt_q  <= pc_lt_q && (pc_q != (pass_init ? PcBits'(Ni - 1) : PcBits'(N - 1)));
+      pc_end_q <= pc_q == (pass_init ? PcBits'(Pi - 2) : PcBits'(Pp - 2));
+    end
   end
 
   always_ff @(posedge clk_i) begin
@@ -766,6 +788,11 @@ module traj_bcu_gen #(
     if (f_past_valid) begin
       // timing copies
       assert (xk1_q == xk_q + 1'b1);
+      assert (pc_lt_q == (pc_q < (pass_init ? PcBits'(Ni) : PcBits'(N))));
+      assert (pc_end_q == (pc_q == (pass_init ? PcBits'(Pi - 1) : PcBits'(Pp - 1))));
+      // (inductive with: pc is 0 outside a pass and within its period in one)
+      if (!pass_on) assert (pc_q == '0);
+      else assert (pc_q <= (pass_init ? PcBits'(Pi - 1) : PcBits'(Pp - 1)));
       assert (adv_t_q == !(!top_v && top_end && !newer));
       assert (adv_n_q == (!top_v && (!top_end || newer)));
       if (C > 1) begin
