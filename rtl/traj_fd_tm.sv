@@ -355,7 +355,9 @@ module traj_fd_tm #(
       iss_q   <= walk && !at_last;
       busy_q  <= walk;
       last1_q <= walk && at_last;
-      if (walk && at_last && fast) active_q <= 1'b0;
+      // (== walk && at_last && fast: run and iss_q never meet, and fast
+      // makes at_last the chunk and axis wraps; written out for timing)
+      if (((run && cnt_one_q) || (iss_q && last_tick_q)) && c_wrap && a_wrap) active_q <= 1'b0;
       // Tick handling.
       tick_in_q      <= tick_i;
       tick_q         <= (tick_q && !consume) || tick_new;
