@@ -307,12 +307,14 @@ module traj_bcu_gen #(
   // slots, at the end only for a one-clock period: Pp = 1, Pi >= 2), up by
   // one within a pass (below: still below unless at the last slot; at the
   // end: one clock before it), else held (pass_init does not change either).
-  // lvl_top_q: lvl_q + 1 == depth_q (the last DESC pass), likewise kept from
-  // the next state (a timing copy, proved equal below)
+  // lvl_top_q: in DESC, lvl_q + 1 == depth_q (its last pass), kept from how
+  // lvl moves there: 0 from WAITX (depth fixed), + 1 at a DESC pass's end
+  // (a timing copy, proved equal below)
   logic pc_zero, pc_inc, pass_init_d, lvl_top_q;
   always_ff @(posedge clk_i) begin
-    if (!rst_ni) lvl_top_q <= 1'b0;  // lvl 0, depth 0
-    else         lvl_top_q <= (lvl_d + 1'b1 == depth_d);
+    if (!rst_ni) lvl_top_q <= 1'b0;
+    else if (fsm_q == StWaitx) lvl_top_q <= (depth_q == DepthBits'(1));
+    else if (fsm_q == StDesc && pc_end_q) lvl_top_q <= ({1'b0, lvl_q} + (DepthBits + 1)'(2) == {1'b0, depth_q});
   end
   assign pc_zero     = ((fsm_q == StWaitx) && !xpend_q && !xbusy_q) || (pass_on && pc_end_q);
   assign pc_inc      = pass_on && !pc_end_q;
@@ -796,7 +798,7 @@ module traj_bcu_gen #(
       assert (xk1_q == xk_q + 1'b1);
       assert (pc_lt_q == (pc_q < (pass_init ? PcBits'(Ni) : PcBits'(N))));
       assert (pc_end_q == (pc_q == (pass_init ? PcBits'(Pi - 1) : PcBits'(Pp - 1))));
-      assert (lvl_top_q == (lvl_q + 1'b1 == depth_q));
+      if (fsm_q == StDesc) assert (lvl_top_q == (lvl_q + 1'b1 == depth_q) && lvl_q < depth_q);
       // (inductive with: pc is 0 outside a pass and within its period in one)
       if (!pass_on) assert (pc_q == '0);
       else assert (pc_q <= (pass_init ? PcBits'(Pi - 1) : PcBits'(Pp - 1)));
