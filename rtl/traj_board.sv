@@ -106,7 +106,8 @@ module traj_board #(
   logic [15:0]              ts_count;
   logic                     ts_starved, ts_held, ts_err;
   // engine
-  logic                     tick, sample_valid, underrun, seg_done, tick_err;
+  logic                     tick, underrun, seg_done, tick_err;
+  logic                     sample_valid /* verilator public_flat_rd */;  // the engine's (the simulated board times it)
   logic [Axes*OutWidth-1:0] sample, status_sample;
   logic                     seg_start, new_seg_q;
   // tick and step generators
@@ -218,7 +219,11 @@ module traj_board #(
     end
     assign ahead = fifo_k_q + eng_k_q;
 
-    logic             scale_on, done_q, resume_q, ts_valid, ts_busy, ts_tick, ts_eng_tick, ts_starved_q;
+    logic             scale_on, done_q, resume_q, ts_valid, ts_tick, ts_starved_q;
+    // the unit's busy and engine strobe: the simulated board measures the
+    // unit's servo tick and the engine's answer against the host's bounds
+    logic             ts_busy /* verilator public_flat_rd */;
+    logic             ts_eng_tick /* verilator public_flat_rd */;
     logic             have_q, step_valid_q, under_q;
     logic [Axes*OutWidth-1:0] step_sample_q;
     /* verilator lint_off UNUSEDSIGNAL */

@@ -26,9 +26,12 @@
 // two samples are available). A servo tick while busy_o is dropped and sets
 // err_o (sticky until reset); so does trajectory time passing the data ahead
 // without end_i (cannot happen: the check keeps every stop within it).
-// A servo tick takes at most 2 shift_i + 2^(p+1) (engine latency + 2) +
-// 4 (the stop's steps: 2 m + s_max / m + 3) + 35 Axes + 12 clocks (2^p
-// engine ticks per servo tick at s = 1).
+// A servo tick takes at most timescale::unit_tick_clocks clocks
+// (host/timescale/time_scale.hpp, from this schedule; 2^p engine ticks per
+// servo tick at s = 1): 2 (shift_i + 1) + 4 (stop + 1) + (2^(p+1) + 2)
+// (engine latency + 2) + 34 Axes + 10, with a stop of at most
+// 3 m + (s_max + m^2) / m + 4 S-curve steps; checked on the hls model
+// (time_scale_hls_test) and on the simulated board.
 `default_nettype none
 `include "traj_check.svh"
 

@@ -34,6 +34,9 @@ struct SimulatedBoard::Rtl {
   ~Rtl() { top->final(); }
   bool tick() const { return top->rootp->traj_board__DOT__u_tick__DOT__tick_q; }  // traj_tick_gen: tick_o = tick_q
   bool out_valid() const { return top->rootp->traj_board__DOT__out_valid; }
+  bool unit_busy() const { return top->rootp->traj_board__DOT__g_scale__DOT__ts_busy; }
+  bool engine_tick() const { return top->rootp->traj_board__DOT__g_scale__DOT__ts_eng_tick; }
+  bool engine_valid() const { return top->rootp->traj_board__DOT__sample_valid; }
   // axis a of the output sample, sign-extended (OutWidth = Width - GuardBits bits)
   int64_t out_sample(int a) const {
     const int w = BoardBuild::kWidth - BoardBuild::kGuardBits;
@@ -87,11 +90,28 @@ void SimulatedBoard::clock(link::Bytes& out) {
     for (int a = 0; a < BoardBuild::kAxes; ++a) samples_.push_back(rtl_->out_sample(a));
     sample_cycles_.push_back(cycle_);
   }
+  time_unit();
   for (int a = 0; a < BoardBuild::kAxes; ++a) decoders_[a].sample(cycle_, (t.step_o >> a) & 1, (t.dir_o >> a) & 1);
   if (auto b = tx_.sample(t.tx_o)) out.push_back(*b);
   t.clk_i = 1;
   t.eval();
   ++cycle_;
+}
+
+// The time-scale unit's busy runs and the engine's answers to its ticks,
+// clock by clock (the unit's strobe is registered: the engine takes it the
+// clock it is high).
+void SimulatedBoard::time_unit() {
+  if (rtl_->unit_busy()) {
+    unit_busy_max_ = std::max(unit_busy_max_, ++busy_run_);
+  } else {
+    busy_run_ = 0;
+  }
+  if (engine_tick_at_ && rtl_->engine_valid()) {
+    engine_answer_max_ = std::max(engine_answer_max_, cycle_ - *engine_tick_at_);
+    engine_tick_at_.reset();
+  }
+  if (rtl_->engine_tick()) engine_tick_at_ = cycle_;
 }
 
 void SimulatedBoard::receive(const uint8_t* p, size_t n, link::Bytes&) {

@@ -12,6 +12,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -94,10 +95,17 @@ class SimulatedBoard : public link::Board {
   const std::vector<int64_t>& samples() const { return samples_; }
   const std::vector<uint64_t>& sample_cycles() const { return sample_cycles_; }
   uint64_t cycles() const { return cycle_; }
+  // With time scaling: the longest the unit was busy (clocks, from a servo
+  // tick to its sample) and the longest the engine took to answer one of its
+  // ticks (clocks from the strobe to the sample), for the host's bounds
+  // (timescale::unit_tick_clocks, link::board_engine_clocks).
+  uint64_t unit_busy_max() const { return unit_busy_max_; }
+  uint64_t engine_answer_max() const { return engine_answer_max_; }
   uint64_t tx_framing_errors() const { return tx_.framing_errors(); }
 
  private:
   void clock(link::Bytes& out);
+  void time_unit();
   void watch_answers(const link::Bytes& bytes);
   void watch_requests(const uint8_t* p, size_t n);
 
@@ -112,6 +120,8 @@ class SimulatedBoard : public link::Board {
   link::Status status_;
   uint32_t next_seq_ = 0;
   uint64_t stored_total_ = 0, cycle_ = 0;
+  uint64_t busy_run_ = 0, unit_busy_max_ = 0, engine_answer_max_ = 0;
+  std::optional<uint64_t> engine_tick_at_;
   uint32_t quiet_ = 0;  // cycles the RX line idles before the queue is sent
   void run_events();
   bool starving() const;

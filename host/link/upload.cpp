@@ -43,6 +43,16 @@ std::string plan_range(double max_percent) { return "the stream was planned for 
 
 }  // namespace
 
+int board_engine_clocks(const fd::Format& f) {
+  const int slots = f.axes * (f.degree + 1) * (f.width / f.chunk_width);
+  const int hdr_words = f.chunk_width < 32 ? 32 / f.chunk_width : 1;
+  return hdr_words + slots + slots + 2 + 6;
+}
+
+uint64_t servo_tick_clocks_needed(const TimeScaleSetup& t, const fd::Format& f) {
+  return timescale::unit_tick_clocks(t.bounds, t.p, f.axes, board_engine_clocks(f));
+}
+
 FeedState TimeScaleSetup::feed() const {
   FeedState f;
   f.scale_bits = bounds.scale_bits;
@@ -539,6 +549,33 @@ class Uploader : public FeedPort {
     return s.clock_hz;
   }
 
+  // A servo tick shorter than the unit's work would find it busy (STATUS tick
+  // error mid-job): refused before anything is sent, naming a period that fits.
+  void check_servo_tick(double tick_clocks, double clock_hz) const {
+    const fd::Format f = src_.header().format();
+    const double need = static_cast<double>(servo_tick_clocks_needed(ts_, f));
+    if (tick_clocks >= need) return;
+    std::string fits = "a longer one";
+    UploadOptions longer = o_;
+    for (int p = ts_.p + 1; p <= 30; ++p) {  // the shortest servo tick that fits, with its own bounds
+      longer.servo_period_s = std::ldexp(ts_.engine_tick, p);
+      try {
+        if (static_cast<double>(servo_tick_clocks_needed(time_scale_setup(src_.header(), longer), f)) <=
+            std::round(*longer.servo_period_s * clock_hz)) {
+          fits = num(*longer.servo_period_s) + " s or longer";
+          break;
+        }
+      } catch (const UploadError&) {
+        break;
+      }
+    }
+    fail("the servo tick of " + num(ts_.servo_period * 1e6) + " us is " + num(tick_clocks) + " clocks at " +
+         num(clock_hz / 1e6) + " MHz, but the board's time-scale unit may need up to " + num(need) +
+         " clocks of it (2^" + std::to_string(ts_.p + 1) + " engine ticks of up to " +
+         std::to_string(board_engine_clocks(f)) + " clocks, a simulated stop of up to " +
+         std::to_string(timescale::stop_ticks_bound(ts_.bounds)) + " S-curve steps): give --servo-period " + fits);
+  }
+
   // The tick CONFIG gives: the servo tick with time scaling, else the engine tick.
   Config make_config(double clock_hz) const {
     Config c;
@@ -548,6 +585,7 @@ class Uploader : public FeedPort {
       fail("tick period " + std::to_string(tick) + " s at " + std::to_string(clock_hz) +
            " Hz is not a 32-bit clock count");
     c.tick_clocks = static_cast<uint32_t>(tick_clocks);
+    if (ts_.on) check_servo_tick(tick_clocks, clock_hz);
     c.status_ticks =
         o_.status_period_s > 0 ? static_cast<uint32_t>(std::max(1.0, std::round(o_.status_period_s / tick))) : 0;
     ts_.apply(c);

@@ -73,6 +73,19 @@ struct TimeScaleSetup {
 // (scale bits, shift 0..40, u32 fields).
 TimeScaleSetup time_scale_setup(const stream::Header& h, const UploadOptions& o);
 
+// The most clocks traj_board's FD engine (traj_fd_tm, fed from the segment
+// FIFO) takes from a tick to its sample, for a stream of format f: at a
+// segment boundary the next segment's words, one per clock
+// (HdrWords + Axes (Degree+1) Chunks), then its first pass over the
+// registers (Axes (Degree+1) Chunks + 2), and the FIFO's read (6). The
+// simulated board measures it (tb/simboard: 218 clocks at 3 axes, quintic,
+// 96-bit, 16-bit chunks, where this gives 226).
+int board_engine_clocks(const fd::Format& f);
+
+// The shortest servo tick, in clocks, in which the board's time-scale unit
+// always finishes (timescale::unit_tick_clocks with board_engine_clocks).
+uint64_t servo_tick_clocks_needed(const TimeScaleSetup& t, const fd::Format& f);
+
 struct UploadProgress {
   uint64_t acked = 0;         // records the board has stored (next_seq)
   uint64_t read = 0;          // records read from the stream so far

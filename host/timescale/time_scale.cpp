@@ -120,6 +120,19 @@ void SCurve::step() {
   s_ += k_;
 }
 
+int64_t stop_ticks_bound(const IntBounds& b) {
+  const int64_t m = std::max<int64_t>(b.m, 1);
+  return 3 * m + (b.s_max + m * m + m - 1) / m + 4;
+}
+
+uint64_t unit_tick_clocks(const IntBounds& b, int p, int axes, int engine_clocks) {
+  const uint64_t shift = static_cast<uint64_t>(32 - b.scale_bits + p);
+  const uint64_t stop = static_cast<uint64_t>(stop_ticks_bound(b));
+  const uint64_t engine_ticks = (uint64_t(1) << (p + 1)) + 2;
+  return 3 + 2 * (shift + 1) + 4 * (stop + 1) + 5 + engine_ticks * (static_cast<uint64_t>(engine_clocks) + 2) +
+         34 * static_cast<uint64_t>(axes) + 2;
+}
+
 int64_t SCurve::stop_travel() const {
   SCurve c = *this;
   c.set_target(0);

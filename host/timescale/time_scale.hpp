@@ -64,6 +64,26 @@ struct IntBounds {
 };
 IntBounds integer_bounds(const RampBounds& b, double servo_period);
 
+// Servo ticks a stop (target 0) takes from any state of the curve
+// (0 <= S <= s_max, |k| <= m), at most: k turns toward the target by one per
+// tick (<= m ticks while S still rises, by at most m^2 in all), reaches -m
+// (<= m), moves at most (s_max + m^2) / m ticks at it, and turns back to 0
+// (<= m), with ticks of landing on S = 0 exactly (+4).
+// tb/timescale checks it against SCurve from extreme and random states.
+int64_t stop_ticks_bound(const IntBounds& b);
+
+// Clocks the hardware unit (rtl/traj_time_scale.sv) takes for one servo tick,
+// at most, from its schedule: the tick (3), trajectory time and ahead >>
+// shift a bit per clock (2 (shift + 1)), the check's stop one S-curve step
+// per 4 clocks after a first step toward the target (4 (stop + 1)), the
+// decision and the tick's own step (5), the engine ticks trajectory time
+// needs, at most 2^(p+1) at s <= 2 and the two that prime the window at the
+// first tick (each engine_clocks + 2: the strobe, the answer, the taking),
+// the interpolation (34 per axis) and the output (2). engine_clocks: the
+// most clocks the engine takes from a tick to its sample. A servo tick
+// shorter than this may find the unit busy (STATUS tick error).
+uint64_t unit_tick_clocks(const IntBounds& b, int p, int axes, int engine_clocks);
+
 // The S-curve of s: each servo tick k changes by -1, 0 or +1 and S by the
 // new k, toward the target (landing on it exactly, k = 0 there). The choice
 // is greedy: the largest change of k after which the target can still be

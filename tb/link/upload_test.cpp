@@ -692,6 +692,34 @@ TEST(Upload, TimeScalingOptionsAreRefusedBeforeTheBoardIsTouched) {
   EXPECT_EQ(rig.board().status().bytes_received, 0u);
 }
 
+// A servo tick too short for the board's time-scale unit is refused before
+// CONFIG, naming the shortest that fits. At 0.25 ms (one engine tick, 7500
+// clocks at 30 MHz) the integer bounds are, by hand: scale bits 20 (2^-20 <=
+// 20 x (0.25e-3)^2 = 1.25e-6), m = floor(2 x 0.25e-3 x 2^20) = 524, S_max =
+// 1.5 x 2^20: a stop may take 3 x 524 + (S_max + 524^2 + 523) / 524 + 4 =
+// 5102 S-curve steps of 4 clocks, beyond 7500. At 0.5 ms (scale bits 18,
+// m 262, S_max 393216) it is 2553 steps, about 10 700 clocks of 15 000.
+TEST(Upload, ServoTickTheUnitCannotFinishIsRefused) {
+  const auto& path = raster_stream(10, kScaled);
+  Rig rig(fast_board(), {}, true);
+  UploadOptions o = tool();
+  o.servo_period_s = 0.25e-3;
+  try {
+    run(rig, path, o);
+    FAIL() << "a 0.25 ms servo tick was taken";
+  } catch (const UploadError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("the servo tick of 250 us is 7500 clocks at 30 MHz, but the board's time-scale unit may need up to"),
+              std::string::npos)
+        << m;
+    EXPECT_NE(m.find("a simulated stop of up to 5102 S-curve steps"), std::string::npos) << m;
+    EXPECT_NE(m.find("give --servo-period 0.0005 s or longer"), std::string::npos) << m;
+  }
+  rig.disconnect();
+  EXPECT_TRUE(rig.shim().configs().empty());
+  EXPECT_TRUE(rig.played().empty());
+}
+
 // A scripted operator: each step runs once its condition holds, in order.
 class Script : public FeedControl {
  public:

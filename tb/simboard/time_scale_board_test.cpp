@@ -34,6 +34,7 @@
 #include "job/toolpath_job.hpp"
 #include "link/frame.hpp"
 #include "link/record_source.hpp"
+#include "link/upload.hpp"
 #include "stream/segment_stream.hpp"
 #include "test_seed.hpp"
 #include "timescale/scaled_butterfly.hpp"
@@ -62,6 +63,7 @@ struct Run {
   link::Status last;
   bool ended = false;
   uint64_t servo_ticks = 0;
+  uint64_t unit_busy_max = 0, engine_answer_max = 0;  // clocks (SimulatedBoard)
 };
 
 // The stream of `p` with its time-scaling fields, written where the link's
@@ -191,6 +193,10 @@ Run play(const std::string& stream_path, const timescale::IntBounds& ib, const s
   r.ended = (r.last.flags & link::status_flag::kEndReached) != 0;
   r.out = b.samples();
   r.servo_ticks = b.sample_cycles().size();
+  r.unit_busy_max = b.unit_busy_max();
+  r.engine_answer_max = b.engine_answer_max();
+  std::printf("  the unit busy at most %llu clocks of a servo tick, the engine's answer at most %llu clocks\n",
+              static_cast<unsigned long long>(r.unit_busy_max), static_cast<unsigned long long>(r.engine_answer_max));
   return r;
 }
 
@@ -259,6 +265,20 @@ void check(const ScaledPlan& p, const timescale::IntBounds& ib, const Run& r, co
               std::ldexp(static_cast<double>(s_max_seen), -ib.scale_bits));
 }
 
+// The host's clock bounds (what `trajcore upload` checks a servo tick
+// against) hold on the board's RTL: the engine's answer to a tick, and the
+// unit's work in a servo tick.
+void check_clocks(const ScaledPlan& p, const timescale::IntBounds& ib, const Run& r) {
+  const fd::Format f = p.res.header.format();
+  const int engine = link::board_engine_clocks(f);
+  const uint64_t unit = timescale::unit_tick_clocks(ib, kP, f.axes, engine);
+  std::printf("  bounds: the engine's answer %d clocks, the unit's servo tick %llu clocks\n", engine,
+              static_cast<unsigned long long>(unit));
+  EXPECT_LE(r.engine_answer_max, static_cast<uint64_t>(engine));
+  EXPECT_LE(r.unit_busy_max, unit);
+  EXPECT_GT(r.unit_busy_max, 0u);
+}
+
 // Random event ticks over the motion (the unscaled duration in servo ticks).
 std::vector<Event> random_events(std::mt19937_64& rng, uint64_t motion_ticks) {
   auto at = [&](double lo, double hi) {
@@ -297,6 +317,7 @@ void run_case(ScaledPlan p, const std::string& name, uint64_t seed, int ramp_gai
                                     {Event::kFeedHold, motion_ticks / 2, 300, 0}};
     const Run r = play(path, ib, events, 8 * 1000);
     std::filesystem::remove(path);
+    check_clocks(p, ib, r);
     const board::PathCheck pc = board::check_on_path(p.samples, r.out, 3, 2.0, kSMax * (1 << kP));
     EXPECT_TRUE(pc.ok()) << pc.first_problem;
     const std::array<double, 3> worst = worst_of_limits(p, r);
@@ -309,6 +330,7 @@ void run_case(ScaledPlan p, const std::string& name, uint64_t seed, int ramp_gai
   // hold resumes once the data is back): a starvation of 2.5 s empties it
   const Run r = play(path, ib, events, 8 * 1000);
   std::filesystem::remove(path);
+  check_clocks(p, ib, r);
   check(p, ib, r, events);
 }
 

@@ -59,8 +59,13 @@ struct Scenario {
 
 // Drives `step(in) -> Out` (the unit, or the lockstep of RTL and unit) with
 // the scenario; returns "" or what first differed from the reference.
+// The servo period is the unit's bound (timescale::unit_tick_clocks) and
+// one clock: a servo tick longer than the bound says would find the unit
+// busy and set err_o. *busy_max: the most clocks from a servo tick to its
+// sample.
 template <class Step>
-std::string run_scenario(const Scenario& sc, Step&& step, uint64_t* outputs = nullptr, uint64_t* starved = nullptr) {
+std::string run_scenario(const Scenario& sc, Step&& step, uint64_t* outputs = nullptr, uint64_t* starved = nullptr,
+                         uint64_t* busy_max = nullptr) {
   const std::vector<int64_t> samples = smooth_samples(sc.seed, sc.n_samples);
   const int n = 1 << sc.p;
   timescale::TimeScaler ref(sc.b, n, kAxes);
@@ -78,10 +83,7 @@ std::string run_scenario(const Scenario& sc, Step&& step, uint64_t* outputs = nu
   in.rst_n = false;
   for (int i = 0; i < 3; ++i) step(in);
   in.rst_n = true;
-  // the servo period: the longest tick (2^(p+1) engine ticks, the stop
-  // simulation, 32 clocks per axis) with room
-  const uint64_t period = static_cast<uint64_t>(2 * n * (sc.engine_latency + 3) + 4 * (4 * sc.b.m + 2 * sc.b.s_max / sc.b.m + 4) +
-                                                35 * kAxes + 2 * in.shift + 64);
+  const uint64_t period = timescale::unit_tick_clocks(sc.b, sc.p, kAxes, sc.engine_latency) + 1;
   uint64_t outs = 0, hold_until = 0, pause_until = 0;
   for (uint64_t t = 0; t < sc.max_servo_ticks; ++t) {
     // link and events, before the servo tick
@@ -109,6 +111,7 @@ std::string run_scenario(const Scenario& sc, Step&& step, uint64_t* outputs = nu
       }
       if (o.err) return "servo tick " + std::to_string(t) + ": err_o";
       if (o.sample_valid) {
+        if (busy_max) *busy_max = std::max(*busy_max, c);
         got = true;
         ++outs;
         ref.set_override(in.override_s);

@@ -63,4 +63,44 @@ TEST(TimeScaleHls, StarvedLinkIsTheReference) {
   EXPECT_GT(starved, 3u);
 }
 
+// The servo period of the scenarios is timescale::unit_tick_clocks + 1
+// (run_scenario): a servo tick that took longer would find the unit busy and
+// fail them with err_o. Here across rate bounds (fast and slow ramps, so
+// short and long stops), engine latencies, holds, overrides and starvation.
+TEST(TimeScaleHls, ServoTickWithinTheClockBound) {
+  struct Case {
+    traj::timescale::IntBounds b;
+    int p, latency;
+  };
+  const Case cases[] = {{{10, 12, 1536}, 4, 3}, {{14, 95, 19660}, 3, 40}, {{12, 1, 5000}, 2, 7}, {{8, 200, 511}, 5, 1}};
+  for (const Case& c : cases) {
+    Scenario sc;
+    sc.seed = traj::test::env_seed(5);
+    sc.b = c.b;
+    sc.p = c.p;
+    sc.engine_latency = c.latency;
+    sc.hold_every = 89;
+    sc.hold_len = 30;
+    sc.override_every = 41;
+    sc.link_per_tick = (uint64_t(1) << c.p) - 1;
+    sc.pause_every = 300;
+    sc.pause_len = 40;
+    sc.max_servo_ticks = 4000;
+    Unit u;
+    uint64_t busy = 0;
+    const std::string why = run_scenario(sc, [&](const Unit::In& in) {
+      const Unit::Out o = u.outputs();
+      u.clock(in);
+      return o;
+    }, nullptr, nullptr, &busy);
+    const uint64_t bound = traj::timescale::unit_tick_clocks(c.b, c.p, kAxes, c.latency);
+    std::printf("  sb %d m %lld s_max %lld p %d engine latency %d: longest servo tick %llu clocks, bound %llu\n",
+                c.b.scale_bits, static_cast<long long>(c.b.m), static_cast<long long>(c.b.s_max), c.p, c.latency,
+                static_cast<unsigned long long>(busy), static_cast<unsigned long long>(bound));
+    EXPECT_EQ(why, "");
+    EXPECT_LE(busy, bound);
+    EXPECT_GT(busy, 0u);
+  }
+}
+
 }  // namespace

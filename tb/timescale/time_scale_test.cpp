@@ -72,6 +72,36 @@ TEST(SCurve, RestToRestInTheFewestTicks) {
   }
 }
 
+// stop_ticks_bound (the hardware unit's clock bound rests on it) against the
+// curve's own stops: from every state random targets lead to, one step
+// toward the target (as the unit's check takes it first), then to rest at 0.
+TEST(SCurve, StopsWithinTheTickBound) {
+  std::mt19937_64 rng(test::env_seed(8));
+  double worst = 0;
+  for (int run = 0; run < 60; ++run) {
+    IntBounds b;
+    b.m = 1 + static_cast<int64_t>(rng() % (run % 3 == 0 ? 4 : 300));
+    b.s_max = 1 + static_cast<int64_t>(rng() % (int64_t(1) << (4 + run % 17)));
+    const int64_t bound = stop_ticks_bound(b);
+    SCurve c(b, static_cast<int64_t>(rng() % (b.s_max + 1)));
+    for (int t = 0; t < 2000; ++t) {
+      if (rng() % 40 == 0) c.set_target(rng() % 3 == 0 ? b.s_max : static_cast<int64_t>(rng() % (b.s_max + 1)));
+      c.step();
+      SCurve stop = c;
+      stop.step();
+      stop.set_target(0);
+      int64_t n = 1;
+      while (!stop.at_rest() && n <= bound + 1) {
+        stop.step();
+        ++n;
+      }
+      ASSERT_LE(n, bound) << "m " << b.m << " s_max " << b.s_max << " from S " << c.s() << " k " << c.k();
+      worst = std::max(worst, static_cast<double>(n) / static_cast<double>(bound));
+    }
+  }
+  std::printf("  longest stop: %.2f of stop_ticks_bound\n", worst);
+}
+
 TEST(SCurve, TargetsChangedAnyTimeStayWithinTheBounds) {
   std::mt19937_64 rng(test::env_seed(7));
   for (int run = 0; run < 200; ++run) {
