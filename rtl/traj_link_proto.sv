@@ -244,23 +244,22 @@ module traj_link_proto #(
   logic cbad_byte;
   logic [7:0] seq_byte;
   assign seq_byte = seq_q[8*idx_q[1:0] +: 8];  // byte p - 8 of seq (p[1:0] == idx[1:0])
+  // An OR of the field checks, not a priority chain (timing: the byte's
+  // compares in parallel). The fields of a type are disjoint byte ranges,
+  // except without the unit, where bytes 24..39 must be 0 (pd_cscale_q): the
+  // checks it overlaps (reserved: != 0; shift: > 40; flags: > 1) then flag
+  // no byte that != 0 does not.
+  logic d_zero, d_gt1, d_gt40, d_gt63;
+  assign d_zero = (d == 8'd0);
+  assign d_gt1  = (d[7:1] != 7'd0);
+  assign d_gt40 = (d > 8'd40);
+  assign d_gt63 = (d[7:6] != 2'd0);
   always_comb begin
-    cbad_byte = 1'b0;
-    if (is_seg) begin
-      if (pd_p0_q) cbad_byte = (d != 8'd1);
-      else if (pd_p13_q) cbad_byte = (d != 8'd0);
-      else if (pd_pseq_q) cbad_byte = (d != seq_byte);
-    end else if (is_cfg) begin
-      if (pd_cshift_q) cbad_byte = (d > 8'd63);
-      else if (pd_cen_q) cbad_byte = (d > 8'd1);
-      else if (pd_cres_q) cbad_byte = (d != 8'd0);
-      else if (ScaleWidth == 0 && pd_cscale_q) cbad_byte = (d != 8'd0);  // no unit: no time scaling
-      else if (pd_cshl_q) cbad_byte = (d > 8'd40);
-      else if (pd_cfl_q) cbad_byte = (d > 8'd1);
-    end else if (is_feed) begin
-      if (pd_p4_q) cbad_byte = (d > 8'd1);
-      else if (pd_fres_q) cbad_byte = (d != 8'd0);
-    end
+    cbad_byte = (is_seg && ((pd_p0_q && d != 8'd1) || (pd_p13_q && !d_zero) || (pd_pseq_q && d != seq_byte))) ||
+                (is_cfg && ((pd_cshift_q && d_gt63) || (pd_cen_q && d_gt1) || (pd_cres_q && !d_zero) ||
+                            (ScaleWidth == 0 && pd_cscale_q && !d_zero) ||  // no unit: no time scaling
+                            (pd_cshl_q && d_gt40) || (pd_cfl_q && d_gt1))) ||
+                (is_feed && ((pd_p4_q && d_gt1) || (pd_fres_q && !d_zero)));
   end
 
   // CONFIG shadow registers (applied by a good CONFIG frame)
