@@ -205,8 +205,9 @@ class Core {
     // -------------------------------------------------------------------
     // Router and segments in flight: nb_q BCU segments (playing, prepared,
     // loading: 0..3), fdf_q an FD segment (at most one), fpos_q BCU segments
-    // older than it. Counted on a segment's first word, dropped on its
-    // engine's seg_done (each engine finishes in order).
+    // older than it. Counted the clock after its engine takes a segment's
+    // first word, dropped on its engine's seg_done (each engine finishes in
+    // order).
     // -------------------------------------------------------------------
     const bool fd_tick = in.tick && !c.tick_kind;
     const bool bcu_tick = in.tick && c.tick_kind;

@@ -14,11 +14,10 @@
 //     segment of the other kind loads while the current one plays; the BCU
 //     generator also takes its own next segments while it plays.
 //   * ticks go to the engine owning the oldest segment in flight (counted
-//     when its engine takes the segment's first word, dropped on its
-//     engine's seg_done, both seen in
-//     the same cycle: up to 3 BCU segments and 1 FD segment, with the number
-//     of BCU segments older than the FD one), else to the engine of the last
-//     segment. Within a run of BCU segments ticks may come
+//     the clock after its engine takes the segment's first word, dropped on
+//     its engine's seg_done, seen in the same cycle: up to 3 BCU segments and
+//     1 FD segment, with the number of BCU segments older than the FD one),
+//     else to the engine of the last segment. Within a run of BCU segments ticks may come
 //     on every clock. Tick contract per engine: the FD engine takes a tick on
 //     a rising edge of its tick (high two cycles in a row = one tick and
 //     tick_err); the BCU generator takes one tick per cycle its tick is high
@@ -118,8 +117,9 @@ module traj_core #(
   // ---------------------------------------------------------------------
   // Router and segments in flight: nb_q BCU segments (playing, prepared,
   // loading: 0..3), fdf_q an FD segment (at most one), fpos_q BCU segments
-  // older than it. Counted on a segment's first word, dropped on its engine's
-  // seg_done (each engine finishes in order). State is control: all reset.
+  // older than it. Counted the clock after its engine takes a segment's first
+  // word, dropped on its engine's seg_done (each engine finishes in order).
+  // State is control: all reset.
   // ---------------------------------------------------------------------
   assign accept        = (fd_v_q && fd_in_ready) || (bcu_v_q && bcu_in_ready);
   // a segment's first word: the router marks it (first), and the segment is
