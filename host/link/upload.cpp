@@ -130,6 +130,7 @@ class Uploader : public FeedPort {
     prog_.time_scaling = ts_.on;
     prog_.feed = ts_.feed();
     config_ = make_config(o_.clock_hz > 0 ? o_.clock_hz : kDefaultBoardClockHz);
+    if (ts_.on && o_.clock_hz > 0) check_servo_tick(config_.tick_clocks, o_.clock_hz);  // else at the board's clock
     drain_input();
     const Status s = query_status();
     if (o_.resume && !(s.next_seq == 0 && s.segments_played == 0)) {
@@ -501,7 +502,9 @@ class Uploader : public FeedPort {
     if (s.next_seq != 0 || s.fifo_level != 0 || (s.flags & (status_flag::kPlaying | status_flag::kUnderrunHalt)))
       fail("the board did not reset (next_seq " + std::to_string(s.next_seq) + ", FIFO level " +
            std::to_string(s.fifo_level) + ")");
-    config_ = make_config(board_clock(s));
+    const double clock_hz = board_clock(s);
+    config_ = make_config(clock_hz);
+    if (ts_.on) check_servo_tick(config_.tick_clocks, clock_hz);
     command(Type::kConfig, 0, encode_config(config_));
     underruns_at_start_ = s.underruns;
     base_ = send_next_ = sent_end_ = 0;
@@ -550,7 +553,8 @@ class Uploader : public FeedPort {
   }
 
   // A servo tick shorter than the unit's work would find it busy (STATUS tick
-  // error mid-job): refused before anything is sent, naming a period that fits.
+  // error mid-job): refused before CONFIG (at the board's clock, or before
+  // the board is touched with --clock-hz), naming a period that fits.
   void check_servo_tick(double tick_clocks, double clock_hz) const {
     const fd::Format f = src_.header().format();
     const double need = static_cast<double>(servo_tick_clocks_needed(ts_, f));
@@ -585,7 +589,6 @@ class Uploader : public FeedPort {
       fail("tick period " + std::to_string(tick) + " s at " + std::to_string(clock_hz) +
            " Hz is not a 32-bit clock count");
     c.tick_clocks = static_cast<uint32_t>(tick_clocks);
-    if (ts_.on) check_servo_tick(tick_clocks, clock_hz);
     c.status_ticks =
         o_.status_period_s > 0 ? static_cast<uint32_t>(std::max(1.0, std::round(o_.status_period_s / tick))) : 0;
     ts_.apply(c);

@@ -718,6 +718,17 @@ TEST(Upload, ServoTickTheUnitCannotFinishIsRefused) {
   rig.disconnect();
   EXPECT_TRUE(rig.shim().configs().empty());
   EXPECT_TRUE(rig.played().empty());
+
+  // The check is at the clock the board reports: at 120 MHz the same tick is
+  // 30 000 clocks, enough.
+  BoardOptions fast = fast_board();
+  fast.clock_hz = 120e6;
+  Rig quick(fast, {}, true);
+  run(quick, path, o);
+  quick.disconnect();
+  ASSERT_EQ(quick.shim().configs().size(), 1u);
+  EXPECT_EQ(quick.shim().configs()[0].tick_clocks, 30000u);
+  EXPECT_TRUE(quick.played() == file_records(path));
 }
 
 // A scripted operator: each step runs once its condition holds, in order.
