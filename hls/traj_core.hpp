@@ -17,20 +17,21 @@
 // path: one in front of the router (s_axis_tready is a flop) and one in front
 // of each engine (an engine's tready reaches its slice and the segment count,
 // not the router); the router's per-engine valids fd_v_q/bcu_v_q are the
-// input slice's valid and the word's kind, registered from the next state. The FD engine takes a segment only when it has none; the BCU
-// generator takes the next one while it plays (up to three of its segments in
-// flight: playing, prepared, loading), so up to four segments are in flight.
+// input slice's valid and the word's kind, registered from the next state.
+// The FD engine takes a segment only when it has none; the BCU generator
+// takes the next one while it plays (up to three of its segments in flight:
+// playing, prepared, loading), so up to four segments are in flight.
 // The next segment of the other kind is loaded while the current one plays.
 //
 // Ticks go to the engine that owns the current segment: the oldest in flight.
 // In flight: the number of BCU segments (0..3), whether an FD segment is (at
 // most one), and how many of the BCU segments are older than it; a segment is
-// counted when its engine takes its first word (marked by the router in the
-// engine's slice) and dropped on its engine's seg_done (each engine finishes
-// its segments in order; first words reach the engines in stream order, at
-// most one per clock, because a segment has more words than a slice holds). The routing looks at this cycle's pop and push,
-// so a tick arriving with the seg_done of the previous segment already goes
-// to the next one. With nothing in flight, ticks go to the engine of the last
+// counted the clock after its engine takes its first word (marked by the
+// router in the engine's slice) and dropped on its engine's seg_done (each
+// engine finishes its segments in order; first words reach the engines in
+// stream order, at most one per clock, because a segment has more words than
+// a slice holds). The routing looks at this cycle's pops, so a tick arriving
+// with the seg_done of the previous segment already goes to the next one. With nothing in flight, ticks go to the engine of the last
 // segment (which then reports underrun as it does alone).
 //
 // Output: the engines' registered outputs, combined (no extra latency:
