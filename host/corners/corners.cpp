@@ -13,7 +13,7 @@
 namespace traj::corners {
 namespace {
 
-using Vec = Eigen::VectorXd;
+using Vec = Point;
 using Kind = input::Move::Kind;
 
 // A piece of the toolpath between two joins: one straight segment of a degree-1 move, or a whole

@@ -112,21 +112,24 @@ struct BlendResult {
   std::vector<CornerStop> stops;
 };
 
+// A point or direction of at most 8 coordinates (the core's axes), held on the stack: the blend
+// searches evaluate millions of them, and a heap vector would allocate for each.
+using Point = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 8, 1>;
+
 // Closed forms of the five-point blend (README.md derives them).
 double blend_deviation(double d, double turn);
 double blend_spacing_for(double tol, double turn);  // d with blend_deviation(d, turn) == tol
 double blend_peak_curvature(double d, double turn);
 // The blend at corner v between unit directions t_in (arriving) and t_out (leaving), spacing d.
-geo::BSpline corner_blend(const Eigen::VectorXd& v, const Eigen::VectorXd& t_in, const Eigen::VectorXd& t_out,
-                          double d);
+geo::BSpline corner_blend(const Point& v, const Point& t_in, const Point& t_out, double d);
 
 // One cubic B-spline over a run of vertices v[0..m-1] (m >= 1), entered from direction t_in with
 // spacing d_first and left along t_out with spacing d_last: control points
 //   v0 - 2 d_first t_in, v0 - d_first t_in, v0, ..., v_{m-1}, v_{m-1} + d_last t_out, v_{m-1} + 2 d_last t_out,
 // clamped knots with the m interior knots uniform, the inner vertices' control points pulled as
 // RunShape says. m = 1 with d_first = d_last is corner_blend.
-geo::BSpline run_spline(const std::vector<Eigen::VectorXd>& v, const Eigen::VectorXd& t_in, double d_first,
-                        const Eigen::VectorXd& t_out, double d_last, const RunShape& shape = {});
+geo::BSpline run_spline(const std::vector<Point>& v, const Point& t_in, double d_first, const Point& t_out,
+                        double d_last, const RunShape& shape = {});
 
 // Blend every corner between two feed moves (degree-1 moves are split at their vertices: a degree-1
 // curve of many points is a polyline; curved moves are cut where a corner next to them is blended).

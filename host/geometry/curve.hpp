@@ -213,7 +213,11 @@ class Curve {
   // tested against (bitwise equal).
   void eval_span_general(int span, double u, int nd, double* out) const;
   void eval(double u, int nd, double* out) const { eval_span(find_span(u), u, nd, out); }
-  Eigen::VectorXd point(double u) const { return eval(u, 0).col(0); }
+  Eigen::VectorXd point(double u) const {
+    Eigen::VectorXd p(dim());
+    eval(u, 0, p.data());
+    return p;
+  }
 
  private:
   BSpline spline_;
