@@ -114,10 +114,21 @@ double max_curvature(const geo::Curve& c, double u0, double u1) {
 }
 
 double dist_to_segment(const Vec& p, const Vec& a, const Vec& b) {
-  const Vec ab = b - a;
-  const double L2 = ab.squaredNorm();
-  const double t = L2 > 0 ? std::clamp((p - a).dot(ab) / L2, 0.0, 1.0) : 0.0;
-  return (p - (a + t * ab)).norm();
+  // plain loops: the run and blend searches call this millions of times
+  const int n = static_cast<int>(p.size());
+  double ab[8], L2 = 0, dot = 0;
+  for (int i = 0; i < n; ++i) {
+    ab[i] = b[i] - a[i];
+    L2 += ab[i] * ab[i];
+    dot += (p[i] - a[i]) * ab[i];
+  }
+  const double t = L2 > 0 ? std::clamp(dot / L2, 0.0, 1.0) : 0.0;
+  double d2 = 0;
+  for (int i = 0; i < n; ++i) {
+    const double e = p[i] - (a[i] + t * ab[i]);
+    d2 += e * e;
+  }
+  return std::sqrt(d2);
 }
 
 // Golden-section minimum of f on [a, b] (f unimodal there), to 3e-13 of the interval.

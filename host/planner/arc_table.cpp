@@ -56,9 +56,16 @@ double tail(const double* c) { return std::abs(c[kN - 1]) + std::abs(c[kN]); }
 ArcTable::ArcTable(const geo::Curve& c, const geo::ArcLength& al) : c_(&c), al_(&al), total_(al.total()) {
   const auto& spans = c.spans();
   pc_.reserve(spans.size() * 2);
+  // Each span starts at the depth the previous span's pieces needed: the
+  // spans of a curve are alike (a run's cubic), and a try at a depth the
+  // previous span failed at is mostly wasted (the inverse's Newton solves
+  // are the table's cost).
+  int start = 0;
   for (size_t si = 0; si < spans.size(); ++si) {
     const size_t first = pc_.size();
-    build_span(static_cast<int>(si), spans[si].u0, spans[si].u1, 0);
+    min_depth_ = kMaxDepth + 1;
+    build_span(static_cast<int>(si), spans[si].u0, spans[si].u1, 0, start);
+    start = min_depth_ <= kMaxDepth ? min_depth_ : 0;
     // piece starts: the library's span start, then the sum of the reference
     // lengths of the pieces before it (no accumulation across spans)
     double s = al.cumulative()[si];
@@ -117,8 +124,12 @@ bool ArcTable::try_piece(int span, double u0, double u1, double ref, Piece& p) {
       (f < 0 ? lo : hi) = x;
       const double dS = r * clenshaw(a, kN, x);
       double xn = dS > 0 ? x - f / dS : 0.5 * (lo + hi);
-      if (!(xn > lo && xn < hi)) xn = 0.5 * (lo + hi);
-      const bool done = std::abs(xn - x) <= 2e-16 || hi - lo <= 4e-16;
+      const bool newton = xn > lo && xn < hi;
+      if (!newton) xn = 0.5 * (lo + hi);
+      // Newton converges quadratically: after a Newton step below 1e-8 the
+      // error is of the order of its square, below the rounding of x (and
+      // the inverse is checked against S between its nodes below)
+      const bool done = (newton && std::abs(xn - x) <= 1e-8) || hi - lo <= 4e-16;
       x = xn;
       if (done) break;
     }
@@ -148,17 +159,24 @@ bool ArcTable::try_piece(int span, double u0, double u1, double ref, Piece& p) {
   return true;
 }
 
-void ArcTable::build_span(int span, double u0, double u1, int depth) {
+void ArcTable::build_span(int span, double u0, double u1, int depth, int start) {
+  const double m = 0.5 * (u0 + u1);
+  const bool halve = depth < kMaxDepth && u0 < m && m < u1;
+  if (depth < start && halve) {
+    build_span(span, u0, m, depth + 1, start);
+    build_span(span, m, u1, depth + 1, start);
+    return;
+  }
   const double ref = al_->span_length(span, u0, u1);
   Piece p{};
   if (try_piece(span, u0, u1, ref, p)) {
     pc_.push_back(p);
+    min_depth_ = std::min(min_depth_, depth);
     return;
   }
-  const double m = 0.5 * (u0 + u1);
-  if (depth < kMaxDepth && u0 < m && m < u1) {
-    build_span(span, u0, m, depth + 1);
-    build_span(span, m, u1, depth + 1);
+  if (halve) {
+    build_span(span, u0, m, depth + 1, start);
+    build_span(span, m, u1, depth + 1, start);
     return;
   }
   p = Piece{u0, u1, 0, ref, ref, span, true, 0};

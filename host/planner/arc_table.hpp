@@ -72,7 +72,8 @@ class ArcTable {
     bool fallback;  // answered by geo::ArcLength
     int off;        // inverse series x(y) at coef_[off .. off + kDegree]
   };
-  void build_span(int span, double u0, double u1, int depth);
+  // Pieces of [u0, u1] at `depth` halvings of the span, tried from `start` halvings on.
+  void build_span(int span, double u0, double u1, int depth, int start);
   bool try_piece(int span, double u0, double u1, double ref, Piece& p);
 
   const geo::Curve* c_;
@@ -81,6 +82,7 @@ class ArcTable {
   std::vector<double> coef_;
   double total_ = 0;
   size_t fallback_spans_ = 0;
+  int min_depth_ = 0;  // the fewest halvings a piece of the span being built needed
   long long build_evals_ = 0;
 };
 
