@@ -64,7 +64,13 @@ ArcTable::ArcTable(const geo::Curve& c, const geo::ArcLength& al) : c_(&c), al_(
   for (size_t si = 0; si < spans.size(); ++si) {
     const size_t first = pc_.size();
     min_depth_ = kMaxDepth + 1;
-    build_span(static_cast<int>(si), spans[si].u0, spans[si].u1, 0, start);
+    if (c.degree() == 1 && !c.rational()) {
+      // a straight segment's speed is constant: u is linear in s, no series
+      const double len = al.span_length(static_cast<int>(si), spans[si].u0, spans[si].u1);
+      pc_.push_back(Piece{spans[si].u0, spans[si].u1, 0, len, len, static_cast<int>(si), false, true, 0});
+    } else {
+      build_span(static_cast<int>(si), spans[si].u0, spans[si].u1, 0, start);
+    }
     start = min_depth_ <= kMaxDepth ? min_depth_ : 0;
     // piece starts: the library's span start, then the sum of the reference
     // lengths of the pieces before it (no accumulation across spans)
@@ -154,6 +160,7 @@ bool ArcTable::try_piece(int span, double u0, double u1, double ref, Piece& p) {
   p.len = L;
   p.span = span;
   p.fallback = false;
+  p.linear = false;
   p.off = static_cast<int>(coef_.size());
   coef_.insert(coef_.end(), b, b + kN + 1);
   return true;
@@ -179,7 +186,7 @@ void ArcTable::build_span(int span, double u0, double u1, int depth, int start) 
     build_span(span, m, u1, depth + 1, start);
     return;
   }
-  p = Piece{u0, u1, 0, ref, ref, span, true, 0};
+  p = Piece{u0, u1, 0, ref, ref, span, true, false, 0};
   pc_.push_back(p);
 }
 
@@ -193,6 +200,7 @@ double ArcTable::u_at(double s, int& hint) const {
   hint = i;
   const Piece& p = pc_[i];
   if (p.fallback) return al_->u_at(s);
+  if (p.linear) return std::clamp(p.u0 + (s - p.s0) / (p.s1 - p.s0) * (p.u1 - p.u0), p.u0, p.u1);
   const double y = std::clamp(2 * (s - p.s0) / p.len - 1, -1.0, 1.0);
   const double x = clenshaw(coef_.data() + p.off, kN, y);
   const double m = 0.5 * (p.u0 + p.u1), r = 0.5 * (p.u1 - p.u0);

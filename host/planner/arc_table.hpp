@@ -24,6 +24,8 @@
 //     the piece length plus 1e-15 of the curve length. Piece starts s(u0) are
 //     sums of the reference lengths from the library's span starts, so errors
 //     do not accumulate along the curve;
+//   * a straight span (degree 1, not rational) has constant speed: u is
+//     linear in s there, with no series;
 //   * a span where this fails after kMaxDepth halvings (sigma near 0: a
 //     near-cusp) keeps its unresolved pieces marked, and queries there go to
 //     geo::ArcLength::u_at (slower, never less accurate).
@@ -70,6 +72,7 @@ class ArcTable {
     double len;             // S(1): the series' length of the piece
     int span;
     bool fallback;  // answered by geo::ArcLength
+    bool linear;    // a straight span (degree 1, not rational): u linear in s
     int off;        // inverse series x(y) at coef_[off .. off + kDegree]
   };
   // Pieces of [u0, u1] at `depth` halvings of the span, tried from `start` halvings on.
