@@ -113,8 +113,9 @@ double max_curvature(const geo::Curve& c, double u0, double u1) {
   return k;
 }
 
-double dist_to_segment(const Vec& p, const Vec& a, const Vec& b) {
-  // plain loops: the run and blend searches call this millions of times
+// Squared distance of p to the segment [a, b], in plain loops (the run and blend searches call it
+// millions of times; a minimum over segments takes one square root, of the minimum).
+double dist2_to_segment(const Vec& p, const Vec& a, const Vec& b) {
   const int n = static_cast<int>(p.size());
   double ab[8], L2 = 0, dot = 0;
   for (int i = 0; i < n; ++i) {
@@ -128,7 +129,16 @@ double dist_to_segment(const Vec& p, const Vec& a, const Vec& b) {
     const double e = p[i] - (a[i] + t * ab[i]);
     d2 += e * e;
   }
-  return std::sqrt(d2);
+  return d2;
+}
+
+double dist_to_segment(const Vec& p, const Vec& a, const Vec& b) { return std::sqrt(dist2_to_segment(p, a, b)); }
+
+// Distance of p to the polygon's edges lo..hi-1 (edge e from poly[e] to poly[e + 1]).
+double dist_to_edges(const Vec& p, const std::vector<Vec>& poly, size_t lo, size_t hi) {
+  double best2 = INFINITY;
+  for (size_t e = lo; e < hi; ++e) best2 = std::min(best2, dist2_to_segment(p, poly[e], poly[e + 1]));
+  return std::sqrt(best2);
 }
 
 // Golden-section minimum of f on [a, b] (f unimodal there), to 4e-9 of the interval: at a smooth
@@ -390,10 +400,7 @@ double run_deviation(const geo::BSpline& s, const std::vector<Vec>& poly, int sa
   // the polygon edges j-2..j+4 around it.
   auto dist_poly = [&](double u, int j) {
     const Vec p = c.point(u);
-    double best = INFINITY;
-    for (int e = std::max(0, j - 2); e <= std::min(n - 2, j + 4); ++e)
-      best = std::min(best, dist_to_segment(p, poly[e], poly[e + 1]));
-    return best;
+    return dist_to_edges(p, poly, static_cast<size_t>(std::max(0, j - 2)), static_cast<size_t>(std::min(n - 2, j + 4)) + 1);
   };
   double worst = 0;
   for (int j = 0; j < spans; ++j) {
@@ -564,9 +571,7 @@ double fitted_run_deviation(const geo::BSpline& s, const std::vector<Vec>& poly,
     const Vec p = c.point(u);
     size_t lo, hi;
     edges_near(u * L, lo, hi);
-    double best = INFINITY;
-    for (size_t e = lo; e < hi; ++e) best = std::min(best, dist_to_segment(p, poly[e], poly[e + 1]));
-    return best;
+    return dist_to_edges(p, poly, lo, hi);
   };
   double worst = 0;
   const int spans = s.n_ctrl() - 3;
