@@ -113,6 +113,13 @@ double max_curvature(const geo::Curve& c, double u0, double u1) {
   return k;
 }
 
+// The curve's point at u, on the stack.
+Vec point_at(const geo::Curve& c, double u) {
+  Vec p(c.dim());
+  c.eval(u, 0, p.data());
+  return p;
+}
+
 // Squared distance of p to the segment [a, b], in plain loops (the run and blend searches call it
 // millions of times; a minimum over segments takes one square root, of the minimum).
 double dist2_to_segment(const Vec& p, const Vec& a, const Vec& b) {
@@ -199,7 +206,7 @@ struct Piece {
   const geo::Curve* curve = nullptr;
   Vec a, b;
   double u0 = 0, u1 = 0;
-  Vec at(double s) const { return curve ? Vec(curve->point(u0 + (u1 - u0) * s)) : Vec(a + s * (b - a)); }
+  Vec at(double s) const { return curve ? point_at(*curve, u0 + (u1 - u0) * s) : Vec(a + s * (b - a)); }
 };
 
 // Distance of p to c(u), u in [0, 1] of f's parameter: 16 samples, then golden section around the best.
@@ -226,7 +233,7 @@ double dist_to_piece(const Vec& p, const Piece& q) {
 double curved_blend_deviation(const geo::BSpline& blend, const Piece& in, const Piece& out, int samples) {
   const geo::Curve c(blend, "corner blend");
   auto off = [&](double u) {
-    const Vec p = c.point(u);
+    const Vec p = point_at(c, u);
     return std::min(dist_to_piece(p, in), dist_to_piece(p, out));
   };
   int arg = 0;
@@ -238,7 +245,7 @@ double curved_blend_deviation(const geo::BSpline& blend, const Piece& in, const 
   worst = std::max(worst, -golden_min([&](double u) { return -off(u); }, std::max(0, arg - 1) / double(samples),
                                       std::min(samples, arg + 1) / double(samples)));
   auto to_blend = [&](const Vec& p) {
-    return dist_sampled(p, [&](double u) { return Vec(c.point(u)); });
+    return dist_sampled(p, [&](double u) { return point_at(c, u); });
   };
   for (int i = 1; i <= 8; ++i) {
     worst = std::max(worst, to_blend(in.at(i / 8.0)));
@@ -399,7 +406,7 @@ double run_deviation(const geo::BSpline& s, const std::vector<Vec>& poly, int sa
   // The curve on knot span j lies in the hull of control points j..j+3, each near its polygon point:
   // the polygon edges j-2..j+4 around it.
   auto dist_poly = [&](double u, int j) {
-    const Vec p = c.point(u);
+    const Vec p = point_at(c, u);
     return dist_to_edges(p, poly, static_cast<size_t>(std::max(0, j - 2)), static_cast<size_t>(std::min(n - 2, j + 4)) + 1);
   };
   double worst = 0;
@@ -424,11 +431,11 @@ double run_deviation(const geo::BSpline& s, const std::vector<Vec>& poly, int sa
     double best = INFINITY, arg = ua;
     for (int k = 0; k <= 2 * samples; ++k) {
       const double u = ua + (ub - ua) * k / (2 * samples);
-      const double d = (c.point(u) - p).norm();
+      const double d = (point_at(c, u) - p).norm();
       if (d < best) best = d, arg = u;
     }
     const double h = (ub - ua) / (2 * samples);
-    return std::min(best, golden_min([&](double u) { return (c.point(u) - p).norm(); }, std::max(ua, arg - h),
+    return std::min(best, golden_min([&](double u) { return (point_at(c, u) - p).norm(); }, std::max(ua, arg - h),
                                      std::min(ub, arg + h)));
   };
   for (int i = 2; i <= n - 3; ++i) {
@@ -568,7 +575,7 @@ double fitted_run_deviation(const geo::BSpline& s, const std::vector<Vec>& poly,
     hi = std::min(hi, poly.size() - 1);
   };
   auto dist_poly = [&](double u) {
-    const Vec p = c.point(u);
+    const Vec p = point_at(c, u);
     size_t lo, hi;
     edges_near(u * L, lo, hi);
     return dist_to_edges(p, poly, lo, hi);
@@ -593,11 +600,11 @@ double fitted_run_deviation(const geo::BSpline& s, const std::vector<Vec>& poly,
     double best = INFINITY, arg = ua;
     for (int i = 0; i <= k; ++i) {
       const double u = ua + (ub - ua) * i / k;
-      const double d = (c.point(u) - p).norm();
+      const double d = (point_at(c, u) - p).norm();
       if (d < best) best = d, arg = u;
     }
     const double h = (ub - ua) / k;
-    return std::min(best, golden_min([&](double u) { return (c.point(u) - p).norm(); }, std::max(ua, arg - h),
+    return std::min(best, golden_min([&](double u) { return (point_at(c, u) - p).norm(); }, std::max(ua, arg - h),
                                      std::min(ub, arg + h)));
   };
   for (size_t i = 1; i + 1 < poly.size(); ++i) {
@@ -668,7 +675,7 @@ geo::BSpline run_spline(const std::vector<Vec>& v, const Vec& t_in, double d_fir
     for (int i = 1; i + 1 < m; ++i) {
       const int k = 2 + i;
       const double xi = (b.knots[k + 1] + b.knots[k + 2] + b.knots[k + 3]) / 3;
-      gap[i] = v[i] - Vec(c0.point(xi));
+      gap[i] = v[i] - point_at(c0, xi);
     }
     for (int i = 1; i + 1 < m; ++i) b.ctrl.row(2 + i) += shape.pull * gap[i].transpose();
   }
