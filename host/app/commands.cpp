@@ -205,6 +205,7 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
     src = std::make_unique<PathSource>(input::load_path(a.input), a.input);  // checks the file and the joins
   }
   job::StreamOptions so;
+  so.prefetch = a.threads > 1;
   if (a.window > 0) {
     so.window = std::max<size_t>(a.window, 2);
     so.commit = so.window >= 16 ? so.window * 3 / 4 : so.window / 2;
@@ -227,10 +228,11 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
   std::FILE* text = a.output == "-" ? stderr : stdout;
   std::fprintf(text, "%s: %zu curves in %zu windows (%zu planned again with half their commit), %zu segments, %lld ticks "
               "(%.3f s of motion) -> %s\n"
-              "host time %.3f s (%.0fx real time), first segment after %.1f ms\n",
+              "host time %.3f s on %d thread%s (%.0fx real time), first segment after %.1f ms\n",
               a.raster ? "raster" : a.input.c_str(), st.curves, st.windows, st.retries, st.segments, st.ticks,
               st.motion_time,
-              a.output == "-" ? "standard output" : a.output.c_str(), st.wall, st.motion_time / st.wall, st.first_segment * 1e3);
+              a.output == "-" ? "standard output" : a.output.c_str(), st.wall, a.threads, a.threads > 1 ? "s" : "",
+              st.motion_time / st.wall, st.first_segment * 1e3);
   if (toolpath) {
     for (const auto& n : toolpath->notes()) std::fprintf(stderr, "trajcore: note: %s\n", n.c_str());
     const auto& t = toolpath->totals();

@@ -17,6 +17,7 @@ struct PlanArgs {
   std::string output = "out/plan.trj";
   size_t window = 0;                 // > 0: stream with this window
   bool window_given = false;         // --window was on the command line
+  int threads = 2;                   // of a streamed plan (job::StreamOptions::prefetch)
   TimeScaleArgs scale;               // --time-scale: planned below the limits, ramp bounds reported
   size_t raster = 0;                 // > 0: a synthetic raster of this many pieces instead of a file
 };

@@ -145,6 +145,11 @@ int main(int argc, char** argv) {
       "(half below 16), "
       "write segments as they are final (0: plan the whole path at once; a .jsonl path is always streamed, "
       "default window 64)");
+  pl->add_option("--threads", pa.threads,
+                 "threads of a streamed plan: 2 reads, blends and builds the curves' arc-length tables beside the "
+                 "planning (the same stream); 1 does all on one")
+      ->check(CLI::Range(1, 2))
+      ->capture_default_str();
   pl->add_option("--format", pa.format, kFormatHelp)->check(CLI::IsMember(kFormats));
   pl->footer(
       "JSON Lines paths (*.jsonl or --format jsonl): one curve per line, each a curve object of the butterfly "

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "job/streaming.hpp"
 
+#include "job/prefetch.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -26,8 +28,9 @@ struct Window {
   std::deque<double> speeds;
   std::deque<bool> stops;
 
-  void push_back(StreamCurve&& c) {
-    curves.push_back(std::make_shared<const PathCurve>(c.curve, c.where));
+  void push_back(CurvePrefetch::Item&& it) {
+    curves.push_back(std::move(it.built));
+    StreamCurve& c = it.curve;
     splines.push_back(std::move(c.curve));
     speeds.push_back(c.speed);
     stops.push_back(c.stop);
@@ -304,14 +307,17 @@ StreamStats run_streaming(StreamSource& src, const JobConfig& cfg, const StreamO
   // occasionally not continue the committed motion within the limits; the
   // held window is then planned again with half its commit (more of the
   // slow-down is left to the next window), and the next window retried.
+  // four windows ahead: about a blend chunk of a toolpath (256 moves), which
+  // comes in one burst, so that blending one chunk overlaps planning the last
+  CurvePrefetch ahead(src, 4 * so.window, so.prefetch);
   Carry carry;             // into the window to plan
   Carry held_from;         // into the held window
   std::optional<WindowPlan> held;
   Window held_curves;      // the held window's committed curves
   while (true) {
-    StreamCurve c;
+    CurvePrefetch::Item c;
     while (!exhausted && win.curves.size() < so.window) {
-      if (src.next(c)) {
+      if (ahead.next(c)) {
         win.push_back(std::move(c));
         ++st.curves;
       } else {

@@ -41,6 +41,9 @@ class StreamSource {
 struct StreamOptions {
   size_t window = 64;  // curves held at once
   size_t commit = 48;  // curves committed per window (< window); the rest is look-ahead, planned again
+  // Read, blend and build the curves (arc-length tables) on a second thread,
+  // at most a window ahead (prefetch.hpp); the same curves and plan.
+  bool prefetch = true;
 };
 
 struct StreamStats {

@@ -57,17 +57,18 @@ void whole(const std::string& file, long lines) {
   print_row("whole path (run_job)", lines, r.plan.duration(), host, r.segments.size(), b);
 }
 
-void streamed(const std::string& file, long lines) {
+void streamed(const std::string& file, long lines, bool prefetch) {
   const auto t0 = Clock::now();
   const job::JobConfig cfg;
   job::ToolpathStream src(file, input::FileKind::kGcode, cfg);
   job::StreamOptions so;  // window 64, commit 48
+  so.prefetch = prefetch;
   const job::StreamStats st = job::run_streaming(src, src.config(), so, [](const fd::Compiled&, const plan::TimeSegment&) {});
   const double host = since(t0);
   char b[200];
   std::snprintf(b, sizeof b, "%d corners blended, %zu windows (%zu planned again), %zu repair caps, %zu moves held at most",
                 src.totals().corners_blended, st.windows, st.retries, st.caps, src.totals().max_pending);
-  print_row("streamed (window 64)", lines, st.motion_time, host, st.segments, b);
+  print_row(prefetch ? "streamed, 2 threads" : "streamed, 1 thread", lines, st.motion_time, host, st.segments, b);
 }
 
 }  // namespace
@@ -91,7 +92,8 @@ int main(int argc, char** argv) {
       std::ofstream o(file);
       bench::write_cam_program(o, n);
     }
-    ok = bench::in_child([&] { streamed(file, n); }, "FAILED: ") && ok;
+    ok = bench::in_child([&] { streamed(file, n, false); }, "FAILED: ") && ok;
+    ok = bench::in_child([&] { streamed(file, n, true); }, "FAILED: ") && ok;
     ok = bench::in_child([&] { whole(file, n); }, "FAILED: ") && ok;
   }
   std::filesystem::remove_all(dir);
