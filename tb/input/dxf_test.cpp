@@ -3,6 +3,7 @@
 // against hand-computed geometry (bulge arcs by the bulge formula, object coordinates, units,
 // chaining, splines).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <fstream>
@@ -40,7 +41,8 @@ struct Dxf {
     return t + "0\nENDSEC\n0\nEOF\n";
   }
   Toolpath read(const std::string& name = "t.dxf") const {
-    const std::string path = ::testing::TempDir() + name;
+    // one file per process: ctest runs the cases of this file in parallel
+    const std::string path = ::testing::TempDir() + std::to_string(::getpid()) + "_" + name;
     std::ofstream(path) << text();
     return traj::input::read_dxf(path);
   }
