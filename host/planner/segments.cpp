@@ -27,6 +27,9 @@ double poly_val(const double* c, int n, double t) {
   return v;
 }
 
+// q(t) - q(0) = c[1] t + ... + c[n] t^n: rounded at the scale of the travel, not of c[0].
+double travel(const double* c, int n, double t) { return t * poly_val(c + 1, n - 1, t); }
+
 // Real roots of c[0..n] (n <= 5) in the open interval (a, b), ascending.
 // Recursive isolation: the roots of the derivative split (a, b) into pieces
 // where the polynomial is monotone; each piece with a sign change holds one
@@ -197,8 +200,16 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
   // Does a fit over [k0, k1] pass? The peak test is exactly "exact maximum <=
   // limit"; the Bernstein bound (>= the exact maximum) only skips the root
   // search where it already shows that the limit holds.
+  // The sampled checks below take differences of positions over up to three
+  // ticks: they work on positions relative to the segment's start, whose
+  // rounding is that of the segment's travel, not of the coordinates (at
+  // 1 us ticks the third difference of absolute doubles is noise above the
+  // jerk limits). `tail`: the fitted positions of the ticks before the next
+  // segment's start, relative to it (the history's, relative to ts[0]).
   std::vector<std::array<double, kMaxAxes>> tail = o.history, pos;
   if (tail.size() > 3) tail.erase(tail.begin(), tail.end() - 3);
+  for (auto& q : tail)
+    for (int a = 0; a < d; ++a) q[a] -= ts[0].x[a];
   const double min_chord = 1e-9 * L.feed * period;  // below: at rest, no direction
   std::string fail_why;
   auto try_fit = [&](long long k0, long long k1, TimeSegment& seg) {
@@ -222,20 +233,19 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
     const int m = hn + 1 + static_cast<int>(k1 - k0);
     pos.resize(m);
     for (int i = 0; i < hn; ++i) pos[i] = tail[i];
-    for (int a = 0; a < d; ++a) pos[hn][a] = A.x[a];
-    double prev[kMaxAxes];
-    for (int a = 0; a < d; ++a) prev[a] = A.x[a];
+    for (int a = 0; a < d; ++a) pos[hn][a] = 0;
+    double prev[kMaxAxes] = {};
     for (long long k = k0 + 1; k <= k1; ++k) {
       const double tau = (k - k0) * period;
       double e2 = 0, c2 = 0;
       auto& q = pos[hn + (k - k0)];
       for (int a = 0; a < d; ++a) {
-        const double x = k == k1 ? B.x[a] : poly_val(seg.coef[a].data(), o.degree, tau);
-        q[a] = x;
-        const double e = x - ts[k].x[a], c = x - prev[a];
+        const double r = k == k1 ? B.x[a] - A.x[a] : travel(seg.coef[a].data(), o.degree, tau);
+        q[a] = r;
+        const double e = (A.x[a] + r) - ts[k].x[a], c = r - prev[a];
         e2 += e * e;
         c2 += c * c;
-        prev[a] = x;
+        prev[a] = r;
       }
       if (k < k1) {
         const double e = std::sqrt(e2);
@@ -278,9 +288,14 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
   };
   // A kept segment: its fitted positions before its end become the tail.
   auto accept = [&](TimeSegment& seg) {
+    // the tail so far and the segment's last ticks, relative to its end (the next start)
+    const TickSample& A = ts[seg.k0 - k_base];
+    const TickSample& B = ts[seg.k0 - k_base + seg.K];
+    for (auto& q : tail)
+      for (int a = 0; a < d; ++a) q[a] -= B.x[a] - A.x[a];
     for (uint32_t k = seg.K > 3 ? seg.K - 3 : 0; k < seg.K; ++k) {
       std::array<double, kMaxAxes> q{};
-      for (int a = 0; a < d; ++a) q[a] = poly_val(seg.coef[a].data(), seg.degree, k * period);
+      for (int a = 0; a < d; ++a) q[a] = travel(seg.coef[a].data(), seg.degree, k * period) - (B.x[a] - A.x[a]);
       tail.push_back(q);
     }
     if (tail.size() > 3) tail.erase(tail.begin(), tail.end() - 3);
