@@ -82,14 +82,14 @@ constexpr size_t kFitPart = 1 << 16;
 // ticks later (the caps already cover about five ticks' travel each side).
 constexpr size_t kResumeAfterFailure = 8;
 
-// The plan's positions of the (up to 3) ticks before ts[i]: the history of a
-// part that follows a failed one (only to look for further failures; that
-// round is not accepted).
+// The plan's positions of the (up to 3) ticks before ts[i], relative to
+// ts[i]: the history of a part that follows a failed one (only to look for
+// further failures; that round is not accepted).
 std::vector<std::array<double, plan::kMaxAxes>> plan_history(const std::vector<plan::TickSample>& ts, size_t i) {
   std::vector<std::array<double, plan::kMaxAxes>> h;
   for (size_t k = i >= 3 ? i - 3 : 0; k < i; ++k) {
     std::array<double, plan::kMaxAxes> q{};
-    for (int a = 0; a < plan::kMaxAxes; ++a) q[a] = ts[k].x[a];
+    for (int a = 0; a < plan::kMaxAxes; ++a) q[a] = ts[k].x[a] - ts[i].x[a];
     h.push_back(q);
   }
   return h;

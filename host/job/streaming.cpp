@@ -176,7 +176,7 @@ namespace {
 // tick times and the committed tick keep full precision however long the path
 // runs: a double T0 alone would round the tick grid to 7e-9 ticks past 2^25
 // ticks, 9 hours at 1 ms), the speed at the commit, the last committed tick
-// and its sample, the fitted positions before it (the next fit checks its
+// and its sample, the fitted positions before it, relative to it (the next fit checks its
 // sampled tangential/normal windows across the junction), and the stations
 // and repair caps of the plan beyond the commit.
 struct Carry {
@@ -241,7 +241,10 @@ WindowPlan plan_window(Window& win, const Carry& in, size_t commit_max, bool las
   wp.ticks = ts.size();
 
   Carry& next = wp.next;
-  next.history = in.history;
+  next.history = in.history;  // relative to this window's first tick: then to its last
+  if (ts.size() > 1)
+    for (auto& q : next.history)
+      for (int a = 0; a < path.dim(); ++a) q[a] -= ts.back().x[a] - ts.front().x[a];
   {
     auto t = plan::fitted_tail(fit.segments, path.dim(), h, 3);
     next.history.insert(next.history.end(), t.begin(), t.end());

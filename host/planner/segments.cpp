@@ -21,6 +21,15 @@ double TimeSegment::eval(int axis, double tau, int deriv) const {
 
 namespace {
 
+double poly_val(const double* c, int n, double t);
+double travel(const double* c, int n, double t);
+
+}  // namespace
+
+double TimeSegment::travel(int axis, double tau) const { return plan::travel(coef[axis].data(), degree, tau); }
+
+namespace {
+
 double poly_val(const double* c, int n, double t) {
   double v = 0;
   for (int j = n; j >= 0; --j) v = v * t + c[j];
@@ -115,13 +124,17 @@ SegmentPeaks segment_peaks(const TimeSegment& seg, int dim, double period) {
 std::vector<std::array<double, kMaxAxes>> fitted_tail(const std::vector<TimeSegment>& segs, int dim, double period,
                                                       int count) {
   std::vector<std::array<double, kMaxAxes>> t;
+  double to_end[kMaxAxes] = {};  // the end of segment i relative to the sequence's end
   for (size_t i = segs.size(); i-- > 0 && static_cast<int>(t.size()) < count;) {
     const TimeSegment& sg = segs[i];
+    double end[kMaxAxes] = {};
+    for (int a = 0; a < dim; ++a) end[a] = travel(sg.coef[a].data(), sg.degree, sg.K * period);
     for (uint32_t k = sg.K; k-- > 0 && static_cast<int>(t.size()) < count;) {
       std::array<double, kMaxAxes> q{};
-      for (int a = 0; a < dim; ++a) q[a] = poly_val(sg.coef[a].data(), sg.degree, k * period);
+      for (int a = 0; a < dim; ++a) q[a] = travel(sg.coef[a].data(), sg.degree, k * period) - end[a] + to_end[a];
       t.insert(t.begin(), q);
     }
+    for (int a = 0; a < dim; ++a) to_end[a] -= end[a];
   }
   return t;
 }
@@ -205,11 +218,9 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
   // rounding is that of the segment's travel, not of the coordinates (at
   // 1 us ticks the third difference of absolute doubles is noise above the
   // jerk limits). `tail`: the fitted positions of the ticks before the next
-  // segment's start, relative to it (the history's, relative to ts[0]).
+  // segment's start, relative to it (at first the history).
   std::vector<std::array<double, kMaxAxes>> tail = o.history, pos;
   if (tail.size() > 3) tail.erase(tail.begin(), tail.end() - 3);
-  for (auto& q : tail)
-    for (int a = 0; a < d; ++a) q[a] -= ts[0].x[a];
   const double min_chord = 1e-9 * L.feed * period;  // below: at rest, no direction
   std::string fail_why;
   auto try_fit = [&](long long k0, long long k1, TimeSegment& seg) {

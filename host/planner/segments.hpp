@@ -38,6 +38,8 @@ struct TimeSegment {
   std::array<std::array<double, 6>, kMaxAxes> coef{};  // per axis, coefficient of tau^j, tau = t - k0 h (seconds)
   double max_dev = 0;                       // max |fit - plan| at the ticks inside
   double eval(int axis, double tau, int deriv = 0) const;
+  // eval(axis, tau) - eval(axis, 0), rounded at the scale of the travel, not of the coordinate.
+  double travel(int axis, double tau) const;
 };
 
 // Exact maxima over a segment of |x'|, |x''|, |x'''| per axis (end points and
@@ -63,10 +65,13 @@ struct SegmentOptions {
   // max(feed_rel * v h, feed_abs), so that the chord between consecutive
   // output samples is within about 2 feed_rel of the planned arc.
   double feed_rel = 0.0025, feed_abs = 1e-8;
-  // Fitted positions of the (up to 3) ticks before ts[0], oldest first (a
-  // streaming window continuing a committed one): the sampled tangential and
-  // normal checks (sampled.hpp) then also cover the windows that straddle
-  // ts[0]. Empty at the start of a motion (at rest).
+  // Fitted positions of the (up to 3) ticks before ts[0], oldest first,
+  // relative to the fit's end there (a streaming window continuing a
+  // committed one, or the part of a long fit after another): the sampled
+  // tangential and normal checks (sampled.hpp) then also cover the windows
+  // that straddle ts[0]. Relative, because those checks take differences of
+  // up to three ticks, which absolute coordinates would round to noise at
+  // fine ticks. Empty at the start of a motion (at rest).
   std::vector<std::array<double, kMaxAxes>> history;
 };
 
@@ -85,7 +90,8 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
                                       double t_offset = 0, long long k_base = 0);
 
 // Positions of the last `count` ticks before the end of a fitted sequence
-// (oldest first), for SegmentOptions::history of the next window.
+// (oldest first), relative to the sequence's end, for SegmentOptions::history
+// of the next window.
 std::vector<std::array<double, kMaxAxes>> fitted_tail(const std::vector<TimeSegment>& segs, int dim, double period,
                                                       int count = 3);
 

@@ -185,27 +185,47 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
   // tangential and normal (centripetal) quantities of the samples, and of the
   // fitted polynomials at the same ticks (sampled.hpp)
   const bool jerk_claimed = r.header.degree == 5;
-  auto sampled_peaks = [&](const std::vector<std::array<double, 3>>& q, double min_chord, Peaks& pk) {
-    for (size_t k = 0; k + 2 < q.size(); ++k) {
-      const SampledWindow w = sampled_window(q[k].data(), q[k + 1].data(), q[k + 2].data(),
-                                             k + 3 < q.size() ? q[k + 3].data() : nullptr, d, h, min_chord);
+  // From the steps x(k+1) - x(k): each window's positions relative to its
+  // first tick, rounded at the scale of the window's travel (absolute
+  // coordinates would round the fitted polynomials' third differences to
+  // noise at 1 us ticks).
+  auto sampled_peaks = [&](const std::vector<std::array<double, 3>>& step, double min_chord, Peaks& pk) {
+    for (size_t k = 0; k + 1 < step.size(); ++k) {
+      double p[4][3] = {};
+      const size_t m = std::min<size_t>(3, step.size() - k);
+      for (size_t i = 0; i < m; ++i)
+        for (int a = 0; a < d; ++a) p[i + 1][a] = p[i][a] + step[k + i][a];
+      const SampledWindow w = sampled_window(p[0], p[1], p[2], m == 3 ? p[3] : nullptr, d, h, min_chord);
       pk.a_tan = std::max(pk.a_tan, w.at);
       pk.a_cen = std::max(pk.a_cen, w.an);
       pk.j_tan = std::max(pk.j_tan, w.jt);
       pk.j_cen = std::max(pk.j_cen, w.jn);
     }
   };
-  sampled_peaks(x, 16 * lsb, rep.out_peaks);
   {
-    std::vector<std::array<double, 3>> fx;
-    fx.reserve(n);
-    for (const auto& sg : r.segments)
-      for (uint32_t k = 0; k < sg.K; ++k) {
+    std::vector<std::array<double, 3>> step(n > 0 ? n - 1 : 0);
+    for (size_t k = 0; k + 1 < n; ++k)
+      for (int a = 0; a < d; ++a) step[k][a] = x[k + 1][a] - x[k][a];  // exact: samples are integers of LSBs
+    sampled_peaks(step, 16 * lsb, rep.out_peaks);
+  }
+  {
+    // each segment's steps from its travel (q(tau) - q(0)); a join's step is
+    // the rest of one segment's travel, the next one starting where it ends
+    std::vector<std::array<double, 3>> step;
+    step.reserve(n);
+    for (const auto& sg : r.segments) {
+      double prev[3] = {};
+      for (uint32_t k = 1; k <= sg.K; ++k) {
         std::array<double, 3> q{};
-        for (int a = 0; a < d; ++a) q[a] = sg.eval(a, k * h);
-        fx.push_back(q);
+        for (int a = 0; a < d; ++a) {
+          const double t = sg.travel(a, k * h);
+          q[a] = t - prev[a];
+          prev[a] = t;
+        }
+        step.push_back(q);
       }
-    sampled_peaks(fx, 1e-9 * cfg.limits.feed * h, rep.fit_peaks);
+    }
+    sampled_peaks(step, 1e-9 * cfg.limits.feed * h, rep.fit_peaks);
   }
   rep.out_peaks.feed = rep.out_path_v;
   const double sd = std::sqrt(static_cast<double>(d));
