@@ -326,6 +326,31 @@ TEST(PlannerCore, VeryFineTicksGiveTheExactFormGuarantee) {
               o.rep.allow_share_what.c_str(), worst, bound);
 }
 
+// At 1 us the sampled tangential and normal checks divide third differences
+// by h^3 = 1e-18 s^3: on absolute coordinates near 125 mm the doubles' rounding
+// alone (8 eps |x| / h^3, about 1e5 mm/s^3) is above the jerk limits. The fit
+// and the report take positions relative to each segment's start (its
+// travel), so an arc far from the origin fits with no cap and its fitted
+// polynomials' tangential and normal jerks read within the limits.
+TEST(PlannerCore, MicrosecondTicksFitWithoutRoundingNoise) {
+  Path p;
+  p.add(geo::make_arc(Eigen::Vector2d(120, 80), 5, 0, 0.5 * M_PI), "quarter arc far from the origin");
+  JobConfig cfg;
+  cfg.machine.period = 1e-6;
+  cfg.machine.choose_format(cfg.limits);
+  const RunOut o = run_through_core(p, cfg);
+  EXPECT_EQ(o.job.repairs, 0);
+  EXPECT_EQ(o.job.rounds, 1);
+  EXPECT_EQ(o.sim.mismatches, 0u);
+  EXPECT_TRUE(o.rep.exact_form);
+  EXPECT_LE(o.rep.worst_fit, 1 + 1e-9) << o.rep.worst_fit_what;
+  EXPECT_GT(o.rep.fit_peaks.j_tan, 0.1 * cfg.limits.j_tan);  // measured, not zero
+  EXPECT_LE(o.rep.max_deviation, cfg.limits.tol);
+  EXPECT_LE(o.rep.sample_to_fit, o.rep.sample_bound);
+  std::printf("  1 us: %zu segments, fit j_tan %.4g, j_cen %.4g (limits %g, %g)\n", o.job.segments.size(),
+              o.rep.fit_peaks.j_tan, o.rep.fit_peaks.j_cen, cfg.limits.j_tan, cfg.limits.j_cen);
+}
+
 TEST(PlannerCore, RandomSplinesThroughVerilatedCore) {
   std::mt19937_64 rng(traj::test::test_seed(99));
   std::uniform_real_distribution<double> U(-1, 1);
