@@ -156,11 +156,19 @@ plan::Path load_jsonl(const std::string& file) {
   return p;
 }
 
-Loaded load(const std::string& file, const std::string& format, const job::JobConfig& cfg) {
+// The G-code reader's options: the tool table, if one is given.
+input::GcodeOptions gcode_options(const std::string& tool_table) {
+  input::GcodeOptions o;
+  if (!tool_table.empty()) o.tools = input::read_tool_table(tool_table);
+  return o;
+}
+
+Loaded load(const std::string& file, const std::string& format, const std::string& tool_table,
+            const job::JobConfig& cfg) {
   const input::FileKind kind = input::file_kind(file, format);
   if (kind == input::FileKind::kJsonl) return {load_jsonl(file), cfg, {}};
   if (!input::is_toolpath(kind)) return {input::load_path(file), cfg, {}};
-  const input::Toolpath tp = input::read_toolpath(file, kind);
+  const input::Toolpath tp = input::read_toolpath(file, kind, gcode_options(tool_table));
   for (const auto& n : tp.notes) std::fprintf(stderr, "trajcore: note: %s\n", n.c_str());
   job::ToolpathPlan tpp = job::toolpath_plan(tp, cfg);
   char b[512];
@@ -198,7 +206,9 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
     src = std::make_unique<input::JsonlSource>(a.input);  // read line by line as the windows need curves
   } else if (input::is_toolpath(input::file_kind(a.input, a.format))) {
     // G-code read a line at a time as the windows need curves, blended in chunks
-    toolpath = std::make_unique<job::ToolpathStream>(a.input, input::file_kind(a.input, a.format), a.cfg);
+    job::ToolpathOptions to;
+    to.gcode = gcode_options(a.tool_table);
+    toolpath = std::make_unique<job::ToolpathStream>(a.input, input::file_kind(a.input, a.format), a.cfg, to);
     cfg = toolpath->config();
   } else {
     if (a.input.empty()) throw PlanError("plan: give a path file or --raster N");
@@ -251,7 +261,7 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
 
 int plan_whole(const PlanArgs& a) {
   if (a.input.empty()) throw PlanError("give a path file");
-  const Loaded in = load(a.input, a.format, a.cfg);
+  const Loaded in = load(a.input, a.format, a.tool_table, a.cfg);
   const plan::Path& path = in.path;
   const job::JobConfig& cfg = in.cfg;
   const auto res = job::run_job(path, cfg, progress);
@@ -339,7 +349,7 @@ int plan_command(const PlanArgs& a) {
 
 int run_command(const RunArgs& a) {
   if (a.input.empty()) throw PlanError("give a path file");
-  const Loaded in = load(a.input, a.format, a.cfg);
+  const Loaded in = load(a.input, a.format, a.tool_table, a.cfg);
   const plan::Path& path = in.path;
   const job::JobConfig& cfg = in.cfg;
   const auto res = job::run_job(path, cfg, progress);

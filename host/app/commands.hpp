@@ -14,6 +14,7 @@ struct PlanArgs {
   job::JobConfig cfg;
   std::string input;                 // path file (empty with raster)
   std::string format;                // "json", "jsonl", "gcode", "svg", "dxf" or empty (by the file name)
+  std::string tool_table;            // LinuxCNC tool table for G43 (empty: none; G43 is then refused)
   std::string output = "out/plan.trj";
   size_t window = 0;                 // > 0: stream with this window
   bool window_given = false;         // --window was on the command line
@@ -28,6 +29,7 @@ struct RunArgs {
   job::JobConfig cfg;
   std::string input;
   std::string format;                // as PlanArgs::format
+  std::string tool_table;            // as PlanArgs::tool_table
   std::string out_dir = "out";
   TimeScaleArgs scale;               // as PlanArgs::scale
 };

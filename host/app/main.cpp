@@ -151,6 +151,11 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 2))
       ->capture_default_str();
   pl->add_option("--format", pa.format, kFormatHelp)->check(CLI::IsMember(kFormats));
+  pl->add_option("--tool-table", pa.tool_table,
+                 "LinuxCNC tool table (\"T1 P1 Z12.5 ;comment\", lengths in mm) for G43 H: the moves are then of the "
+                 "tool's holder, the program's Z plus the length; without one G43 is refused")
+      ->check(CLI::ExistingFile);
+
   pl->footer(
       "JSON Lines paths (*.jsonl or --format jsonl): one curve per line, each a curve object of the butterfly "
       "format (degree, knots, control_points, optional weights); blank lines and lines starting with # are "
@@ -180,6 +185,11 @@ int main(int argc, char** argv) {
                  "with `plan`, then `sim`)")
       ->required();
   rn->add_option("--format", ra.format, kFormatHelp)->check(CLI::IsMember(kFormats));
+  rn->add_option("--tool-table", ra.tool_table,
+                 "LinuxCNC tool table (\"T1 P1 Z12.5 ;comment\", lengths in mm) for G43 H: the moves are then of the "
+                 "tool's holder, the program's Z plus the length; without one G43 is refused")
+      ->check(CLI::ExistingFile);
+
   rn->add_option("--out-dir", ra.out_dir, "where to write plan.trj, samples.csv, report.txt, *.svg")->capture_default_str();
   add_limits(rn, ra.cfg, v_axis, a_axis, j_axis);
   add_time_scale(rn, ra.scale);

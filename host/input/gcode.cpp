@@ -8,6 +8,7 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <sstream>
 
 #include "input/gcode_curves.hpp"
 #include "input/gcode_lexer.hpp"
@@ -50,7 +51,8 @@ int g_group(int g) {
     case 940: return 5;
     case 200: case 210: return 6;
     case 400: return 7;
-    case 490: return 8;
+    case 430: case 490: return 8;
+    case 280: case 300: return 0;  // non-modal
     case 540: return 12;
     case 610: case 611: case 640: return 13;
     default: return -1;
@@ -60,7 +62,7 @@ int g_group(int g) {
 // Why a G code is refused.
 std::string g_refusal(int g) {
   if (g == 410 || g == 420 || g == 411 || g == 421) return "cutter radius compensation is not supported";
-  if (g == 430 || g == 431 || g == 432) return "tool length offsets are not supported";
+  if (g == 431 || g == 432) return "dynamic tool length offsets (G43.1/G43.2) are not supported";
   if ((g >= 550 && g <= 593) || g == 100 || g == 520)
     return "work offsets are not supported (only G54, the default work offset)";
   if (g >= 920 && g <= 923) return "coordinate offsets (G92) are not supported";
@@ -69,7 +71,7 @@ std::string g_refusal(int g) {
   if (g == 950) return "feed per revolution is not supported (only G94, units per minute)";
   if ((g >= 810 && g <= 890) || g == 730 || g == 740 || g == 760) return "canned cycles are not supported";
   if (g == 40) return "dwell is not supported";
-  if (g == 280 || g == 281 || g == 300 || g == 301) return "reference-point moves (G28/G30) are not supported";
+  if (g == 281 || g == 301) return "storing the reference point (G28.1/G30.1) is not supported";
   if (g >= 330 && g <= 331) return "spindle-synchronised motion is not supported";
   if (g >= 380 && g <= 385) return "probing is not supported";
   if (g == 70 || g == 80) return "lathe diameter/radius mode is not supported";
@@ -144,6 +146,10 @@ class Interpreter {
   double tolerance_ = -1;
   bool exact_stop_ = false;
   double g5_i_ = 0, g5_j_ = 0;  // a G5 without I J continues the previous one's direction
+  // Tool length offset (G43): positions are of the tool's holder, the
+  // program's Z plus the length (pos_ holds them so).
+  double tlo_ = 0;
+  std::optional<int> selected_tool_, loaded_tool_;  // T; T at the last M6
 
   // An open G5.2 NURBS: control points (mm) and weights, its order and place.
   struct Nurbs {
@@ -251,25 +257,35 @@ class Interpreter {
       note("S", text('S'), "spindle speed accepted and not acted on");
     }
     if (has('T')) {
-      value('T');
-      note("T", text('T'), "tool selection accepted and not acted on");
+      const double t = value('T');
+      if (t < 0 || t != std::floor(t)) fail(text('T'), "the tool number must be a whole number, 0 or more");
+      selected_tool_ = static_cast<int>(t);
+      note("T", text('T'), "tool selection accepted (no motion; G43 without H takes the tool of the last M6)");
     }
     for (const auto& [m, t] : ms) {
-      if (m == 6) note("M6", t, "tool change accepted and not acted on");
+      if (m == 6) {
+        loaded_tool_ = selected_tool_;
+        note("M6", t, "tool change accepted (no motion)");
+      }
       if (m >= 3 && m <= 5) note("M3/M4/M5", t, "spindle control accepted and not acted on");
       if (m >= 7 && m <= 9) note("M7/M8/M9", t, "coolant control accepted and not acted on");
     }
     if (auto g = g_in(2)) plane_ = *g;
     if (auto g = g_in(6)) set_units(*g == 200 ? kInch : 1.0);
     if (g_in(7)) note("G40", g_text(400), "cutter compensation off (none is applied) accepted");
-    if (g_in(8)) note("G49", g_text(490), "tool length offset cancel (none is applied) accepted");
+    if (auto g = g_in(8)) tool_length(*g, g_text(*g));
     if (g_in(12)) note("G54", g_text(540), "work offset G54 (the default, zero) accepted");
     if (auto g = g_in(13)) path_control(*g, g_text(*g));
     if (auto g = g_in(3)) absolute_ = *g == 900;
     if (auto g = g_in(4)) ijk_absolute_ = *g == 901;
     const std::optional<int> mg = g_in(1);
     if (mg) set_motion(*mg, g_text(*mg));
-    motion(mg.has_value());
+    if (auto g = g_in(0)) {
+      if (mg && any_axis()) fail(g_text(*g), "two G codes that both use the axis words (" + g_text(*mg) + ")");
+      reference_move(*g, g_text(*g));
+    } else {
+      motion(mg.has_value());
+    }
     check_unused();
     return m_by_group.count(4) > 0;
   }
@@ -277,14 +293,62 @@ class Interpreter {
   void check_letter(const Word& w) const {
     switch (w.letter) {
       case 'X': case 'Y': case 'Z': case 'I': case 'J': case 'K': case 'R': case 'P': case 'Q': case 'L':
-      case 'F': case 'S': case 'T':
+      case 'F': case 'S': case 'T': case 'H':
         return;
       case 'A': case 'B': case 'C': case 'U': case 'V': case 'W':
         fail(w.text, "motion of the A/B/C/U/V/W axes is not supported: the planner carries X, Y and Z only");
       case 'D': fail(w.text, "cutter radius compensation (D) is not supported");
-      case 'H': fail(w.text, "tool length offsets (H) are not supported");
       default: fail(w.text, "unknown word");
     }
+  }
+
+  // G43 (H, or the tool of the last M6) and G49.
+  void tool_length(int g, const std::string& t) {
+    if (g == 490) {
+      tlo_ = 0;
+      return;
+    }
+    if (!opt_.tools)
+      fail(t, "a tool length offset needs the machine's tool table (trajcore --tool-table FILE, LinuxCNC's format)");
+    int tool;
+    std::string word = t;
+    if (has('H')) {
+      const double h = value('H');
+      if (h < 0 || h != std::floor(h)) fail(text('H'), "the tool number must be a whole number, 0 or more");
+      tool = static_cast<int>(h);
+      word = text('H');
+    } else if (loaded_tool_) {
+      tool = *loaded_tool_;
+    } else {
+      fail(t, "no H word and no tool loaded (T with M6) to take the length of");
+    }
+    if (tool == 0) {  // LinuxCNC: tool 0 is no tool, of no length
+      tlo_ = 0;
+      return;
+    }
+    const auto it = opt_.tools->z.find(tool);
+    if (it == opt_.tools->z.end()) fail(word, "tool " + std::to_string(tool) + " is not in the tool table " + opt_.tools->file);
+    tlo_ = it->second;
+  }
+
+  // G28/G30: with axis words a rapid to that point, then for the axes named
+  // (all without axis words) a rapid to the machine origin, as LinuxCNC does
+  // with its reference parameters at their default 0. The motion mode stays.
+  void reference_move(int g, const std::string& t) {
+    if (nurbs_) fail(t, "G5.2 NURBS not closed with G5.3");
+    note("G28/G30", t, "reference-point move to the machine origin X0 Y0 Z0 (LinuxCNC's parameters 5161-5166 and "
+                       "5181-5186 at their default 0)");
+    const bool named = any_axis();
+    const Vector3d mid = named ? end_point() : pos_;
+    if (mid != pos_) emit(Move::Kind::kRapid, gcode::line3(pos_, mid), 0);
+    pos_ = mid;
+    const char letters[3] = {'X', 'Y', 'Z'};
+    Vector3d home = pos_;
+    for (int i = 0; i < 3; ++i)
+      if (!named || has(letters[i])) home[i] = 0;
+    if (home != pos_) emit(Move::Kind::kRapid, gcode::line3(pos_, home), 0);
+    pos_ = home;
+    (void)g;
   }
 
   void set_units(double u) {
@@ -334,7 +398,7 @@ class Interpreter {
     Vector3d e = pos_;
     const char letters[3] = {'X', 'Y', 'Z'};
     for (int i = 0; i < 3; ++i)
-      if (has(letters[i])) e[i] = value(letters[i]) * units_ + (absolute_ ? 0.0 : pos_[i]);
+      if (has(letters[i])) e[i] = value(letters[i]) * units_ + (absolute_ ? (i == 2 ? tlo_ : 0.0) : pos_[i]);
     return e;
   }
 
@@ -446,8 +510,9 @@ class Interpreter {
         return 0.0;
       };
       const double o1 = offset(pa.i1), o2 = offset(pa.i2);
-      c1 = ijk_absolute_ ? o1 : s1 + o1;
-      c2 = ijk_absolute_ ? o2 : s2 + o2;
+      // an absolute centre is a program position: on Z, the tool's length added as to end points
+      c1 = ijk_absolute_ ? o1 + (pa.first == 2 ? tlo_ : 0.0) : s1 + o1;
+      c2 = ijk_absolute_ ? o2 + (pa.second == 2 ? tlo_ : 0.0) : s2 + o2;
       const double r0 = std::hypot(c1 - s1, c2 - s2), r1 = std::hypot(c1 - e1, c2 - e2);
       if (r0 < rtol || r1 < rtol) fail(word, "zero-radius arc (start radius " + fmt_num(r0 / units_) + ", end radius " + fmt_num(r1 / units_) + ")");
       const double abs_err = std::abs(r0 - r1), rel_err = abs_err / std::max(r0, r1);
@@ -626,6 +691,47 @@ Toolpath read_all(GcodeReader& r) {
   return tp;
 }
 }  // namespace
+
+ToolTable read_tool_table(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file + ": cannot open");
+  ToolTable t;
+  t.file = file;
+  std::string line;
+  for (int n = 1; std::getline(in, line); ++n) {
+    const std::string at = file + ":" + std::to_string(n) + ": ";
+    const std::string body = line.substr(0, line.find(';'));
+    std::istringstream words(body);
+    std::string w;
+    std::map<char, double> v;
+    while (words >> w) {
+      const char c = static_cast<char>(std::toupper(static_cast<unsigned char>(w[0])));
+      const std::string num = w.substr(1);
+      size_t used = 0;
+      double x = 0;
+      try {
+        x = std::stod(num, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (num.empty() || used != num.size() || !std::isfinite(x)) throw InputError(at + w + ": not a letter and a number");
+      if (std::string("TPXYZABCUVWDIJQ").find(c) == std::string::npos) throw InputError(at + w + ": unknown word");
+      if (v.count(c)) throw InputError(at + w + ": more than one " + std::string(1, c) + " word");
+      if (std::string("XYABCUVW").find(c) != std::string::npos && x != 0)
+        throw InputError(at + w + ": only Z tool length offsets are supported");
+      v[c] = x;
+    }
+    if (v.empty()) continue;
+    if (!v.count('T')) throw InputError(at + "T: the tool number is missing");
+    if (!v.count('P')) throw InputError(at + "P: the pocket number is missing");
+    const double tool = v['T'];
+    if (tool < 1 || tool != std::floor(tool) || tool > 1e9)
+      throw InputError(at + "T: the tool number must be a whole number, 1 or more");
+    if (t.z.count(static_cast<int>(tool))) throw InputError(at + "T: tool " + std::to_string(static_cast<int>(tool)) + " listed twice");
+    t.z[static_cast<int>(tool)] = v.count('Z') ? v['Z'] : 0.0;
+  }
+  return t;
+}
 
 Toolpath read_gcode(std::istream& in, const std::string& name, const GcodeOptions& options) {
   GcodeReader r(in, name, options);

@@ -5,8 +5,12 @@
 //
 // Acted on: G0 G1 G2 G3 (centre I J K or R, helical, P turns, planes
 // G17/G18/G19), G5 G5.1 G5.2/G5.3, G20/G21, G90/G91, G90.1/G91.1,
-// G61/G61.1/G64 P, F (units per minute), comments, N, '/', '%', M2/M30.
-// Accepted with a note: S, M3/M4/M5, M7/M8/M9, T, M6, G40, G49, G54, G80,
+// G61/G61.1/G64 P, F (units per minute), G28/G30 (to the machine origin:
+// LinuxCNC's parameters 5161-5166 and 5181-5186 at their default 0), G43 H
+// (with a tool table; the moves are then of the tool's holder, the
+// program's Z plus the length) and G49, T with M6 (the tool G43 without H
+// takes), comments, N, '/', '%', M2/M30.
+// Accepted with a note: S, M3/M4/M5, M7/M8/M9, T, M6, G40, G54, G80,
 // G94, G64 Q. Everything else is refused with one InputError
 // "<file>:<line>: <word>: <why>".
 //
@@ -15,6 +19,8 @@
 // Moves of zero length produce no Move.
 #pragma once
 #include <istream>
+#include <map>
+#include <optional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -23,10 +29,24 @@
 
 namespace traj::input {
 
+// The machine's tool table, LinuxCNC's format: one tool a line,
+// "T<n> P<pocket> Z<length> D<diameter> ;comment" (words in any order; T and
+// P required). Only Z length offsets are taken (a non-zero X, Y, A, B, C, U,
+// V or W offset is refused); lengths in mm, the machine's units.
+struct ToolTable {
+  std::string file;
+  std::map<int, double> z;  // tool number -> Z length offset, mm
+};
+// Throws InputError "<file>:<line>: <word>: <why>" for a malformed line.
+ToolTable read_tool_table(const std::string& file);
+
 struct GcodeOptions {
   // LinuxCNC's block-delete switch: when on, lines starting with '/' are
   // skipped; when off (LinuxCNC's default, and rs274's) they run.
   bool block_delete = false;
+  // G43 takes its length from here; without a table G43 is refused (a
+  // length taken as 0 would move a real tool's tip by its length).
+  std::optional<ToolTable> tools;
 };
 
 // The moves one at a time, as the program is read (a line at a time): memory

@@ -35,9 +35,9 @@ FileKind file_kind(const std::string& file, const std::string& format) {
 
 bool is_toolpath(FileKind k) { return k == FileKind::kGcode || k == FileKind::kSvg || k == FileKind::kDxf; }
 
-Toolpath read_toolpath(const std::string& file, FileKind kind) {
+Toolpath read_toolpath(const std::string& file, FileKind kind, const GcodeOptions& gcode) {
   switch (kind) {
-    case FileKind::kGcode: return read_gcode(file);
+    case FileKind::kGcode: return read_gcode(file, gcode);
     case FileKind::kSvg: return read_svg(file);
     case FileKind::kDxf: return read_dxf(file);
     default: throw InputError(file + ": not a toolpath file (JSON paths are curves: load_path)");

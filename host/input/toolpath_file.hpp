@@ -5,6 +5,7 @@
 #pragma once
 #include <string>
 
+#include "input/gcode.hpp"
 #include "input/toolpath.hpp"
 
 namespace traj::input {
@@ -17,7 +18,7 @@ enum class FileKind { kJson, kJsonl, kGcode, kSvg, kDxf };
 FileKind file_kind(const std::string& file, const std::string& format = {});
 bool is_toolpath(FileKind k);
 
-// read_gcode, read_svg or read_dxf by kind (InputError for JSON kinds).
-Toolpath read_toolpath(const std::string& file, FileKind kind);
+// read_gcode (with `gcode`), read_svg or read_dxf by kind (InputError for JSON kinds).
+Toolpath read_toolpath(const std::string& file, FileKind kind, const GcodeOptions& gcode = {});
 
 }  // namespace traj::input

@@ -23,12 +23,14 @@
 #include <cstddef>
 #include <vector>
 
+#include "input/gcode.hpp"
 #include "input/toolpath.hpp"
 #include "job/job.hpp"
 
 namespace traj::job {
 
 struct ToolpathOptions {
+  input::GcodeOptions gcode;  // the reader's (the tool table G43 takes lengths from)
   double rapid = 0;   // mm/s; 0: the smallest per-axis velocity limit
   bool blend = true;  // blend the corners between feed moves (host/corners)
   double blend_share = 0.9;  // share of the tolerance for the blends; the fit gets the rest

@@ -24,9 +24,9 @@ ToolpathStream::ToolpathStream(const std::string& file, input::FileKind kind, co
                                const ToolpathOptions& o, size_t chunk)
     : job_cfg_(cfg), opt_(o), chunk_(std::max<size_t>(chunk, 2)) {
   if (kind == input::FileKind::kGcode) {
-    reader_ = std::make_unique<input::GcodeReader>(file);
+    reader_ = std::make_unique<input::GcodeReader>(file, o.gcode);
   } else {
-    whole_ = input::read_toolpath(file, kind);
+    whole_ = input::read_toolpath(file, kind, o.gcode);
     axes_ = whole_.axes;
   }
   rapid_ = rapid_speed(cfg, axes_, o);

@@ -11,6 +11,11 @@
 // of splines, feed rates, path tolerance and exact-stop mode, to 1e-9 (in mm;
 // rs274 prints in the program's units, the shim makes it print all digits).
 // Exit 0 if no disagreement, 1 otherwise, 77 (skipped) without rs274.
+// A program X.ngc with a tool table X.tbl beside it (mm) is read with that
+// table, and rs274 gets it in inches (its standalone machine units); rs274
+// prints positions in program coordinates and the tool length apart
+// (USE_TOOL_LENGTH_OFFSET), read_gcode the tool holder's: the length is
+// added to rs274's Z (and to an arc centre's Z) before comparing.
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -21,6 +26,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -63,11 +69,22 @@ std::vector<double> numbers(const std::string& args) {
   return v;
 }
 
-Rs274 run_rs274(const std::string& shim, const fs::path& prog, const fs::path& work) {
+// rs274's copy of a tool table (mm) in inches, its standalone machine units.
+fs::path inch_tool_table(const traj::input::ToolTable& t, const fs::path& work) {
+  const fs::path f = work / "tools_inch.tbl";
+  std::ofstream o(f);
+  o.precision(17);
+  for (const auto& [tool, z] : t.z) o << "T" << tool << " P" << tool << " Z" << z / 25.4 << "\n";
+  return f;
+}
+
+Rs274 run_rs274(const std::string& shim, const fs::path& prog, const fs::path& work,
+                const std::optional<traj::input::ToolTable>& tools) {
   Rs274 r;
   const fs::path out = work / "canon.txt", msg = work / "msg.txt";
   fs::remove(out);
-  const std::string cmd = "cd '" + work.string() + "' && LD_PRELOAD='" + shim + "' timeout 30 rs274 -g '" +
+  const std::string table = tools ? "-t '" + inch_tool_table(*tools, work).string() + "' " : "";
+  const std::string cmd = "cd '" + work.string() + "' && LD_PRELOAD='" + shim + "' timeout 30 rs274 " + table + "-g '" +
                           prog.string() + "' '" + out.string() + "' < /dev/null > '" + msg.string() + "' 2>&1";
   const int st = std::system(cmd.c_str());
   r.ok = WIFEXITED(st) && WEXITSTATUS(st) == 0;
@@ -77,7 +94,7 @@ Rs274 run_rs274(const std::string& shim, const fs::path& prog, const fs::path& w
     if (line != "executing" && !line.empty()) r.error += line + " | ";
   std::ifstream in(out);
   static const std::regex call(R"(([A-Z_]+)\((.*)\)\s*$)");
-  double unit = 1, feed = 0, tol = -1;
+  double unit = 1, feed = 0, tol = -1, tlo = 0;
   bool exact = false;
   int plane = 0;
   while (std::getline(in, line)) {
@@ -86,6 +103,12 @@ Rs274 run_rs274(const std::string& shim, const fs::path& prog, const fs::path& w
     const std::string name = mt[1], args = mt[2];
     if (name == "USE_LENGTH_UNITS") unit = args.find("INCHES") != std::string::npos ? 25.4 : 1.0;
     else if (name == "SET_FEED_RATE") feed = numbers(args)[0];
+    else if (name == "USE_TOOL_LENGTH_OFFSET") {
+      std::istringstream xyz(args);  // "x y z, ..."
+      double x = 0, y = 0, z = 0;
+      xyz >> x >> y >> z;
+      tlo = z * unit;
+    }
     else if (name == "SELECT_PLANE") plane = args.find("XZ") != std::string::npos ? 1 : args.find("YZ") != std::string::npos ? 2 : 0;
     else if (name == "SET_MOTION_CONTROL_MODE") {
       exact = args.find("CONTINUOUS") == std::string::npos;
@@ -108,11 +131,13 @@ Rs274 run_rs274(const std::string& shim, const fs::path& prog, const fs::path& w
         c.end[first[plane]] = v[0] * unit;
         c.end[second[plane]] = v[1] * unit;
         c.end[normal[plane]] = v[5] * unit;
-        c.c1 = v[2] * unit;
-        c.c2 = v[3] * unit;
+        c.c1 = v[2] * unit + (first[plane] == 2 ? tlo : 0);
+        c.c2 = v[3] * unit + (second[plane] == 2 ? tlo : 0);
         c.rotation = static_cast<int>(v[4]);
+        c.end[2] += tlo;
       } else {
         c.end = Eigen::Vector3d(v[0], v[1], v[2]) * unit;
+        c.end[2] += tlo;
       }
       r.moves.push_back(c);
     }
@@ -252,9 +277,13 @@ int main(int argc, char** argv) {
   std::map<std::string, int> reasons;
   std::vector<std::string> disagreements;
   for (const fs::path& prog : progs) {
-    const Rs274 r = run_rs274(shim, prog, work);
+    traj::input::GcodeOptions opt;
+    fs::path table = prog;
+    table.replace_extension(".tbl");
+    if (fs::exists(table)) opt.tools = traj::input::read_tool_table(table.string());
+    const Rs274 r = run_rs274(shim, prog, work, opt.tools);
     try {
-      const traj::input::Toolpath tp = traj::input::read_gcode(prog.string());
+      const traj::input::Toolpath tp = traj::input::read_gcode(prog.string(), opt);
       ++accepted;
       if (!r.ok) {
         ++only_here;

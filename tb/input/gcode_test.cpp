@@ -2,8 +2,10 @@
 // read_gcode: each word, each refusal (its message), arcs in all planes, helices, inches, relative
 // mode, splines. Geometry is checked by evaluating the curves (geo::Curve).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <fstream>
 #include <sstream>
 
 #include "geometry/curve.hpp"
@@ -189,9 +191,9 @@ TEST(Gcode, PathControlAndNotes) {
   EXPECT_LT(t.moves[3].tolerance, 0);
   std::string all;
   for (const auto& n : t.notes) all += n + "\n";
-  for (const char* kind : {"S1000", "M3", "M8", "T1", "M6", "G40", "G49", "G54", "G80", "G94", "Q0.02"})
+  for (const char* kind : {"S1000", "M3", "M8", "T1", "M6", "G40", "G54", "G80", "G94", "Q0.02"})
     EXPECT_NE(all.find(std::string(": ") + kind + ":"), std::string::npos) << kind << "\n" << all;
-  EXPECT_EQ(t.notes.size(), 11u);  // once per kind (M5, M9 are not noted again)
+  EXPECT_EQ(t.notes.size(), 10u);  // G49 is acted on (no tool length offset to take off here)  // once per kind (M5, M9 are not noted again)
 }
 
 TEST(Gcode, Refusals) {
@@ -200,7 +202,11 @@ TEST(Gcode, Refusals) {
       {"G1 X[1+2]\nM2\n", "t.ngc:1: X[: expressions ([ ]) are not supported"},
       {"#1=2\nM2\n", "t.ngc:1: #: parameters (#) are not supported"},
       {"G41\nM2\n", "t.ngc:1: G41: cutter radius compensation is not supported"},
-      {"G43\nM2\n", "t.ngc:1: G43: tool length offsets are not supported"},
+      {"G43 H1\nM2\n",
+       "t.ngc:1: G43: a tool length offset needs the machine's tool table (trajcore --tool-table FILE, LinuxCNC's format)"},
+      {"G43.1 Z1\nM2\n", "t.ngc:1: G43.1: dynamic tool length offsets (G43.1/G43.2) are not supported"},
+      {"G28.1\nM2\n", "t.ngc:1: G28.1: storing the reference point (G28.1/G30.1) is not supported"},
+      {"G0 G28 X1\nM2\n", "t.ngc:1: G28: two G codes that both use the axis words (G0)"},
       {"G55\nM2\n", "t.ngc:1: G55: work offsets are not supported (only G54, the default work offset)"},
       {"G92 X0\nM2\n", "t.ngc:1: G92: coordinate offsets (G92) are not supported"},
       {"G93\nM2\n", "t.ngc:1: G93: inverse-time feed mode is not supported (only G94, units per minute)"},
@@ -235,4 +241,76 @@ TEST(Gcode, Refusals) {
       {"F1\nG3 X1 Y1 K1 I1\nM2\n", "t.ngc:2: K1: K word given for an arc in this plane"},
   };
   for (const auto& [program, message] : cases) EXPECT_EQ(refusal(program), message) << program;
+}
+
+// G28/G30 as LinuxCNC with its reference parameters at 0: a rapid to the
+// point the axis words give (in the block's distance mode), then for the
+// axes named (all without axis words) a rapid to the machine origin.
+TEST(Gcode, ReferenceMoves) {
+  const Toolpath tp = read("G0 X5 Y6 Z7\nG28 G91 Z2\nG90 G30 X1\nG0 X4 Y4 Z4\nG28\nM2\n");
+  ASSERT_EQ(tp.moves.size(), 7u);
+  for (const Move& m : tp.moves) EXPECT_EQ(m.kind, Move::Kind::kRapid);
+  EXPECT_EQ(end_of(tp.moves[1]), Eigen::Vector3d(5, 6, 9));  // G91 Z2: up 2 from Z7
+  EXPECT_EQ(end_of(tp.moves[2]), Eigen::Vector3d(5, 6, 0));  // Z only to the origin
+  EXPECT_EQ(end_of(tp.moves[3]), Eigen::Vector3d(1, 6, 0));  // G30 X1 (G90 again)
+  EXPECT_EQ(end_of(tp.moves[4]), Eigen::Vector3d(0, 6, 0));
+  EXPECT_EQ(end_of(tp.moves[5]), Eigen::Vector3d(4, 4, 4));
+  EXPECT_EQ(end_of(tp.moves[6]), Eigen::Vector3d(0, 0, 0));  // G28 alone: every axis
+}
+
+// G43 moves the tool's holder: Z targets get the tool's length from the
+// table (the machine does not move at the G43 itself); G43 without H takes
+// the tool of the last M6; H0 and G49 take the length off.
+TEST(Gcode, ToolLengthOffsetsFromTheTable) {
+  traj::input::GcodeOptions opt;
+  opt.tools = traj::input::ToolTable{"tools.tbl", {{1, 40.5}, {2, -3.25}}};
+  const Toolpath tp = read("G0 Z10\nG43 H1\nG0 Z5\nT2 M6\nG43\nG0 Z5\nG43 H0\nG0 Z6\nG43 H1\nG49 G0 Z7\nM2\n", opt);
+  ASSERT_EQ(tp.moves.size(), 5u);
+  EXPECT_EQ(end_of(tp.moves[0]).z(), 10);
+  EXPECT_EQ(end_of(tp.moves[1]).z(), 45.5);
+  EXPECT_EQ(end_of(tp.moves[2]).z(), 1.75);
+  EXPECT_EQ(end_of(tp.moves[3]).z(), 6);
+  EXPECT_EQ(end_of(tp.moves[4]).z(), 7);
+  auto refused = [&](const std::string& program) {
+    try {
+      read(program, opt);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_EQ(refused("G43 H7\nM2\n"), "t.ngc:1: H7: tool 7 is not in the tool table tools.tbl");
+  EXPECT_EQ(refused("G43\nM2\n"), "t.ngc:1: G43: no H word and no tool loaded (T with M6) to take the length of");
+  EXPECT_EQ(refused("G43 H1.5\nM2\n"), "t.ngc:1: H1.5: the tool number must be a whole number, 0 or more");
+  EXPECT_EQ(refused("G0 X1 H1\nM2\n"), "t.ngc:1: H1: no G code in this block uses it");
+}
+
+TEST(Gcode, ToolTableFile) {
+  const std::string dir = ::testing::TempDir() + std::to_string(::getpid()) + "_";
+  auto table = [&](const std::string& text) {
+    const std::string f = dir + "tools.tbl";
+    std::ofstream(f) << text;
+    return f;
+  };
+  const std::string ok = table("; LinuxCNC tool table\nT1 P1 Z12.5 D6.0 ;end mill\n\nt2 p5 d3 x0\n");
+  const auto t = traj::input::read_tool_table(ok);
+  ASSERT_EQ(t.z.size(), 2u);
+  EXPECT_EQ(t.z.at(1), 12.5);
+  EXPECT_EQ(t.z.at(2), 0.0);
+  auto refused = [&](const std::string& text) {
+    const std::string f = table(text);
+    try {
+      traj::input::read_tool_table(f);
+    } catch (const InputError& e) {
+      return std::string(e.what()).substr(f.size());
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_EQ(refused("T1 P1 Z1\nT1 P2 Z2\n"), ":2: T: tool 1 listed twice");
+  EXPECT_EQ(refused("T1 P1 X0.5 Z1\n"), ":1: X0.5: only Z tool length offsets are supported");
+  EXPECT_EQ(refused("T1 Z1\n"), ":1: P: the pocket number is missing");
+  EXPECT_EQ(refused("P1 Z1\n"), ":1: T: the tool number is missing");
+  EXPECT_EQ(refused("T1 P1 Zx\n"), ":1: Zx: not a letter and a number");
+  EXPECT_EQ(refused("T1 P1 E4\n"), ":1: E4: unknown word");
+  EXPECT_EQ(refused("T0 P1\n"), ":1: T: the tool number must be a whole number, 1 or more");
 }
