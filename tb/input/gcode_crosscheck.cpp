@@ -2,7 +2,7 @@
 // Cross-check of read_gcode against LinuxCNC's interpreter (rs274, batch mode),
 // through rs274's printed canonical calls only (LinuxCNC is not linked).
 //
-// usage: gcode_crosscheck <precision shim .so> <file or directory>...
+// usage: gcode_crosscheck <precision shim .so> [--tools TABLE] <file or directory>...
 // Every *.ngc under the directories is run through both. A program read_gcode
 // refuses must get one well-formed "<file>:<line>: <word>: <why>" message
 // (counted by reason). A program both accept must agree move for move: the
@@ -15,7 +15,9 @@
 // table, and rs274 gets it in inches (its standalone machine units); rs274
 // prints positions in program coordinates and the tool length apart
 // (USE_TOOL_LENGTH_OFFSET), read_gcode the tool holder's: the length is
-// added to rs274's Z (and to an arc centre's Z) before comparing.
+// added to rs274's Z (and to an arc centre's Z) before comparing. --tools
+// gives the table for the programs without one of their own (LinuxCNC's
+// sample configuration's sim_mm.tbl for its examples).
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -259,7 +261,13 @@ int main(int argc, char** argv) {
   }
   const std::string shim = fs::absolute(argv[1]).string();
   std::vector<fs::path> progs;
+  std::optional<traj::input::ToolTable> default_tools;
   for (int a = 2; a < argc; ++a) {
+    if (std::string(argv[a]) == "--tools" && a + 1 < argc) {
+      if (fs::exists(argv[a + 1])) default_tools = traj::input::read_tool_table(argv[a + 1]);
+      ++a;
+      continue;
+    }
     const fs::path p(argv[a]);
     if (fs::is_directory(p)) {
       for (const auto& e : fs::recursive_directory_iterator(p))
@@ -280,7 +288,7 @@ int main(int argc, char** argv) {
     traj::input::GcodeOptions opt;
     fs::path table = prog;
     table.replace_extension(".tbl");
-    if (fs::exists(table)) opt.tools = traj::input::read_tool_table(table.string());
+    opt.tools = fs::exists(table) ? traj::input::read_tool_table(table.string()) : default_tools;
     const Rs274 r = run_rs274(shim, prog, work, opt.tools);
     try {
       const traj::input::Toolpath tp = traj::input::read_gcode(prog.string(), opt);
