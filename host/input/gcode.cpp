@@ -38,6 +38,10 @@ constexpr double kSpiralRel = 0.001;
 
 enum class Motion { kNone, kRapid, kLine, kCw, kCcw, kCubic, kQuadratic, kNurbs };
 
+// Tool numbers (T, H, a tool table's T) are held as int: checked before the conversion.
+constexpr double kMaxTool = 1e9;
+constexpr const char* kToolNumber = "the tool number must be a whole number from 0 to 1000000000";
+
 // G codes as integers in tenths (G5.2 -> 52, G1 -> 10).
 int tenths(double v) { return static_cast<int>(std::lround(v * 10)); }
 
@@ -258,7 +262,7 @@ class Interpreter {
     }
     if (has('T')) {
       const double t = value('T');
-      if (t < 0 || t != std::floor(t)) fail(text('T'), "the tool number must be a whole number, 0 or more");
+      if (!(t >= 0 && t <= kMaxTool) || t != std::floor(t)) fail(text('T'), kToolNumber);
       selected_tool_ = static_cast<int>(t);
       note("T", text('T'), "tool selection accepted (no motion; G43 without H takes the tool of the last M6)");
     }
@@ -314,7 +318,7 @@ class Interpreter {
     std::string word = t;
     if (has('H')) {
       const double h = value('H');
-      if (h < 0 || h != std::floor(h)) fail(text('H'), "the tool number must be a whole number, 0 or more");
+      if (!(h >= 0 && h <= kMaxTool) || h != std::floor(h)) fail(text('H'), kToolNumber);
       tool = static_cast<int>(h);
       word = text('H');
     } else if (loaded_tool_) {
@@ -725,8 +729,8 @@ ToolTable read_tool_table(const std::string& file) {
     if (!v.count('T')) throw InputError(at + "T: the tool number is missing");
     if (!v.count('P')) throw InputError(at + "P: the pocket number is missing");
     const double tool = v['T'];
-    if (tool < 1 || tool != std::floor(tool) || tool > 1e9)
-      throw InputError(at + "T: the tool number must be a whole number, 1 or more");
+    if (!(tool >= 1 && tool <= kMaxTool) || tool != std::floor(tool))
+      throw InputError(at + "T: the tool number must be a whole number from 1 to 1000000000");
     if (t.z.count(static_cast<int>(tool))) throw InputError(at + "T: tool " + std::to_string(static_cast<int>(tool)) + " listed twice");
     t.z[static_cast<int>(tool)] = v.count('Z') ? v['Z'] : 0.0;
   }

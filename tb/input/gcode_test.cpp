@@ -281,7 +281,11 @@ TEST(Gcode, ToolLengthOffsetsFromTheTable) {
   };
   EXPECT_EQ(refused("G43 H7\nM2\n"), "t.ngc:1: H7: tool 7 is not in the tool table tools.tbl");
   EXPECT_EQ(refused("G43\nM2\n"), "t.ngc:1: G43: no H word and no tool loaded (T with M6) to take the length of");
-  EXPECT_EQ(refused("G43 H1.5\nM2\n"), "t.ngc:1: H1.5: the tool number must be a whole number, 0 or more");
+  EXPECT_EQ(refused("G43 H1.5\nM2\n"), "t.ngc:1: H1.5: the tool number must be a whole number from 0 to 1000000000");
+  // found by the fuzzer: T beyond int (UBSan at the conversion)
+  const std::string big = "1" + std::string(114, '0');  // 1e114
+  EXPECT_EQ(refused("T" + big + " M6\nM2\n"), "t.ngc:1: T" + big + ": the tool number must be a whole number from 0 to 1000000000");
+  EXPECT_EQ(refused("G43 H3000000000\nM2\n"), "t.ngc:1: H3000000000: the tool number must be a whole number from 0 to 1000000000");
   EXPECT_EQ(refused("G0 X1 H1\nM2\n"), "t.ngc:1: H1: no G code in this block uses it");
 }
 
@@ -312,5 +316,7 @@ TEST(Gcode, ToolTableFile) {
   EXPECT_EQ(refused("P1 Z1\n"), ":1: T: the tool number is missing");
   EXPECT_EQ(refused("T1 P1 Zx\n"), ":1: Zx: not a letter and a number");
   EXPECT_EQ(refused("T1 P1 E4\n"), ":1: E4: unknown word");
-  EXPECT_EQ(refused("T0 P1\n"), ":1: T: the tool number must be a whole number, 1 or more");
+  EXPECT_EQ(refused("T0 P1\n"), ":1: T: the tool number must be a whole number from 1 to 1000000000");
+  EXPECT_EQ(refused("T1e114 P1\n"), ":1: T: the tool number must be a whole number from 1 to 1000000000");
+  EXPECT_EQ(refused("T1 P1 Z1e999\n"), ":1: Z1e999: not a letter and a number");
 }
