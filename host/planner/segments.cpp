@@ -7,6 +7,18 @@
 #include <cmath>
 
 namespace traj::plan {
+namespace {
+
+double poly_val(const double* c, int n, double t) {
+  double v = 0;
+  for (int j = n; j >= 0; --j) v = v * t + c[j];
+  return v;
+}
+
+// q(t) - q(0) = c[1] t + ... + c[n] t^n: rounded at the scale of the travel, not of c[0].
+double travel(const double* c, int n, double t) { return t * poly_val(c + 1, n - 1, t); }
+
+}  // namespace
 
 double TimeSegment::eval(int axis, double tau, int deriv) const {
   const auto& c = coef[axis];
@@ -19,25 +31,9 @@ double TimeSegment::eval(int axis, double tau, int deriv) const {
   return v;
 }
 
-namespace {
-
-double poly_val(const double* c, int n, double t);
-double travel(const double* c, int n, double t);
-
-}  // namespace
-
 double TimeSegment::travel(int axis, double tau) const { return plan::travel(coef[axis].data(), degree, tau); }
 
 namespace {
-
-double poly_val(const double* c, int n, double t) {
-  double v = 0;
-  for (int j = n; j >= 0; --j) v = v * t + c[j];
-  return v;
-}
-
-// q(t) - q(0) = c[1] t + ... + c[n] t^n: rounded at the scale of the travel, not of c[0].
-double travel(const double* c, int n, double t) { return t * poly_val(c + 1, n - 1, t); }
 
 // Real roots of c[0..n] (n <= 5) in the open interval (a, b), ascending.
 // Recursive isolation: the roots of the derivative split (a, b) into pieces
