@@ -91,7 +91,9 @@ std::string fmt_num(double v) {
 
 class Interpreter {
  public:
-  Interpreter(std::string name, GcodeOptions opt) : name_(std::move(name)), opt_(opt) {}
+  Interpreter(std::string name, GcodeOptions opt)
+      : name_(std::move(name)), opt_(opt), further_(opt_.axes.substr(3)),
+        ext_(Eigen::VectorXd::Zero(static_cast<Eigen::Index>(further_.size()))), ext_end_(ext_) {}
 
   // Reads lines until at least one move is pending or the program has
   // ended; false once the program has ended and every move was taken.
@@ -126,6 +128,7 @@ class Interpreter {
   // The moves produced and not yet taken (in program order), and the notes.
   std::deque<Move>& pending() { return out_.moves; }
   const std::vector<std::string>& notes() const { return out_.notes; }
+  const std::string& axes() const { return opt_.axes; }
 
  private:
   std::string name_;
@@ -139,8 +142,11 @@ class Interpreter {
   int line_no_ = 0;
   bool seen_content_ = false, in_percent_ = false, ended_ = false;
 
-  // Machine state (mm, the program's start X0 Y0 Z0).
+  // Machine state (mm, the program's start X0 Y0 Z0; the further axes at 0).
   Vector3d pos_ = Vector3d::Zero();
+  std::string further_;     // the machine's axes after X Y Z (A B C U V W)
+  Eigen::VectorXd ext_;     // their positions (mm; degrees for A B C)
+  Eigen::VectorXd ext_end_; // their positions at the end of the move being made
   double units_ = 1;  // mm per program unit
   bool absolute_ = true, ijk_absolute_ = false;
   int plane_ = 170;
@@ -300,7 +306,9 @@ class Interpreter {
       case 'F': case 'S': case 'T': case 'H':
         return;
       case 'A': case 'B': case 'C': case 'U': case 'V': case 'W':
-        fail(w.text, "motion of the A/B/C/U/V/W axes is not supported: the planner carries X, Y and Z only");
+        if (further_.find(w.letter) != std::string::npos) return;
+        fail(w.text, std::string("the machine has no ") + w.letter + " axis (its axes: " + opt_.axes +
+                         "; name them with trajcore --axes, e.g. --axes " + opt_.axes + w.letter + ")");
       case 'D': fail(w.text, "cutter radius compensation (D) is not supported");
       default: fail(w.text, "unknown word");
     }
@@ -340,18 +348,19 @@ class Interpreter {
   // with its reference parameters at their default 0. The motion mode stays.
   void reference_move(int g, const std::string& t) {
     if (nurbs_) fail(t, "G5.2 NURBS not closed with G5.3");
-    note("G28/G30", t, "reference-point move to the machine origin X0 Y0 Z0 (LinuxCNC's parameters 5161-5166 and "
+    note("G28/G30", t, "reference-point move to the machine origin X0 Y0 Z0, further axes at 0 (LinuxCNC's parameters 5161-5166 and "
                        "5181-5186 at their default 0)");
     const bool named = any_axis();
     const Vector3d mid = named ? end_point() : pos_;
-    if (mid != pos_) emit(Move::Kind::kRapid, gcode::line3(pos_, mid), 0);
-    pos_ = mid;
+    if (named) ext_end_ = further_end_point();
+    rapid_to(mid);
     const char letters[3] = {'X', 'Y', 'Z'};
     Vector3d home = pos_;
     for (int i = 0; i < 3; ++i)
       if (!named || has(letters[i])) home[i] = 0;
-    if (home != pos_) emit(Move::Kind::kRapid, gcode::line3(pos_, home), 0);
-    pos_ = home;
+    for (size_t i = 0; i < further_.size(); ++i)
+      if (!named || has(further_[i])) ext_end_[static_cast<Eigen::Index>(i)] = 0;
+    rapid_to(home);
     (void)g;
   }
 
@@ -396,7 +405,36 @@ class Interpreter {
     motion_text_ = t;
   }
 
-  bool any_axis() const { return has('X') || has('Y') || has('Z'); }
+  bool any_axis() const {
+    if (has('X') || has('Y') || has('Z')) return true;
+    for (char c : further_)
+      if (has(c)) return true;
+    return false;
+  }
+  bool any_further_axis() const {
+    for (char c : further_)
+      if (has(c)) return true;
+    return false;
+  }
+
+  // A B C are in degrees whatever the length units; U V W in them.
+  Eigen::VectorXd further_end_point() {
+    Eigen::VectorXd e = ext_;
+    for (size_t i = 0; i < further_.size(); ++i) {
+      const char c = further_[i];
+      if (!has(c)) continue;
+      const double unit = (c == 'A' || c == 'B' || c == 'C') ? 1.0 : units_;
+      const auto k = static_cast<Eigen::Index>(i);
+      e[k] = value(c) * unit + (absolute_ ? 0.0 : ext_[k]);
+    }
+    return e;
+  }
+
+  void rapid_to(const Vector3d& e) {
+    if (e != pos_ || ext_end_ != ext_) emit(Move::Kind::kRapid, gcode::line3(pos_, e), 0);
+    pos_ = e;
+    ext_ = ext_end_;
+  }
 
   Vector3d end_point() {
     Vector3d e = pos_;
@@ -411,11 +449,38 @@ class Interpreter {
     return feed_ * units_ / 60.0;
   }
 
-  void emit(Move::Kind kind, geo::BSpline curve, double feed) {
+  // The move's length in all axes over the length its feed measures
+  // (Move::feed_scale), and the programmed feed in that measure's units/s:
+  // F of X Y Z (length xyz, mm) when they move, else of U V W, else of A B C
+  // (degrees a minute, whatever the length units). The further axes move
+  // linearly with the move's progress (xyz: the XYZ length of a line, of a
+  // circle or a helix; the further axes' share is exact for those).
+  std::pair<double, double> feed_measure(double xyz, double feed_mm_s) const {
+    double uvw = 0, abc = 0;
+    for (size_t i = 0; i < further_.size(); ++i) {
+      const double d = ext_end_[static_cast<Eigen::Index>(i)] - ext_[static_cast<Eigen::Index>(i)];
+      const char c = further_[i];
+      ((c == 'A' || c == 'B' || c == 'C') ? abc : uvw) += d * d;
+    }
+    if (uvw == 0 && abc == 0) return {1.0, feed_mm_s};
+    const double all = std::sqrt(xyz * xyz + uvw + abc);
+    if (xyz > 0) return {all / xyz, feed_mm_s};
+    if (uvw > 0) return {all / std::sqrt(uvw), feed_mm_s};
+    return {all / std::sqrt(abc), feed_ / 60.0};
+  }
+
+  // A move of X Y Z (`curve`, 3-D) with the further axes from ext_ to
+  // ext_end_ appended; `xyz` its XYZ length and `feed` the programmed feed
+  // (mm/s) for feed moves.
+  void emit(Move::Kind kind, geo::BSpline curve, double feed, double xyz = 0) {
     Move m;
     m.kind = kind;
-    m.curve = std::move(curve);
-    m.feed = feed;
+    m.curve = gcode::with_further_axes(std::move(curve), ext_, ext_end_);
+    if (kind == Move::Kind::kFeed) {
+      const auto [scale, programmed] = feed_measure(xyz, feed);
+      m.feed = programmed * scale;
+      m.feed_scale = scale;
+    }
     m.tolerance = tolerance_;
     m.exact_stop = exact_stop_ || kind == Move::Kind::kRapid;
     m.where = where(line_);
@@ -441,17 +506,20 @@ class Interpreter {
       return;
     }
     if (motion_ == Motion::kNone) {
-      const char c = has('X') ? 'X' : has('Y') ? 'Y' : 'Z';
+      char c = has('X') ? 'X' : has('Y') ? 'Y' : 'Z';
+      for (char f : further_)
+        if (!has(c) && has(f)) c = f;
       fail(text(c), "axis word with no motion mode (G0, G1, G2, G3, G5, ...) in effect");
     }
     const Vector3d e = end_point();
+    ext_end_ = further_end_point();
     switch (motion_) {
       case Motion::kRapid:
-        if (e != pos_) emit(Move::Kind::kRapid, gcode::line3(pos_, e), 0);
+        rapid_to(e);
         break;
       case Motion::kLine: {
         const double f = feed_mm_s(word);
-        if (e != pos_) emit(Move::Kind::kFeed, gcode::line3(pos_, e), f);
+        if (e != pos_ || ext_end_ != ext_) emit(Move::Kind::kFeed, gcode::line3(pos_, e), f, (e - pos_).norm());
         break;
       }
       case Motion::kCw: case Motion::kCcw: arc(e, word); break;
@@ -459,6 +527,7 @@ class Interpreter {
       default: break;
     }
     pos_ = e;
+    ext_ = ext_end_;
   }
 
   // Plane axes (LinuxCNC's order) and the letters of their centre words.
@@ -546,16 +615,28 @@ class Interpreter {
     spec.c1 = c1;
     spec.c2 = c2;
     spec.sweep = sweep;
-    if (spec.start[pa.normal] != spec.end[pa.normal] && gcode::helix_pieces(spec) > gcode::kMaxHelixPieces)
+    spec.helix_form = ext_end_ != ext_;
+    if ((spec.start[pa.normal] != spec.end[pa.normal] || spec.helix_form) &&
+        gcode::helix_pieces(spec) > gcode::kMaxHelixPieces)
       fail(word, "helical arc of radius " + fmt_num(std::hypot(c1 - s1, c2 - s2) / units_) +
                      ": too large to follow within " + fmt_num(gcode::kHelixBound) + " in at most " +
                      std::to_string(gcode::kMaxHelixPieces) + " pieces");
-    emit(Move::Kind::kFeed, gcode::arc3(spec), f);
+    // X Y Z length: the mean radius turned through the sweep, with the normal axis's travel
+    const double r_mean = (std::hypot(c1 - s1, c2 - s2) + std::hypot(c1 - e1, c2 - e2)) / 2;
+    const double xyz = std::hypot(r_mean * sweep, e[pa.normal] - pos_[pa.normal]);
+    emit(Move::Kind::kFeed, gcode::arc3(spec), f, xyz);
+  }
+
+  // Splines move X and Y only (LinuxCNC's G5, G5.1 and G5.2 do).
+  void refuse_further_axes(const std::string& what) const {
+    for (char c : further_)
+      if (has(c)) fail(text(c), what + " may not move " + std::string(1, c));
   }
 
   void spline(const Vector3d& e, const std::string& word) {
     if (plane_ != 170) fail(word, "splines must be in the XY plane (G17)");
     if (has('Z')) fail(text('Z'), "splines (G5, G5.1) may not move Z");
+    refuse_further_axes("splines (G5, G5.1)");
     const double f = feed_mm_s(word);
     if (motion_ == Motion::kQuadratic) {
       if (!has('I') || !has('J')) fail(word, "G5.1 needs both I and J");
@@ -592,6 +673,7 @@ class Interpreter {
     const std::string word = explicit_g ? motion_text_ : "G5.2 (modal)";
     if (plane_ != 170) fail(word, "NURBS (G5.2) must be in the XY plane (G17)");
     if (has('Z')) fail(text('Z'), "NURBS (G5.2) control points are in X and Y only");
+    refuse_further_axes("NURBS (G5.2)");
     if (has('X') != has('Y')) fail(word, "a NURBS control point needs both X and Y");
     if (!nurbs_) {
       feed_mm_s(word);
@@ -663,14 +745,14 @@ struct GcodeReader::Impl {
 };
 
 GcodeReader::GcodeReader(const std::string& file, const GcodeOptions& options)
-    : impl_(std::make_unique<Impl>(file, options)) {
+    : impl_((check_axes(options.axes), std::make_unique<Impl>(file, options))) {
   impl_->file.open(file);
   if (!impl_->file) throw InputError(file + ": cannot open");
   impl_->in = &impl_->file;
 }
 
 GcodeReader::GcodeReader(std::istream& in, const std::string& name, const GcodeOptions& options)
-    : impl_(std::make_unique<Impl>(name, options)) {
+    : impl_((check_axes(options.axes), std::make_unique<Impl>(name, options))) {
   impl_->in = &in;
 }
 
@@ -685,16 +767,29 @@ bool GcodeReader::next(Move& m) {
 
 const std::vector<std::string>& GcodeReader::notes() const { return impl_->interp.notes(); }
 
+int GcodeReader::axes() const { return static_cast<int>(impl_->interp.axes().size()); }
+
 namespace {
 Toolpath read_all(GcodeReader& r) {
   Toolpath tp;
   Move m;
   while (r.next(m)) tp.moves.push_back(std::move(m));
   tp.notes = r.notes();
-  tp.axes = 3;
+  tp.axes = r.axes();
   return tp;
 }
 }  // namespace
+
+void check_axes(const std::string& axes) {
+  const std::string why = "--axes " + axes + ": ";
+  if (axes.compare(0, 3, "XYZ") != 0) throw InputError(why + "the axes start with X Y Z (e.g. XYZA)");
+  if (axes.size() > 8) throw InputError(why + "at most 8 axes (the core's)");
+  for (size_t i = 3; i < axes.size(); ++i) {
+    if (std::string("ABCUVW").find(axes[i]) == std::string::npos)
+      throw InputError(why + std::string(1, axes[i]) + " is not one of A B C U V W");
+    if (axes.find(axes[i]) != i) throw InputError(why + std::string(1, axes[i]) + " named twice");
+  }
+}
 
 ToolTable read_tool_table(const std::string& file) {
   std::ifstream in(file);

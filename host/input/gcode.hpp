@@ -4,7 +4,8 @@
 // input.crosscheck.linuxcnc_examples; see host/input/README.md).
 //
 // Acted on: G0 G1 G2 G3 (centre I J K or R, helical, P turns, planes
-// G17/G18/G19), G5 G5.1 G5.2/G5.3, G20/G21, G90/G91, G90.1/G91.1,
+// G17/G18/G19; the further axes A B C U V W of GcodeOptions::axes move
+// linearly with lines and arcs), G5 G5.1 G5.2/G5.3, G20/G21, G90/G91, G90.1/G91.1,
 // G61/G61.1/G64 P, F (units per minute), G28/G30 (to the machine origin:
 // LinuxCNC's parameters 5161-5166 and 5181-5186 at their default 0), G43 H
 // (with a tool table; the moves are then of the tool's holder, the
@@ -40,7 +41,15 @@ struct ToolTable {
 // Throws InputError "<file>:<line>: <word>: <why>" for a malformed line.
 ToolTable read_tool_table(const std::string& file);
 
+// The machine's axes: "XYZ" and then up to five of A B C U V W, each once, in
+// the order the curves carry them (e.g. "XYZA", "XYZBC"). A B C are rotary
+// (degrees, whatever G20/G21 says), U V W linear. Throws InputError naming
+// what is wrong.
+void check_axes(const std::string& axes);
+
 struct GcodeOptions {
+  // The machine's axes (check_axes): words of other axes are refused.
+  std::string axes = "XYZ";
   // LinuxCNC's block-delete switch: when on, lines starting with '/' are
   // skipped; when off (LinuxCNC's default, and rs274's) they run.
   bool block_delete = false;
@@ -61,6 +70,8 @@ class GcodeReader {
   bool next(Move& m);
   // Notes so far (words accepted and not acted on).
   const std::vector<std::string>& notes() const;
+  // The axes the moves' curves carry (GcodeOptions::axes).
+  int axes() const;
 
  private:
   struct Impl;

@@ -207,7 +207,26 @@ geo::BSpline line3(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 }
 
 geo::BSpline arc3(const ArcSpec& a) {
-  return a.start[a.normal] == a.end[a.normal] ? planar_arc(a) : helical_arc(a);
+  return a.start[a.normal] == a.end[a.normal] && !a.helix_form ? planar_arc(a) : helical_arc(a);
+}
+
+geo::BSpline with_further_axes(geo::BSpline xyz, const Eigen::VectorXd& e0, const Eigen::VectorXd& e1) {
+  const Eigen::Index n = xyz.ctrl.rows(), d = xyz.ctrl.cols(), m = e0.size();
+  if (m == 0) return xyz;
+  if (xyz.rational() && e0 != e1) throw std::invalid_argument("further axes moving along a rational curve");
+  Eigen::MatrixXd c(n, d + m);
+  c.leftCols(d) = xyz.ctrl;
+  const double u0 = xyz.u_begin(), span = xyz.u_end() - u0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    double greville = 0;  // mean of knots i+1 .. i+degree, as a share of the parameter range
+    for (int j = 1; j <= xyz.degree; ++j) greville += xyz.knots[i + j];
+    const double f = xyz.degree > 0 ? (greville / xyz.degree - u0) / span : 0.0;
+    c.block(i, d, 1, m) = (e0 + (e1 - e0) * f).transpose();
+  }
+  c.block(0, d, 1, m) = e0.transpose();  // the programmed points exactly (clamped ends)
+  c.block(n - 1, d, 1, m) = e1.transpose();
+  xyz.ctrl = c;
+  return xyz;
 }
 
 geo::BSpline bezier3(const Eigen::MatrixXd& ctrl) { return geo::make_bezier(ctrl); }

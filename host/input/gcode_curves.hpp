@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// The curves of G-code moves, in 3-D (X, Y, Z), as geo::BSpline.
+// The curves of G-code moves, in 3-D (X, Y, Z), as geo::BSpline, and the
+// machine's further axes (A B C U V W) appended to them.
 //
 // Arcs (G2/G3) live in a plane given by two axes (first, second: XY for G17,
 // ZX for G18, YZ for G19, LinuxCNC's order) and a normal axis; a positive
@@ -27,6 +28,10 @@
 //   this to be <= kHelixBound (and at most 45 degrees). Piece ends shared by
 //   two pieces are set to the exact point (the first and last to the
 //   programmed points), which adds at most the same bound.
+// * The further axes move linearly with the move's progress, as LinuxCNC
+//   moves them: on a line with its parameter, on an arc with its angle. An
+//   arc that moves them takes the helix form (its parameter is proportional
+//   to the angle) even when its normal axis stays.
 #pragma once
 #include <Eigen/Dense>
 #include <vector>
@@ -43,6 +48,7 @@ struct ArcSpec {
   Eigen::Vector3d start, end;             // programmed points
   double c1 = 0, c2 = 0;                  // centre in (first, second)
   double sweep = 0;                       // signed angle, radians (> 0 from first towards second)
+  bool helix_form = false;                // the helix form even when the normal axis stays (further axes move)
 };
 
 // The pieces helical_arc cuts a helix into: the least m >= ceil(|sweep| /
@@ -57,6 +63,11 @@ geo::BSpline line3(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
 geo::BSpline arc3(const ArcSpec& a);
 // The Taylor truncation bound of a helix piece of half angle h and largest radius r.
 double helix_piece_bound(double r, double h);
+// `xyz` with the further axes appended as columns, from e0 at its start to e1
+// at its end, linear in its parameter: the control values at the Greville
+// abscissae, exact for a non-rational B-spline. A rational one (a planar arc,
+// a NURBS) only takes constant columns (e0 == e1; throws otherwise).
+geo::BSpline with_further_axes(geo::BSpline xyz, const Eigen::VectorXd& e0, const Eigen::VectorXd& e1);
 // Bezier through the given control points (rows), non-rational.
 geo::BSpline bezier3(const Eigen::MatrixXd& ctrl);
 // LinuxCNC's G5.2 NURBS: order k (degree k-1), the knot vector 0 (k times),

@@ -20,7 +20,12 @@ struct Move {
   enum class Kind { kRapid, kFeed };
   Kind kind = Kind::kFeed;
   geo::BSpline curve;      // the move's geometry in mm (line, arc, helix, spline); starts where the previous ended
-  double feed = 0;         // programmed feed, mm/s (F / 60); 0 for rapids (they run at the rapid limits)
+  double feed = 0;         // speed along the curve in all its axes, units/s; 0 for rapids (they run at the rapid limits)
+  // feed / feed_scale is the programmed feed (F / 60, mm/s or degrees/s): as
+  // LinuxCNC, F is the speed of X Y Z when they move, else of U V W, else of
+  // A B C, and the other axes keep pace; feed_scale is the curve's length in
+  // all axes over that (1 for a move of X Y Z alone).
+  double feed_scale = 1;
   double tolerance = -1;   // path tolerance for this move, mm (G64 P); < 0: the job's --tol
   bool exact_stop = false; // the machine stops at the end of this move (G61, G61.1, rapids)
   std::string where;       // "<file>:<line>" (G-code), "<file>: path <id>" (SVG), "<file>: entity <n>" (DXF)
@@ -28,7 +33,7 @@ struct Move {
 
 struct Toolpath {
   std::vector<Move> moves;
-  int axes = 3;              // axes the curves carry (2 for SVG, 3 for G-code and DXF)
+  int axes = 3;              // axes the curves carry (2 for SVG, 3 for DXF, 3 or more for G-code: GcodeOptions::axes)
   std::vector<std::string> notes;  // words accepted and not acted on (spindle, coolant, tool), one per kind, with where
 };
 

@@ -25,6 +25,7 @@ ToolpathStream::ToolpathStream(const std::string& file, input::FileKind kind, co
     : job_cfg_(cfg), opt_(o), chunk_(std::max<size_t>(chunk, 2)) {
   if (kind == input::FileKind::kGcode) {
     reader_ = std::make_unique<input::GcodeReader>(file, o.gcode);
+    axes_ = reader_->axes();
   } else {
     whole_ = input::read_toolpath(file, kind, o.gcode);
     axes_ = whole_.axes;

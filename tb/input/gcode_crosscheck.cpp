@@ -10,6 +10,9 @@
 // radius) and the swept angle (direction and turns), the control-point count
 // of splines, feed rates, path tolerance and exact-stop mode, to 1e-9 (in mm;
 // rs274 prints in the program's units, the shim makes it print all digits).
+// Programs are read with the axes X Y Z A B C (rs274's, standalone): the
+// rotary axes' end points, their progress along arcs (linear in the angle)
+// and the feed as programmed (Move::feed / Move::feed_scale) are compared too.
 // Exit 0 if no disagreement, 1 otherwise, 77 (skipped) without rs274.
 // A program X.ngc with a tool table X.tbl beside it (mm) is read with that
 // table, and rs274 gets it in inches (its standalone machine units); rs274
@@ -45,14 +48,17 @@ namespace {
 constexpr double kTol = 1e-9;
 constexpr double kPi = 3.14159265358979323846;
 
+using Point = Eigen::Matrix<double, 6, 1>;  // X Y Z (mm) A B C (degrees)
+
 struct Canon {
   enum Kind { kTraverse, kFeed, kArc, kNurbs } kind;
-  Eigen::Vector3d end;   // mm
+  Point end = Point::Zero();  // mm, degrees
   double c1 = 0, c2 = 0;  // arc centre (mm) in the plane's (first, second)
   int rotation = 0;
   int plane = 0;         // 0 XY, 1 XZ, 2 YZ
   int n_ctrl = 0;        // NURBS_FEED
-  double feed = 0;       // mm/min
+  double feed = 0;       // mm/min (degrees/min for A B C alone: rs274 prints F as programmed)
+  double feed_raw = 0;   // F as programmed
   double tolerance = -1; // mm, -1 none
   bool exact = false;
 };
@@ -122,6 +128,7 @@ Rs274 run_rs274(const std::string& shim, const fs::path& prog, const fs::path& w
       c.kind = name == "STRAIGHT_TRAVERSE" ? Canon::kTraverse : name == "STRAIGHT_FEED" ? Canon::kFeed
              : name == "ARC_FEED" ? Canon::kArc : Canon::kNurbs;
       c.feed = feed * unit;
+      c.feed_raw = feed;
       c.tolerance = tol;
       c.exact = exact;
       c.plane = plane;
@@ -137,8 +144,10 @@ Rs274 run_rs274(const std::string& shim, const fs::path& prog, const fs::path& w
         c.c2 = v[3] * unit + (second[plane] == 2 ? tlo : 0);
         c.rotation = static_cast<int>(v[4]);
         c.end[2] += tlo;
+        for (int k = 0; k < 3 && 6 + k < static_cast<int>(v.size()); ++k) c.end[3 + k] = v[6 + k];
       } else {
-        c.end = Eigen::Vector3d(v[0], v[1], v[2]) * unit;
+        for (int k = 0; k < 3; ++k) c.end[k] = v[k] * unit;
+        for (int k = 3; k < 6 && k < static_cast<int>(v.size()); ++k) c.end[k] = v[k];  // degrees
         c.end[2] += tlo;
       }
       r.moves.push_back(c);
@@ -148,21 +157,23 @@ Rs274 run_rs274(const std::string& shim, const fs::path& prog, const fs::path& w
 }
 
 bool near(double a, double b) { return std::abs(a - b) <= kTol * std::max(1.0, std::max(std::abs(a), std::abs(b))); }
-bool near(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return near(a[0], b[0]) && near(a[1], b[1]) && near(a[2], b[2]);
+bool near(const Point& a, const Point& b) {
+  for (int k = 0; k < 6; ++k)
+    if (!near(a[k], b[k])) return false;
+  return true;
 }
 
-std::string str(const Eigen::Vector3d& p) {
+std::string str(const Point& p) {
   std::ostringstream o;
   o.precision(12);
-  o << "(" << p[0] << ", " << p[1] << ", " << p[2] << ")";
+  o << "(" << p[0] << ", " << p[1] << ", " << p[2] << "; A " << p[3] << ", B " << p[4] << ", C " << p[5] << ")";
   return o.str();
 }
 
 // Checks our arc move against rs274's ARC_FEED: every sample on the circle (radius interpolated
 // linearly in angle between the start and end radii), the normal axis linear in the angle, and the
 // total swept angle.
-std::string check_arc(const Move& m, const Canon& c, const Eigen::Vector3d& start) {
+std::string check_arc(const Move& m, const Canon& c, const Point& start) {
   static const int first[3] = {0, 2, 1}, second[3] = {1, 0, 2}, normal[3] = {2, 1, 0};
   const int f = first[c.plane], s = second[c.plane], n = normal[c.plane];
   const double a0 = std::atan2(start[s] - c.c2, start[f] - c.c1), a1 = std::atan2(c.end[s] - c.c2, c.end[f] - c.c1);
@@ -194,13 +205,16 @@ std::string check_arc(const Move& m, const Canon& c, const Eigen::Vector3d& star
     if (std::abs(r - (r0 + (r1 - r0) * frac)) > rtol) return "sample " + std::to_string(k) + " off the circle by " + std::to_string(r - r0);
     const double z = start[n] + (c.end[n] - start[n]) * frac;
     if (!near(p[n], z)) return "sample " + std::to_string(k) + " off the helix in the normal axis";
+    for (int r = 3; r < 6; ++r)
+      if (!near(p[r], start[r] + (c.end[r] - start[r]) * frac))
+        return "sample " + std::to_string(k) + " off the rotary axes' linear progress with the angle";
   }
   if (std::abs(swept - sweep) > kTol * std::max(1.0, std::abs(sweep))) return "swept angle " + std::to_string(swept) + " against " + std::to_string(sweep);
   return "";
 }
 
 std::string compare(const traj::input::Toolpath& tp, const Rs274& r) {
-  Eigen::Vector3d pos = Eigen::Vector3d::Zero();
+  Point pos = Point::Zero();
   size_t i = 0;
   for (const Canon& c : r.moves) {
     if (c.kind != Canon::kArc && c.kind != Canon::kNurbs && near(c.end, pos)) continue;  // zero-length: no Move
@@ -209,10 +223,10 @@ std::string compare(const traj::input::Toolpath& tp, const Rs274& r) {
     const std::string at = m.where + ": ";
     const Eigen::VectorXd s = m.curve.ctrl.row(0).transpose();
     const Eigen::VectorXd e = m.curve.ctrl.row(m.curve.n_ctrl() - 1).transpose();
-    if (!near(Eigen::Vector3d(s), pos)) return at + "starts at " + str(s) + ", not at " + str(pos);
+    if (!near(Point(s), pos)) return at + "starts at " + str(s) + ", not at " + str(pos);
     const bool rapid = c.kind == Canon::kTraverse;
     if ((m.kind == Move::Kind::kRapid) != rapid) return at + "kind differs";
-    if (c.kind != Canon::kNurbs && !near(Eigen::Vector3d(e), c.end)) return at + "ends at " + str(e) + ", rs274 " + str(c.end);
+    if (c.kind != Canon::kNurbs && !near(Point(e), c.end)) return at + "ends at " + str(e) + ", rs274 " + str(c.end);
     if (c.kind == Canon::kFeed || c.kind == Canon::kTraverse) {
       if (m.curve.degree != 1) return at + "not a line";
     } else if (c.kind == Canon::kArc) {
@@ -222,11 +236,14 @@ std::string compare(const traj::input::Toolpath& tp, const Rs274& r) {
       return at + "spline with " + std::to_string(m.curve.n_ctrl()) + " control points, rs274 " + std::to_string(c.n_ctrl);
     }
     if (!rapid) {
-      if (!near(m.feed * 60, c.feed)) return at + "feed " + std::to_string(m.feed * 60) + " mm/min, rs274 " + std::to_string(c.feed);
+      // F measures X Y Z when they move, else A B C (degrees/min whatever the units)
+      const bool rotary_only = c.kind == Canon::kFeed && (c.end.head<3>() - pos.head<3>()).norm() == 0;
+      const double f = m.feed / m.feed_scale * 60, rf = rotary_only ? c.feed_raw : c.feed;
+      if (!near(f, rf)) return at + "feed " + std::to_string(f) + " as programmed, rs274 " + std::to_string(rf);
       if (m.exact_stop != c.exact) return at + "exact-stop mode differs";
       if (!(m.tolerance < 0 && c.tolerance < 0) && !near(m.tolerance, c.tolerance)) return at + "path tolerance differs";
     }
-    pos = c.kind == Canon::kNurbs ? Eigen::Vector3d(e) : c.end;
+    pos = c.kind == Canon::kNurbs ? Point(e) : c.end;
   }
   if (i != tp.moves.size()) return "read_gcode has " + std::to_string(tp.moves.size() - i) + " more moves than rs274";
   return "";
@@ -286,6 +303,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> disagreements;
   for (const fs::path& prog : progs) {
     traj::input::GcodeOptions opt;
+    opt.axes = "XYZABC";
     fs::path table = prog;
     table.replace_extension(".tbl");
     opt.tools = fs::exists(table) ? traj::input::read_tool_table(table.string()) : default_tools;

@@ -41,6 +41,7 @@ Eigen::Vector3d at(const Move& m, double f) {
 }
 
 Eigen::Vector3d end_of(const Move& m) { return m.curve.ctrl.row(m.curve.n_ctrl() - 1).transpose(); }
+Eigen::Vector4d end_of4(const Move& m) { return m.curve.ctrl.row(m.curve.n_ctrl() - 1).transpose(); }
 
 // Largest distance of samples from the circle (centre c in the plane of axes a, b) and the swept angle.
 std::pair<double, double> circle_fit(const Move& m, int a, int b, double ca, double cb, double r, int n = 720) {
@@ -219,7 +220,7 @@ TEST(Gcode, Refusals) {
       {"F100\nG1 X-\nM2\n", "t.ngc:2: X-: malformed number"},
       {"G1 X1\nM2\n", "t.ngc:1: G1: no feed rate: program F (units per minute) before the first feed move"},
       {"G22\nM2\n", "t.ngc:1: G22: unknown or unsupported G code"},
-      {"F1\nG1 X1 A3\nM2\n", "t.ngc:2: A3: motion of the A/B/C/U/V/W axes is not supported: the planner carries X, Y and Z only"},
+      {"F1\nG1 X1 A3\nM2\n", "t.ngc:2: A3: the machine has no A axis (its axes: XYZ; name them with trajcore --axes, e.g. --axes XYZA)"},
       {"E1\nM2\n", "t.ngc:1: E1: unknown word"},
       {"F1\nG1 X1\n", "t.ngc:2: end of file: the program has no M2, M30 or closing '%'"},
       {"F1\nG0 X1 G1 Y2\nM2\n", "t.ngc:2: G1: two G codes from the same modal group (G0)"},
@@ -319,4 +320,79 @@ TEST(Gcode, ToolTableFile) {
   EXPECT_EQ(refused("T0 P1\n"), ":1: T: the tool number must be a whole number from 1 to 1000000000");
   EXPECT_EQ(refused("T1e114 P1\n"), ":1: T: the tool number must be a whole number from 1 to 1000000000");
   EXPECT_EQ(refused("T1 P1 Z1e999\n"), ":1: Z1e999: not a letter and a number");
+}
+
+// The further axes (GcodeOptions::axes): their words, units, moves along
+// lines and arcs, the feed LinuxCNC's way, and the refusals. The LinuxCNC
+// cross-check (input.crosscheck.linuxcnc_examples, tb/input/gcode/rotary_abc.ngc)
+// compares A B C with rs274; rs274 standalone has no U V W, so they are
+// checked here by hand.
+TEST(Gcode, FurtherAxesMoveWithLinesAndArcs) {
+  traj::input::GcodeOptions opt;
+  opt.axes = "XYZAUW";
+  const Toolpath tp = read(
+      "G21 G90 F600\n"
+      "G1 X30 Y40 A90\n"          // X Y and A: F measures X Y Z (50 mm)
+      "G1 A180 F3600\n"           // A alone: F in degrees/min
+      "G1 U3 W4 A270 F60\n"       // U W and A: F measures U V W (5 mm)
+      "G20 G1 A0 U0 W0 F60\n"     // inches: A stays in degrees, U and W in inches
+      "G21 G2 X50 Y40 I10 J0 A90 F600\n"  // an arc with A: helix form, A linear in the angle
+      "M2\n",
+      opt);
+  ASSERT_EQ(tp.axes, 6);
+  ASSERT_EQ(tp.moves.size(), 5u);
+  const Move& m0 = tp.moves[0];
+  EXPECT_EQ(m0.curve.ctrl.cols(), 6);
+  EXPECT_EQ(m0.curve.ctrl(1, 3), 90.0);
+  EXPECT_NEAR(m0.feed_scale, std::hypot(50.0, 90.0) / 50, 1e-15);
+  EXPECT_NEAR(m0.feed, 10 * m0.feed_scale, 1e-12);  // 600 mm/min over X Y at 10 mm/s
+  EXPECT_NEAR(tp.moves[1].feed, 60.0, 1e-12);          // 3600 degrees/min
+  EXPECT_NEAR(tp.moves[1].feed_scale, 1.0, 1e-15);
+  const Move& m2 = tp.moves[2];
+  EXPECT_EQ(m2.curve.ctrl(1, 4), 3.0);
+  EXPECT_EQ(m2.curve.ctrl(1, 5), 4.0);
+  EXPECT_NEAR(m2.feed_scale, std::hypot(5.0, 90.0) / 5, 1e-14);
+  const Move& m3 = tp.moves[3];
+  EXPECT_EQ(m3.curve.ctrl(1, 3), 0.0);
+  EXPECT_NEAR(m3.feed / m3.feed_scale, 25.4, 1e-12);  // 60 inch/min of U W
+  // the arc: every sample's A on the line from 0 to 90 degrees in the swept angle
+  const Move& arc = tp.moves[4];
+  traj::geo::Curve c(arc.curve);
+  for (int k = 0; k <= 64; ++k) {
+    const double u = arc.curve.u_begin() + (arc.curve.u_end() - arc.curve.u_begin()) * k / 64.0;
+    const Eigen::VectorXd p = c.eval(u, 0).col(0);
+    const double angle = std::atan2(p[1] - 40, p[0] - 40);  // from pi (start, X30) clockwise to 0
+    const double swept = kPi - (angle < 0 ? angle + 2 * kPi : angle);
+    EXPECT_NEAR(p[3], 90 * std::min(swept, kPi) / kPi, 1e-9) << k;
+    EXPECT_NEAR(std::hypot(p[0] - 40, p[1] - 40), 10, 1e-9) << k;
+  }
+  EXPECT_NEAR(arc.feed_scale, std::hypot(10 * kPi, 90.0) / (10 * kPi), 1e-12);
+}
+
+TEST(Gcode, FurtherAxesRefusals) {
+  EXPECT_THROW(traj::input::check_axes("XYA"), InputError);
+  EXPECT_THROW(traj::input::check_axes("XYZAA"), InputError);
+  EXPECT_THROW(traj::input::check_axes("XYZABCUVW"), InputError);  // 9: the core takes 8
+  EXPECT_THROW(traj::input::check_axes("XYZQ"), InputError);
+  traj::input::check_axes("XYZABCUV");
+  traj::input::GcodeOptions opt;
+  opt.axes = "XYZA";
+  auto refused = [&](const std::string& program) {
+    try {
+      read(program, opt);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_EQ(refused("F60\nG1 B3\nM2\n"),
+            "t.ngc:2: B3: the machine has no B axis (its axes: XYZA; name them with trajcore --axes, e.g. --axes XYZAB)");
+  EXPECT_EQ(refused("F60\nG5 X1 Y1 P0 Q0 I0 J1 A3\nM2\n"), "t.ngc:2: A3: splines (G5, G5.1) may not move A");
+  EXPECT_EQ(refused("G80\nA3\nM2\n"), "t.ngc:2: A3: axis word with no motion mode (G0, G1, G2, G3, G5, ...) in effect");
+  // G28 takes A home too; with A named only A
+  const Toolpath tp = read("G0 X1 A10\nG28\nG0 X2 A20\nG28 A5\nM2\n", opt);
+  ASSERT_EQ(tp.moves.size(), 5u);
+  EXPECT_EQ(end_of4(tp.moves[1]), Eigen::Vector4d(0, 0, 0, 0));
+  EXPECT_EQ(end_of4(tp.moves[3]), Eigen::Vector4d(2, 0, 0, 5));   // to A5 first
+  EXPECT_EQ(end_of4(tp.moves[4]), Eigen::Vector4d(2, 0, 0, 0));   // then A home, X stays
 }
