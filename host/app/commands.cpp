@@ -67,42 +67,57 @@ void progress(const std::string& stage, double f) {
   if (stage == "done") end_progress();
 }
 
-// The samples CSV, row by row.
+// The samples CSV, row by row: a column of LSBs and one of units per axis,
+// named by `names` (the machine's axis letters; the stream's axes beyond
+// them idle).
 class CsvWriter {
  public:
-  CsvWriter(const std::string& path, const stream::Header& h)
-      : file_(path), lsb_(std::ldexp(1.0, -h.frac_bits)), period_(h.period) {
-    file_.out() << "tick,t_s,x_lsb,y_lsb,z_lsb,x,y,z\n";
+  CsvWriter(const std::string& path, const stream::Header& h, const std::string& names = plan::Limits{}.axis_names)
+      : file_(path), lsb_(std::ldexp(1.0, -h.frac_bits)), period_(h.period),
+        axes_(std::min({h.axes, plan::kMaxAxes, static_cast<int>(names.size())})) {
+    std::string head = "tick,t_s", units;
+    for (int a = 0; a < axes_; ++a) {
+      head += "," + names.substr(static_cast<size_t>(a), 1) + "_lsb";
+      units += "," + names.substr(static_cast<size_t>(a), 1);
+    }
+    file_.out() << head << units << "\n";
   }
-  void row(uint64_t k, const std::array<long long, 3>& v) {
-    char b[160];
-    std::snprintf(b, sizeof b, "%llu,%.6f,%lld,%lld,%lld,%.10f,%.10f,%.10f\n", static_cast<unsigned long long>(k),
-                  static_cast<double>(k) * period_, v[0], v[1], v[2], v[0] * lsb_, v[1] * lsb_, v[2] * lsb_);
-    file_.out() << b;
+  void row(uint64_t k, const report::Sample& v) {
+    char b[64];
+    std::snprintf(b, sizeof b, "%llu,%.6f", static_cast<unsigned long long>(k), static_cast<double>(k) * period_);
+    std::string line = b;
+    for (int a = 0; a < axes_; ++a) line += "," + std::to_string(v[a]);
+    for (int a = 0; a < axes_; ++a) {
+      std::snprintf(b, sizeof b, ",%.10f", v[a] * lsb_);
+      line += b;
+    }
+    file_.out() << line << "\n";
   }
   void commit() { file_.commit(); }  // not committed: nothing is left under the path
 
  private:
   util::AtomicFile file_;
   double lsb_, period_;
+  int axes_;
 };
 
 // The compact sample file (host/stream/README.md, "Sample files"): 8 bytes
 // "TRJSMP01", u32 axes, i32 fraction bits, f64 tick period (s), then per
-// tick one int64 per axis (output LSB), all little-endian: 24 bytes a tick
-// for 3 axes against about 100 in CSV.
+// tick one int64 per axis of the stream (output LSB), all little-endian: 24
+// bytes a tick for 3 axes against about 100 in CSV.
 class SampleFileWriter {
  public:
-  SampleFileWriter(const std::string& path, const stream::Header& h) : file_(path, std::ios::out | std::ios::binary) {
+  SampleFileWriter(const std::string& path, const stream::Header& h)
+      : file_(path, std::ios::out | std::ios::binary), axes_(std::min(h.axes, plan::kMaxAxes)) {
     file_.out().write("TRJSMP01", 8);
-    put(static_cast<uint32_t>(3), 4);
+    put(static_cast<uint32_t>(axes_), 4);
     put(static_cast<uint32_t>(h.frac_bits), 4);
     uint64_t p;
     std::memcpy(&p, &h.period, 8);
     put(p, 8);
   }
-  void row(const std::array<long long, 3>& v) {
-    for (long long x : v) put(static_cast<uint64_t>(x), 8);
+  void row(const report::Sample& v) {
+    for (int a = 0; a < axes_; ++a) put(static_cast<uint64_t>(v[a]), 8);
   }
   void commit() { file_.commit(); }
 
@@ -113,10 +128,11 @@ class SampleFileWriter {
     file_.out().write(b, bytes);
   }
   util::AtomicFile file_;
+  int axes_;
 };
 
-void write_csv(const std::string& path, const stream::Header& h, const report::Samples& s) {
-  CsvWriter w(path, h);
+void write_csv(const std::string& path, const stream::Header& h, const report::Samples& s, const std::string& names) {
+  CsvWriter w(path, h, names);
   for (size_t k = 0; k < s.v.size(); ++k) w.row(k, s.v[k]);
   w.commit();
 }
@@ -156,19 +172,30 @@ plan::Path load_jsonl(const std::string& file) {
   return p;
 }
 
-// The G-code reader's options: the tool table, if one is given.
-input::GcodeOptions gcode_options(const std::string& tool_table) {
+// The G-code reader's options: the machine's axes (--axes: the first
+// Machine::axes of the limits' axis names) and the tool table, if one is given.
+input::GcodeOptions gcode_options(const std::string& tool_table, const job::JobConfig& cfg) {
   input::GcodeOptions o;
+  o.axes.clear();
+  for (char c : cfg.limits.axis_names.substr(0, static_cast<size_t>(cfg.machine.axes)))
+    o.axes += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   if (!tool_table.empty()) o.tools = input::read_tool_table(tool_table);
   return o;
+}
+
+// --axes names a G-code program's axes; other paths carry their own (2 or 3).
+void check_axes_for(input::FileKind kind, const job::JobConfig& cfg) {
+  if (kind != input::FileKind::kGcode && cfg.machine.axes > 3)
+    throw PlanError("--axes with more than X Y Z is for G-code programs (SVG, DXF and JSON paths carry 2 or 3 axes)");
 }
 
 Loaded load(const std::string& file, const std::string& format, const std::string& tool_table,
             const job::JobConfig& cfg) {
   const input::FileKind kind = input::file_kind(file, format);
+  check_axes_for(kind, cfg);
   if (kind == input::FileKind::kJsonl) return {load_jsonl(file), cfg, {}};
   if (!input::is_toolpath(kind)) return {input::load_path(file), cfg, {}};
-  const input::Toolpath tp = input::read_toolpath(file, kind, gcode_options(tool_table));
+  const input::Toolpath tp = input::read_toolpath(file, kind, gcode_options(tool_table, cfg));
   for (const auto& n : tp.notes) std::fprintf(stderr, "trajcore: note: %s\n", n.c_str());
   job::ToolpathPlan tpp = job::toolpath_plan(tp, cfg);
   char b[512];
@@ -207,7 +234,8 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
   } else if (input::is_toolpath(input::file_kind(a.input, a.format))) {
     // G-code read a line at a time as the windows need curves, blended in chunks
     job::ToolpathOptions to;
-    to.gcode = gcode_options(a.tool_table);
+    check_axes_for(input::file_kind(a.input, a.format), a.cfg);
+    to.gcode = gcode_options(a.tool_table, a.cfg);
     toolpath = std::make_unique<job::ToolpathStream>(a.input, input::file_kind(a.input, a.format), a.cfg, to);
     cfg = toolpath->config();
   } else {
@@ -369,7 +397,8 @@ int run_command(const RunArgs& a) {
               res.ticks.size(), res.plan.duration());
   const auto sr = sim::simulate(res.header, records, 0, [](double f) { progress("sim", f); });
   end_progress();
-  write_csv(stage.dir + "/samples.csv", res.header, sr.samples);
+  write_csv(stage.dir + "/samples.csv", res.header, sr.samples,
+            cfg.limits.axis_names.substr(0, static_cast<size_t>(std::max(cfg.machine.axes, path.dim()))));
   const auto rep = report::make_report(path, cfg, res, sr.samples);
   report::write_plots(stage.dir, path, cfg, res, sr.samples, in.fastest_feed_move);
   std::string scale_text;
@@ -430,7 +459,7 @@ int sim_command(const SimArgs& a) {
   if (!a.csv.empty()) csv = std::make_unique<CsvWriter>(a.csv, header);
   std::unique_ptr<SampleFileWriter> bin;
   if (!a.samples.empty()) bin = std::make_unique<SampleFileWriter>(a.samples, header);
-  const sim::SampleSink sink = [&](uint64_t k, const std::array<long long, 3>& v) {
+  const sim::SampleSink sink = [&](uint64_t k, const report::Sample& v) {
     if (csv) csv->row(k, v);
     if (bin) bin->row(v);
   };

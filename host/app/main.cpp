@@ -11,10 +11,12 @@
 //   trajcore board --loopback                  the loopback board on a pty or TCP port (fault injection)
 #include <CLI/CLI.hpp>
 
+#include <cctype>
 #include <cstdio>
 #include <exception>
 
 #include "commands.hpp"
+#include "input/gcode.hpp"
 #include "demo.hpp"
 #include "link_cmds.hpp"
 #include "util/atomic_file.hpp"
@@ -30,18 +32,28 @@ constexpr const char* kFormatHelp =
     "path file format: json, jsonl, gcode, svg or dxf (default: by the name: .jsonl, .ngc/.nc/.gcode/.tap/.cnc, "
     ".svg, .dxf; JSON otherwise)";
 
-void add_limits(CLI::App* c, JobConfig& cfg, std::vector<double>& v_axis, std::vector<double>& a_axis,
-                std::vector<double>& j_axis) {
+struct AxisArgs {
+  std::string axes = "XYZ";
+  std::vector<double> v, a, j;
+};
+
+void add_limits(CLI::App* c, JobConfig& cfg, AxisArgs& ax) {
   auto& L = cfg.limits;
+  c->add_option("--axes", ax.axes,
+                "the machine's axes, as LinuxCNC names them: XYZ and up to five of A B C (rotary, degrees) and U V W, "
+                "in the engine's order (G-code words of other axes are refused; F is the speed of X Y Z when they "
+                "move, else of U V W, else of A B C, as in LinuxCNC)")
+      ->capture_default_str();
   c->add_option("--feed", L.feed, "commanded feed, units/s")->capture_default_str();
   c->add_option("--period", cfg.machine.period, "tick period, s")->capture_default_str();
   c->add_option("--feed-accuracy", cfg.machine.feed_accuracy,
                 "bound on |chord between samples / chord between the planned points - 1| at every tick (0: the default "
                 "fit, about 2e-3)")
       ->capture_default_str();
-  c->add_option("--v-axis", v_axis, "per-axis velocity limits x,y,z (one value: all axes)")->delimiter(',');
-  c->add_option("--a-axis", a_axis, "per-axis acceleration limits")->delimiter(',');
-  c->add_option("--j-axis", j_axis, "per-axis jerk limits")->delimiter(',');
+  c->add_option("--v-axis", ax.v, "per-axis velocity limits in --axes order, e.g. x,y,z (one value: all axes; "
+                "A B C in degrees/s)")->delimiter(',');
+  c->add_option("--a-axis", ax.a, "per-axis acceleration limits")->delimiter(',');
+  c->add_option("--j-axis", ax.j, "per-axis jerk limits")->delimiter(',');
   c->add_option("--a-tan", L.a_tan, "tangential acceleration limit")->capture_default_str();
   c->add_option("--j-tan", L.j_tan, "tangential jerk limit")->capture_default_str();
   c->add_option("--a-cen", L.a_cen, "centripetal acceleration limit")->capture_default_str();
@@ -67,17 +79,26 @@ void add_time_scale(CLI::App* c, traj::app::TimeScaleArgs& t) {
   c->add_option("--servo-period", t.servo_period, "with --time-scale: the board's servo tick, s")->capture_default_str();
 }
 
-void apply_axes(JobConfig& cfg, const std::vector<double>& v, const std::vector<double>& a,
-                const std::vector<double>& j) {
-  auto set = [](double* dst, const std::vector<double>& src, const char* name) {
+// The machine's axes (--axes) and their limits: one value for all, or one per axis.
+void apply_axes(JobConfig& cfg, const AxisArgs& ax) {
+  traj::input::check_axes(ax.axes);
+  const int n = static_cast<int>(ax.axes.size());
+  auto set = [n](double* dst, const std::vector<double>& src, const char* name) {
     if (src.empty()) return;
-    if (src.size() != 1 && src.size() != 3)
-      throw traj::plan::PlanError(std::string("--") + name + " takes 1 or 3 values, got " + std::to_string(src.size()));
-    for (int k = 0; k < 3; ++k) dst[k] = src.size() == 1 ? src[0] : src[k];
+    if (src.size() != 1 && static_cast<int>(src.size()) != n)
+      throw traj::plan::PlanError(std::string("--") + name + " takes 1 or " + std::to_string(n) +
+                                  " values (one per axis of --axes), got " + std::to_string(src.size()));
+    for (int k = 0; k < traj::plan::kMaxAxes; ++k) dst[k] = src.size() == 1 ? src[0] : src[std::min(k, n - 1)];
   };
-  set(cfg.limits.v_axis, v, "v-axis");
-  set(cfg.limits.a_axis, a, "a-axis");
-  set(cfg.limits.j_axis, j, "j-axis");
+  set(cfg.limits.v_axis, ax.v, "v-axis");
+  set(cfg.limits.a_axis, ax.a, "a-axis");
+  set(cfg.limits.j_axis, ax.j, "j-axis");
+  std::string names;
+  for (char c : ax.axes) names += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  for (char c : std::string("xyzabcuvw"))
+    if (names.size() < static_cast<size_t>(traj::plan::kMaxAxes) && names.find(c) == std::string::npos) names += c;
+  cfg.limits.axis_names = names;
+  cfg.machine.axes = n;
 }
 
 }  // namespace
@@ -133,7 +154,7 @@ int main(int argc, char** argv) {
   traj::app::PlanArgs pa;
   traj::app::RunArgs ra;
   traj::app::SimArgs sa;
-  std::vector<double> v_axis, a_axis, j_axis;
+  AxisArgs axes;
   auto* pl = app.add_subcommand("plan", "Plan and compile a path (curve JSON) into a segment stream");
   pl->add_option("path", pa.input,
                  "G-code (.ngc .nc .gcode .tap), SVG, DXF, curve or path JSON (the butterfly format, or "
@@ -164,7 +185,7 @@ int main(int argc, char** argv) {
       "and leaves no output file. (`trajcore run` reads a .jsonl whole: its report and plots are of the whole "
       "path, planned at once.)");
   pl->add_option("--raster", pa.raster, "instead of a file: a synthetic raster toolpath of this many pieces (streamed)");
-  add_limits(pl, pa.cfg, v_axis, a_axis, j_axis);
+  add_limits(pl, pa.cfg, axes);
   add_time_scale(pl, pa.scale);
 
   auto* sm = app.add_subcommand("sim", "Run a segment stream through the Verilated core");
@@ -191,7 +212,7 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
 
   rn->add_option("--out-dir", ra.out_dir, "where to write plan.trj, samples.csv, report.txt, *.svg")->capture_default_str();
-  add_limits(rn, ra.cfg, v_axis, a_axis, j_axis);
+  add_limits(rn, ra.cfg, axes);
   add_time_scale(rn, ra.scale);
 
   traj::app::LinkCommands lc;
@@ -210,14 +231,14 @@ int main(int argc, char** argv) {
     if (*sp) throw std::runtime_error("spline: this trajcore was built without host/bcu (TRAJ_SKIP)");
 #endif
     if (*pl) {
-      apply_axes(pa.cfg, v_axis, a_axis, j_axis);
+      apply_axes(pa.cfg, axes);
       if (pa.scale.on()) traj::app::apply_time_scale_headroom(pa.cfg, pa.scale);
       pa.cfg.machine.choose_format(pa.cfg.limits);
       pa.window_given = window_opt->count() > 0;
       return traj::app::plan_command(pa);
     }
     if (*rn) {
-      apply_axes(ra.cfg, v_axis, a_axis, j_axis);
+      apply_axes(ra.cfg, axes);
       if (ra.scale.on()) traj::app::apply_time_scale_headroom(ra.cfg, ra.scale);
       ra.cfg.machine.choose_format(ra.cfg.limits);
       return traj::app::run_command(ra);

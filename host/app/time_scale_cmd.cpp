@@ -71,7 +71,7 @@ std::string time_scale_text(const TimeScaleArgs& t, const report::Report& rep, c
   for (int a = 0; a < axes; ++a) {
     if (peaks[a].v <= 0) continue;  // the axis does not move
     std::snprintf(buf, sizeof buf, "  plan peaks, axis %c    v %.4g, a %.4g, j %.4g (limits %g, %g, %g; +2 %% for the maxima between ticks)\n",
-                  "xyz"[a], peaks[a].v, peaks[a].a, peaks[a].j, limits[a].v, limits[a].a, limits[a].j);
+                  machine.axis(a)[0], peaks[a].v, peaks[a].a, peaks[a].j, limits[a].v, limits[a].a, limits[a].j);
     s += buf;
   }
   std::snprintf(buf, sizeof buf,

@@ -33,7 +33,7 @@ AllowanceShare allowance_share(const Allowance& al, const plan::Limits& l, int a
   const double sd = std::sqrt(static_cast<double>(axes));
   const bool jerk = degree != 3;
   for (int a = 0; a < axes && a < plan::kMaxAxes; ++a) {
-    const std::string ax(1, "xyzabcuvw"[a]);
+    const std::string ax = l.axis(a);
     take(al.v, l.v_axis[a], "v_" + ax);
     take(al.a, l.a_axis[a], "a_" + ax);
     if (jerk) take(al.j, l.j_axis[a], "j_" + ax);
@@ -48,15 +48,22 @@ AllowanceShare allowance_share(const Allowance& al, const plan::Limits& l, int a
   return w;
 }
 
-std::vector<fd::Format> Machine::carried_formats(int degree) {
+std::vector<fd::Format> Machine::carried_formats(int degree, int axes) {
+  if (axes < 1 || axes > plan::kMaxAxes)
+    throw PlanError(std::to_string(axes) + " axes: the tool carries engines of 1 to " + std::to_string(plan::kMaxAxes));
   // {axes, degree, width, chunk_width, guard_bits, frac_bits}
+  if (axes > 3) {
+    if (degree == 5) return {{8, 5, 96, 16, 48, 32}, {8, 5, 128, 16, 48, 44}};
+    throw PlanError("segment degree " + std::to_string(degree) + " with " + std::to_string(axes) +
+                    " axes: the tool carries 8-axis engines of degree 5 only (--degree 5)");
+  }
   if (degree == 5) return {{3, 5, 96, 16, 48, 32}, {3, 5, 128, 16, 48, 44}};
   if (degree == 3) return {{3, 3, 64, 16, 32, 16}, {3, 3, 96, 16, 48, 32}};
   throw PlanError("segment degree " + std::to_string(degree) + ": the tool carries engines for degree 3 and 5");
 }
 
 fd::Format Machine::format() const {
-  const std::vector<fd::Format> f = carried_formats(degree);
+  const std::vector<fd::Format> f = carried_formats(degree, axes);
   if (build < 0 || build >= static_cast<int>(f.size()))
     throw PlanError("engine build " + std::to_string(build) + " of degree " + std::to_string(degree) +
                     ": the tool carries " + std::to_string(f.size()));
@@ -65,10 +72,10 @@ fd::Format Machine::format() const {
 
 namespace {
 
-AllowanceShare share_of(const fd::Format& f, double period, const plan::Limits& l) {
+AllowanceShare share_of(const fd::Format& f, int axes, double period, const plan::Limits& l) {
   const double lsb = std::ldexp(1.0, -f.frac_bits);
   return allowance_share(sample_allowance(Machine::sample_error_lsb(f) * lsb, Machine::joint_lsb(f) * lsb, period), l,
-                         f.axes, f.degree);
+                         std::min(axes, f.axes), f.degree);
 }
 
 }  // namespace
@@ -76,7 +83,7 @@ AllowanceShare share_of(const fd::Format& f, double period, const plan::Limits& 
 void Machine::choose_format(const plan::Limits& l) {
   l.validate();
   validate();
-  const std::vector<fd::Format> fs = carried_formats(degree);
+  const std::vector<fd::Format> fs = carried_formats(degree, axes);
   if (engine_width != 0) {
     std::string widths;
     for (build = 0; build < static_cast<int>(fs.size()); ++build) {
@@ -88,7 +95,7 @@ void Machine::choose_format(const plan::Limits& l) {
                     std::to_string(degree) + " engines of width " + widths);
   }
   for (build = 0; build + 1 < static_cast<int>(fs.size()); ++build)
-    if (share_of(fs[build], period, l).share <= kAllowanceShare) return;
+    if (share_of(fs[build], axes, period, l).share <= kAllowanceShare) return;
 }
 
 double Machine::output_range() const {

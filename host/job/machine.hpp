@@ -49,6 +49,7 @@ struct Machine {
   // its travel, about +-2e-3).
   double feed_accuracy = 0;
   std::string units = "mm";  // units of the path and of the output LSB
+  int axes = 3;              // axes of the path (3 or fewer: the 3-axis engines; 4..8: the 8-axis ones)
   // Which of the degree's carried engine builds (carried_formats): 0 the
   // narrowest; set by choose_format.
   int build = 0;
@@ -71,8 +72,10 @@ struct Machine {
   //            Axes 3, Width 128, Chunk 16, Guard 48, F 44 (2^-44 units, |x| < 2^35: fine ticks)
   //   cubic:   Axes 3, Width 64, Chunk 16, Guard 32, F 16 (|x| < 32768)
   //            Axes 3, Width 96, Chunk 16, Guard 48, F 32
-  // PlanError if the tool carries no engine of this degree.
-  static std::vector<fd::Format> carried_formats(int degree);
+  //   4 to 8 axes: the quintic formats with Axes 8 (a path's further axes
+  //            idle, at 0)
+  // PlanError if the tool carries no engine of this degree for so many axes.
+  static std::vector<fd::Format> carried_formats(int degree, int axes = 3);
   // The fit keeps absolute coordinates in double precision, so consecutive
   // fitted polynomials meet only to a few ulp (1.4e-14 mm at 100 mm). That is
   // far below the compiler's continuity budget (tol/2 LSB) at 2^-32 units,

@@ -21,9 +21,11 @@ void check_positive(double v, const std::string& name) {
 }  // namespace
 
 void Limits::validate() const {
+  if (axis_names.size() != static_cast<size_t>(kMaxAxes))
+    throw PlanError("axis names '" + axis_names + "': " + std::to_string(kMaxAxes) + " letters expected");
   check_positive(feed, "feed");
   for (int a = 0; a < kMaxAxes; ++a) {
-    const std::string ax = std::string(1, "xyz"[a]);
+    const std::string ax = axis(a);
     check_positive(v_axis[a], "v_axis." + ax);
     check_positive(a_axis[a], "a_axis." + ax);
     check_positive(j_axis[a], "j_axis." + ax);
@@ -807,7 +809,7 @@ double worst_ratio(const Peaks& pk, const Limits& L, int dim, std::string* which
     }
   };
   for (int a = 0; a < dim; ++a) {
-    const std::string ax(1, "xyz"[a]);
+    const std::string ax = L.axis(a);
     chk(pk.v_axis[a], L.v_axis[a], "v_axis." + ax);
     chk(pk.a_axis[a], L.a_axis[a], "a_axis." + ax);
     chk(pk.j_axis[a], L.j_axis[a], "j_axis." + ax);

@@ -50,7 +50,9 @@ class PlanError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-constexpr int kMaxAxes = 3;
+// Axes a path may carry: X Y Z and A B C, U V W as a machine names them
+// (input::AxisSet); the core takes up to 8.
+constexpr int kMaxAxes = 8;
 // Arc-length grid points one plan may hold (PlanOptions::max_grid_ds apart at
 // most, closer where the curve turns): about 1 GB; a path needing more is
 // refused naming the curve (split it: plan --window).
@@ -58,12 +60,16 @@ constexpr double kMaxGridPoints = 4e7;
 
 struct Limits {
   double feed = 50;                        // commanded feed, units/s
-  double v_axis[kMaxAxes] = {200, 200, 200};
-  double a_axis[kMaxAxes] = {2000, 2000, 2000};
-  double j_axis[kMaxAxes] = {50000, 50000, 50000};
+  double v_axis[kMaxAxes] = {200, 200, 200, 200, 200, 200, 200, 200};
+  double a_axis[kMaxAxes] = {2000, 2000, 2000, 2000, 2000, 2000, 2000, 2000};
+  double j_axis[kMaxAxes] = {50000, 50000, 50000, 50000, 50000, 50000, 50000, 50000};
   double a_tan = 1000, j_tan = 20000;      // tangential
   double a_cen = 1000, j_cen = 50000;      // centripetal acceleration and its jerk
   double tol = 1e-3;                       // path tolerance (units): deviation of the output from the curve
+  // The axes' letters in order, for messages and reports: the machine's
+  // (input::AxisSet, e.g. "xyzac"); beyond them the rest of "xyzabcuvw".
+  std::string axis_names = "xyzabcuv";
+  std::string axis(int a) const { return std::string(1, axis_names.at(static_cast<size_t>(a))); }
   // Throws PlanError naming the field if any limit is non-positive or not finite.
   void validate() const;
 };
@@ -157,7 +163,7 @@ class Path {
 struct Frame {
   double s = 0, u = 0;
   size_t curve = 0;
-  double C[kMaxAxes] = {0, 0, 0}, T[kMaxAxes] = {0, 0, 0}, K[kMaxAxes] = {0, 0, 0}, Q[kMaxAxes] = {0, 0, 0};
+  double C[kMaxAxes] = {}, T[kMaxAxes] = {}, K[kMaxAxes] = {}, Q[kMaxAxes] = {};
   double kappa = 0, q_norm = 0;
   double sig[3] = {0, 0, 0};  // parametric speed |C'(u)| and its first two u-derivatives
 };
@@ -212,7 +218,7 @@ void append_ticks_range(const Path& p, const Plan& plan, double period, double t
                         long long k_last, std::vector<TickSample>& out, long long k_origin = 0);
 
 struct Peaks {
-  double v_axis[kMaxAxes] = {0, 0, 0}, a_axis[kMaxAxes] = {0, 0, 0}, j_axis[kMaxAxes] = {0, 0, 0};
+  double v_axis[kMaxAxes] = {}, a_axis[kMaxAxes] = {}, j_axis[kMaxAxes] = {};
   double feed = 0, a_tan = 0, j_tan = 0, a_cen = 0, j_cen = 0;
 };
 Peaks peaks_of(const std::vector<TickSample>& ts, int dim);

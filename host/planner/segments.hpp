@@ -46,7 +46,7 @@ struct TimeSegment {
 // real roots of the next derivative): what the report quotes. The fit decides
 // with the same exact test, skipped where a Bernstein bound already suffices.
 struct SegmentPeaks {
-  double v[kMaxAxes] = {0, 0, 0}, a[kMaxAxes] = {0, 0, 0}, j[kMaxAxes] = {0, 0, 0};
+  double v[kMaxAxes] = {}, a[kMaxAxes] = {}, j[kMaxAxes] = {};
 };
 SegmentPeaks segment_peaks(const TimeSegment& seg, int dim, double period);
 

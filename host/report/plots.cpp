@@ -300,7 +300,7 @@ void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, co
     std::filesystem::create_directories(dir, ec);
     if (ec) throw PlanError("cannot write plots: cannot create directory " + dir + ": " + ec.message());
   }
-  const int d = std::clamp(p.dim(), 1, 3);
+  const int d = std::clamp(p.dim(), 1, kMaxAxes);
   const double h = cfg.machine.period;
   const double lsb = std::ldexp(1.0, -r.header.frac_bits);
   const auto& L = cfg.limits;
@@ -308,8 +308,8 @@ void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, co
   const bool jerk = r.header.degree != 3;  // cubic segments join C1: no jerk claim
   const size_t n = s.v.size();
   auto X = [&](size_t k) {
-    std::array<double, 3> q;
-    for (int a = 0; a < 3; ++a) q[a] = static_cast<double>(s.v[k][a]) * lsb;
+    std::array<double, kMaxAxes> q;
+    for (int a = 0; a < kMaxAxes; ++a) q[a] = static_cast<double>(s.v[k][a]) * lsb;
     return q;
   };
   // quantisation allowance on sample differences, as in make_report
@@ -412,14 +412,14 @@ void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, co
     panels.push_back(P);
   }
   for (int a = 0; a < d; ++a) {
-    const std::string ax(1, "xyz"[a]);
+    const std::string ax = L.axis(a);
     Panel P = panel("a_" + ax, ax + " acceleration", "a_" + ax + " (" + u2 + ")",
                     {plan("plan", [a](const TickSample& t) { return t.ddx[a]; }), out_aa(a)});
     limit_pm(P, L.a_axis[a], "a_" + ax, allow_a);
     panels.push_back(P);
   }
   for (int a = 0; a < d; ++a) {
-    const std::string ax(1, "xyz"[a]);
+    const std::string ax = L.axis(a);
     Panel P = panel("j_" + ax, ax + " jerk", "j_" + ax + " (" + u3 + ")",
                     {plan("plan", [a](const TickSample& t) { return t.dddx[a]; }), out_ja(a)});
     if (jerk)
@@ -458,7 +458,12 @@ void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, co
                              " samples a column), so that no peak is lost."
                        : std::string()),
       panels, 0, T);
-  const std::string path = path_svg(n, X, d, cfg, h, sd * allow_v, scale_feed);
+  // the path in X Y Z (the further axes: their panels)
+  const auto xyz = [&](size_t k) {
+    const auto q = X(k);
+    return std::array<double, 3>{q[0], q[1], q[2]};
+  };
+  const std::string path = path_svg(n, xyz, std::min(d, 3), cfg, h, sd * allow_v, scale_feed);
   write_all({{dir + "/path_feed.svg", path}, {dir + "/profile.svg", prof}});
 }
 

@@ -20,8 +20,8 @@ Samples predicted_samples(const JobResult& r) {
   fd::Compiler comp(r.header.format());
   for (const auto& c : r.compiled)
     for (uint32_t k = 0; k < c.ticks; ++k) {
-      std::array<long long, 3> v{};
-      for (int a = 0; a < std::min(3, r.header.axes); ++a) v[a] = comp.sample_at(c, a, k).get_si();
+      Sample v{};
+      for (int a = 0; a < std::min(kMaxAxes, r.header.axes); ++a) v[a] = comp.sample_at(c, a, k).get_si();
       s.v.push_back(v);
     }
   return s;
@@ -106,14 +106,14 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
   }
   // output samples
   const size_t n = s.v.size();
-  std::vector<std::array<double, 3>> x(n);
+  std::vector<std::array<double, kMaxAxes>> x(n);
   for (size_t k = 0; k < n; ++k)
-    for (int a = 0; a < 3; ++a) x[k][a] = static_cast<double>(s.v[k][a]) * lsb;
+    for (int a = 0; a < kMaxAxes; ++a) x[k][a] = static_cast<double>(s.v[k][a]) * lsb;
   // distance to the exact curve: Newton on (C(u) - x).C'(u) = 0 from the planned u
   for (size_t k = 0; k < n && k < r.ticks.size(); ++k) {
     const geo::Curve& c = p.curve(r.ticks[k].curve);
     double u = r.ticks[k].u;
-    double buf[9];
+    double buf[3 * kMaxAxes];
     for (int it = 0; it < 8; ++it) {
       c.eval(u, 2, buf);
       double f = 0, fp = 0;
@@ -189,9 +189,9 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
   // first tick, rounded at the scale of the window's travel (absolute
   // coordinates would round the fitted polynomials' third differences to
   // noise at 1 us ticks).
-  auto sampled_peaks = [&](const std::vector<std::array<double, 3>>& step, double min_chord, Peaks& pk) {
+  auto sampled_peaks = [&](const std::vector<std::array<double, kMaxAxes>>& step, double min_chord, Peaks& pk) {
     for (size_t k = 0; k + 1 < step.size(); ++k) {
-      double p[4][3] = {};
+      double p[4][kMaxAxes] = {};
       const size_t m = std::min<size_t>(3, step.size() - k);
       for (size_t i = 0; i < m; ++i)
         for (int a = 0; a < d; ++a) p[i + 1][a] = p[i][a] + step[k + i][a];
@@ -203,7 +203,7 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
     }
   };
   {
-    std::vector<std::array<double, 3>> step(n > 0 ? n - 1 : 0);
+    std::vector<std::array<double, kMaxAxes>> step(n > 0 ? n - 1 : 0);
     for (size_t k = 0; k + 1 < n; ++k)
       for (int a = 0; a < d; ++a) step[k][a] = x[k + 1][a] - x[k][a];  // exact: samples are integers of LSBs
     sampled_peaks(step, 16 * lsb, rep.out_peaks);
@@ -211,12 +211,12 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
   {
     // each segment's steps from its travel (q(tau) - q(0)); a join's step is
     // the rest of one segment's travel, the next one starting where it ends
-    std::vector<std::array<double, 3>> step;
+    std::vector<std::array<double, kMaxAxes>> step;
     step.reserve(n);
     for (const auto& sg : r.segments) {
-      double prev[3] = {};
+      double prev[kMaxAxes] = {};
       for (uint32_t k = 1; k <= sg.K; ++k) {
-        std::array<double, 3> q{};
+        std::array<double, kMaxAxes> q{};
         for (int a = 0; a < d; ++a) {
           const double t = sg.travel(a, k * h);
           q[a] = t - prev[a];
@@ -238,7 +238,7 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
     }
   };
   for (int a = 0; a < d; ++a) {
-    const std::string ax(1, "xyz"[a]);
+    const std::string ax = cfg.limits.axis(a);
     chk(rep.out_peaks.v_axis[a], rep.allow_v, cfg.limits.v_axis[a], "v_axis." + ax);
     chk(rep.out_peaks.a_axis[a], rep.allow_a, cfg.limits.a_axis[a], "a_axis." + ax);
     if (jerk_claimed) chk(rep.out_peaks.j_axis[a], rep.allow_j, cfg.limits.j_axis[a], "j_axis." + ax);
@@ -300,9 +300,9 @@ std::string report_text(const JobConfig& cfg, const Report& rep, const JobResult
     << (cfg.machine.feed_accuracy > 0 ? "  (--feed-accuracy " + fmt("%g", cfg.machine.feed_accuracy) + ")" : std::string())
     << "\n";
   o << "Limits            limit       plan peak   fit peak    output peak (sample differences)\n";
-  for (int a = 0; a < 3; ++a) {
+  for (int a = 0; a < kMaxAxes; ++a) {
     if (rep.plan_peaks.v_axis[a] == 0 && rep.out_peaks.v_axis[a] == 0) continue;
-    const std::string ax(1, "xyz"[a]);
+    const std::string ax = L.axis(a);
     o << "  v_" << ax << "           " << fmt("%10.4g", L.v_axis[a]) << "  " << fmt("%10.4g", rep.plan_peaks.v_axis[a])
       << "  " << fmt("%10.4g", rep.fit_peaks.v_axis[a]) << "  " << fmt("%10.4g", rep.out_peaks.v_axis[a]) << "\n";
     o << "  a_" << ax << "           " << fmt("%10.4g", L.a_axis[a]) << "  " << fmt("%10.4g", rep.plan_peaks.a_axis[a])

@@ -12,8 +12,10 @@
 namespace traj::report {
 
 // The core's output, as integers per tick and axis (OutWidth <= 63 bits).
+// One output sample: a value per axis (LSB), the axes beyond the stream's 0.
+using Sample = std::array<long long, plan::kMaxAxes>;
 struct Samples {
-  std::vector<std::array<long long, 3>> v;
+  std::vector<Sample> v;
 };
 
 struct Report {

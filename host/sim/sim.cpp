@@ -154,7 +154,7 @@ template <class B, class F, class Ticks, class OnSample>
 void clock_stream(F& f, Ticks ticks, SimResult& res, const std::function<void(double)>& progress,
                   const SampleSink& sink, OnSample on_sample) {
   using M = builds::ModelOf<B>;
-  static_assert(B::Axes == 3, "report::Samples holds three axes");
+  static_assert(B::Axes <= plan::kMaxAxes, "report::Sample holds up to kMaxAxes axes");
   // The RTL on a second thread, compared with the model cycle by cycle; the
   // model's ports drive the run (equal to the RTL's unless a mismatch is
   // counted).
@@ -186,7 +186,7 @@ void clock_stream(F& f, Ticks ticks, SimResult& res, const std::function<void(do
     res.tick_err |= o.tick_err;
     if (o.sample_valid) ticks.sampled();
     if (o.sample_valid && !o.underrun) {
-      std::array<long long, 3> s{};
+      report::Sample s{};
       for (int a = 0; a < B::Axes; ++a) s[a] = static_cast<long long>(sext(o.sample[a], M::kOutWidth));
       on_sample(s, o.seg_done);
       if (sink)
@@ -206,7 +206,7 @@ void clock_stream(F& f, Ticks ticks, SimResult& res, const std::function<void(do
 
 #if TRAJ_APP_CORE
 struct Expect {
-  std::array<long long, 3> v;
+  report::Sample v;
   bool done;
 };
 
@@ -304,14 +304,14 @@ SimResult run(const stream::Header& h, const Source& src, int tick_gap, const st
     Feed f = core_feed<B>(h, src.records, res);
     Prediction<B> expect(src.records, h.bcu_format());
     clock_stream<B>(f, GapAfterFirstSegment{static_cast<uint64_t>(tick_gap), f.first_len}, res, progress, sink,
-                    [&](const std::array<long long, 3>& s, bool done) {
+                    [&](const report::Sample& s, bool done) {
                       const Expect e = expect.next();
                       if (s != e.v || done != e.done) ++res.prediction_mismatches;
                     });
 #endif
   } else if (src.pull) {
     PulledFeed f(h, src.pull, src.expected);
-    const auto none = [](const std::array<long long, 3>&, bool) {};
+    const auto none = [](const report::Sample&, bool) {};
     if (paced)
       clock_stream<B>(f, AfterEachSample{f.first_segment_words()}, res, progress, sink, none);
     else
@@ -319,7 +319,7 @@ SimResult run(const stream::Header& h, const Source& src, int tick_gap, const st
   } else {
     Feed f = fd_feed(h, src.records);
     clock_stream<B>(f, EveryGap{static_cast<uint64_t>(tick_gap)}, res, progress, sink,
-                    [](const std::array<long long, 3>&, bool) {});
+                    [](const report::Sample&, bool) {});
   }
   return res;
 }

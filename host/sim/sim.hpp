@@ -36,7 +36,7 @@ struct SimResult {
 
 // Receives every sample in tick order instead of SimResult::samples: the
 // simulation then holds nothing per tick (memory bounded whatever K is).
-using SampleSink = std::function<void(uint64_t tick, const std::array<long long, 3>& sample)>;
+using SampleSink = std::function<void(uint64_t tick, const report::Sample& sample)>;
 
 // Pulls the next record of a stream: false at its end.
 using RecordPull = std::function<bool(stream::Record&)>;
