@@ -52,7 +52,7 @@ int g_group(int g) {
     case 170: case 180: case 190: return 2;
     case 900: case 910: return 3;
     case 901: case 911: return 4;
-    case 940: return 5;
+    case 930: case 940: return 5;
     case 200: case 210: return 6;
     case 400: return 7;
     case 430: case 490: return 8;
@@ -71,8 +71,7 @@ std::string g_refusal(int g) {
     return "work offsets are not supported (only G54, the default work offset)";
   if (g >= 920 && g <= 923) return "coordinate offsets (G92) are not supported";
   if (g == 530) return "machine coordinates (G53) are not supported";
-  if (g == 930) return "inverse-time feed mode is not supported (only G94, units per minute)";
-  if (g == 950) return "feed per revolution is not supported (only G94, units per minute)";
+  if (g == 950) return "feed per revolution is not supported (only G93 inverse time and G94 units per minute)";
   if ((g >= 810 && g <= 890) || g == 730 || g == 740 || g == 760) return "canned cycles are not supported";
   if (g == 40) return "dwell is not supported";
   if (g == 281 || g == 301) return "storing the reference point (G28.1/G30.1) is not supported";
@@ -152,7 +151,8 @@ class Interpreter {
   int plane_ = 170;
   Motion motion_ = Motion::kNone;
   std::string motion_text_ = "";
-  double feed_ = 0;  // the F number, program units per minute
+  double feed_ = 0;  // the F number, program units per minute (G93: moves per minute)
+  bool inverse_time_ = false;  // G93: each feed move takes 60 / F seconds
   double tolerance_ = -1;
   bool exact_stop_ = false;
   double g5_i_ = 0, g5_j_ = 0;  // a G5 without I J continues the previous one's direction
@@ -256,7 +256,12 @@ class Interpreter {
     };
 
     // LinuxCNC's order of execution within a block.
-    if (g_in(5)) note("G94", g_text(940), "units-per-minute feed mode (the only one supported) accepted");
+    // G93/G94 set the mode and, as in LinuxCNC, the feed rate to 0 (F after
+    // them in the same block sets it)
+    if (auto g = g_in(5)) {
+      inverse_time_ = *g == 930;
+      feed_ = 0;
+    }
     if (has('F')) {
       const double f = value('F');
       if (f < 0) fail(text('F'), "negative feed rate");
@@ -444,7 +449,14 @@ class Interpreter {
     return e;
   }
 
+  // The programmed feed of X Y Z or U V W (mm/s); in G93 its F is checked
+  // here and the feed made from the move's length (feed_measure).
   double feed_mm_s(const std::string& word) const {
+    if (inverse_time_) {
+      if (!has('F')) fail(word, "F word missing: in inverse-time mode (G93) every feed move needs its own F");
+      if (feed_ <= 0) fail(text('F'), "in inverse-time mode (G93) F must be positive (the move takes 1/F minutes)");
+      return 0;
+    }
     if (feed_ <= 0) fail(word, "no feed rate: program F (units per minute) before the first feed move");
     return feed_ * units_ / 60.0;
   }
@@ -452,9 +464,10 @@ class Interpreter {
   // The move's length in all axes over the length its feed measures
   // (Move::feed_scale), and the programmed feed in that measure's units/s:
   // F of X Y Z (length xyz, mm) when they move, else of U V W, else of A B C
-  // (degrees a minute, whatever the length units). The further axes move
-  // linearly with the move's progress (xyz: the XYZ length of a line, of a
-  // circle or a helix; the further axes' share is exact for those).
+  // (degrees a minute, whatever the length units); in G93 that length over
+  // the move's time, 60 / F s (rs274 prints this feed too). The further axes
+  // move linearly with the move's progress (xyz: the XYZ length of a line,
+  // of a circle or a helix; the further axes' share is exact for those).
   std::pair<double, double> feed_measure(double xyz, double feed_mm_s) const {
     double uvw = 0, abc = 0;
     for (size_t i = 0; i < further_.size(); ++i) {
@@ -462,11 +475,11 @@ class Interpreter {
       const char c = further_[i];
       ((c == 'A' || c == 'B' || c == 'C') ? abc : uvw) += d * d;
     }
-    if (uvw == 0 && abc == 0) return {1.0, feed_mm_s};
-    const double all = std::sqrt(xyz * xyz + uvw + abc);
-    if (xyz > 0) return {all / xyz, feed_mm_s};
-    if (uvw > 0) return {all / std::sqrt(uvw), feed_mm_s};
-    return {all / std::sqrt(abc), feed_ / 60.0};
+    const bool angular = xyz == 0 && uvw == 0 && abc > 0;
+    const double measured = (xyz > 0 || (uvw == 0 && abc == 0)) ? xyz : uvw > 0 ? std::sqrt(uvw) : std::sqrt(abc);
+    const double scale = measured > 0 ? std::sqrt(xyz * xyz + uvw + abc) / measured : 1.0;
+    if (inverse_time_) return {scale, measured * feed_ / 60.0};
+    return {scale, angular ? feed_ / 60.0 : feed_mm_s};
   }
 
   // A move of X Y Z (`curve`, 3-D) with the further axes from ext_ to
@@ -634,6 +647,7 @@ class Interpreter {
   }
 
   void spline(const Vector3d& e, const std::string& word) {
+    if (inverse_time_) fail(word, "splines (G5, G5.1) in inverse-time mode (G93) are not supported");
     if (plane_ != 170) fail(word, "splines must be in the XY plane (G17)");
     if (has('Z')) fail(text('Z'), "splines (G5, G5.1) may not move Z");
     refuse_further_axes("splines (G5, G5.1)");
@@ -671,6 +685,7 @@ class Interpreter {
   // A G5.2 block: the first one starts the NURBS at the current point.
   void nurbs_point(bool explicit_g) {
     const std::string word = explicit_g ? motion_text_ : "G5.2 (modal)";
+    if (inverse_time_) fail(word, "NURBS (G5.2) in inverse-time mode (G93) are not supported");
     if (plane_ != 170) fail(word, "NURBS (G5.2) must be in the XY plane (G17)");
     if (has('Z')) fail(text('Z'), "NURBS (G5.2) control points are in X and Y only");
     refuse_further_axes("NURBS (G5.2)");

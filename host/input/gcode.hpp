@@ -6,13 +6,14 @@
 // Acted on: G0 G1 G2 G3 (centre I J K or R, helical, P turns, planes
 // G17/G18/G19; the further axes A B C U V W of GcodeOptions::axes move
 // linearly with lines and arcs), G5 G5.1 G5.2/G5.3, G20/G21, G90/G91, G90.1/G91.1,
-// G61/G61.1/G64 P, F (units per minute), G28/G30 (to the machine origin:
+// G61/G61.1/G64 P, F (units per minute; G93 inverse time: each G1 G2 G3 takes
+// 1/F minutes, F on every one; G93 and G94 set the feed to 0, as in LinuxCNC), G28/G30 (to the machine origin:
 // LinuxCNC's parameters 5161-5166 and 5181-5186 at their default 0), G43 H
 // (with a tool table; the moves are then of the tool's holder, the
 // program's Z plus the length) and G49, T with M6 (the tool G43 without H
 // takes), comments, N, '/', '%', M2/M30.
 // Accepted with a note: S, M3/M4/M5, M7/M8/M9, T, M6, G40, G54, G80,
-// G94, G64 Q. Everything else is refused with one InputError
+// G64 Q. Everything else is refused with one InputError
 // "<file>:<line>: <word>: <why>".
 //
 // The program starts at X0 Y0 Z0 (as rs274 does) and ends at M2, M30 or the

@@ -24,8 +24,10 @@ input::Toolpath blend_toolpath(const input::Toolpath& tp, double tol, double sha
 }
 
 double rapid_speed(const JobConfig& cfg, int axes, const ToolpathOptions& o) {
+  // of X Y Z only: the further axes (A B C in degrees) keep their own limits
+  // through the planner's per-axis bounds, without slowing rapids of X Y Z
   double v_axis_min = cfg.limits.v_axis[0];
-  for (int a = 1; a < axes && a < plan::kMaxAxes; ++a) v_axis_min = std::min(v_axis_min, cfg.limits.v_axis[a]);
+  for (int a = 1; a < axes && a < 3; ++a) v_axis_min = std::min(v_axis_min, cfg.limits.v_axis[a]);
   return o.rapid > 0 ? o.rapid : v_axis_min;
 }
 

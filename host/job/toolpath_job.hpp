@@ -5,8 +5,11 @@
 //   feed move   its programmed feed (F / 60), or the job's feed where the file
 //               programs none (SVG, DXF);
 //   rapid       the rapid speed (ToolpathOptions::rapid; by default the
-//               smallest per-axis velocity limit, which every direction can
-//               take);
+//               smallest velocity limit of X Y Z, which every direction can
+//               take; a further axis's own limit binds through the
+//               planner's per-axis bounds);
+//   feed move   with further axes: F of X Y Z, else U V W, else A B C
+//               (input::Move::feed_scale);
 //   exact stop  the speed is 0 at the end of a move that asks for it (every
 //               rapid, G61): a cap of speed 0 over the junction point.
 // The planner's own speed limit (Limits::feed) becomes the largest of these
@@ -31,7 +34,7 @@ namespace traj::job {
 
 struct ToolpathOptions {
   input::GcodeOptions gcode;  // the reader's (the tool table G43 takes lengths from)
-  double rapid = 0;   // mm/s; 0: the smallest per-axis velocity limit
+  double rapid = 0;   // mm/s; 0: the smallest velocity limit of X Y Z (the further axes' own limits hold through the planner)
   bool blend = true;  // blend the corners between feed moves (host/corners)
   double blend_share = 0.9;  // share of the tolerance for the blends; the fit gets the rest
 };

@@ -76,7 +76,9 @@ int jsonl(const uint8_t* data, std::size_t size) {
 int gcode(const uint8_t* data, std::size_t size) {
   return guarded([&] {
     std::istringstream in(text(data, size));
-    input::read_gcode(in, "fuzz.ngc");
+    input::GcodeOptions opt;
+    opt.axes = "XYZABCUV";  // every axis word a machine may have is read (8 axes: the core's)
+    input::read_gcode(in, "fuzz.ngc", opt);
   });
 }
 

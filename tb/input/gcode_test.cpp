@@ -181,7 +181,7 @@ TEST(Gcode, Splines) {
 
 TEST(Gcode, PathControlAndNotes) {
   const Toolpath t = read(
-      "F100 S1000 M3 M8 T1 M6\nG40 G49 G54 G80 G94 G17\nG64 P0.01 Q0.02\nG1 X1\nG61\nG1 X2\nG61.1 G1 X3\n"
+      "S1000 M3 M8 T1 M6\nG40 G49 G54 G80 G94 G17\nG64 P0.01 Q0.02 F100\nG1 X1\nG61\nG1 X2\nG61.1 G1 X3\n"
       "G64 G1 X4\nM5 M9\nM2\n");
   ASSERT_EQ(t.moves.size(), 4u);
   EXPECT_DOUBLE_EQ(t.moves[0].tolerance, 0.01);
@@ -192,9 +192,9 @@ TEST(Gcode, PathControlAndNotes) {
   EXPECT_LT(t.moves[3].tolerance, 0);
   std::string all;
   for (const auto& n : t.notes) all += n + "\n";
-  for (const char* kind : {"S1000", "M3", "M8", "T1", "M6", "G40", "G54", "G80", "G94", "Q0.02"})
+  for (const char* kind : {"S1000", "M3", "M8", "T1", "M6", "G40", "G54", "G80", "Q0.02"})
     EXPECT_NE(all.find(std::string(": ") + kind + ":"), std::string::npos) << kind << "\n" << all;
-  EXPECT_EQ(t.notes.size(), 10u);  // G49 is acted on (no tool length offset to take off here)  // once per kind (M5, M9 are not noted again)
+  EXPECT_EQ(t.notes.size(), 9u);  // G49 is acted on (no tool length offset to take off here)  // once per kind (M5, M9 are not noted again)
 }
 
 TEST(Gcode, Refusals) {
@@ -210,8 +210,11 @@ TEST(Gcode, Refusals) {
       {"G0 G28 X1\nM2\n", "t.ngc:1: G28: two G codes that both use the axis words (G0)"},
       {"G55\nM2\n", "t.ngc:1: G55: work offsets are not supported (only G54, the default work offset)"},
       {"G92 X0\nM2\n", "t.ngc:1: G92: coordinate offsets (G92) are not supported"},
-      {"G93\nM2\n", "t.ngc:1: G93: inverse-time feed mode is not supported (only G94, units per minute)"},
-      {"G95\nM2\n", "t.ngc:1: G95: feed per revolution is not supported (only G94, units per minute)"},
+      {"G93\nG1 X1\nM2\n", "t.ngc:2: G1: F word missing: in inverse-time mode (G93) every feed move needs its own F"},
+      {"G93 G1 X1 F0\nM2\n", "t.ngc:1: F0: in inverse-time mode (G93) F must be positive (the move takes 1/F minutes)"},
+      {"F600\nG94\nG1 X1\nM2\n", "t.ngc:3: G1: no feed rate: program F (units per minute) before the first feed move"},
+      {"G93 G5 X1 Y1 I0 J1 P0 Q1 F2\nM2\n", "t.ngc:1: G5: splines (G5, G5.1) in inverse-time mode (G93) are not supported"},
+      {"G95\nM2\n", "t.ngc:1: G95: feed per revolution is not supported (only G93 inverse time and G94 units per minute)"},
       {"G81 X1 Y1 Z-1 R1 F10\nM2\n", "t.ngc:1: G81: canned cycles are not supported"},
       {"F100\nG2 X20.029 Y0 I10 J0\nM2\n",
        "t.ngc:2: G2: radius to the end differs from radius to the start: 10 and 10.029 (more than 0.0282843 and 0.1%)"},
@@ -381,4 +384,29 @@ TEST(Gcode, FurtherAxesRefusals) {
   EXPECT_EQ(end_of4(tp.moves[1]), Eigen::Vector4d(0, 0, 0, 0));
   EXPECT_EQ(end_of4(tp.moves[3]), Eigen::Vector4d(2, 0, 0, 5));   // to A5 first
   EXPECT_EQ(end_of4(tp.moves[4]), Eigen::Vector4d(2, 0, 0, 0));   // then A home, X stays
+}
+
+// G93, inverse time: each feed move takes 60 / F s, whatever its length and
+// axes (the feed it gives is its measured length over that time, as rs274
+// prints it); G93 and G94 set the feed rate to 0, as in LinuxCNC.
+TEST(Gcode, InverseTimeFeeds) {
+  traj::input::GcodeOptions opt;
+  opt.axes = "XYZA";
+  const Toolpath tp = read(
+      "G21 G90 F600\n"
+      "G93 G1 X30 Y40 A90 F2\n"     // 50 mm of X Y in 30 s
+      "G2 X50 Y40 I10 J0 F6\n"      // a half circle of 10 mm radius in 10 s
+      "G1 A180 F4\n"                // A alone: 90 degrees in 15 s
+      "G0 X0\n"
+      "G94 G1 X5 F300\n"            // back to units per minute
+      "M2\n",
+      opt);
+  ASSERT_EQ(tp.moves.size(), 5u);
+  const double l0 = std::sqrt(50.0 * 50 + 90.0 * 90);
+  EXPECT_NEAR(tp.moves[0].feed, l0 / 30, 1e-12);  // the path (all axes) in 30 s
+  EXPECT_NEAR(tp.moves[0].feed / tp.moves[0].feed_scale * 60, 100, 1e-9);  // rs274: 50 mm / 0.5 min
+  EXPECT_NEAR(tp.moves[1].feed, 10 * kPi / 10, 1e-9);
+  EXPECT_NEAR(tp.moves[2].feed, 90.0 / 15, 1e-12);
+  EXPECT_EQ(tp.moves[3].kind, Move::Kind::kRapid);
+  EXPECT_NEAR(tp.moves[4].feed, 5.0, 1e-12);
 }
