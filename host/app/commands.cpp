@@ -183,16 +183,10 @@ input::GcodeOptions gcode_options(const std::string& tool_table, const job::JobC
   return o;
 }
 
-// --axes names a G-code program's axes; other paths carry their own (2 or 3).
-void check_axes_for(input::FileKind kind, const job::JobConfig& cfg) {
-  if (kind != input::FileKind::kGcode && cfg.machine.axes > 3)
-    throw PlanError("--axes with more than X Y Z is for G-code programs (SVG, DXF and JSON paths carry 2 or 3 axes)");
-}
 
 Loaded load(const std::string& file, const std::string& format, const std::string& tool_table,
             const job::JobConfig& cfg) {
   const input::FileKind kind = input::file_kind(file, format);
-  check_axes_for(kind, cfg);
   if (kind == input::FileKind::kJsonl) return {load_jsonl(file), cfg, {}};
   if (!input::is_toolpath(kind)) return {input::load_path(file), cfg, {}};
   const input::Toolpath tp = input::read_toolpath(file, kind, gcode_options(tool_table, cfg));
@@ -234,7 +228,6 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
   } else if (input::is_toolpath(input::file_kind(a.input, a.format))) {
     // G-code read a line at a time as the windows need curves, blended in chunks
     job::ToolpathOptions to;
-    check_axes_for(input::file_kind(a.input, a.format), a.cfg);
     to.gcode = gcode_options(a.tool_table, a.cfg);
     toolpath = std::make_unique<job::ToolpathStream>(a.input, input::file_kind(a.input, a.format), a.cfg, to);
     cfg = toolpath->config();

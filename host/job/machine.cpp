@@ -104,6 +104,9 @@ double Machine::output_range() const {
 }
 
 void Machine::check_range(const geo::BSpline& c, const std::string& where) const {
+  if (c.ctrl.cols() > axes)
+    throw PlanError(where + ": " + std::to_string(c.ctrl.cols()) + " axes, more than the machine's " +
+                    std::to_string(axes) + " (name them with --axes, e.g. XYZA for 4)");
   const double range = output_range();
   if (!(c.ctrl.size() > 0) || c.ctrl.cwiseAbs().maxCoeff() < range) return;
   const geo::Curve curve(c, where);

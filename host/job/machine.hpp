@@ -113,8 +113,8 @@ struct Machine {
   // The largest |coordinate| the output holds: 2^(out_width-1-frac_bits) units
   // (32768 mm for the quintic engine).
   double output_range() const;
-  // Refuses, before any planning, a curve that reaches outside the output
-  // range: plan::PlanError("<where>: axis A leaves the output range: |x|
+  // Refuses, before any planning, a curve of more axes than the machine's
+  // (`axes`, --axes), and one that reaches outside the output range: plan::PlanError("<where>: axis A leaves the output range: |x|
   // reaches X units, the format holds |x| < R (...)"), the compiler's message
   // for a segment. The curve lies in the hull of its control points, so only
   // a curve with a control point outside is evaluated (at its span ends and
