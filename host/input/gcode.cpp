@@ -36,7 +36,15 @@ constexpr double kSpiralAbsInch = 2 * 0.001 * 1.41421356237309504880;
 constexpr double kSpiralAbsMm = 2 * 0.01 * 1.41421356237309504880;
 constexpr double kSpiralRel = 0.001;
 
-enum class Motion { kNone, kRapid, kLine, kCw, kCcw, kCubic, kQuadratic, kNurbs };
+enum class Motion { kNone, kRapid, kLine, kCw, kCcw, kCubic, kQuadratic, kNurbs, kDrill, kPeck, kChipBreak };
+
+// LinuxCNC's clearance of G83/G73 above the last peck's depth: 0.010 inch,
+// 0.254 mm (rs274 2.9 rapids to 0.254 mm above it in mm programs too).
+constexpr double kPeckClearanceMm = 0.254;
+// Repeats of one canned-cycle block (L), and pecks of one hole (G73, G83):
+// more is no toolpath, and the moves of one block are held until taken.
+constexpr int kMaxCycleRepeats = 10000;
+constexpr double kMaxPecks = 100000;
 
 // Tool numbers (T, H, a tool table's T) are held as int: checked before the conversion.
 constexpr double kMaxTool = 1e9;
@@ -48,7 +56,9 @@ int tenths(double v) { return static_cast<int>(std::lround(v * 10)); }
 // Modal group of an accepted G code, or -1.
 int g_group(int g) {
   switch (g) {
-    case 0: case 10: case 20: case 30: case 50: case 51: case 52: case 53: case 800: return 1;
+    case 0: case 10: case 20: case 30: case 50: case 51: case 52: case 53: case 800: case 730: case 810: case 830:
+      return 1;
+    case 980: case 990: return 10;
     case 170: case 180: case 190: return 2;
     case 900: case 910: return 3;
     case 901: case 911: return 4;
@@ -72,7 +82,8 @@ std::string g_refusal(int g) {
   if (g >= 920 && g <= 923) return "coordinate offsets (G92) are not supported";
   if (g == 530) return "machine coordinates (G53) are not supported";
   if (g == 950) return "feed per revolution is not supported (only G93 inverse time and G94 units per minute)";
-  if ((g >= 810 && g <= 890) || g == 730 || g == 740 || g == 760) return "canned cycles are not supported";
+  if ((g >= 820 && g <= 890) || g == 740 || g == 760)
+    return "canned cycles other than G73, G81 and G83 are not supported (dwell, feed-out, tapping, boring)";
   if (g == 40) return "dwell is not supported";
   if (g == 281 || g == 301) return "storing the reference point (G28.1/G30.1) is not supported";
   if (g >= 330 && g <= 331) return "spindle-synchronised motion is not supported";
@@ -159,6 +170,16 @@ class Interpreter {
   // Tool length offset (G43): positions are of the tool's holder, the
   // program's Z plus the length (pos_ holds them so).
   double tlo_ = 0;
+  // Canned cycles (G73, G81, G83): the retract mode (G98: to the Z before
+  // the block, if above R) and the R, Z, Q words kept from block to block,
+  // in program units as written (LinuxCNC's cycle_r, cycle_z, cycle_q),
+  // only while the same cycle goes on (a block that starts a cycle, after
+  // another motion or G80, needs its own: rs274 refuses it otherwise).
+  bool retract_old_z_ = false;  // G99 until G98, as rs274 starts
+  bool same_cycle_ = true;    // this block continues the cycle in effect before it
+  bool cycle_fresh_ = false;  // this block starts cycles after another motion or G80
+  std::optional<double> cycle_r_, cycle_z_, cycle_q_;
+  double cycle_level_ = 0;    // the Z where the cycles started (G98's plane; G91's base of R)
   std::optional<int> selected_tool_, loaded_tool_;  // T; T at the last M6
 
   // An open G5.2 NURBS: control points (mm) and weights, its order and place.
@@ -293,6 +314,9 @@ class Interpreter {
     if (auto g = g_in(13)) path_control(*g, g_text(*g));
     if (auto g = g_in(3)) absolute_ = *g == 900;
     if (auto g = g_in(4)) ijk_absolute_ = *g == 901;
+    if (auto g = g_in(10)) retract_old_z_ = *g == 980;
+    same_cycle_ = true;
+    cycle_fresh_ = false;
     const std::optional<int> mg = g_in(1);
     if (mg) set_motion(*mg, g_text(*mg));
     if (auto g = g_in(0)) {
@@ -395,7 +419,6 @@ class Interpreter {
 
   void set_motion(int g, const std::string& t) {
     if (g == 800) {
-      note("G80", t, "canned cycle cancel (no cycle is active) accepted");
       if (nurbs_) fail(t, "G5.2 NURBS not closed with G5.3");
       motion_ = Motion::kNone;
       return;
@@ -405,8 +428,12 @@ class Interpreter {
       return;
     }
     if (nurbs_ && g != 52) fail(t, "G5.2 NURBS not closed with G5.3");
+    const Motion before = motion_;
     motion_ = g == 0 ? Motion::kRapid : g == 10 ? Motion::kLine : g == 20 ? Motion::kCw : g == 30 ? Motion::kCcw
-            : g == 50 ? Motion::kCubic : g == 51 ? Motion::kQuadratic : Motion::kNurbs;
+            : g == 50 ? Motion::kCubic : g == 51 ? Motion::kQuadratic : g == 52 ? Motion::kNurbs
+            : g == 810 ? Motion::kDrill : g == 830 ? Motion::kPeck : Motion::kChipBreak;
+    same_cycle_ = motion_ == before;
+    cycle_fresh_ = is_cycle(motion_) && !is_cycle(before);
     motion_text_ = t;
   }
 
@@ -506,6 +533,10 @@ class Interpreter {
       nurbs_point(explicit_g);
       return;
     }
+    if (is_cycle(motion_)) {
+      if (any_axis()) canned_cycle(word);  // a block with an axis word runs it (with R alone rs274 refuses R)
+      return;
+    }
     const bool arc_mode = motion_ == Motion::kCw || motion_ == Motion::kCcw;
     if (!any_axis()) {
       // LinuxCNC: a centre-format arc without end point words is a full circle back to the start.
@@ -541,6 +572,92 @@ class Interpreter {
     }
     pos_ = e;
     ext_ = ext_end_;
+  }
+
+  static bool is_cycle(Motion m) { return m == Motion::kDrill || m == Motion::kPeck || m == Motion::kChipBreak; }
+
+  // G81 (drill), G83 (peck: back to R after each peck) and G73 (chip
+  // break: a short retract after each), as rs274 expands them (in G17; the
+  // rules are its, found by running it on programs written for it, 60 of
+  // them random): the cycles keep a level L, the Z where they start after
+  // another motion or G80; in G91 R is relative to L and Z to R. A block
+  // whose R is above L first rises to R at the tool's X Y. Per hole (L
+  // times; in G91 X Y are increments): a rapid to the hole's X Y at the
+  // tool's Z (rising to the clear plane on the way when not above R), a
+  // rapid down to R, the feed down (in pecks of Q, each after the first
+  // begun by a rapid to 0.254 mm above the last depth, G83 from R), and a
+  // rapid up to the clear plane (G98: the higher of L and R; G99: R). The
+  // moves run in exact-path mode, as in LinuxCNC.
+  void canned_cycle(const std::string& word) {
+    if (plane_ != 170) fail(word, "canned cycles are supported in the XY plane (G17) only");
+    if (inverse_time_) fail(word, "canned cycles in inverse-time mode (G93) are not supported");
+    refuse_further_axes("canned cycles");
+    const double f = feed_mm_s(word);
+    if (!same_cycle_) cycle_r_.reset(), cycle_z_.reset(), cycle_q_.reset();
+    if (has('R')) cycle_r_ = value('R');
+    if (has('Z')) cycle_z_ = value('Z');
+    if (!cycle_r_) fail(word, "R word missing (the retract plane of the cycle)");
+    if (!cycle_z_) fail(word, "Z word missing (the bottom of the hole)");
+    if (motion_ != Motion::kDrill && has('Q')) {  // G81 takes no Q (rs274 refuses it)
+      const double q = value('Q');
+      if (!(q > 0)) fail(text('Q'), "the peck depth Q must be positive");
+      cycle_q_ = q;
+    }
+    if (motion_ != Motion::kDrill && !cycle_q_) fail(word, "Q word missing (the peck depth)");
+    int repeats = 1;
+    if (has('L')) {
+      const double l = value('L');
+      if (l != std::floor(l) || l < 1 || l > kMaxCycleRepeats)
+        fail(text('L'), "the repeat count L must be a whole number from 1 to " + std::to_string(kMaxCycleRepeats));
+      repeats = static_cast<int>(l);
+    }
+    if (cycle_fresh_) cycle_level_ = pos_[2];
+    const double r = absolute_ ? *cycle_r_ * units_ + tlo_ : cycle_level_ + *cycle_r_ * units_;
+    const double bottom = absolute_ ? *cycle_z_ * units_ + tlo_ : r + *cycle_z_ * units_;
+    if (bottom > r) fail(word, "the bottom of the hole (Z) is above the retract plane (R)");
+    if (motion_ != Motion::kDrill && !((r - bottom) / (*cycle_q_ * units_) <= kMaxPecks))
+      fail(word, "the peck depth Q makes more than " + fmt_num(kMaxPecks) + " pecks in one hole");
+    const double x = has('X') ? value('X') * units_ : 0, y = has('Y') ? value('Y') * units_ : 0;
+    const bool exact = exact_stop_;
+    const double tol = tolerance_;
+    exact_stop_ = true;
+    tolerance_ = -1;
+    if (cycle_level_ < r) rapid_to({pos_[0], pos_[1], r});
+    const double clear = retract_old_z_ ? std::max(cycle_level_, r) : r;
+    for (int k = 0; k < repeats; ++k) {
+      // to the hole at the tool's Z, or risen to the clear plane when not above R
+      Vector3d hole(pos_[0], pos_[1], pos_[2] <= r ? clear : pos_[2]);
+      if (has('X')) hole[0] = absolute_ ? x : pos_[0] + x;
+      if (has('Y')) hole[1] = absolute_ ? y : pos_[1] + y;
+      rapid_to(hole);
+      rapid_to({hole[0], hole[1], r});
+      drill(r, bottom, f);
+      rapid_to({hole[0], hole[1], clear});
+    }
+    exact_stop_ = exact;
+    tolerance_ = tol;
+  }
+
+  // The feed down from R to the bottom, in pecks for G83 and G73.
+  void drill(double r, double bottom, double f) {
+    auto feed_to = [&](double z) {
+      const Vector3d e(pos_[0], pos_[1], z);
+      emit(Move::Kind::kFeed, gcode::line3(pos_, e), f, (e - pos_).norm());
+      pos_ = e;
+    };
+    if (motion_ == Motion::kDrill) {
+      feed_to(bottom);
+      return;
+    }
+    const double q = *cycle_q_ * units_;
+    double depth = std::max(r - q, bottom);
+    feed_to(depth);
+    while (depth > bottom) {
+      if (motion_ == Motion::kPeck) rapid_to({pos_[0], pos_[1], r});
+      rapid_to({pos_[0], pos_[1], depth + kPeckClearanceMm});
+      depth = std::max(depth - q, bottom);
+      feed_to(depth);
+    }
   }
 
   // Plane axes (LinuxCNC's order) and the letters of their centre words.
