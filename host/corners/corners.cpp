@@ -830,7 +830,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
         s = geo::split_at(s, joins[k - 1].u_out).second;
         s.ctrl.row(0) = last_end.transpose();
       }
-      res.curves.push_back({s, m.where, m.feed, m.kind, stop_here, false});
+      res.curves.push_back({s, m.where, m.feed, m.kind, stop_here, false, stop_here ? m.dwell : 0.0});
       last_end = s.ctrl.row(s.n_ctrl() - 1).transpose();
       if (blend_after) emit_blend(k);
       continue;
@@ -840,7 +840,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
     const Vec a = blend_before ? last_end : Vec(e.a);
     const Vec b = e.b - cut1 * e.t_end;
     if (e.length - cut0 - cut1 >= o.min_line || !blend_after) {
-      res.curves.push_back({geo::make_line(a, b), m.where, m.feed, m.kind, stop_here, false});
+      res.curves.push_back({geo::make_line(a, b), m.where, m.feed, m.kind, stop_here, false, stop_here ? m.dwell : 0.0});
       last_end = b;
     } else {
       last_end = a;  // the remnant is dropped: the next blend starts here, on the same segment line
@@ -886,6 +886,7 @@ input::Toolpath to_toolpath(const BlendResult& r, const input::Toolpath& origina
     m.curve = c.curve;
     m.feed = c.feed;
     m.exact_stop = c.exact_stop;
+    m.dwell = c.dwell;
     m.where = c.where;
     tp.moves.push_back(std::move(m));
   }

@@ -66,6 +66,7 @@ struct ChainCurve {
   input::Move::Kind kind = input::Move::Kind::kFeed;
   bool exact_stop = false;  // stop at the end of this curve (the move's exact_stop, on its last curve)
   bool blend = false;       // a corner transition (a single corner's blend or a run's curve)
+  double dwell = 0;         // seconds at rest after it (the move's G4, on its last curve)
 };
 
 enum class StopReason { kRapid, kExactStop, kReversal, kCurvedMove };

@@ -36,7 +36,7 @@ constexpr double kSpiralAbsInch = 2 * 0.001 * 1.41421356237309504880;
 constexpr double kSpiralAbsMm = 2 * 0.01 * 1.41421356237309504880;
 constexpr double kSpiralRel = 0.001;
 
-enum class Motion { kNone, kRapid, kLine, kCw, kCcw, kCubic, kQuadratic, kNurbs, kDrill, kPeck, kChipBreak };
+enum class Motion { kNone, kRapid, kLine, kCw, kCcw, kCubic, kQuadratic, kNurbs, kDrill, kDrillDwell, kPeck, kChipBreak };
 
 // LinuxCNC's clearance of G83/G73 above the last peck's depth: 0.010 inch,
 // 0.254 mm (rs274 2.9 rapids to 0.254 mm above it in mm programs too).
@@ -56,7 +56,7 @@ int tenths(double v) { return static_cast<int>(std::lround(v * 10)); }
 // Modal group of an accepted G code, or -1.
 int g_group(int g) {
   switch (g) {
-    case 0: case 10: case 20: case 30: case 50: case 51: case 52: case 53: case 800: case 730: case 810: case 830:
+    case 0: case 10: case 20: case 30: case 50: case 51: case 52: case 53: case 800: case 730: case 810: case 820: case 830:
       return 1;
     case 980: case 990: return 10;
     case 170: case 180: case 190: return 2;
@@ -66,7 +66,7 @@ int g_group(int g) {
     case 200: case 210: return 6;
     case 400: return 7;
     case 430: case 490: return 8;
-    case 280: case 300: return 0;  // non-modal
+    case 40: case 280: case 300: return 0;  // non-modal
     case 540: return 12;
     case 610: case 611: case 640: return 13;
     default: return -1;
@@ -82,9 +82,8 @@ std::string g_refusal(int g) {
   if (g >= 920 && g <= 923) return "coordinate offsets (G92) are not supported";
   if (g == 530) return "machine coordinates (G53) are not supported";
   if (g == 950) return "feed per revolution is not supported (only G93 inverse time and G94 units per minute)";
-  if ((g >= 820 && g <= 890) || g == 740 || g == 760)
-    return "canned cycles other than G73, G81 and G83 are not supported (dwell, feed-out, tapping, boring)";
-  if (g == 40) return "dwell is not supported";
+  if ((g >= 840 && g <= 890) || g == 740 || g == 760)
+    return "canned cycles other than G73, G81, G82 and G83 are not supported (feed-out, tapping, boring)";
   if (g == 281 || g == 301) return "storing the reference point (G28.1/G30.1) is not supported";
   if (g >= 330 && g <= 331) return "spindle-synchronised motion is not supported";
   if (g >= 380 && g <= 385) return "probing is not supported";
@@ -105,10 +104,11 @@ class Interpreter {
       : name_(std::move(name)), opt_(opt), further_(opt_.axes.substr(3)),
         ext_(Eigen::VectorXd::Zero(static_cast<Eigen::Index>(further_.size()))), ext_end_(ext_) {}
 
-  // Reads lines until at least one move is pending or the program has
-  // ended; false once the program has ended and every move was taken.
+  // Reads lines until two moves are pending (a G4 after the first adds its
+  // dwell to it) or the program has ended; false once the program has ended
+  // and every move was taken.
   bool read_more(std::istream& in) {
-    while (out_.moves.empty() && !ended_) {
+    while (out_.moves.size() < 2 && !ended_) {
       if (!std::getline(in, text_)) {
         finish(line_no_, false);
         break;
@@ -178,7 +178,7 @@ class Interpreter {
   bool retract_old_z_ = false;  // G99 until G98, as rs274 starts
   bool same_cycle_ = true;    // this block continues the cycle in effect before it
   bool cycle_fresh_ = false;  // this block starts cycles after another motion or G80
-  std::optional<double> cycle_r_, cycle_z_, cycle_q_;
+  std::optional<double> cycle_r_, cycle_z_, cycle_q_, cycle_p_;
   double cycle_level_ = 0;    // the Z where the cycles started (G98's plane; G91's base of R)
   std::optional<int> selected_tool_, loaded_tool_;  // T; T at the last M6
 
@@ -319,10 +319,12 @@ class Interpreter {
     cycle_fresh_ = false;
     const std::optional<int> mg = g_in(1);
     if (mg) set_motion(*mg, g_text(*mg));
-    if (auto g = g_in(0)) {
-      if (mg && any_axis()) fail(g_text(*g), "two G codes that both use the axis words (" + g_text(*mg) + ")");
-      reference_move(*g, g_text(*g));
+    const std::optional<int> g0 = g_in(0);
+    if (g0 && *g0 != 40) {
+      if (mg && any_axis()) fail(g_text(*g0), "two G codes that both use the axis words (" + g_text(*mg) + ")");
+      reference_move(*g0, g_text(*g0));
     } else {
+      if (g0) dwell(g_text(40));  // before the block's motion, as in LinuxCNC
       motion(mg.has_value());
     }
     check_unused();
@@ -431,7 +433,8 @@ class Interpreter {
     const Motion before = motion_;
     motion_ = g == 0 ? Motion::kRapid : g == 10 ? Motion::kLine : g == 20 ? Motion::kCw : g == 30 ? Motion::kCcw
             : g == 50 ? Motion::kCubic : g == 51 ? Motion::kQuadratic : g == 52 ? Motion::kNurbs
-            : g == 810 ? Motion::kDrill : g == 830 ? Motion::kPeck : Motion::kChipBreak;
+            : g == 810 ? Motion::kDrill : g == 820 ? Motion::kDrillDwell : g == 830 ? Motion::kPeck
+            : Motion::kChipBreak;
     same_cycle_ = motion_ == before;
     cycle_fresh_ = is_cycle(motion_) && !is_cycle(before);
     motion_text_ = t;
@@ -574,9 +577,13 @@ class Interpreter {
     ext_ = ext_end_;
   }
 
-  static bool is_cycle(Motion m) { return m == Motion::kDrill || m == Motion::kPeck || m == Motion::kChipBreak; }
+  static bool is_cycle(Motion m) {
+    return m == Motion::kDrill || m == Motion::kDrillDwell || m == Motion::kPeck || m == Motion::kChipBreak;
+  }
+  static bool is_peck(Motion m) { return m == Motion::kPeck || m == Motion::kChipBreak; }
 
-  // G81 (drill), G83 (peck: back to R after each peck) and G73 (chip
+  // G81 (drill), G82 (drill, resting P seconds at the bottom), G83 (peck:
+  // back to R after each peck) and G73 (chip
   // break: a short retract after each), as rs274 expands them (in G17; the
   // rules are its, found by running it on programs written for it, 60 of
   // them random): the cycles keep a level L, the Z where they start after
@@ -593,17 +600,23 @@ class Interpreter {
     if (inverse_time_) fail(word, "canned cycles in inverse-time mode (G93) are not supported");
     refuse_further_axes("canned cycles");
     const double f = feed_mm_s(word);
-    if (!same_cycle_) cycle_r_.reset(), cycle_z_.reset(), cycle_q_.reset();
+    if (!same_cycle_) cycle_r_.reset(), cycle_z_.reset(), cycle_q_.reset(), cycle_p_.reset();
     if (has('R')) cycle_r_ = value('R');
     if (has('Z')) cycle_z_ = value('Z');
     if (!cycle_r_) fail(word, "R word missing (the retract plane of the cycle)");
     if (!cycle_z_) fail(word, "Z word missing (the bottom of the hole)");
-    if (motion_ != Motion::kDrill && has('Q')) {  // G81 takes no Q (rs274 refuses it)
+    if (is_peck(motion_) && has('Q')) {  // G81 and G82 take no Q (rs274 refuses it)
       const double q = value('Q');
       if (!(q > 0)) fail(text('Q'), "the peck depth Q must be positive");
       cycle_q_ = q;
     }
-    if (motion_ != Motion::kDrill && !cycle_q_) fail(word, "Q word missing (the peck depth)");
+    if (is_peck(motion_) && !cycle_q_) fail(word, "Q word missing (the peck depth)");
+    if (motion_ == Motion::kDrillDwell && has('P')) {
+      const double p = value('P');
+      if (!(p >= 0)) fail(text('P'), "the dwell time must not be negative");
+      cycle_p_ = p;
+    }
+    if (motion_ == Motion::kDrillDwell && !cycle_p_) fail(word, "P word missing (the dwell at the bottom, seconds)");
     int repeats = 1;
     if (has('L')) {
       const double l = value('L');
@@ -615,7 +628,7 @@ class Interpreter {
     const double r = absolute_ ? *cycle_r_ * units_ + tlo_ : cycle_level_ + *cycle_r_ * units_;
     const double bottom = absolute_ ? *cycle_z_ * units_ + tlo_ : r + *cycle_z_ * units_;
     if (bottom > r) fail(word, "the bottom of the hole (Z) is above the retract plane (R)");
-    if (motion_ != Motion::kDrill && !((r - bottom) / (*cycle_q_ * units_) <= kMaxPecks))
+    if (is_peck(motion_) && !((r - bottom) / (*cycle_q_ * units_) <= kMaxPecks))
       fail(word, "the peck depth Q makes more than " + fmt_num(kMaxPecks) + " pecks in one hole");
     const double x = has('X') ? value('X') * units_ : 0, y = has('Y') ? value('Y') * units_ : 0;
     const bool exact = exact_stop_;
@@ -642,11 +655,15 @@ class Interpreter {
   void drill(double r, double bottom, double f) {
     auto feed_to = [&](double z) {
       const Vector3d e(pos_[0], pos_[1], z);
-      emit(Move::Kind::kFeed, gcode::line3(pos_, e), f, (e - pos_).norm());
+      if (e != pos_) emit(Move::Kind::kFeed, gcode::line3(pos_, e), f, (e - pos_).norm());
       pos_ = e;
     };
-    if (motion_ == Motion::kDrill) {
+    if (!is_peck(motion_)) {
       feed_to(bottom);
+      if (motion_ == Motion::kDrillDwell && !out_.moves.empty()) {  // G82: rests at the bottom
+        out_.moves.back().exact_stop = true;
+        out_.moves.back().dwell += *cycle_p_;
+      }
       return;
     }
     const double q = *cycle_q_ * units_;
@@ -797,6 +814,21 @@ class Interpreter {
     g5_i_ = -p;
     g5_j_ = -q;
     emit(Move::Kind::kFeed, gcode::bezier3(c), f);
+  }
+
+  // G4 P: the machine stops at the end of the move before it and rests P
+  // seconds there (P0: the stop alone, LinuxCNC's way of forcing one).
+  void dwell(const std::string& t) {
+    if (!has('P')) fail(t, "dwell time P (seconds) missing");
+    const double p = value('P');
+    if (!(p >= 0)) fail(text('P'), "the dwell time must not be negative");
+    if (nurbs_) fail(t, "G5.2 NURBS not closed with G5.3");
+    if (out_.moves.empty()) {
+      note("G4", t, "dwell before the first move accepted (the machine is at rest there)");
+      return;
+    }
+    out_.moves.back().exact_stop = true;
+    out_.moves.back().dwell += p;
   }
 
   // A G5.2 block: the first one starts the NURBS at the current point.

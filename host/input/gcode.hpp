@@ -8,8 +8,10 @@
 // linearly with lines and arcs), G5 G5.1 G5.2/G5.3, G20/G21, G90/G91, G90.1/G91.1,
 // G61/G61.1/G64 P, F (units per minute; G93 inverse time: each G1 G2 G3 takes
 // 1/F minutes, F on every one; G93 and G94 set the feed to 0, as in LinuxCNC),
-// G73/G81/G83 drilling cycles with G98/G99, R, Q, L and G80 (in G17, expanded
-// into rapids and feeds as rs274 expands them), G28/G30 (to the machine origin:
+// G73/G81/G82/G83 drilling cycles with G98/G99, R, Q, P, L and G80 (in G17,
+// expanded into rapids and feeds as rs274 expands them), G4 P (the move
+// before it ends in a stop and rests P seconds: Move::dwell), G28/G30 (to
+// the machine origin:
 // LinuxCNC's parameters 5161-5166 and 5181-5186 at their default 0), G43 H
 // (with a tool table; the moves are then of the tool's holder, the
 // program's Z plus the length) and G49, T with M6 (the tool G43 without H

@@ -21,12 +21,13 @@ using plan::PlanError;
 
 // The curves held by the streaming window: each built once (arc-length
 // tables) and shared by the windows that plan it, with its spline kept so
-// that it can be cut at a commit, and its speed and stop.
+// that it can be cut at a commit, and its speed, stop and dwell.
 struct Window {
   std::deque<std::shared_ptr<const PathCurve>> curves;
   std::deque<geo::BSpline> splines;
   std::deque<double> speeds;
   std::deque<bool> stops;
+  std::deque<double> dwells;
 
   void push_back(CurvePrefetch::Item&& it) {
     curves.push_back(std::move(it.built));
@@ -34,6 +35,7 @@ struct Window {
     splines.push_back(std::move(c.curve));
     speeds.push_back(c.speed);
     stops.push_back(c.stop);
+    dwells.push_back(c.dwell);
   }
   Path path() const {
     Path p;
@@ -48,10 +50,12 @@ struct Window {
       w.splines.push_back(std::move(splines.front()));
       w.speeds.push_back(speeds.front());
       w.stops.push_back(stops.front());
+      w.dwells.push_back(dwells.front());
       curves.pop_front();
       splines.pop_front();
       speeds.pop_front();
       stops.pop_front();
+      dwells.pop_front();
     }
     return w;
   }
@@ -61,6 +65,7 @@ struct Window {
     splines.insert(splines.begin(), w.splines.begin(), w.splines.end());
     speeds.insert(speeds.begin(), w.speeds.begin(), w.speeds.end());
     stops.insert(stops.begin(), w.stops.begin(), w.stops.end());
+    dwells.insert(dwells.begin(), w.dwells.begin(), w.dwells.end());
   }
   // Cuts curve i in two inside the knot span that holds its parameter middle
   // (a smooth place: no knot there).
@@ -79,14 +84,18 @@ struct Window {
     speeds.insert(speeds.begin() + at, speeds[i]);
     stops.insert(stops.begin() + at, stops[i]);
     stops[i] = false;
+    dwells.insert(dwells.begin() + at, dwells[i]);
+    dwells[i] = 0;
   }
-  // The curves' speeds and stops as speed caps on `path` (the window's path).
-  void add_caps(const Path& path, double feed, std::vector<plan::SpeedCap>& caps) const {
+  // The curves' speeds and stops as speed caps on `path` (the window's
+  // path), and their dwells (the window's end is a stop of its own plan).
+  void add_caps(const Path& path, double feed, plan::PlanOptions& o) const {
     const double eps = 1e-9 * std::max(1.0, path.length());
     for (size_t i = 0; i < curves.size(); ++i) {
       const double s0 = path.offset(i), s1 = path.offset(i + 1);
-      if (speeds[i] > 0 && speeds[i] < feed) caps.push_back({s0, s1, speeds[i]});
-      if (stops[i] && i + 1 < curves.size()) caps.push_back({s1 - eps, s1 + eps, 0.0});
+      if (speeds[i] > 0 && speeds[i] < feed) o.caps.push_back({s0, s1, speeds[i]});
+      if (stops[i] && i + 1 < curves.size()) o.caps.push_back({s1 - eps, s1 + eps, 0.0});
+      if (dwells[i] > 0) o.dwells.push_back({s1, dwells[i]});
     }
   }
 };
@@ -97,6 +106,7 @@ struct PlainSource : StreamSource {
   bool next(StreamCurve& c) override {
     c.speed = 0;
     c.stop = false;
+    c.dwell = 0;
     return src.next(c.curve, c.where);
   }
   CurveSource& src;
@@ -151,13 +161,16 @@ double snap_to_junction(const Path& path, double s) {
   return s;
 }
 
-// Time at which `plan` reaches arc length s (bisection on the profile).
+// Time at which `plan` reaches arc length s (bisection on the profile), or
+// leaves it when it dwells there (a commit takes the dwell with it).
 double time_at_arc_length(const plan::Plan& plan, double s) {
   double lo = 0, hi = plan.duration();
   for (int it = 0; it < 200 && hi - lo > 1e-15 * (1 + hi); ++it) {
     const double mid = 0.5 * (lo + hi);
     (plan::state_at(plan, mid).s < s ? lo : hi) = mid;
   }
+  for (const plan::Piece& q : plan.pieces)
+    if (q.dwell && std::fabs(q.t0 - hi) <= 1e-9 * (1 + hi)) return q.t0 + q.T;
   return hi;
 }
 
@@ -216,7 +229,7 @@ WindowPlan plan_window(Window& win, const Carry& in, size_t commit_max, bool las
   req.limits = &cfg.limits;
   req.options = cfg.plan_options();
   req.options.v_start = in.v;
-  win.add_caps(path, cfg.limits.feed, req.options.caps);
+  win.add_caps(path, cfg.limits.feed, req.options);
   const size_t own_caps = req.options.caps.size();
   req.options.caps.insert(req.options.caps.end(), in.caps.begin(), in.caps.end());
   if (!last) req.options.force_stations = {s_commit};

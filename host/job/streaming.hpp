@@ -29,6 +29,7 @@ struct StreamCurve {
   std::string where;
   double speed = 0;   // the speed over this curve, units/s; 0: the feed limit (Limits::feed)
   bool stop = false;  // the machine stops exactly at its end
+  double dwell = 0;   // and rests there this many seconds (G4)
 };
 
 class StreamSource {

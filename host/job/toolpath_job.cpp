@@ -61,6 +61,7 @@ ToolpathPlan toolpath_plan(const input::Toolpath& original, const JobConfig& cfg
       caps.push_back({s1 - eps, s1 + eps, 0.0});
       ++r.stops;
     }
+    if (tp.moves[i].dwell > 0) r.cfg.plan.dwells.push_back({s1, tp.moves[i].dwell});
   }
   return r;
 }

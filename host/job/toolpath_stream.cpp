@@ -89,6 +89,7 @@ void ToolpathStream::blend_next_chunk() {
       input::Move first = m;
       first.curve = std::move(halves.first);
       first.exact_stop = false;
+      first.dwell = 0;
       m.curve = std::move(halves.second);
       for (size_t i = 0; i < j; ++i) part.moves.push_back(std::move(pending_[i]));
       part.moves.push_back(std::move(first));
@@ -118,6 +119,7 @@ void ToolpathStream::blend_next_chunk() {
     if (!(v > 0) || !std::isfinite(v)) throw PlanError(m.where + ": feed " + util::num(v) + " mm/s must be positive");
     c.speed = std::min(v, cfg_.limits.feed);
     c.stop = m.exact_stop;
+    c.dwell = m.dwell;
     (rapid ? totals_.rapid_curves : totals_.feed_curves)++;
     if (m.exact_stop) ++totals_.stops;
     ready_.push_back(std::move(c));

@@ -617,6 +617,47 @@ std::vector<size_t> mark_violations(const Grid& g, std::vector<char>& forced, Sp
 
 }  // namespace
 
+namespace {
+
+// Each dwell before the first piece that starts at rest within 1e-6 of its
+// arc length (the stop its cap of speed 0 makes: a station of speed 0, so
+// exactly at rest), the later pieces delayed by it.
+void insert_dwells(Plan& plan, std::vector<PlanOptions::Dwell> dwells) {
+  std::sort(dwells.begin(), dwells.end(), [](const auto& a, const auto& b) { return a.s < b.s; });
+  const double tol = 1e-6 * std::max(1.0, plan.length);
+  size_t i = 0;
+  for (const auto& d : dwells) {
+    if (!(d.seconds > 0) || !std::isfinite(d.seconds))
+      throw PlanError("dwell of " + num(d.seconds) + " s at arc length " + num(d.s) + ": must be positive and finite");
+    while (i < plan.pieces.size()) {
+      const Piece& q = plan.pieces[i];
+      if (i > 0 && q.v0 == 0 && q.a0 == 0 && std::fabs(q.s0 - d.s) <= tol) break;
+      ++i;
+    }
+    if (i == plan.pieces.size() && std::fabs(plan.length - d.s) <= tol) {  // at the path's end, at rest
+      Piece rest;
+      rest.t0 = plan.duration();
+      rest.T = d.seconds;
+      rest.s0 = plan.length;
+      rest.dwell = true;
+      plan.pieces.push_back(rest);
+      continue;
+    }
+    if (i == plan.pieces.size())
+      throw PlanError("dwell at arc length " + num(d.s) + ": the plan does not stop there (a dwell needs a stop)");
+    Piece rest;
+    rest.t0 = plan.pieces[i].t0;
+    rest.T = d.seconds;
+    rest.s0 = plan.pieces[i].s0;
+    rest.dwell = true;
+    for (size_t k = i; k < plan.pieces.size(); ++k) plan.pieces[k].t0 += d.seconds;
+    plan.pieces.insert(plan.pieces.begin() + static_cast<long>(i), rest);
+    i += 2;
+  }
+}
+
+}  // namespace
+
 Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o) {
   L.validate();
   if (const std::string m = util::tick_period_problem(o.period); !m.empty()) throw PlanError(m);
@@ -655,7 +696,10 @@ Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o) {
       while (blk + 1 < changed.size() && idx[blk + 1] <= i) ++blk;
       return changed.empty() || changed[blk] != 0;
     });
-    if (marked.empty()) return plan;
+    if (marked.empty()) {
+      insert_dwells(plan, o.dwells);
+      return plan;
+    }
     plan.refinements += static_cast<int>(marked.size());
     // Local refinement: a block that violated is re-planned alone, between
     // its two stations at this pass's speeds, adding stations until it is

@@ -110,6 +110,12 @@ struct PlanOptions {
   std::vector<SpeedCap> caps;
   double v_start = 0;                  // speed at the path start (a window continuing a committed plan)
   std::vector<double> force_stations;  // arc lengths that must be stations (acceleration 0 there)
+  // Dwells (G4): at arc length s, where a cap of speed 0 stops the path, the
+  // plan rests `seconds` (a piece at rest, Piece::dwell, after the stop).
+  struct Dwell {
+    double s = 0, seconds = 0;
+  };
+  std::vector<Dwell> dwells;
 };
 
 // A path: curves joined end to end (each a B-spline/NURBS/Bezier/line/arc).

@@ -59,6 +59,8 @@ struct Canon {
   int n_ctrl = 0;        // NURBS_FEED
   double feed = 0;       // mm/min (degrees/min for A B C alone: rs274 prints F as programmed)
   double feed_raw = 0;   // F as programmed
+  double dwell = 0;      // DWELLs after it, seconds
+  bool dwelled = false;  // a DWELL (even of 0 s) follows it: the machine stops there
   double tolerance = -1; // mm, -1 none
   bool exact = false;
 };
@@ -111,6 +113,10 @@ Rs274 run_rs274(const std::string& shim, const fs::path& prog, const fs::path& w
     const std::string name = mt[1], args = mt[2];
     if (name == "USE_LENGTH_UNITS") unit = args.find("INCHES") != std::string::npos ? 25.4 : 1.0;
     else if (name == "SET_FEED_RATE") feed = numbers(args)[0];
+    else if (name == "DWELL" && !r.moves.empty()) {
+      r.moves.back().dwell += numbers(args)[0];
+      r.moves.back().dwelled = true;
+    }
     else if (name == "USE_TOOL_LENGTH_OFFSET") {
       std::istringstream xyz(args);  // "x y z, ..."
       double x = 0, y = 0, z = 0;
@@ -213,11 +219,31 @@ std::string check_arc(const Move& m, const Canon& c, const Point& start) {
   return "";
 }
 
+// A move's stop and dwell against rs274's DWELLs after its canonical call
+// (and after the zero-length calls that follow it, which make no Move): a
+// dwell stops the machine, so the move ends in an exact stop.
+std::string check_dwell(const Move& m, double dwell, bool dwelled, bool exact) {
+  if (!near(m.dwell, dwell)) return m.where + ": dwell " + std::to_string(m.dwell) + " s, rs274 " + std::to_string(dwell);
+  if (m.kind != Move::Kind::kRapid && m.exact_stop != (exact || dwelled)) return m.where + ": exact-stop mode differs";
+  return "";
+}
+
 std::string compare(const traj::input::Toolpath& tp, const Rs274& r) {
   Point pos = Point::Zero();
   size_t i = 0;
+  const Move* last = nullptr;  // the last move matched, with its DWELLs so far
+  double dwell = 0;
+  bool dwelled = false, exact = false;
   for (const Canon& c : r.moves) {
-    if (c.kind != Canon::kArc && c.kind != Canon::kNurbs && near(c.end, pos)) continue;  // zero-length: no Move
+    if (c.kind != Canon::kArc && c.kind != Canon::kNurbs && near(c.end, pos)) {  // zero-length: no Move
+      dwell += c.dwell;
+      dwelled = dwelled || c.dwelled;
+      continue;
+    }
+    if (last) {
+      const std::string why = check_dwell(*last, dwell, dwelled, exact);
+      if (!why.empty()) return why;
+    }
     if (i >= tp.moves.size()) return "rs274 has more moves than read_gcode (" + std::to_string(tp.moves.size()) + ")";
     const Move& m = tp.moves[i++];
     const std::string at = m.where + ": ";
@@ -240,10 +266,17 @@ std::string compare(const traj::input::Toolpath& tp, const Rs274& r) {
       const bool rotary_only = c.kind == Canon::kFeed && (c.end.head<3>() - pos.head<3>()).norm() == 0;
       const double f = m.feed / m.feed_scale * 60, rf = rotary_only ? c.feed_raw : c.feed;
       if (!near(f, rf)) return at + "feed " + std::to_string(f) + " as programmed, rs274 " + std::to_string(rf);
-      if (m.exact_stop != c.exact) return at + "exact-stop mode differs";
       if (!(m.tolerance < 0 && c.tolerance < 0) && !near(m.tolerance, c.tolerance)) return at + "path tolerance differs";
     }
     pos = c.kind == Canon::kNurbs ? Point(e) : c.end;
+    last = &m;
+    dwell = c.dwell;
+    dwelled = c.dwelled;
+    exact = c.exact;
+  }
+  if (last) {
+    const std::string why = check_dwell(*last, dwell, dwelled, exact);
+    if (!why.empty()) return why;
   }
   if (i != tp.moves.size()) return "read_gcode has " + std::to_string(tp.moves.size() - i) + " more moves than rs274";
   return "";

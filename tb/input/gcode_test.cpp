@@ -215,7 +215,7 @@ TEST(Gcode, Refusals) {
       {"F600\nG94\nG1 X1\nM2\n", "t.ngc:3: G1: no feed rate: program F (units per minute) before the first feed move"},
       {"G93 G5 X1 Y1 I0 J1 P0 Q1 F2\nM2\n", "t.ngc:1: G5: splines (G5, G5.1) in inverse-time mode (G93) are not supported"},
       {"G95\nM2\n", "t.ngc:1: G95: feed per revolution is not supported (only G93 inverse time and G94 units per minute)"},
-      {"G82 X1 Y1 Z-1 R1 P1 F10\nM2\n", "t.ngc:1: G82: canned cycles other than G73, G81 and G83 are not supported (dwell, feed-out, tapping, boring)"},
+      {"G85 X1 Y1 Z-1 R1 F10\nM2\n", "t.ngc:1: G85: canned cycles other than G73, G81, G82 and G83 are not supported (feed-out, tapping, boring)"},
       {"F10 G81 X1 Y1 Z-1\nM2\n", "t.ngc:1: G81: R word missing (the retract plane of the cycle)"},
       {"F10 G83 X1 Y1 Z-1 R1\nM2\n", "t.ngc:1: G83: Q word missing (the peck depth)"},
       {"F10 G81 X1 Y1 Z-1 R1\nG0 X3\nG81 X2\nM2\n", "t.ngc:3: G81: R word missing (the retract plane of the cycle)"},
@@ -417,4 +417,42 @@ TEST(Gcode, InverseTimeFeeds) {
   EXPECT_NEAR(tp.moves[2].feed, 90.0 / 15, 1e-12);
   EXPECT_EQ(tp.moves[3].kind, Move::Kind::kRapid);
   EXPECT_NEAR(tp.moves[4].feed, 5.0, 1e-12);
+}
+
+// G4 P: the move before it ends in an exact stop and rests P seconds; G82
+// rests at the bottom of each hole (P kept while G82 goes on, as R and Z).
+TEST(Gcode, Dwells) {
+  const Toolpath tp = read(
+      "G21 G90 G64 P0.05 F600\n"
+      "G4 P2\n"                  // before any move: nothing to rest after (a note)
+      "G1 X10\n"
+      "G4 P0.5\n"
+      "G4 P0.25\n"               // two dwells add up
+      "G1 X20\n"
+      "G4 P0\n"                  // a stop without a rest
+      "G1 X30\n"
+      "G0 Z5\n"
+      "G82 X40 Z-2 R1 P0.4\n"
+      "X50\n"
+      "G80\n"
+      "M2\n");
+  ASSERT_GE(tp.moves.size(), 4u);
+  EXPECT_TRUE(tp.moves[0].exact_stop);
+  EXPECT_DOUBLE_EQ(tp.moves[0].dwell, 0.75);
+  EXPECT_TRUE(tp.moves[1].exact_stop);
+  EXPECT_EQ(tp.moves[1].dwell, 0.0);
+  EXPECT_FALSE(tp.moves[2].exact_stop);  // G64: no stop where no dwell is
+  int bottoms = 0;
+  for (const Move& m : tp.moves)
+    if (m.kind == Move::Kind::kFeed && m.curve.ctrl(m.curve.n_ctrl() - 1, 2) == -2) {
+      ++bottoms;
+      EXPECT_DOUBLE_EQ(m.dwell, 0.4);
+    }
+  EXPECT_EQ(bottoms, 2);
+  bool noted = false;
+  for (const auto& n : tp.notes) noted = noted || n.find("t.ngc:2: G4: dwell before the first move") == 0;
+  EXPECT_TRUE(noted);
+  EXPECT_EQ(refusal("G1 X1 F60\nG4\nM2\n"), "t.ngc:2: G4: dwell time P (seconds) missing");
+  EXPECT_EQ(refusal("G1 X1 F60\nG4 P-1\nM2\n"), "t.ngc:2: P-1: the dwell time must not be negative");
+  EXPECT_EQ(refusal("F60 G82 X1 Z-1 R1\nM2\n"), "t.ngc:1: G82: P word missing (the dwell at the bottom, seconds)");
 }
