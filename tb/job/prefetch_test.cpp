@@ -94,11 +94,11 @@ TEST(Prefetch, AnErrorReachesThePlannerInItsPlace) {
   std::string text = o.str();
   const size_t end = text.rfind("G0 Z5");  // before the program's retract and M2
   ASSERT_NE(end, std::string::npos);
-  text.insert(end, "G81 X3 Y4 Z-1 R1\n");
+  text.insert(end, "G85 X3 Y4 Z-1 R1\n");
   const std::string file = temp_file("bad.ngc", text);
   const Streamed one = stream_gcode(file, false), two = stream_gcode(file, true);
   EXPECT_NE(one.error.find("bad.ngc:"), std::string::npos) << one.error;
-  EXPECT_NE(one.error.find("G81"), std::string::npos) << one.error;
+  EXPECT_NE(one.error.find("G85"), std::string::npos) << one.error;
   EXPECT_EQ(one.error, two.error);
   EXPECT_GT(one.segments.size(), 500u);  // what was planned before it: emitted alike
   expect_same(one, two);
