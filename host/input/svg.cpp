@@ -217,10 +217,13 @@ class Walker {
     throw InputError(name_ + ": " + where + ": " + why);
   }
 
+  // The element named in messages: its tag and id as excerpts (a file's
+  // names can be of any length; a message stays one line).
   std::string label(const tinyxml2::XMLElement* e, const std::string& tag, int index) const {
     const char* id = e->Attribute("id");
-    if (id) return tag + " " + id;
-    return index > 0 ? tag + " #" + std::to_string(index) : tag + " without id";
+    const std::string t = util::excerpt(tag);
+    if (id) return t + " " + util::excerpt(id);
+    return index > 0 ? t + " #" + std::to_string(index) : t + " without id";
   }
 
   void note_once(const std::string& kind, const std::string& text) {
