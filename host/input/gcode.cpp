@@ -446,11 +446,7 @@ class Interpreter {
       if (has(c)) return true;
     return false;
   }
-  bool any_further_axis() const {
-    for (char c : further_)
-      if (has(c)) return true;
-    return false;
-  }
+  static bool rotary(char axis) { return axis == 'A' || axis == 'B' || axis == 'C'; }
 
   // A B C are in degrees whatever the length units; U V W in them.
   Eigen::VectorXd further_end_point() {
@@ -458,7 +454,7 @@ class Interpreter {
     for (size_t i = 0; i < further_.size(); ++i) {
       const char c = further_[i];
       if (!has(c)) continue;
-      const double unit = (c == 'A' || c == 'B' || c == 'C') ? 1.0 : units_;
+      const double unit = rotary(c) ? 1.0 : units_;
       const auto k = static_cast<Eigen::Index>(i);
       e[k] = value(c) * unit + (absolute_ ? 0.0 : ext_[k]);
     }
@@ -503,7 +499,7 @@ class Interpreter {
     for (size_t i = 0; i < further_.size(); ++i) {
       const double d = ext_end_[static_cast<Eigen::Index>(i)] - ext_[static_cast<Eigen::Index>(i)];
       const char c = further_[i];
-      ((c == 'A' || c == 'B' || c == 'C') ? abc : uvw) += d * d;
+      (rotary(c) ? abc : uvw) += d * d;
     }
     const bool angular = xyz == 0 && uvw == 0 && abc > 0;
     const double measured = (xyz > 0 || (uvw == 0 && abc == 0)) ? xyz : uvw > 0 ? std::sqrt(uvw) : std::sqrt(abc);
