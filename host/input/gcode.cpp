@@ -41,8 +41,9 @@ enum class Motion { kNone, kRapid, kLine, kCw, kCcw, kCubic, kQuadratic, kNurbs,
 // LinuxCNC's clearance of G83/G73 above the last peck's depth: 0.010 inch,
 // 0.254 mm (rs274 2.9 rapids to 0.254 mm above it in mm programs too).
 constexpr double kPeckClearanceMm = 0.254;
-// Repeats of one canned-cycle block (L), and pecks of one hole (G73, G83):
-// more is no toolpath, and the moves of one block are held until taken.
+// Repeats of one canned-cycle block (L), and pecks of one block (G73, G83:
+// holes times pecks a hole): more is no toolpath, and the moves of one block
+// are held until taken (at most about 4 a peck).
 constexpr int kMaxCycleRepeats = 10000;
 constexpr double kMaxPecks = 100000;
 
@@ -624,8 +625,8 @@ class Interpreter {
     const double r = absolute_ ? *cycle_r_ * units_ + tlo_ : cycle_level_ + *cycle_r_ * units_;
     const double bottom = absolute_ ? *cycle_z_ * units_ + tlo_ : r + *cycle_z_ * units_;
     if (bottom > r) fail(word, "the bottom of the hole (Z) is above the retract plane (R)");
-    if (is_peck(motion_) && !((r - bottom) / (*cycle_q_ * units_) <= kMaxPecks))
-      fail(word, "the peck depth Q makes more than " + fmt_num(kMaxPecks) + " pecks in one hole");
+    if (is_peck(motion_) && !(std::ceil((r - bottom) / (*cycle_q_ * units_)) * repeats <= kMaxPecks))
+      fail(word, "the peck depth Q and the repeats L make more than " + fmt_num(kMaxPecks) + " pecks in one block");
     const double x = has('X') ? value('X') * units_ : 0, y = has('Y') ? value('Y') * units_ : 0;
     const bool exact = exact_stop_;
     const double tol = tolerance_;

@@ -16,11 +16,12 @@
 namespace traj::fuzz {
 
 constexpr std::size_t kMaxMessage = 1024;
+constexpr std::size_t kMaxGcodeMoves = 100000;  // the G-code moves one input is read for (fuzz_entries.cpp)
 
 int stream(const uint8_t* data, std::size_t size);  // StreamReader on the bytes (segment stream v3)
 int json(const uint8_t* data, std::size_t size);    // JSON path: one curve or {"curves": [...]}
 int jsonl(const uint8_t* data, std::size_t size);   // JSON Lines path
-int gcode(const uint8_t* data, std::size_t size);   // G-code (RS274NGC subset)
+int gcode(const uint8_t* data, std::size_t size);   // G-code (RS274NGC subset), its first moves
 int svg(const uint8_t* data, std::size_t size);     // SVG (tinyxml2)
 int dxf(const uint8_t* data, std::size_t size);     // DXF (dxflib; through a temporary file)
 int link(const uint8_t* data, std::size_t size);    // link frames (LINK.md) at both ends: the host's

@@ -221,7 +221,9 @@ TEST(Gcode, Refusals) {
       {"F10 G81 X1 Y1 Z-1 R1\nG0 X3\nG81 X2\nM2\n", "t.ngc:3: G81: R word missing (the retract plane of the cycle)"},
       {"F10 G83 X1 Y1 Z-1 R1 Q1\nG73 X2 R1\nM2\n", "t.ngc:2: G73: Z word missing (the bottom of the hole)"},
       {"F10 G81 X1 Y1 Z1 R-1\nM2\n", "t.ngc:1: G81: the bottom of the hole (Z) is above the retract plane (R)"},
-      {"F10 G83 X1 Y1 Z-1000000 R1 Q1\nM2\n", "t.ngc:1: G83: the peck depth Q makes more than 100000 pecks in one hole"},
+      {"F10 G83 X1 Y1 Z-1000000 R1 Q1\nM2\n", "t.ngc:1: G83: the peck depth Q and the repeats L make more than 100000 pecks in one block"},
+      // 999 pecks a hole: 100 holes of them are one block (GcodeCycles.PeckBudget), 101 too many
+      {"F10 G91 G83 X1 Y1 Z-999 R1 Q1 L101\nM2\n", "t.ngc:1: G83: the peck depth Q and the repeats L make more than 100000 pecks in one block"},
       {"F10 G81 X1 Y1 Z-1 R1 L0\nM2\n", "t.ngc:1: L0: the repeat count L must be a whole number from 1 to 10000"},
       {"F10 G18 G81 X1 Y1 Z-1 R1\nM2\n", "t.ngc:1: G81: canned cycles are supported in the XY plane (G17) only"},
       {"F100\nG2 X20.029 Y0 I10 J0\nM2\n",
@@ -417,6 +419,21 @@ TEST(Gcode, InverseTimeFeeds) {
   EXPECT_NEAR(tp.moves[2].feed, 90.0 / 15, 1e-12);
   EXPECT_EQ(tp.moves[3].kind, Move::Kind::kRapid);
   EXPECT_NEAR(tp.moves[4].feed, 5.0, 1e-12);
+}
+
+// One block's pecks are bounded as holes times pecks a hole (its moves are
+// held until taken): 100 holes of 999 pecks are read, each peck a feed of Q
+// (after the first, from LinuxCNC's clearance of 0.254 mm above the last).
+TEST(Gcode, PeckBudgetOfOneBlock) {
+  const Toolpath p = read("F10 G91 G83 X1 Y1 Z-999 R1 Q1 L100\nM2\n");
+  int feeds = 0;
+  for (const Move& m : p.moves)
+    if (m.kind == Move::Kind::kFeed) {
+      const double peck = (at(m, 1) - at(m, 0)).norm() - (feeds % 999 == 0 ? 0 : 0.254);
+      EXPECT_NEAR(peck, 1.0, 1e-9) << "feed " << feeds;
+      ++feeds;
+    }
+  EXPECT_EQ(feeds, 100 * 999);
 }
 
 // G4 P: the move before it ends in an exact stop and rests P seconds; G82
