@@ -253,13 +253,20 @@ class Interpreter {
       g_by_group[grp] = t;
     }
     std::map<int, std::string> m_by_group;
+    std::string optional_stop;  // the M1 word, if the block has one
     for (const auto& [m, t] : ms) {
       int grp;
       if (m == 2 || m == 30) grp = 4;
+      else if (m == 1) {
+        grp = 4;
+        optional_stop = t;
+      }
       else if (m == 3 || m == 4 || m == 5) grp = 7;
       else if (m == 7 || m == 8 || m == 9) grp = (m == 9 ? 8 : 80 + m);  // M7 and M8 may share a block
       else if (m == 6) grp = 6;
-      else if (m == 0 || m == 1 || m == 60) fail(t, "program pause (M0/M1/M60) is not supported");
+      else if (m == 0 || m == 60)
+        fail(t, "program pause (M0/M60) is not supported: the program runs with no operator to resume it "
+                "(M1, the optional stop, is taken as an exact stop)");
       else fail(t, "unknown or unsupported M code");
       if (grp == 8 && (m_by_group.count(87) || m_by_group.count(88))) fail(t, "M9 with M7 or M8 in the same block");
       if ((grp == 87 || grp == 88) && m_by_group.count(8)) fail(t, "M7 or M8 with M9 in the same block");
@@ -329,7 +336,8 @@ class Interpreter {
       motion(mg.has_value());
     }
     check_unused();
-    return m_by_group.count(4) > 0;
+    if (!optional_stop.empty()) stop_after_motion(optional_stop);
+    return m_by_group.count(4) > 0 && optional_stop.empty();
   }
 
   void check_letter(const Word& w) const {
@@ -813,6 +821,15 @@ class Interpreter {
     emit(Move::Kind::kFeed, gcode::bezier3(c), f);
   }
 
+  // M1 (after the block's motion, as in LinuxCNC): the machine stops at the
+  // end of the move before it and goes on, as LinuxCNC does with its
+  // optional-stop switch off; a pause for an operator is not modelled.
+  void stop_after_motion(const std::string& t) {
+    if (nurbs_) fail(t, "G5.2 NURBS not closed with G5.3");
+    note("M1", t, "optional stop taken as an exact stop, without a pause (LinuxCNC's optional-stop switch off)");
+    if (!out_.moves.empty()) out_.moves.back().exact_stop = true;
+  }
+
   // G4 P: the machine stops at the end of the move before it and rests P
   // seconds there (P0: the stop alone, LinuxCNC's way of forcing one).
   void dwell(const std::string& t) {
@@ -848,7 +865,10 @@ class Interpreter {
     }
     if (has('L')) {
       const double l = value('L');
-      if (l != std::floor(l) || l < 3) fail(text('L'), "the NURBS order must be an integer of 3 or more");
+      // the order is held as int: bounded before the conversion (a rational NURBS is checked against
+      // its own, lower cap when it is closed)
+      if (l != std::floor(l) || l < 3 || l > geo::kMaxDegree + 1)
+        fail(text('L'), "the NURBS order must be an integer from 3 to " + std::to_string(geo::kMaxDegree + 1));
       nurbs_->order = static_cast<int>(l);
     }
     if (has('X')) {

@@ -17,7 +17,9 @@
 // program's Z plus the length) and G49, T with M6 (the tool G43 without H
 // takes), comments, N, '/', '%', M2/M30.
 // Accepted with a note: S, M3/M4/M5, M7/M8/M9, T, M6, G40, G54, G80,
-// G64 Q. Everything else is refused with one InputError
+// G64 Q, M1 (the optional stop: the move before it ends in an exact stop and
+// the program goes on, as LinuxCNC with its optional-stop switch off; CAM
+// posts write it between operations). Everything else is refused with one InputError
 // "<file>:<line>: <word>: <why>".
 //
 // The program starts at X0 Y0 Z0 (as rs274 does) and ends at M2, M30 or the

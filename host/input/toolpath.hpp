@@ -27,7 +27,7 @@ struct Move {
   // all axes over that (1 for a move of X Y Z alone).
   double feed_scale = 1;
   double tolerance = -1;   // path tolerance for this move, mm (G64 P); < 0: the job's --tol
-  bool exact_stop = false; // the machine stops at the end of this move (G61, G61.1, rapids, a dwell)
+  bool exact_stop = false; // the machine stops at the end of this move (G61, G61.1, rapids, a dwell, M1)
   double dwell = 0;        // seconds at rest at the end of this move (G4), after its exact stop
   std::string where;       // "<file>:<line>" (G-code), "<file>: path <id>" (SVG), "<file>: entity <n>" (DXF)
 };

@@ -54,6 +54,7 @@ void butterfly(const std::string& file, double period) {
   const plan::Path p = input::load_path(file);
   const job::JobResult r = job::run_job(p, cfg);
   row("butterfly", period, r.plan.duration(), since(t0), r.segments.size(), r.ticks.size(), cfg);
+  std::printf("  stages: plan %.3f ticks %.3f fit %.3f compile %.3f s\n", r.t_plan, r.t_ticks, r.t_fit, r.t_compile);
 }
 
 void raster(size_t pieces, double period) {

@@ -60,7 +60,7 @@ struct Canon {
   double feed = 0;       // mm/min (degrees/min for A B C alone: rs274 prints F as programmed)
   double feed_raw = 0;   // F as programmed
   double dwell = 0;      // DWELLs after it, seconds
-  bool dwelled = false;  // a DWELL (even of 0 s) follows it: the machine stops there
+  bool dwelled = false;  // a DWELL (even of 0 s) or an M1 follows it: the machine stops there
   double tolerance = -1; // mm, -1 none
   bool exact = false;
 };
@@ -117,6 +117,7 @@ Rs274 run_rs274(const std::string& shim, const fs::path& prog, const fs::path& w
       r.moves.back().dwell += numbers(args)[0];
       r.moves.back().dwelled = true;
     }
+    else if (name == "OPTIONAL_PROGRAM_STOP" && !r.moves.empty()) r.moves.back().dwelled = true;  // M1: a stop
     else if (name == "USE_TOOL_LENGTH_OFFSET") {
       std::istringstream xyz(args);  // "x y z, ..."
       double x = 0, y = 0, z = 0;

@@ -247,8 +247,15 @@ TEST(Gcode, Refusals) {
       {"F1\nG2 X1 Y0 R0.2\nM2\n", "t.ngc:2: R0.2: the radius is too small to reach the end point"},
       {"F1\nG2 X0.0019 I0.001 J0\nM2\n", "t.ngc:2: G2: zero-radius arc (start radius 0.001, end radius 0.0009)"},
       {"F1\nG5.2 X1 Y0 P1\nX2 Y2 P1\nG1 X5\nM2\n", "t.ngc:4: G1: G5.2 NURBS not closed with G5.3"},
+      // found by the fuzzer: the order overflowed int (undefined behaviour)
+      {"F1\nG5.2 X1 Y0 P1 L4111111111111111111111\nX2 Y2 P1\nG5.3\nM2\n",
+       "t.ngc:2: L4111111111111111111111: the NURBS order must be an integer from 3 to 16"},
+      {"F1\nG5.2 X1 Y0 P1 L17\nX2 Y2 P1\nG5.3\nM2\n", "t.ngc:2: L17: the NURBS order must be an integer from 3 to 16"},
       {"F1\nG18 G5 X1 I1 J0 P0 Q1\nM2\n", "t.ngc:2: G5: splines must be in the XY plane (G17)"},
-      {"M0\nM2\n", "t.ngc:1: M0: program pause (M0/M1/M60) is not supported"},
+      {"M0\nM2\n", "t.ngc:1: M0: program pause (M0/M60) is not supported: the program runs with no operator to resume it "
+                   "(M1, the optional stop, is taken as an exact stop)"},
+      {"F1\nG1 X1 M1 M2\n", "t.ngc:2: M2: two M codes from the same modal group (M1)"},
+      {"F1\nG5.2 X1 Y0 P1\nX2 Y2 P1 M1\nG5.3\nM2\n", "t.ngc:3: M1: G5.2 NURBS not closed with G5.3"},
       {"F1 G1 X1\n%\nM2\n", "t.ngc:2: %: '%' only on the first line, or to close a program opened with '%'"},
       {"F1 (open\nM2\n", "t.ngc:1: (: comment not closed on its line"},
       {"G0 X1\nG80\nX2\nM2\n", "t.ngc:3: X2: axis word with no motion mode (G0, G1, G2, G3, G5, ...) in effect"},
@@ -419,6 +426,20 @@ TEST(Gcode, InverseTimeFeeds) {
   EXPECT_NEAR(tp.moves[2].feed, 90.0 / 15, 1e-12);
   EXPECT_EQ(tp.moves[3].kind, Move::Kind::kRapid);
   EXPECT_NEAR(tp.moves[4].feed, 5.0, 1e-12);
+}
+
+// M1 after the block's motion (LinuxCNC's order): the move before it ends in
+// an exact stop, the program goes on (the optional-stop switch off), noted.
+TEST(Gcode, OptionalStopIsAnExactStop) {
+  const Toolpath tp = read("G64 P0.01\nM1\nF600\nG1 X10\nG1 X10 Y10 M1\nG1 X20\nM1\nG1 X30 Y5\nM2\n");
+  ASSERT_EQ(tp.moves.size(), 4u);
+  const bool expected[4] = {false, true, true, false};
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_EQ(tp.moves[i].exact_stop, expected[i]) << tp.moves[i].where;
+    EXPECT_EQ(tp.moves[i].dwell, 0.0);
+  }
+  ASSERT_EQ(tp.notes.size(), 1u);  // one note per kind, at its first use (before any move: nothing to stop)
+  EXPECT_NE(tp.notes[0].find("t.ngc:2: M1: optional stop taken as an exact stop"), std::string::npos) << tp.notes[0];
 }
 
 // One block's pecks are bounded as holes times pecks a hole (its moves are
