@@ -67,7 +67,7 @@ int g_group(int g) {
     case 200: case 210: return 6;
     case 400: return 7;
     case 430: case 490: return 8;
-    case 40: case 280: case 300: return 0;  // non-modal
+    case 40: case 280: case 300: case 530: return 0;  // non-modal
     case 540: return 12;
     case 610: case 611: case 640: return 13;
     default: return -1;
@@ -81,7 +81,6 @@ std::string g_refusal(int g) {
   if ((g >= 550 && g <= 593) || g == 100 || g == 520)
     return "work offsets are not supported (only G54, the default work offset)";
   if (g >= 920 && g <= 923) return "coordinate offsets (G92) are not supported";
-  if (g == 530) return "machine coordinates (G53) are not supported";
   if (g == 950) return "feed per revolution is not supported (only G93 inverse time and G94 units per minute)";
   if ((g >= 840 && g <= 890) || g == 740 || g == 760)
     return "canned cycles other than G73, G81, G82 and G83 are not supported (feed-out, tapping, boring)";
@@ -171,6 +170,7 @@ class Interpreter {
   // Tool length offset (G43): positions are of the tool's holder, the
   // program's Z plus the length (pos_ holds them so).
   double tlo_ = 0;
+  bool machine_coords_ = false;  // within a G53 block
   // Canned cycles (G73, G81, G83): the retract mode (G98: to the Z before
   // the block, if above R) and the R, Z, Q words kept from block to block,
   // in program units as written (LinuxCNC's cycle_r, cycle_z, cycle_q),
@@ -328,7 +328,9 @@ class Interpreter {
     const std::optional<int> mg = g_in(1);
     if (mg) set_motion(*mg, g_text(*mg));
     const std::optional<int> g0 = g_in(0);
-    if (g0 && *g0 != 40) {
+    if (g0 && *g0 == 530) {
+      machine_move(g_text(530), mg.has_value());
+    } else if (g0 && *g0 != 40) {
       if (mg && any_axis()) fail(g_text(*g0), "two G codes that both use the axis words (" + g_text(*mg) + ")");
       reference_move(*g0, g_text(*g0));
     } else {
@@ -479,9 +481,23 @@ class Interpreter {
   Vector3d end_point() {
     Vector3d e = pos_;
     const char letters[3] = {'X', 'Y', 'Z'};
+    const double z_offset = machine_coords_ ? 0.0 : tlo_;
     for (int i = 0; i < 3; ++i)
-      if (has(letters[i])) e[i] = value(letters[i]) * units_ + (absolute_ ? (i == 2 ? tlo_ : 0.0) : pos_[i]);
+      if (has(letters[i])) e[i] = value(letters[i]) * units_ + (absolute_ ? (i == 2 ? z_offset : 0.0) : pos_[i]);
     return e;
+  }
+
+  // G53: this block's G0 or G1 goes to machine coordinates, the moves' own
+  // (the holder's; G54 is zero here, so only the tool length offset is left
+  // out), as in LinuxCNC; absolute only.
+  void machine_move(const std::string& t, bool explicit_g) {
+    if (motion_ != Motion::kRapid && motion_ != Motion::kLine) fail(t, "G53 needs G0 or G1 (as in LinuxCNC)");
+    if (!absolute_) fail(t, "G53 in incremental distance mode (G91): machine coordinates are absolute");
+    struct Within {
+      bool& flag;
+      ~Within() { flag = false; }
+    } within{machine_coords_ = true};
+    motion(explicit_g);
   }
 
   // The programmed feed of X Y Z or U V W (mm/s); in G93 its F is checked

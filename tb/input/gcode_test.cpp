@@ -255,6 +255,9 @@ TEST(Gcode, Refusals) {
       {"M0\nM2\n", "t.ngc:1: M0: program pause (M0/M60) is not supported: the program runs with no operator to resume it "
                    "(M1, the optional stop, is taken as an exact stop)"},
       {"F1\nG1 X1 M1 M2\n", "t.ngc:2: M2: two M codes from the same modal group (M1)"},
+      {"G91 G53 G0 Z20\nM2\n", "t.ngc:1: G53: G53 in incremental distance mode (G91): machine coordinates are absolute"},
+      {"F1 G53 G2 X1 Y1 R1\nM2\n", "t.ngc:1: G53: G53 needs G0 or G1 (as in LinuxCNC)"},
+      {"G53 G28 Z1\nM2\n", "t.ngc:1: G28: two G codes from the same modal group (G53)"},
       {"F1\nG5.2 X1 Y0 P1\nX2 Y2 P1 M1\nG5.3\nM2\n", "t.ngc:3: M1: G5.2 NURBS not closed with G5.3"},
       {"F1 G1 X1\n%\nM2\n", "t.ngc:2: %: '%' only on the first line, or to close a program opened with '%'"},
       {"F1 (open\nM2\n", "t.ngc:1: (: comment not closed on its line"},
@@ -426,6 +429,22 @@ TEST(Gcode, InverseTimeFeeds) {
   EXPECT_NEAR(tp.moves[2].feed, 90.0 / 15, 1e-12);
   EXPECT_EQ(tp.moves[3].kind, Move::Kind::kRapid);
   EXPECT_NEAR(tp.moves[4].feed, 5.0, 1e-12);
+}
+
+// G53: the block's axis words are machine coordinates, the moves' own: the
+// tool length offset (10 mm here) is left out of that block only.
+TEST(Gcode, MachineCoordinates) {
+  traj::input::GcodeOptions opt;
+  opt.tools = traj::input::ToolTable{"t.tbl", {{1, 10.0}}};
+  const Toolpath tp = read("T1 M6 G43\nG21 G90 F100\nG1 Z5\nG53 G0 Z20\nG53 X7\nG1 Z5\nM2\n", opt);
+  ASSERT_EQ(tp.moves.size(), 4u);
+  EXPECT_NEAR(at(tp.moves[0], 1)[2], 15, 1e-12);
+  EXPECT_EQ(tp.moves[1].kind, Move::Kind::kRapid);
+  EXPECT_NEAR(at(tp.moves[1], 1)[2], 20, 1e-12);
+  EXPECT_EQ(tp.moves[2].kind, Move::Kind::kRapid);  // G0 stays modal
+  EXPECT_NEAR(at(tp.moves[2], 1)[0], 7, 1e-12);
+  EXPECT_NEAR(at(tp.moves[2], 1)[2], 20, 1e-12);
+  EXPECT_NEAR(at(tp.moves[3], 1)[2], 15, 1e-12);  // the offset is back
 }
 
 // M1 after the block's motion (LinuxCNC's order): the move before it ends in
