@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <set>
 #include <vector>
@@ -22,6 +23,7 @@
 #include "job/toolpath_job.hpp"
 #include "job/toolpath_stream.hpp"
 #include "report/report.hpp"
+#include "report/sample_check.hpp"
 #include "sim/sim.hpp"
 #include "stream/segment_stream.hpp"
 #include "util/atomic_file.hpp"
@@ -430,6 +432,37 @@ struct FileRecords {
 
 }  // namespace
 
+namespace {
+// sim --check: the samples' peaks against the limits, after the allowance
+// the stream's format leaves at most (job::Machine: 1/2 LSB of rounding and
+// the register bound the compiler accepts; the exact joints' offset on top
+// in the fine formats), printed; false if one is exceeded.
+bool limits_held(report::SampleCheck& check, const stream::Header& header, plan::Limits limits, bool check_feed) {
+  check.finish();
+  const fd::Format fmt = header.format();
+  const double lsb = std::ldexp(1.0, -header.frac_bits);
+  const job::Allowance al = job::sample_allowance(job::Machine::sample_error_lsb(fmt) * lsb,
+                                                  job::Machine::joint_lsb(fmt) * lsb, header.period);
+  const bool jerk = header.degree == 5;
+  const std::string feed_limit = check_feed ? util::num(limits.feed) : "not checked: no --feed";
+  if (!check_feed) limits.feed = std::numeric_limits<double>::infinity();
+  const report::Worst w = report::worst_of_samples(check.peaks(), al, limits, header.axes, jerk);
+  const plan::Peaks& pk = check.peaks();
+  std::printf("  limits on the core's samples (%lld samples at %g s; allowance per axis v %.3g, a %.3g, j %.3g%s):\n",
+              check.count(), header.period, al.v, al.a, al.j, jerk ? "" : "; cubic segments: no jerk claim");
+  for (int ax = 0; ax < header.axes; ++ax)
+    std::printf("    %-2s v %-10.5g a %-10.5g j %-10.5g (limits %g, %g, %g)\n", limits.axis(ax).c_str(),
+                pk.v_axis[ax], pk.a_axis[ax], pk.j_axis[ax], limits.v_axis[ax], limits.a_axis[ax], limits.j_axis[ax]);
+  std::printf("    feed %.5g (%s), a_tan %.5g (%g), a_cen %.5g (%g), j_tan %.5g (%g), j_cen %.5g (%g)\n", pk.feed,
+              feed_limit.c_str(), pk.a_tan, limits.a_tan, pk.a_cen, limits.a_cen, pk.j_tan, limits.j_tan, pk.j_cen,
+              limits.j_cen);
+  const bool held = w.ratio <= 1.0;
+  std::printf("  worst peak/limit after the allowance: %.4f%s%s -> %s\n", w.ratio, w.what.empty() ? "" : " ",
+              w.what.c_str(), held ? "every limit held" : "EXCEEDED");
+  return held;
+}
+}  // namespace
+
 int sim_command(const SimArgs& a) {
   if (!a.csv.empty()) util::check_output_path(a.csv);
   // A first pass checks the whole stream, keeping nothing, so that a bad
@@ -452,9 +485,18 @@ int sim_command(const SimArgs& a) {
   if (!a.csv.empty()) csv = std::make_unique<CsvWriter>(a.csv, header);
   std::unique_ptr<SampleFileWriter> bin;
   if (!a.samples.empty()) bin = std::make_unique<SampleFileWriter>(a.samples, header);
+  std::unique_ptr<report::SampleCheck> check;
+  if (a.check) {
+    // a path of fewer axes than the engine's leaves the rest at 0 (checked all the same)
+    if (a.axes > header.axes)
+      throw plan::PlanError("--axes names " + std::to_string(a.axes) + " axes; the stream " + a.input + " has " +
+                            std::to_string(header.axes));
+    check = std::make_unique<report::SampleCheck>(header.axes, std::ldexp(1.0, -header.frac_bits), header.period);
+  }
   const sim::SampleSink sink = [&](uint64_t k, const report::Sample& v) {
     if (csv) csv->row(k, v);
     if (bin) bin->row(v);
+    if (check) check->add(v);
   };
   const auto commit = [&] {
     if (csv) csv->commit();
@@ -480,8 +522,9 @@ int sim_command(const SimArgs& a) {
                 sr.tick_gap, sim_speed(sr).c_str(), sr.mismatches ? "NO" : "yes",
                 sr.prediction_mismatches ? "NO" : "yes", sr.tick_err ? "SET" : "clear",
                 static_cast<unsigned long long>(sr.underruns), ok ? to.c_str() : "(no samples written)");
-    if (!ok) std::fprintf(stderr, "trajcore sim: a check FAILED (see above)\n");
-    return ok ? 0 : 1;
+    const bool held = !check || limits_held(*check, header, a.limits, a.check_feed);
+    if (!ok || !held) std::fprintf(stderr, "trajcore sim: a check FAILED (see above)\n");
+    return ok && held ? 0 : 1;
   }
   FileRecords f(a.input);
   const sim::RecordPull pull = [&](stream::Record& r) { return f.reader.next(r); };
@@ -502,8 +545,9 @@ int sim_command(const SimArgs& a) {
   if (header.has_time_scaling())
     std::printf("  time scaling (header): s <= %g, |ds/dt| <= %g /s, |d2s/dt2| <= %g /s^2\n", header.scale_max,
                 static_cast<double>(header.scale_rate), static_cast<double>(header.scale_accel));
-  if (!ok) std::fprintf(stderr, "trajcore sim: a check FAILED (see above)\n");
-  return ok ? 0 : 1;
+  const bool held = !check || limits_held(*check, header, a.limits, a.check_feed);
+  if (!ok || !held) std::fprintf(stderr, "trajcore sim: a check FAILED (see above)\n");
+  return ok && held ? 0 : 1;
 }
 
 }  // namespace traj::app

@@ -41,6 +41,10 @@ struct SimArgs {
   std::string csv;      // empty: no samples written
   std::string samples;  // binary sample file (host/stream/README.md); empty: none
   int tick_gap = 0;
+  bool check = false;   // the samples measured against `limits` (report/sample_check.hpp)
+  plan::Limits limits;  // as given to plan (its defaults)
+  int axes = 0;         // --axes given: its count, at most the stream's (0: not given)
+  bool check_feed = false;  // --feed given: the path speed checked too (a toolpath's feeds and rapids vary by move)
 };
 int sim_command(const SimArgs& a);
 

@@ -37,19 +37,15 @@ struct AxisArgs {
   std::vector<double> v, a, j;
 };
 
-void add_limits(CLI::App* c, JobConfig& cfg, AxisArgs& ax) {
-  auto& L = cfg.limits;
+// The limits (and the axes they are given for): plan and run plan within
+// them, sim --check measures the core's samples against them.
+void add_limit_values(CLI::App* c, traj::plan::Limits& L, AxisArgs& ax) {
   c->add_option("--axes", ax.axes,
                 "the machine's axes, as LinuxCNC names them: XYZ and up to five of A B C (rotary, degrees) and U V W, "
                 "in the engine's order (G-code words of other axes are refused; F is the speed of X Y Z when they "
                 "move, else of U V W, else of A B C, as in LinuxCNC)")
       ->capture_default_str();
   c->add_option("--feed", L.feed, "commanded feed, units/s")->capture_default_str();
-  c->add_option("--period", cfg.machine.period, "tick period, s")->capture_default_str();
-  c->add_option("--feed-accuracy", cfg.machine.feed_accuracy,
-                "bound on |chord between samples / chord between the planned points - 1| at every tick (0: the default "
-                "fit, about 2e-3)")
-      ->capture_default_str();
   c->add_option("--v-axis", ax.v, "per-axis velocity limits in --axes order, e.g. x,y,z (one value: all axes; "
                 "A B C in degrees/s)")->delimiter(',');
   c->add_option("--a-axis", ax.a, "per-axis acceleration limits")->delimiter(',');
@@ -58,6 +54,16 @@ void add_limits(CLI::App* c, JobConfig& cfg, AxisArgs& ax) {
   c->add_option("--j-tan", L.j_tan, "tangential jerk limit")->capture_default_str();
   c->add_option("--a-cen", L.a_cen, "centripetal acceleration limit")->capture_default_str();
   c->add_option("--j-cen", L.j_cen, "centripetal jerk limit")->capture_default_str();
+}
+
+void add_limits(CLI::App* c, JobConfig& cfg, AxisArgs& ax) {
+  auto& L = cfg.limits;
+  add_limit_values(c, L, ax);
+  c->add_option("--period", cfg.machine.period, "tick period, s")->capture_default_str();
+  c->add_option("--feed-accuracy", cfg.machine.feed_accuracy,
+                "bound on |chord between samples / chord between the planned points - 1| at every tick (0: the default "
+                "fit, about 2e-3)")
+      ->capture_default_str();
   c->add_option("--tol", L.tol, "path tolerance: max distance of the output from the curve, units")
       ->capture_default_str();
   c->add_option("--degree", cfg.machine.degree, "segment degree: 5 (C2 joins) or 3")->capture_default_str();
@@ -80,7 +86,7 @@ void add_time_scale(CLI::App* c, traj::app::TimeScaleArgs& t) {
 }
 
 // The machine's axes (--axes) and their limits: one value for all, or one per axis.
-void apply_axes(JobConfig& cfg, const AxisArgs& ax) {
+void apply_axes(traj::plan::Limits& limits, const AxisArgs& ax) {
   traj::input::check_axes(ax.axes);
   const int n = static_cast<int>(ax.axes.size());
   auto set = [n](double* dst, const std::vector<double>& src, const char* name) {
@@ -90,15 +96,19 @@ void apply_axes(JobConfig& cfg, const AxisArgs& ax) {
                                   " values (one per axis of --axes), got " + std::to_string(src.size()));
     for (int k = 0; k < traj::plan::kMaxAxes; ++k) dst[k] = src.size() == 1 ? src[0] : src[std::min(k, n - 1)];
   };
-  set(cfg.limits.v_axis, ax.v, "v-axis");
-  set(cfg.limits.a_axis, ax.a, "a-axis");
-  set(cfg.limits.j_axis, ax.j, "j-axis");
+  set(limits.v_axis, ax.v, "v-axis");
+  set(limits.a_axis, ax.a, "a-axis");
+  set(limits.j_axis, ax.j, "j-axis");
   std::string names;
   for (char c : ax.axes) names += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   for (char c : std::string("xyzabcuvw"))
     if (names.size() < static_cast<size_t>(traj::plan::kMaxAxes) && names.find(c) == std::string::npos) names += c;
-  cfg.limits.axis_names = names;
-  cfg.machine.axes = n;
+  limits.axis_names = names;
+}
+
+void apply_axes(JobConfig& cfg, const AxisArgs& ax) {
+  apply_axes(cfg.limits, ax);
+  cfg.machine.axes = static_cast<int>(ax.axes.size());
 }
 
 }  // namespace
@@ -154,7 +164,7 @@ int main(int argc, char** argv) {
   traj::app::PlanArgs pa;
   traj::app::RunArgs ra;
   traj::app::SimArgs sa;
-  AxisArgs axes;
+  AxisArgs axes, sim_axes;
   auto* pl = app.add_subcommand("plan", "Plan and compile a path (curve JSON) into a segment stream");
   pl->add_option("path", pa.input,
                  "G-code (.ngc .nc .gcode .tap), SVG, DXF, curve or path JSON (the butterfly format, or "
@@ -197,13 +207,18 @@ int main(int argc, char** argv) {
   sm->add_option("--tick-gap", sa.tick_gap,
                  "clock cycles between ticks (0: the engine's pace, a tick after each sample; BCU streams: the "
                  "core's minimum spacing)");
+  sm->add_flag("--check", sa.check,
+               "measure the core's samples against the limits (the options below, as given to plan; defaults: "
+               "plan's; the path speed only with --feed: a toolpath's feeds and rapids vary by move) after the "
+               "quantisation allowance of the stream's format, in bounded memory; exit 1 if one is exceeded");
+  add_limit_values(sm, sa.limits, sim_axes);
   sm->footer("A stream without a BCU format (FD segments) runs on traj_fd_engine, one with a BCU format (FD and BCU segments, "
              "from `trajcore demo --engine bcu|mixed` or `trajcore spline`) on traj_core.");
 
   auto* rn = app.add_subcommand("run", "Plan, compile, simulate on the Verilated core, and report (text + SVG)");
   rn->add_option("path", ra.input,
-                 "G-code (.ngc .nc .gcode .tap), SVG, DXF, or curve/path JSON (not .jsonl: plan a JSON Lines path "
-                 "with `plan`, then `sim`)")
+                 "G-code (.ngc .nc .gcode .tap), SVG, DXF, curve/path JSON, or a JSON Lines path (read whole; "
+                 "`plan` streams it, `sim --check` measures that stream)")
       ->required();
   rn->add_option("--format", ra.format, kFormatHelp)->check(CLI::IsMember(kFormats));
   rn->add_option("--tool-table", ra.tool_table,
@@ -243,7 +258,12 @@ int main(int argc, char** argv) {
       ra.cfg.machine.choose_format(ra.cfg.limits);
       return traj::app::run_command(ra);
     }
-    if (*sm) return traj::app::sim_command(sa);
+    if (*sm) {
+      apply_axes(sa.limits, sim_axes);
+      if (sm->get_option("--axes")->count() > 0) sa.axes = static_cast<int>(sim_axes.axes.size());
+      sa.check_feed = sm->get_option("--feed")->count() > 0;
+      return traj::app::sim_command(sa);
+    }
     if (*lc.upload) return traj::app::upload_command(lc.up);
     if (*lc.board) return traj::app::board_command(lc.bd);
   } catch (const std::exception& e) {

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "planner/sampled.hpp"
+#include "report/sample_check.hpp"
 #include "util/format.hpp"
 
 namespace traj::report {
@@ -148,28 +149,14 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
   }
   fluct.into(rep.feed_fluct_max, rep.feed_fluct_min, rep.feed_fluct_rms);
   err.into(rep.feed_err_max, rep.feed_err_min, rep.feed_err_rms);
-  // sampled derivatives
-  for (size_t k = 0; k + 1 < n; ++k) {
-    double v2 = 0, a2 = 0, j2 = 0;
-    for (int a = 0; a < d; ++a) {
-      const double dv = (x[k + 1][a] - x[k][a]) / h;
-      rep.out_peaks.v_axis[a] = std::max(rep.out_peaks.v_axis[a], std::fabs(dv));
-      v2 += dv * dv;
-      if (k + 2 < n) {
-        const double da = (x[k + 2][a] - 2 * x[k + 1][a] + x[k][a]) / (h * h);
-        rep.out_peaks.a_axis[a] = std::max(rep.out_peaks.a_axis[a], std::fabs(da));
-        a2 += da * da;
-      }
-      if (k + 3 < n) {
-        const double dj = (x[k + 3][a] - 3 * x[k + 2][a] + 3 * x[k + 1][a] - x[k][a]) / (h * h * h);
-        rep.out_peaks.j_axis[a] = std::max(rep.out_peaks.j_axis[a], std::fabs(dj));
-        j2 += dj * dj;
-      }
-    }
-    rep.out_path_v = std::max(rep.out_path_v, std::sqrt(v2));
-    rep.out_path_a = std::max(rep.out_path_a, std::sqrt(a2));
-    rep.out_path_j = std::max(rep.out_path_j, std::sqrt(j2));
-  }
+  // the limits on the samples (sample_check.hpp)
+  SampleCheck check(d, lsb, h);
+  for (const Sample& v : s.v) check.add(v);
+  check.finish();
+  rep.out_peaks = check.peaks();
+  rep.out_path_v = rep.out_peaks.feed;
+  rep.out_path_a = check.path_a();
+  rep.out_path_j = check.path_j();
   const job::Allowance al = job::sample_allowance(rep.quant_diff, rep.quant - rep.quant_diff, h);
   rep.allow_v = al.v;
   rep.allow_a = al.a;
@@ -182,8 +169,8 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
     rep.exact_form = sh.share > job::Machine::kAllowanceShare;
   }
   sample_to_fit(r, s, h, lsb, rep);
-  // tangential and normal (centripetal) quantities of the samples, and of the
-  // fitted polynomials at the same ticks (sampled.hpp)
+  // tangential and normal (centripetal) quantities of the fitted polynomials
+  // at the ticks (sampled.hpp; the samples' own are SampleCheck's)
   const bool jerk_claimed = r.header.degree == 5;
   // From the steps x(k+1) - x(k): each window's positions relative to its
   // first tick, rounded at the scale of the window's travel (absolute
@@ -203,12 +190,6 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
     }
   };
   {
-    std::vector<std::array<double, kMaxAxes>> step(n > 0 ? n - 1 : 0);
-    for (size_t k = 0; k + 1 < n; ++k)
-      for (int a = 0; a < d; ++a) step[k][a] = x[k + 1][a] - x[k][a];  // exact: samples are integers of LSBs
-    sampled_peaks(step, 16 * lsb, rep.out_peaks);
-  }
-  {
     // each segment's steps from its travel (q(tau) - q(0)); a join's step is
     // the rest of one segment's travel, the next one starting where it ends
     std::vector<std::array<double, kMaxAxes>> step;
@@ -227,29 +208,9 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
     }
     sampled_peaks(step, 1e-9 * cfg.limits.feed * h, rep.fit_peaks);
   }
-  rep.out_peaks.feed = rep.out_path_v;
-  const double sd = std::sqrt(static_cast<double>(d));
-  rep.worst_out = 0;
-  auto chk = [&](double v, double allow, double lim, const std::string& what) {
-    const double q = (v - allow) / lim;
-    if (q > rep.worst_out) {
-      rep.worst_out = q;
-      rep.worst_out_what = what;
-    }
-  };
-  for (int a = 0; a < d; ++a) {
-    const std::string ax = cfg.limits.axis(a);
-    chk(rep.out_peaks.v_axis[a], rep.allow_v, cfg.limits.v_axis[a], "v_axis." + ax);
-    chk(rep.out_peaks.a_axis[a], rep.allow_a, cfg.limits.a_axis[a], "a_axis." + ax);
-    if (jerk_claimed) chk(rep.out_peaks.j_axis[a], rep.allow_j, cfg.limits.j_axis[a], "j_axis." + ax);
-  }
-  chk(rep.out_path_v, rep.allow_path_v, cfg.limits.feed, "feed");
-  chk(rep.out_peaks.a_tan, sd * rep.allow_a, cfg.limits.a_tan, "a_tan");
-  chk(rep.out_peaks.a_cen, sd * rep.allow_a, cfg.limits.a_cen, "a_cen");
-  if (jerk_claimed) {
-    chk(rep.out_peaks.j_tan, sd * rep.allow_j, cfg.limits.j_tan, "j_tan");
-    chk(rep.out_peaks.j_cen, sd * rep.allow_j, cfg.limits.j_cen, "j_cen");
-  }
+  const Worst worst = worst_of_samples(rep.out_peaks, al, cfg.limits, d, jerk_claimed);
+  rep.worst_out = worst.ratio;
+  rep.worst_out_what = worst.what;
   // the fit: per-axis exact maxima, tangential/normal at the ticks
   {
     Peaks f = rep.fit_peaks;
