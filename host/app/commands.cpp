@@ -1,10 +1,14 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "commands.hpp"
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <array>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -437,12 +441,91 @@ namespace {
 // the stream's format leaves at most (job::Machine: 1/2 LSB of rounding and
 // the register bound the compiler accepts; the exact joints' offset on top
 // in the fine formats), printed; false if one is exceeded.
-bool limits_held(report::SampleCheck& check, const stream::Header& header, plan::Limits limits, bool check_feed) {
-  check.finish();
+// The allowance a stream's format leaves at most (job::Machine): 1/2 LSB of
+// rounding and the register bound the compiler accepts, and the exact
+// joints' offset on top in the fine formats.
+job::Allowance format_allowance(const stream::Header& header) {
   const fd::Format fmt = header.format();
   const double lsb = std::ldexp(1.0, -header.frac_bits);
-  const job::Allowance al = job::sample_allowance(job::Machine::sample_error_lsb(fmt) * lsb,
-                                                  job::Machine::joint_lsb(fmt) * lsb, header.period);
+  return job::sample_allowance(job::Machine::sample_error_lsb(fmt) * lsb, job::Machine::joint_lsb(fmt) * lsb,
+                               header.period);
+}
+
+// A binary sample file (SampleFileWriter's format) mapped read-only: the
+// plots read the samples on demand, in pages the kernel can drop, so memory
+// stays bounded however long the run.
+class MappedSamples {
+ public:
+  MappedSamples(const std::string& path, int axes) : axes_(axes) {
+    fd_ = ::open(path.c_str(), O_RDONLY);
+    if (fd_ < 0) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
+    struct stat st {};
+    if (::fstat(fd_, &st) != 0 || st.st_size < kHeader) throw std::runtime_error(path + ": not a sample file");
+    size_ = static_cast<size_t>(st.st_size);
+    base_ = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd_, 0);
+    if (base_ == MAP_FAILED) throw std::runtime_error(path + ": cannot map: " + std::strerror(errno));
+    count_ = (size_ - kHeader) / (8 * static_cast<size_t>(axes_));
+  }
+  ~MappedSamples() {
+    if (base_ != MAP_FAILED) ::munmap(base_, size_);
+    if (fd_ >= 0) ::close(fd_);
+  }
+  MappedSamples(const MappedSamples&) = delete;
+  MappedSamples& operator=(const MappedSamples&) = delete;
+  size_t count() const { return count_; }
+  report::Sample at(size_t k) const {
+    report::Sample v{};
+    const auto* p = static_cast<const unsigned char*>(base_) + kHeader + k * 8 * static_cast<size_t>(axes_);
+    for (int a = 0; a < axes_; ++a) {
+      uint64_t u = 0;
+      for (int i = 7; i >= 0; --i) u = (u << 8) | p[8 * a + i];  // little-endian, as written
+      v[a] = static_cast<long long>(u);
+    }
+    return v;
+  }
+
+ private:
+  static constexpr long kHeader = 24;
+  int axes_;
+  int fd_ = -1;
+  void* base_ = MAP_FAILED;
+  size_t size_ = 0, count_ = 0;
+};
+
+// sim --plots: path_feed.svg and profile.svg of the output alone (no plan),
+// from the sample file the run wrote.
+void write_stream_plots(const std::string& dir, const std::string& samples, const stream::Header& header,
+                        int shown_axes, plan::Limits limits, bool feed_limited, double fastest) {
+  const MappedSamples m(samples, std::min(header.axes, plan::kMaxAxes));
+  report::PlotSource src;
+  src.count = m.count();
+  src.sample = [&m](size_t k) { return m.at(k); };
+  src.axes = shown_axes;
+  src.lsb = std::ldexp(1.0, -header.frac_bits);
+  src.jerk_claimed = header.degree == 5;
+  src.allowance = format_allowance(header);
+  src.feed_limited = feed_limited;
+  job::JobConfig cfg;
+  cfg.machine.period = header.period;
+  cfg.machine.units = header.units;
+  if (!feed_limited) {
+    limits.feed = 0;  // none given; the colour scale's top: the fastest step
+    src.scale_feed = fastest;
+  }
+  cfg.limits = limits;
+  report::write_plot_pages(dir, src, cfg);
+}
+
+// The axes printed and plotted: those --axes names (the engine's further
+// axes carry 0 and are checked all the same), else all of the stream's.
+int shown_axes(const SimArgs& a, const stream::Header& header) {
+  return a.axes > 0 ? a.axes : std::min(header.axes, plan::kMaxAxes);
+}
+
+bool limits_held(report::SampleCheck& check, const stream::Header& header, const SimArgs& a) {
+  plan::Limits limits = a.limits;
+  const bool check_feed = a.check_feed;
+  const job::Allowance al = format_allowance(header);
   const bool jerk = header.degree == 5;
   const std::string feed_limit = check_feed ? util::num(limits.feed) : "not checked: no --feed";
   if (!check_feed) limits.feed = std::numeric_limits<double>::infinity();
@@ -450,7 +533,7 @@ bool limits_held(report::SampleCheck& check, const stream::Header& header, plan:
   const plan::Peaks& pk = check.peaks();
   std::printf("  limits on the core's samples (%lld samples at %g s; allowance per axis v %.3g, a %.3g, j %.3g%s):\n",
               check.count(), header.period, al.v, al.a, al.j, jerk ? "" : "; cubic segments: no jerk claim");
-  for (int ax = 0; ax < header.axes; ++ax)
+  for (int ax = 0; ax < shown_axes(a, header); ++ax)
     std::printf("    %-2s v %-10.5g a %-10.5g j %-10.5g (limits %g, %g, %g)\n", limits.axis(ax).c_str(),
                 pk.v_axis[ax], pk.a_axis[ax], pk.j_axis[ax], limits.v_axis[ax], limits.a_axis[ax], limits.j_axis[ax]);
   std::printf("    feed %.5g (%s), a_tan %.5g (%g), a_cen %.5g (%g), j_tan %.5g (%g), j_cen %.5g (%g)\n", pk.feed,
@@ -459,6 +542,21 @@ bool limits_held(report::SampleCheck& check, const stream::Header& header, plan:
   const bool held = w.ratio <= 1.0;
   std::printf("  worst peak/limit after the allowance: %.4f%s%s -> %s\n", w.ratio, w.what.empty() ? "" : " ",
               w.what.c_str(), held ? "every limit held" : "EXCEEDED");
+  return held;
+}
+
+// After a run: --check's verdict (true without --check) and --plots (from the
+// committed sample file; none when the run failed).
+bool measured(report::SampleCheck* check, bool run_ok, const stream::Header& header, const SimArgs& a,
+              const std::string& sample_file) {
+  if (!check) return true;
+  check->finish();
+  const bool held = !a.check || limits_held(*check, header, a);
+  if (run_ok && !a.plots.empty()) {
+    write_stream_plots(a.plots, sample_file, header, shown_axes(a, header), a.limits, a.check_feed,
+                       check->peaks().feed);
+    std::printf("  plots: %s/{path_feed.svg, profile.svg} (samples: %s)\n", a.plots.c_str(), sample_file.c_str());
+  }
   return held;
 }
 }  // namespace
@@ -483,10 +581,18 @@ int sim_command(const SimArgs& a) {
   }
   std::unique_ptr<CsvWriter> csv;
   if (!a.csv.empty()) csv = std::make_unique<CsvWriter>(a.csv, header);
+  // --plots: the samples to a file (the user's --samples, else <plots>/samples.bin) mapped afterwards
+  std::string sample_file = a.samples;
+  if (!a.plots.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(a.plots, ec);
+    if (ec) throw std::runtime_error("cannot create " + a.plots + ": " + ec.message());
+    if (sample_file.empty()) sample_file = a.plots + "/samples.bin";
+  }
   std::unique_ptr<SampleFileWriter> bin;
-  if (!a.samples.empty()) bin = std::make_unique<SampleFileWriter>(a.samples, header);
+  if (!sample_file.empty()) bin = std::make_unique<SampleFileWriter>(sample_file, header);
   std::unique_ptr<report::SampleCheck> check;
-  if (a.check) {
+  if (a.check || !a.plots.empty()) {
     // a path of fewer axes than the engine's leaves the rest at 0 (checked all the same)
     if (a.axes > header.axes)
       throw plan::PlanError("--axes names " + std::to_string(a.axes) + " axes; the stream " + a.input + " has " +
@@ -504,7 +610,7 @@ int sim_command(const SimArgs& a) {
   };
   const auto prog = [](double f) { progress("sim", f); };
   std::string to = csv ? a.csv : std::string();
-  if (bin) to += (to.empty() ? "" : ", ") + a.samples;
+  if (bin) to += (to.empty() ? "" : ", ") + sample_file;
   if (to.empty()) to = "(no samples written: --csv FILE or --samples FILE writes them)";
   if (header.has_bcu()) {
     // a BCU format: both engines, every sample also against the exact
@@ -522,7 +628,7 @@ int sim_command(const SimArgs& a) {
                 sr.tick_gap, sim_speed(sr).c_str(), sr.mismatches ? "NO" : "yes",
                 sr.prediction_mismatches ? "NO" : "yes", sr.tick_err ? "SET" : "clear",
                 static_cast<unsigned long long>(sr.underruns), ok ? to.c_str() : "(no samples written)");
-    const bool held = !check || limits_held(*check, header, a.limits, a.check_feed);
+    const bool held = measured(check.get(), ok, header, a, sample_file);
     if (!ok || !held) std::fprintf(stderr, "trajcore sim: a check FAILED (see above)\n");
     return ok && held ? 0 : 1;
   }
@@ -545,7 +651,7 @@ int sim_command(const SimArgs& a) {
   if (header.has_time_scaling())
     std::printf("  time scaling (header): s <= %g, |ds/dt| <= %g /s, |d2s/dt2| <= %g /s^2\n", header.scale_max,
                 static_cast<double>(header.scale_rate), static_cast<double>(header.scale_accel));
-  const bool held = !check || limits_held(*check, header, a.limits, a.check_feed);
+  const bool held = measured(check.get(), ok, header, a, sample_file);
   if (!ok || !held) std::fprintf(stderr, "trajcore sim: a check FAILED (see above)\n");
   return ok && held ? 0 : 1;
 }

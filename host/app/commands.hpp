@@ -44,6 +44,7 @@ struct SimArgs {
   bool check = false;   // the samples measured against `limits` (report/sample_check.hpp)
   plan::Limits limits;  // as given to plan (its defaults)
   int axes = 0;         // --axes given: its count, at most the stream's (0: not given)
+  std::string plots;     // folder for path_feed.svg, profile.svg (and samples.bin unless --samples); empty: none
   bool check_feed = false;  // --feed given: the path speed checked too (a toolpath's feeds and rapids vary by move)
 };
 int sim_command(const SimArgs& a);

@@ -211,6 +211,9 @@ int main(int argc, char** argv) {
                "measure the core's samples against the limits (the options below, as given to plan; defaults: "
                "plan's; the path speed only with --feed: a toolpath's feeds and rapids vary by move) after the "
                "quantisation allowance of the stream's format, in bounded memory; exit 1 if one is exceeded");
+  sm->add_option("--plots", sa.plots,
+                 "folder for path_feed.svg and profile.svg of the core's output (and samples.bin, which they are drawn "
+                 "from, unless --samples names the file), in bounded memory");
   add_limit_values(sm, sa.limits, sim_axes);
   sm->footer("A stream without a BCU format (FD segments) runs on traj_fd_engine, one with a BCU format (FD and BCU segments, "
              "from `trajcore demo --engine bcu|mixed` or `trajcore spline`) on traj_core.");

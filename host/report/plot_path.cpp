@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <functional>
 #include <sstream>
 #include <string>
@@ -307,9 +308,9 @@ void draw_heading(std::ostringstream& o, const Feed& F, double left, const std::
                 " ms; output feed = chord speed |x(k+1) \xE2\x88\x92 x(k)| / h" + how,
             " fill=\"#444\"");
   o << text(left, 59,
-            "output feed " + vfmt(F.smin) + " \xE2\x80\xA6 " + vfmt(F.smax) + " " + u + "/s (commanded " +
-                vfmt(F.feed) + " " + u + "/s" +
-                (F.scale < F.feed ? "; colours up to the fastest feed move, " + vfmt(F.scale) + " " + u + "/s" : "") +
+            "output feed " + vfmt(F.smin) + " \xE2\x80\xA6 " + vfmt(F.smax) + " " + u + "/s (" +
+                (std::isfinite(F.feed) ? "commanded " + vfmt(F.feed) + " " + u + "/s" : "no feed limit given") +
+                (F.scale < F.feed ? "; colours up to " + std::string(std::isfinite(F.feed) ? "the fastest feed move" : "the fastest step") + ", " + vfmt(F.scale) + " " + u + "/s" : "") +
                 ")" +
                 (F.over ? "; " + std::to_string(F.over) + " steps above the feed" : ""),
             F.over ? " fill=\"#c0392b\" font-weight=\"bold\"" : " fill=\"#444\"");
@@ -417,8 +418,10 @@ bool needs_three_views(const Feed& F) {
 
 std::string path_svg(size_t n, const std::function<std::array<double, 3>(size_t)>& pos, int d,
                      const job::JobConfig& cfg, double h, double allow_v, double scale_feed) {
-  const double scale = scale_feed > 0 ? std::min(scale_feed, cfg.limits.feed) : cfg.limits.feed;
-  Feed F{n, pos, d, h, cfg.limits.feed, allow_v, scale};
+  // no feed limit (<= 0: sim of a stream without --feed): nothing is "above the feed"
+  const double feed = cfg.limits.feed > 0 ? cfg.limits.feed : std::numeric_limits<double>::infinity();
+  const double scale = scale_feed > 0 ? std::min(scale_feed, feed) : feed;
+  Feed F{n, pos, d, h, feed, allow_v, scale};
   measure_feed(F);
   return needs_three_views(F) ? drawing_svg(F, cfg.machine.units) : flat_svg(F, cfg.machine.units);
 }

@@ -171,7 +171,8 @@ class PathData {
 // chord speed. The colour scale runs from 0 to scale_feed (a toolpath's
 // fastest feed move; 0: the feed limit); steps faster than it and within the
 // feed limit (rapids) are drawn in a colour of their own, steps above the
-// limit in another.
+// limit in another. A feed limit <= 0: none given (sim of a stream), the
+// colour scale up to scale_feed.
 std::string path_svg(size_t n, const std::function<std::array<double, 3>(size_t)>& pos, int d,
                      const job::JobConfig& cfg, double h, double allow_v, double scale_feed = 0);
 

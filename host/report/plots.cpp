@@ -293,35 +293,29 @@ void write_all(const std::vector<std::pair<std::string, std::string>>& files) {
 
 }  // namespace
 
-void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, const JobResult& r, const Samples& s,
-                 double scale_feed) {
+void write_plot_pages(const std::string& dir, const PlotSource& src, const JobConfig& cfg) {
   {
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
     if (ec) throw PlanError("cannot write plots: cannot create directory " + dir + ": " + ec.message());
   }
-  const int d = std::clamp(p.dim(), 1, kMaxAxes);
+  const int d = std::clamp(src.axes, 1, kMaxAxes);
   const double h = cfg.machine.period;
-  const double lsb = std::ldexp(1.0, -r.header.frac_bits);
+  const double lsb = src.lsb;
   const auto& L = cfg.limits;
   const std::string& u = cfg.machine.units;
-  const bool jerk = r.header.degree != 3;  // cubic segments join C1: no jerk claim
-  const size_t n = s.v.size();
+  const bool jerk = src.jerk_claimed;
+  const size_t n = src.count;
+  const std::vector<TickSample> no_ticks;
+  const std::vector<TickSample>& ticks = src.plan ? *src.plan : no_ticks;
   auto X = [&](size_t k) {
+    const Sample v = src.sample(k);
     std::array<double, kMaxAxes> q;
-    for (int a = 0; a < kMaxAxes; ++a) q[a] = static_cast<double>(s.v[k][a]) * lsb;
+    for (int a = 0; a < kMaxAxes; ++a) q[a] = static_cast<double>(v[a]) * lsb;
     return q;
   };
-  // quantisation allowance on sample differences, as in make_report
-  double bound = 0;
-  double offset = 0;
-  for (const auto& c : r.compiled) {
-    bound = std::max(bound, c.bound_lsb);
-    offset = std::max(offset, c.offset_lsb);
-  }
   const double sd = std::sqrt(static_cast<double>(d));
-  const job::Allowance al = job::sample_allowance((0.5 + bound) * lsb, offset * lsb, h);
-  const double allow_v = al.v, allow_a = al.a, allow_j = al.j;
+  const double allow_v = src.allowance.v, allow_a = src.allowance.a, allow_j = src.allowance.j;
   const std::string u1 = u + "/s", u2 = u + "/s\xC2\xB2", u3 = u + "/s\xC2\xB3";
   const std::string not_limited = "not limited (cubic, C1 joins)";
 
@@ -351,21 +345,18 @@ void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, co
   const Series out_an = out("output", h, n2, [&](size_t k) { return win(k).an; });
   const Series out_jn = out("output", 1.5 * h, n3, [&](size_t k) { return win(k).jn; });
   auto out_aa = [&](int a) {
-    return out("output", h, n2, [&, a](size_t k) {
-      return (s.v[k + 2][a] * lsb - 2 * (s.v[k + 1][a] * lsb) + s.v[k][a] * lsb) / (h * h);
-    });
+    return out("output", h, n2, [&, a](size_t k) { return (X(k + 2)[a] - 2 * X(k + 1)[a] + X(k)[a]) / (h * h); });
   };
   auto out_ja = [&](int a) {
     return out("output", 1.5 * h, n3, [&, a](size_t k) {
-      return (s.v[k + 3][a] * lsb - 3 * (s.v[k + 2][a] * lsb) + 3 * (s.v[k + 1][a] * lsb) - s.v[k][a] * lsb) /
-             (h * h * h);
+      return (X(k + 3)[a] - 3 * X(k + 2)[a] + 3 * X(k + 1)[a] - X(k)[a]) / (h * h * h);
     });
   };
   // plan: the planner's values at the ticks
   auto plan = [&](const std::string& label, std::function<double(const TickSample&)> f) {
     Series q;
-    q.label = label, q.colour = kPlanColour, q.t0 = r.ticks.empty() ? 0 : r.ticks.front().t, q.dt = h;
-    q.count = r.ticks.size(), q.y = [&r, f](size_t k) { return f(r.ticks[k]); };
+    q.label = label, q.colour = kPlanColour, q.t0 = ticks.empty() ? 0 : ticks.front().t, q.dt = h;
+    q.count = ticks.size(), q.y = [&ticks, f](size_t k) { return f(ticks[k]); };
     q.width = 2.6, q.opacity = 0.85, q.band = Band::kFill, q.fill = 0.35;
     return q;
   };
@@ -373,9 +364,12 @@ void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, co
     return plan(label, [m](const TickSample& t) { return t.*m; });
   };
 
-  auto panel = [](const std::string& id, const std::string& title, const std::string& ylabel, std::vector<Series> sv) {
+  // without a plan (sim of a stream), the output alone
+  auto panel = [&](const std::string& id, const std::string& title, const std::string& ylabel, std::vector<Series> sv) {
     Panel P;
-    P.id = id, P.title = title, P.ylabel = ylabel, P.series = std::move(sv);
+    P.id = id, P.title = title, P.ylabel = ylabel;
+    for (Series& q : sv)
+      if (q.colour != kPlanColour || src.plan) P.series.push_back(std::move(q));
     return P;
   };
   auto limit_pm = [&](Panel& P, double lim, const std::string& name, double allowance) {
@@ -394,7 +388,10 @@ void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, co
   std::vector<Panel> panels;
   {
     Panel P = panel("speed", "Path speed (feed)", "speed (" + u1 + ")", {member("plan", &TickSample::v), out_v});
-    limit_up(P, L.feed, "feed", sd * allow_v);
+    if (src.feed_limited)
+      limit_up(P, L.feed, "feed", sd * allow_v);
+    else
+      P.note = "no feed limit given";
     P.from_zero = true;
     panels.push_back(P);
   }
@@ -446,12 +443,13 @@ void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, co
     panels.push_back(P);
   }
 
-  const double T = std::max({n > 1 ? (n - 1) * h : 0.0, r.ticks.empty() ? 0.0 : r.ticks.back().t, h});
+  const double T = std::max({n > 1 ? (n - 1) * h : 0.0, ticks.empty() ? 0.0 : ticks.back().t, h});
   const double per_col = T / h / kPlotW;
   const std::string prof = profile_svg(
-      "Speed, acceleration and jerk against time: plan and output, with the limits",
-      std::to_string(n) + " output samples at " + gfmt(h * 1e3) + " ms, " + gfmt(T) +
-          " s. plan: the planner at the ticks; output: differences of the core's samples\n"
+      std::string("Speed, acceleration and jerk against time: ") + (src.plan ? "plan and output" : "output") +
+          ", with the limits",
+      std::to_string(n) + " output samples at " + gfmt(h * 1e3) + " ms, " + gfmt(T) + " s. " +
+          (src.plan ? "plan: the planner at the ticks; " : "") + "output: differences of the core's samples\n"
           "over 1, 2, 3 ticks (as in report.txt), at the centre of their ticks. Dashed: the limits; every y range "
           "covers the data and the limits." +
           (per_col > 1 ? "\nShaded: the min/max of a series over each pixel column (" + gfmt(per_col, 3) +
@@ -463,8 +461,29 @@ void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, co
     const auto q = X(k);
     return std::array<double, 3>{q[0], q[1], q[2]};
   };
-  const std::string path = path_svg(n, xyz, std::min(d, 3), cfg, h, sd * allow_v, scale_feed);
+  const std::string path = path_svg(n, xyz, std::min(d, 3), cfg, h, sd * allow_v, src.scale_feed);
   write_all({{dir + "/path_feed.svg", path}, {dir + "/profile.svg", prof}});
+}
+
+void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, const JobResult& r, const Samples& s,
+                 double scale_feed) {
+  // quantisation allowance on sample differences, as in make_report
+  double bound = 0;
+  double offset = 0;
+  for (const auto& c : r.compiled) {
+    bound = std::max(bound, c.bound_lsb);
+    offset = std::max(offset, c.offset_lsb);
+  }
+  PlotSource src;
+  src.count = s.v.size();
+  src.sample = [&s](size_t k) { return s.v[k]; };
+  src.axes = p.dim();
+  src.lsb = std::ldexp(1.0, -r.header.frac_bits);
+  src.jerk_claimed = r.header.degree != 3;  // cubic segments join C1: no jerk claim
+  src.allowance = job::sample_allowance((0.5 + bound) * src.lsb, offset * src.lsb, cfg.machine.period);
+  src.plan = &r.ticks;
+  src.scale_feed = scale_feed;
+  write_plot_pages(dir, src, cfg);
 }
 
 }  // namespace traj::report

@@ -4,6 +4,7 @@
 // the limits, as text and as SVG plots.
 #pragma once
 #include <array>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -61,5 +62,22 @@ std::string report_text(const job::JobConfig& cfg, const Report& rep, const job:
 // scale_feed: the top of the path's colour scale (svg::path_svg).
 void write_plots(const std::string& dir, const plan::Path& p, const job::JobConfig& cfg, const job::JobResult& r,
                  const Samples& s, double scale_feed = 0);
+
+// What the plots are drawn from: the output samples, read on demand (a
+// stream's samples from a mapped file: `trajcore sim --plots`), and the plan
+// at the ticks when there is one (none: the output alone).
+struct PlotSource {
+  size_t count = 0;
+  std::function<Sample(size_t)> sample;
+  int axes = 3;
+  double lsb = 1;
+  bool jerk_claimed = true;
+  job::Allowance allowance;
+  const std::vector<plan::TickSample>* plan = nullptr;
+  double scale_feed = 0;  // the top of the path's colour scale (0: the feed limit)
+  bool feed_limited = true;  // false: the path speed has no limit line (sim without --feed)
+};
+// path_feed.svg and profile.svg in `dir` (cfg: the tick period, units and limits).
+void write_plot_pages(const std::string& dir, const PlotSource& src, const job::JobConfig& cfg);
 
 }  // namespace traj::report
