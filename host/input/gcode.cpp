@@ -47,6 +47,10 @@ constexpr double kPeckClearanceMm = 0.254;
 constexpr int kMaxCycleRepeats = 10000;
 constexpr double kMaxPecks = 100000;
 
+// LinuxCNC's longest line (its buffer of 255 with the newline and the
+// terminating NUL; rs274 refuses longer ones: "Command too long").
+constexpr size_t kMaxLineChars = 253;
+
 // Tool numbers (T, H, a tool table's T) are held as int: checked before the conversion.
 constexpr double kMaxTool = 1e9;
 constexpr const char* kToolNumber = "the tool number must be a whole number from 0 to 1000000000";
@@ -115,7 +119,12 @@ class Interpreter {
       }
       ++line_no_;
       if (!text_.empty() && text_.back() == '\r') text_.pop_back();
-      const Block b = gcode::lex_line(text_, line_no_, name_);
+      if (text_.size() > kMaxLineChars) {
+        line_ = line_no_;
+        fail(text_.substr(0, 16) + "...", "the line is too long (" + std::to_string(text_.size()) +
+                                              " characters; LinuxCNC reads at most " + std::to_string(kMaxLineChars) + ")");
+      }
+      const Block b = gcode::lex_line(text_, line_no_, name_, params_);
       if (b.percent) {
         if (in_percent_) {
           finish(line_no_, true);
@@ -128,8 +137,9 @@ class Interpreter {
         continue;
       }
       if (text_.find_first_not_of(" \t") != std::string::npos) seen_content_ = true;
-      if (b.words.empty()) continue;
       if (b.block_delete && opt_.block_delete) continue;
+      params_.apply(b.settings);  // after the line is read, before it runs (as LinuxCNC)
+      if (b.words.empty()) continue;
       if (execute(b)) finish(line_no_, true);
     }
     return !out_.moves.empty();
@@ -170,6 +180,7 @@ class Interpreter {
   // Tool length offset (G43): positions are of the tool's holder, the
   // program's Z plus the length (pos_ holds them so).
   double tlo_ = 0;
+  gcode::Parameters params_;
   bool machine_coords_ = false;  // within a G53 block
   // Canned cycles (G73, G81, G83): the retract mode (G98: to the Z before
   // the block, if above R) and the R, Z, Q words kept from block to block,

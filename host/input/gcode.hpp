@@ -16,7 +16,9 @@
 // (with a tool table; the moves are then of the tool's holder, the
 // program's Z plus the length) and G49, G53 with G0/G1 (machine
 // coordinates: the holder's, G54 being zero), T with M6 (the tool G43
-// without H takes), comments, N, '/', '%', M2/M30.
+// without H takes), comments, N, '/', '%', M2/M30; parameters (#n, #<name>)
+// and expressions ([ ], operators, functions) as LinuxCNC reads them
+// (gcode_lexer.hpp).
 // Accepted with a note: S, M3/M4/M5, M7/M8/M9, T, M6, G40, G54, G80,
 // G64 Q, M1 (the optional stop: the move before it ends in an exact stop and
 // the program goes on, as LinuxCNC with its optional-stop switch off; CAM

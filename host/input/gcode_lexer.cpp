@@ -2,6 +2,7 @@
 #include "input/gcode_lexer.hpp"
 
 #include <cctype>
+#include <cmath>
 #include <cstdlib>
 
 #include "input/toolpath.hpp"
@@ -9,9 +10,25 @@
 namespace traj::input::gcode {
 namespace {
 
+constexpr double kPi = 3.14159265358979323846;
+// LinuxCNC's tolerances: EQ/NE compare within it; an integer value (a
+// parameter's number) may be this far from a whole number.
+constexpr double kTolEqual = 0.0001;
+constexpr double kTolInteger = 0.0001;
+// Numbered parameters LinuxCNC has (RS274NGC_MAX_PARAMETERS); 5000 and above
+// hold the machine's state.
+constexpr int kMaxParameter = 5602;
+constexpr int kFirstSystemParameter = 5000;
+// Expressions nest at most this deep (a recursion bound for any input).
+constexpr int kMaxDepth = 100;
+// Word texts in messages are cut to this many characters.
+constexpr size_t kMaxWordText = 48;
+
 [[noreturn]] void fail(const std::string& file, int line, const std::string& word, const std::string& why) {
   throw InputError(file + ":" + std::to_string(line) + ": " + word + ": " + why);
 }
+
+std::string cut(const std::string& t) { return t.size() <= kMaxWordText ? t : t.substr(0, kMaxWordText) + "..."; }
 
 // The line without comments and blanks, letters upper-cased. A '(' comment
 // ends at the first ')' (LinuxCNC does not nest them); ';' ends the line.
@@ -34,72 +51,301 @@ std::string strip(const std::string& text, int line, const std::string& file) {
   return out;
 }
 
-// Reads the number after a letter at s[pos]; returns its text and advances pos.
-std::string read_number(const std::string& s, size_t& pos, const std::string& word_so_far, int line,
-                        const std::string& file) {
-  const size_t start = pos;
-  if (pos < s.size() && (s[pos] == '+' || s[pos] == '-')) ++pos;
-  int digits = 0, points = 0;
-  while (pos < s.size() && (std::isdigit(static_cast<unsigned char>(s[pos])) || s[pos] == '.')) {
-    if (s[pos] == '.') ++points; else ++digits;
-    ++pos;
+enum class Op { kPow, kTimes, kDiv, kMod, kPlus, kMinus, kEq, kNe, kGt, kGe, kLt, kLe, kAnd, kOr, kXor };
+
+struct OpName {
+  const char* text;
+  Op op;
+  int precedence;
+};
+// Longer names first where one starts another ("**" and "*"; "XOR" and "OR" do not share a start).
+constexpr OpName kOps[] = {{"**", Op::kPow, 6},  {"*", Op::kTimes, 5}, {"/", Op::kDiv, 5},  {"MOD", Op::kMod, 5},
+                           {"+", Op::kPlus, 4},  {"-", Op::kMinus, 4}, {"EQ", Op::kEq, 3},  {"NE", Op::kNe, 3},
+                           {"GT", Op::kGt, 3},   {"GE", Op::kGe, 3},   {"LT", Op::kLt, 3},  {"LE", Op::kLe, 3},
+                           {"AND", Op::kAnd, 2}, {"OR", Op::kOr, 2},   {"XOR", Op::kXor, 2}};
+
+// One line: its words' values and its parameter settings.
+class LineParser {
+ public:
+  LineParser(std::string s, int line, const std::string& file, const Parameters& params)
+      : s_(std::move(s)), line_(line), file_(file), params_(params) {}
+
+  Block parse() {
+    Block b;
+    b.line = line_;
+    if (!s_.empty() && s_[0] == '%') {
+      if (s_.size() > 1) fail(file_, line_, "%", "text after '%' on its line");
+      b.percent = true;
+      return b;
+    }
+    if (pos_ < s_.size() && s_[pos_] == '/') {
+      b.block_delete = true;
+      ++pos_;
+    }
+    bool first = true;
+    while (pos_ < s_.size()) {
+      start_ = pos_;
+      const char c = s_[pos_];
+      if (c == '#') {
+        b.settings.push_back(setting());
+      } else {
+        if (!std::isalpha(static_cast<unsigned char>(c))) error(std::string(1, c), "expected a letter");
+        if (c == 'O') error("O", "subroutines and control flow (O-words) are not supported");
+        ++pos_;
+        Word w;
+        w.letter = c;
+        if (c == 'N') {
+          w.value = std::strtod(number().c_str(), nullptr);
+          if (!first) error(text(), "a line number must come first on its line");
+        } else {
+          w.value = real_value(0);
+          w.text = text();
+          b.words.push_back(w);
+        }
+      }
+      first = false;
+    }
+    return b;
   }
-  const std::string num = s.substr(start, pos - start);
-  if (pos < s.size() && (s[pos] == '#' || s[pos] == '['))
-    fail(file, line, word_so_far + num + s[pos],
-         s[pos] == '#' ? "parameters (#) are not supported" : "expressions ([ ]) are not supported");
-  if (digits == 0 || points > 1) {
-    // Show what follows, up to the next letter, so the user sees the bad text.
-    size_t end = pos;
-    while (end < s.size() && !std::isalpha(static_cast<unsigned char>(s[end]))) ++end;
-    fail(file, line, word_so_far + s.substr(start, end - start), "malformed number");
+
+ private:
+  std::string text() const { return cut(s_.substr(start_, pos_ - start_)); }
+  [[noreturn]] void error(const std::string& word, const std::string& why) const { fail(file_, line_, word, why); }
+  // the text of the word so far, with the character at the error
+  [[noreturn]] void error_here(const std::string& why) const {
+    error(cut(s_.substr(start_, std::min(s_.size(), pos_ + 1) - start_)), why);
   }
-  return num;
-}
+  bool at(const char* t) const { return s_.compare(pos_, std::char_traits<char>::length(t), t) == 0; }
+  void expect(char c, const char* why) {
+    if (pos_ >= s_.size() || s_[pos_] != c) error_here(why);
+    ++pos_;
+  }
+
+  // A decimal number, sign optional; its text.
+  std::string number() {
+    const size_t begin = pos_;
+    if (pos_ < s_.size() && (s_[pos_] == '+' || s_[pos_] == '-')) ++pos_;
+    int digits = 0, points = 0;
+    while (pos_ < s_.size() && (std::isdigit(static_cast<unsigned char>(s_[pos_])) || s_[pos_] == '.')) {
+      if (s_[pos_] == '.') ++points; else ++digits;
+      ++pos_;
+    }
+    if (digits == 0 || points > 1) {
+      // show what follows, up to the next letter, so the user sees the bad text
+      size_t end = pos_;
+      while (end < s_.size() && !std::isalpha(static_cast<unsigned char>(s_[end]))) ++end;
+      error(cut(s_.substr(start_, end - start_)), "malformed number");
+    }
+    return s_.substr(begin, pos_ - begin);
+  }
+
+  // LinuxCNC's read_real_value: an expression, a parameter, a unary + or -
+  // before anything but a digit or '.', a unary function, or a number.
+  double real_value(int depth) {
+    if (depth > kMaxDepth) error_here("expression nested too deeply");
+    if (pos_ >= s_.size()) error_here("a value is missing");
+    const char c = s_[pos_];
+    const char c1 = pos_ + 1 < s_.size() ? s_[pos_ + 1] : 0;
+    double v;
+    if (c == '[') {
+      v = expression(depth + 1);
+    } else if (c == '#') {
+      v = parameter(depth + 1);
+    } else if ((c == '+' || c == '-') && c1 && !std::isdigit(static_cast<unsigned char>(c1)) && c1 != '.') {
+      ++pos_;
+      v = real_value(depth + 1);
+      if (c == '-') v = -v;
+    } else if (std::isalpha(static_cast<unsigned char>(c))) {
+      v = unary(depth + 1);
+    } else {
+      v = std::strtod(number().c_str(), nullptr);
+    }
+    if (!std::isfinite(v)) error(text(), "the value is not a finite number");
+    return v;
+  }
+
+  // '[' value (op value)* ']', precedence climbing: left-associative at every level.
+  double expression(int depth) {
+    expect('[', "expected '['");
+    const double v = binary(1, depth);
+    expect(']', "expected an operator or ']'");
+    return v;
+  }
+
+  const OpName* peek_op() const {
+    for (const OpName& o : kOps)
+      if (at(o.text)) return &o;
+    return nullptr;
+  }
+
+  double binary(int min_precedence, int depth) {
+    double left = real_value(depth);
+    for (const OpName* o = peek_op(); o && o->precedence >= min_precedence; o = peek_op()) {
+      pos_ += std::char_traits<char>::length(o->text);
+      const double right = binary(o->precedence + 1, depth + 1);
+      left = apply(o->op, left, right);
+    }
+    return left;
+  }
+
+  double apply(Op op, double a, double b) const {
+    switch (op) {
+      case Op::kPow:
+        if (a < 0 && std::floor(b) != b) error(text(), "a negative number raised to a non-integer power");
+        return std::pow(a, b);
+      case Op::kTimes: return a * b;
+      case Op::kDiv:
+        if (b == 0) error(text(), "division by zero");
+        return a / b;
+      case Op::kMod: {
+        // as LinuxCNC: MOD 0 is not a number, refused when it reaches a value
+        // (a comparison or a logical operator may take it first)
+        const double r = std::fmod(a, b);
+        return r < 0 ? r + std::fabs(b) : r;
+      }
+      case Op::kPlus: return a + b;
+      case Op::kMinus: return a - b;
+      case Op::kEq: return std::fabs(a - b) < kTolEqual ? 1 : 0;
+      case Op::kNe: return std::fabs(a - b) >= kTolEqual ? 1 : 0;
+      case Op::kGt: return a > b ? 1 : 0;
+      case Op::kGe: return a >= b ? 1 : 0;
+      case Op::kLt: return a < b ? 1 : 0;
+      case Op::kLe: return a <= b ? 1 : 0;
+      case Op::kAnd: return (a == 0 || b == 0) ? 0 : 1;
+      case Op::kOr: return (a != 0 || b != 0) ? 1 : 0;
+      case Op::kXor: return ((a == 0) != (b == 0)) ? 1 : 0;
+    }
+    return 0;
+  }
+
+  double unary(int depth) {
+    static const char* const kNames[] = {"ABS", "ACOS", "ASIN", "ATAN", "COS", "EXISTS", "EXP", "FIX",
+                                         "FUP", "LN",   "ROUND", "SIN", "SQRT", "TAN"};
+    std::string name;
+    for (const char* n : kNames)
+      if (at(n) && std::char_traits<char>::length(n) > name.size()) name = n;
+    if (name.empty() || pos_ + name.size() >= s_.size() || s_[pos_ + name.size()] != '[') {
+      size_t end = pos_;
+      while (end < s_.size() && std::isalpha(static_cast<unsigned char>(s_[end]))) ++end;
+      error(cut(s_.substr(start_, end - start_)), "a letter without a number (or an unknown function)");
+    }
+    pos_ += name.size();
+    if (name == "EXISTS") {
+      expect('[', "expected '['");
+      if (!at("#<")) error_here("EXISTS takes a named parameter, #<name>");
+      pos_ += 2;
+      const std::string n = parameter_name();
+      expect(']', "expected ']'");
+      return params_.named.count(n) ? 1 : 0;
+    }
+    const double x = expression(depth);
+    if (name == "ATAN") {
+      expect('/', "ATAN needs a second argument: ATAN[y]/[x]");
+      const double y = x, xx = expression(depth);
+      return std::atan2(y, xx) * 180 / kPi;
+    }
+    if (name == "ABS") return std::fabs(x);
+    if (name == "ACOS" || name == "ASIN") {
+      if (x < -1 || x > 1) error(text(), name + " of a number outside [-1, 1]");
+      return (name == "ACOS" ? std::acos(x) : std::asin(x)) * 180 / kPi;
+    }
+    if (name == "COS") return std::cos(x * kPi / 180);
+    if (name == "SIN") return std::sin(x * kPi / 180);
+    if (name == "TAN") return std::tan(x * kPi / 180);
+    if (name == "EXP") return std::exp(x);
+    if (name == "FIX") return std::floor(x);
+    if (name == "FUP") return std::ceil(x);
+    if (name == "LN") {
+      if (x <= 0) error(text(), "LN of zero or a negative number");
+      return std::log(x);
+    }
+    if (name == "SQRT") {
+      if (x < 0) error(text(), "SQRT of a negative number");
+      return std::sqrt(x);
+    }
+    // ROUND: half away from zero, as LinuxCNC does it (through an int: bounded first)
+    if (std::fabs(x) > 2e9) error(text(), "ROUND of a number beyond 2e9");
+    return static_cast<double>(static_cast<long long>(x + (x < 0 ? -0.5 : 0.5)));
+  }
+
+  // after "#<": the name up to '>'
+  std::string parameter_name() {
+    const size_t close = s_.find('>', pos_);
+    if (close == std::string::npos) error_here("a named parameter #<name> not closed with '>'");
+    const std::string n = s_.substr(pos_, close - pos_);
+    if (n.empty()) error_here("a named parameter needs a name");
+    pos_ = close + 1;
+    return n;
+  }
+
+  // after '#': the number of a numbered parameter (a value within 1e-4 of a whole number)
+  int parameter_number(int depth) {
+    const double v = real_value(depth);
+    const double r = std::round(v);
+    if (std::fabs(v - r) > kTolInteger) error(text(), "a parameter number must be a whole number");
+    if (r < 1 || r >= kMaxParameter)
+      error(text(), "parameter numbers run from 1 to " + std::to_string(kMaxParameter - 1));
+    return static_cast<int>(r);
+  }
+
+  double parameter(int depth) {
+    ++pos_;  // '#'
+    if (pos_ < s_.size() && s_[pos_] == '<') {
+      ++pos_;
+      const std::string n = parameter_name();
+      const auto it = params_.named.find(n);
+      if (it != params_.named.end()) return it->second;
+      if (n[0] == '_')
+        error(text(), "predefined parameters (#<_...>, the machine's state) are not supported, and the program has "
+                      "not set this one");
+      error(text(), "the named parameter is not set");
+    }
+    const int k = parameter_number(depth);
+    const auto it = params_.numbered.find(k);
+    if (it != params_.numbered.end()) return it->second;
+    if (k >= kFirstSystemParameter)
+      error(text(), "parameters 5000 and above (the machine's state) are not supported");
+    error(text(), "the parameter is not set by the program (trajcore reads no parameter file; LinuxCNC would take "
+                  "it from its .var file)");
+  }
+
+  Setting setting() {
+    ++pos_;  // '#'
+    Setting st;
+    if (pos_ < s_.size() && s_[pos_] == '<') {
+      ++pos_;
+      st.name = parameter_name();
+    } else {
+      st.number = parameter_number(0);
+      if (st.number >= kFirstSystemParameter)
+        error(text(), "parameters 5000 and above (the machine's state) are not supported");
+    }
+    st.text = text();
+    expect('=', "expected '=' (a parameter setting: #n = value)");
+    st.value = real_value(0);
+    return st;
+  }
+
+  std::string s_;
+  size_t pos_ = 0, start_ = 0;
+  int line_;
+  const std::string& file_;
+  const Parameters& params_;
+};
 
 }  // namespace
 
-Block lex_line(const std::string& text, int line, const std::string& file) {
-  Block b;
-  b.line = line;
-  std::string s = strip(text, line, file);
-  size_t pos = 0;
-  if (!s.empty() && s[0] == '%') {
-    if (s.size() > 1) fail(file, line, "%", "text after '%' on its line");
-    b.percent = true;
-    return b;
+void Parameters::apply(const std::vector<Setting>& settings) {
+  for (const Setting& s : settings) {
+    if (s.name.empty())
+      numbered[s.number] = s.value;
+    else
+      named[s.name] = s.value;
   }
-  if (pos < s.size() && s[pos] == '/') {
-    b.block_delete = true;
-    ++pos;
-  }
-  bool first = true;
-  while (pos < s.size()) {
-    const char c = s[pos];
-    if (c == '#') fail(file, line, "#", "parameters (#) are not supported");
-    if (c == '[') fail(file, line, "[", "expressions ([ ]) are not supported");
-    if (!std::isalpha(static_cast<unsigned char>(c))) fail(file, line, std::string(1, c), "expected a letter");
-    if (c == 'O') fail(file, line, "O", "subroutines and control flow (O-words) are not supported");
-    ++pos;
-    if (pos < s.size() && std::isalpha(static_cast<unsigned char>(s[pos]))) {
-      // Two letters in a row: a named function or a missing number ("G", "ABS[...]").
-      size_t end = pos;
-      while (end < s.size() && std::isalpha(static_cast<unsigned char>(s[end]))) ++end;
-      fail(file, line, s.substr(pos - 1, end - pos + 1), "a letter without a number (or an unsupported function)");
-    }
-    Word w;
-    w.letter = c;
-    const std::string num = read_number(s, pos, std::string(1, c), line, file);
-    w.text = std::string(1, c) + num;
-    w.value = std::strtod(num.c_str(), nullptr);
-    if (c == 'N') {
-      if (!first) fail(file, line, w.text, "a line number must come first on its line");
-    } else {
-      b.words.push_back(w);
-    }
-    first = false;
-  }
-  return b;
+}
+
+Block lex_line(const std::string& text, int line, const std::string& file, const Parameters& params) {
+  return LineParser(strip(text, line, file), line, file, params).parse();
 }
 
 }  // namespace traj::input::gcode

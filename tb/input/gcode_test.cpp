@@ -200,8 +200,6 @@ TEST(Gcode, PathControlAndNotes) {
 TEST(Gcode, Refusals) {
   const std::pair<const char*, const char*> cases[] = {
       {"O100 sub\nM2\n", "t.ngc:1: O: subroutines and control flow (O-words) are not supported"},
-      {"G1 X[1+2]\nM2\n", "t.ngc:1: X[: expressions ([ ]) are not supported"},
-      {"#1=2\nM2\n", "t.ngc:1: #: parameters (#) are not supported"},
       {"G41\nM2\n", "t.ngc:1: G41: cutter radius compensation is not supported"},
       {"G43 H1\nM2\n",
        "t.ngc:1: G43: a tool length offset needs the machine's tool table (trajcore --tool-table FILE, LinuxCNC's format)"},
@@ -255,6 +253,22 @@ TEST(Gcode, Refusals) {
       {"M0\nM2\n", "t.ngc:1: M0: program pause (M0/M60) is not supported: the program runs with no operator to resume it "
                    "(M1, the optional stop, is taken as an exact stop)"},
       {"F1\nG1 X1 M1 M2\n", "t.ngc:2: M2: two M codes from the same modal group (M1)"},
+      {"G1 X#100\nM2\n", "t.ngc:1: X#100: the parameter is not set by the program (trajcore reads no parameter file; "
+                          "LinuxCNC would take it from its .var file)"},
+      {"G1 X#<nope>\nM2\n", "t.ngc:1: X#<NOPE>: the named parameter is not set"},
+      {"G1 X#<_y>\nM2\n", "t.ngc:1: X#<_Y>: predefined parameters (#<_...>, the machine's state) are not supported, and "
+                           "the program has not set this one"},
+      {"G1 X#5220\nM2\n", "t.ngc:1: X#5220: parameters 5000 and above (the machine's state) are not supported"},
+      {"#5300 = 1\nM2\n", "t.ngc:1: #5300: parameters 5000 and above (the machine's state) are not supported"},
+      {"G1 X[1/0]\nM2\n", "t.ngc:1: X[1/0: division by zero"},
+      {"G1 X[1+2\nM2\n", "t.ngc:1: X[1+2: expected an operator or ']'"},
+      {"G1 X[FOO[1]]\nM2\n", "t.ngc:1: X[FOO: a letter without a number (or an unknown function)"},
+      {"#1 5\nM2\n", "t.ngc:1: #15: expected '=' (a parameter setting: #n = value)"},
+      {"G1 X[ATAN[1]]\nM2\n", "t.ngc:1: X[ATAN[1]]: ATAN needs a second argument: ATAN[y]/[x]"},
+      {"G1 X[-1 ** 0.5]\nM2\n", "t.ngc:1: X[-1**0.5: a negative number raised to a non-integer power"},
+      {"G1 X[5 MOD 0]\nM2\n", "t.ngc:1: X[5MOD0]: the value is not a finite number"},
+      {"G1 X#0\nM2\n", "t.ngc:1: X#0: parameter numbers run from 1 to 5601"},
+      {"G1 X#1.5\nM2\n", "t.ngc:1: X#1.5: a parameter number must be a whole number"},
       {"G91 G53 G0 Z20\nM2\n", "t.ngc:1: G53: G53 in incremental distance mode (G91): machine coordinates are absolute"},
       {"F1 G53 G2 X1 Y1 R1\nM2\n", "t.ngc:1: G53: G53 needs G0 or G1 (as in LinuxCNC)"},
       {"G53 G28 Z1\nM2\n", "t.ngc:1: G28: two G codes from the same modal group (G53)"},
@@ -265,6 +279,11 @@ TEST(Gcode, Refusals) {
       {"F1\nG3 X1 Y1 K1 I1\nM2\n", "t.ngc:2: K1: K word given for an arc in this plane"},
   };
   for (const auto& [program, message] : cases) EXPECT_EQ(refusal(program), message) << program;
+  // nesting is bounded (recursion for any input), and a long text is cut in the message
+  EXPECT_EQ(refusal("G1 X[" + std::string(120, '[') + "1" + std::string(120, ']') + "]\nM2\n"),
+            "t.ngc:1: X" + std::string(47, '[') + "...: expression nested too deeply");
+  EXPECT_EQ(refusal("G1 X1 (" + std::string(250, 'a') + ")\nM2\n"),
+            "t.ngc:1: G1 X1 (aaaaaaaaa...: the line is too long (258 characters; LinuxCNC reads at most 253)");
 }
 
 // G28/G30 as LinuxCNC with its reference parameters at 0: a rapid to the
@@ -301,7 +320,9 @@ TEST(Gcode, ToolLengthOffsetsFromTheTable) {
   EXPECT_EQ(refused("G43 H1.5\nM2\n"), "t.ngc:1: H1.5: the tool number must be a whole number from 0 to 1000000000");
   // found by the fuzzer: T beyond int (UBSan at the conversion)
   const std::string big = "1" + std::string(114, '0');  // 1e114
-  EXPECT_EQ(refused("T" + big + " M6\nM2\n"), "t.ngc:1: T" + big + ": the tool number must be a whole number from 0 to 1000000000");
+  // the word's text cut to 48 characters in the message
+  EXPECT_EQ(refused("T" + big + " M6\nM2\n"),
+            "t.ngc:1: " + ("T" + big).substr(0, 48) + "...: the tool number must be a whole number from 0 to 1000000000");
   EXPECT_EQ(refused("G43 H3000000000\nM2\n"), "t.ngc:1: H3000000000: the tool number must be a whole number from 0 to 1000000000");
   EXPECT_EQ(refused("G0 X1 H1\nM2\n"), "t.ngc:1: H1: no G code in this block uses it");
 }
@@ -429,6 +450,33 @@ TEST(Gcode, InverseTimeFeeds) {
   EXPECT_NEAR(tp.moves[2].feed, 90.0 / 15, 1e-12);
   EXPECT_EQ(tp.moves[3].kind, Move::Kind::kRapid);
   EXPECT_NEAR(tp.moves[4].feed, 5.0, 1e-12);
+}
+
+// Parameters and expressions: the expected values are rs274's (LinuxCNC 2.9)
+// for the same lines (tb/input/gcode/parameters.ngc has them all, cross-checked).
+TEST(Gcode, ParametersAndExpressions) {
+  const Toolpath tp = read(
+      "#1 = 2\n#2 = 3 #1 = 7 #3 = #1\nG21 F100\nG1 X#1 Y#3\n"        // settings read the values before their line
+      "#<a> = [1 + 2 * 3 ** 2 - 8 / 4 MOD 3]\nG1 X#<a> Y[5 MOD -3] Z[-5 MOD 3]\n"
+      "G1 X[1 EQ 1.00005] Y[1 EQ 1.0002] Z[2 GT 1 AND 0 OR 1 XOR 1]\n"
+      "G1 X[ROUND[-2.5]] Y[FIX[-2.5]] Z[FUP[-2.5]]\n"
+      "G1 X[ATAN[1]/[-1]] Y[SIN[30]] Z[EXISTS[#<a>] + EXISTS[#<b>]]\n"
+      "G1 X-#1 Y-[2] Z+#1\n#4 = [2 ** 3 ** 2]\nG1 X#4 Y[-2 ** 2] Z[ABS[-3]]\n"
+      "G1 X[1 NE 1.00005] Y[5 MOD 0 NE 1] Z[5 MOD 0 AND 1]\nM2\n");
+  const double want[][3] = {{7, 2, 0},    {17, 2, 1}, {1, 0, 0},  {-3, -3, -2}, {135, 0.5, 1},
+                            {-7, -2, 7},  {64, 4, 3}, {0, 0, 1}};
+  ASSERT_EQ(tp.moves.size(), 8u);
+  for (size_t i = 0; i < 8; ++i)
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(at(tp.moves[i], 1)[a], want[i][a], 1e-12) << tp.moves[i].where;
+}
+
+// Block delete skips a line's settings with its words.
+TEST(Gcode, BlockDeleteSkipsSettings) {
+  traj::input::GcodeOptions opt;
+  opt.block_delete = true;
+  const Toolpath tp = read("#1 = 1\n/#1 = 5\nG21 F100 G1 X#1\nM2\n", opt);
+  ASSERT_EQ(tp.moves.size(), 1u);
+  EXPECT_NEAR(at(tp.moves[0], 1)[0], 1, 1e-12);
 }
 
 // G53: the block's axis words are machine coordinates, the moves' own: the
