@@ -16,13 +16,25 @@ constexpr int kMaxAttempts = 200;
 
 // A speed cap around tick sample t: over about five ticks' travel, at most
 // `shrink` of the planned speed, and where a limit was exceeded by `ratio`
-// (> 1) at most 0.95 ratio^(-1/3) of it (the jerk scales with v^3).
+// (> 1) at most 0.95 ratio^(-1/3) of it (the jerk scales with v^3); never
+// below `floor` (speed_floor).
 plan::SpeedCap cap_around(const plan::TickSample& t, double ratio, double shrink, double period, double length,
-                          double feed) {
+                          double floor) {
   const double w = std::max(5 * period * t.v, 1e-9 * length) + 1e-9;
   double v = t.v * shrink;
   if (ratio > 1) v = std::min(v, t.v * 0.95 * std::pow(ratio, -1.0 / 3.0));
-  return {t.s - w, t.s + w, std::max(v, 1e-6 * feed)};
+  return {t.s - w, t.s + w, std::max(v, floor)};
+}
+
+// The slowest a repair cap goes: 1e-6 of the fastest the path can move, the
+// feed or, when the feed is above what the axes allow together (a program's
+// F of millions of mm/min), the axes' own top speed: a floor taken from the
+// feed alone would stay above the speed a kink needs, and the repairs would
+// never converge.
+double speed_floor(const plan::Limits& l, int dim) {
+  double v2 = 0;
+  for (int a = 0; a < dim; ++a) v2 += l.v_axis[a] * l.v_axis[a];
+  return 1e-6 * std::min(l.feed, std::sqrt(v2));
 }
 
 // The repair caps of earlier rounds, to tell how often a place has been
@@ -66,7 +78,7 @@ size_t cap_tick_violations(const PlanFitRequest& req, const std::vector<plan::Ti
     const double q = plan::tick_ratio(ts[k], *req.limits, dim);
     if (q > 1 + 1e-9 && static_cast<long long>(k) > last + 5) {
       caps.push_back(cap_around(ts[k], q, earlier.shrink(ts[k].s), req.options.period, req.path->length(),
-                                req.limits->feed));
+                                speed_floor(*req.limits, dim)));
       last = static_cast<long long>(k);
     }
   }
@@ -129,7 +141,8 @@ size_t fit_all(const PlanFitRequest& req, const plan::Plan& plan, const std::vec
                               "at their junction (" + e.what() + "); plan with a larger window (--window)");
       const size_t k = static_cast<size_t>(std::max<long long>(idx, 0));
       for (size_t j : {k, std::min(k + 1, n)})
-        caps.push_back(cap_around(ts[j], 0, 0.8 * earlier.shrink(ts[j].s), h, req.path->length(), req.limits->feed));
+        caps.push_back(cap_around(ts[j], 0, 0.8 * earlier.shrink(ts[j].s), h, req.path->length(),
+                                  speed_floor(*req.limits, req.path->dim())));
       ++failures;
       i0 = std::max(i0 + 1, std::min(n, k + kResumeAfterFailure));
       so.history = plan_history(ts, i0);
