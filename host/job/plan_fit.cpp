@@ -26,16 +26,11 @@ plan::SpeedCap cap_around(const plan::TickSample& t, double ratio, double shrink
   return {t.s - w, t.s + w, std::max(v, floor)};
 }
 
-// The slowest a repair cap goes: 1e-6 of the fastest the path can move, the
-// feed or, when the feed is above what the axes allow together (a program's
-// F of millions of mm/min), the axes' own top speed: a floor taken from the
-// feed alone would stay above the speed a kink needs, and the repairs would
-// never converge.
-double speed_floor(const plan::Limits& l, int dim) {
-  double v2 = 0;
-  for (int a = 0; a < dim; ++a) v2 += l.v_axis[a] * l.v_axis[a];
-  return 1e-6 * std::min(l.feed, std::sqrt(v2));
-}
+// The slowest a repair cap goes: 1e-6 of the fastest the path can move
+// (Limits::top_speed; from the feed alone, a program's F far above the axes'
+// speed would hold every cap above the speed a kink needs, and the repairs
+// would not converge).
+double speed_floor(const plan::Limits& l, int dim) { return 1e-6 * l.top_speed(dim); }
 
 // The repair caps of earlier rounds, to tell how often a place has been
 // capped already: a place capped again is slowed by a further 0.8 per time it

@@ -844,6 +844,12 @@ double tick_ratio(const TickSample& t, const Limits& L, int dim) {
   return w;
 }
 
+double Limits::top_speed(int dim) const {
+  double v2 = 0;
+  for (int a = 0; a < dim; ++a) v2 += v_axis[a] * v_axis[a];
+  return std::min(feed, std::sqrt(v2));
+}
+
 double worst_ratio(const Peaks& pk, const Limits& L, int dim, std::string* which) {
   double w = 0;
   auto chk = [&](double v, double lim, const std::string& name) {

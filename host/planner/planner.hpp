@@ -70,6 +70,11 @@ struct Limits {
   // (input::AxisSet, e.g. "xyzac"); beyond them the rest of "xyzabcuvw".
   std::string axis_names = "xyzabcuv";
   std::string axis(int a) const { return std::string(1, axis_names.at(static_cast<size_t>(a))); }
+  // The fastest the path of `dim` axes can move: the feed, or the axes'
+  // velocity limits together where the feed is above them (a program's F
+  // of millions of mm/min). Scales that follow the speed (the repairs'
+  // floor, the report's moving ticks, the plot's colours) take it.
+  double top_speed(int dim) const;
   // Throws PlanError naming the field if any limit is non-positive or not finite.
   void validate() const;
 };

@@ -43,6 +43,7 @@ struct Feed {
   int d;
   double h, feed, allow_v;
   double scale;           // top of the colour scale (<= feed): faster steps within the feed are "rapid"
+  std::string scale_what; // what the scale's top is, when below the feed
   size_t over = 0;        // steps above feed + allow_v
   size_t rapid = 0;       // steps above scale + allow_v, within feed + allow_v
   double smin = 0, smax = 0;  // range of the chord speed
@@ -310,7 +311,7 @@ void draw_heading(std::ostringstream& o, const Feed& F, double left, const std::
   o << text(left, 59,
             "output feed " + vfmt(F.smin) + " \xE2\x80\xA6 " + vfmt(F.smax) + " " + u + "/s (" +
                 (std::isfinite(F.feed) ? "commanded " + vfmt(F.feed) + " " + u + "/s" : "no feed limit given") +
-                (F.scale < F.feed ? "; colours up to " + std::string(std::isfinite(F.feed) ? "the fastest feed move" : "the fastest step") + ", " + vfmt(F.scale) + " " + u + "/s" : "") +
+                (F.scale < F.feed ? "; colours up to " + F.scale_what + ", " + vfmt(F.scale) + " " + u + "/s" : "") +
                 ")" +
                 (F.over ? "; " + std::to_string(F.over) + " steps above the feed" : ""),
             F.over ? " fill=\"#c0392b\" font-weight=\"bold\"" : " fill=\"#444\"");
@@ -420,8 +421,13 @@ std::string path_svg(size_t n, const std::function<std::array<double, 3>(size_t)
                      const job::JobConfig& cfg, double h, double allow_v, double scale_feed) {
   // no feed limit (<= 0: sim of a stream without --feed): nothing is "above the feed"
   const double feed = cfg.limits.feed > 0 ? cfg.limits.feed : std::numeric_limits<double>::infinity();
-  const double scale = scale_feed > 0 ? std::min(scale_feed, feed) : feed;
-  Feed F{n, pos, d, h, feed, allow_v, scale};
+  double scale = scale_feed > 0 ? std::min(scale_feed, feed) : feed;
+  std::string scale_what = std::isfinite(feed) ? "the fastest feed move" : "the fastest step";
+  if (std::isfinite(feed) && cfg.limits.top_speed(d) < scale) {  // a feed above what the axes allow
+    scale = cfg.limits.top_speed(d);
+    scale_what = "the axes' top speed";
+  }
+  Feed F{n, pos, d, h, feed, allow_v, scale, scale_what};
   measure_feed(F);
   return needs_three_views(F) ? drawing_svg(F, cfg.machine.units) : flat_svg(F, cfg.machine.units);
 }

@@ -138,7 +138,7 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
   Spread fluct, err;
   for (size_t k = 0; k + 1 < n && k + 1 < r.ticks.size(); ++k) {
     const double ds = r.ticks[k + 1].s - r.ticks[k].s;
-    if (ds < 0.01 * cfg.limits.feed * h) continue;
+    if (ds < 0.01 * cfg.limits.top_speed(d) * h) continue;
     double c2 = 0, p2 = 0;
     for (int a = 0; a < d; ++a) {
       c2 += (x[k + 1][a] - x[k][a]) * (x[k + 1][a] - x[k][a]);
@@ -206,7 +206,7 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
         step.push_back(q);
       }
     }
-    sampled_peaks(step, 1e-9 * cfg.limits.feed * h, rep.fit_peaks);
+    sampled_peaks(step, 1e-9 * cfg.limits.top_speed(d) * h, rep.fit_peaks);
   }
   const Worst worst = worst_of_samples(rep.out_peaks, al, cfg.limits, d, jerk_claimed);
   rep.worst_out = worst.ratio;
