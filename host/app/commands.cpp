@@ -434,13 +434,6 @@ struct FileRecords {
   stream::StreamReader reader;
 };
 
-}  // namespace
-
-namespace {
-// sim --check: the samples' peaks against the limits, after the allowance
-// the stream's format leaves at most (job::Machine: 1/2 LSB of rounding and
-// the register bound the compiler accepts; the exact joints' offset on top
-// in the fine formats), printed; false if one is exceeded.
 // The allowance a stream's format leaves at most (job::Machine): 1/2 LSB of
 // rounding and the register bound the compiler accepts, and the exact
 // joints' offset on top in the fine formats.
@@ -522,6 +515,8 @@ int shown_axes(const SimArgs& a, const stream::Header& header) {
   return a.axes > 0 ? a.axes : std::min(header.axes, plan::kMaxAxes);
 }
 
+// sim --check: the samples' peaks against the limits after the format's
+// allowance, printed; false if one is exceeded.
 bool limits_held(report::SampleCheck& check, const stream::Header& header, const SimArgs& a) {
   plan::Limits limits = a.limits;
   const bool check_feed = a.check_feed;
