@@ -4,7 +4,10 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 
+#include "fd/fd_ticker.hpp"
 #include "planner/sampled.hpp"
 #include "report/sample_check.hpp"
 #include "util/format.hpp"
@@ -18,13 +21,25 @@ using util::fmt;
 
 Samples predicted_samples(const JobResult& r) {
   Samples s;
-  fd::Compiler comp(r.header.format());
-  for (const auto& c : r.compiled)
+  const int axes = std::min(kMaxAxes, r.header.axes);
+  fd::FdTicker t(r.header.width, r.header.guard_bits);
+  size_t n = 0;
+  for (const auto& c : r.compiled) n += c.ticks;
+  s.v.reserve(n);
+  for (size_t i = 0; i < r.compiled.size(); ++i) {
+    const fd::Compiled& c = r.compiled[i];
+    t.load(c.regs);
     for (uint32_t k = 0; k < c.ticks; ++k) {
       Sample v{};
-      for (int a = 0; a < std::min(kMaxAxes, r.header.axes); ++a) v[a] = comp.sample_at(c, a, k).get_si();
+      for (int a = 0; a < axes; ++a) v[a] = t.sample_and_step(a);
       s.v.push_back(v);
     }
+    // the recurrence against the compiler's closed form of the end state
+    for (int a = 0; a < axes; ++a)
+      if (!t.holds(a, c.end[a]))
+        throw std::logic_error("predicted_samples: segment " + std::to_string(i) + " axis " + std::to_string(a) +
+                               " ends off the compiler's end state");
+  }
   return s;
 }
 
