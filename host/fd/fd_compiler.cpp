@@ -6,6 +6,7 @@
 #include "fd/fd_compiler.hpp"
 
 #include <cmath>
+#include <stdexcept>
 
 #include "fd/detail/fd_internal.hpp"
 
@@ -45,17 +46,20 @@ Compiler::Compiler(Format f) : f_(f) {
 }
 
 void Compiler::compile(const PolySegment& seg, const std::vector<mpz_class>* start, const std::string& where,
-                       Compiled& out) const {
+                       Compiled& out, double start_slack_lsb) const {
   // The refusals before any arithmetic, in the reference's order and words.
   check_segment(f_, seg, start, where);
+  if (!(start_slack_lsb >= 0) || !std::isfinite(start_slack_lsb))
+    throw std::invalid_argument("Compiler::compile: the start slack must be finite and >= 0");
+  const double start_tol = f_.tol_lsb / 2 + start_slack_lsb;
   if (seg.ticks > kfit_) {
-    out = compile_reference(f_, seg, start, where);  // words the refusal
+    out = compile_reference(f_, seg, start, where, start_tol);  // words the refusal
     return;
   }
   // compile_grid() reads `start` before it writes `out` (r[0] of an axis
   // before its end), so start may be &out.end.
-  if (!compile_grid(f_, scale_ld_, limit_ld_, seg, start, out))
-    out = compile_exact(f_, scale_ld_, limit_ld_, seg, start, where);
+  if (!compile_grid(f_, scale_ld_, limit_ld_, seg, start, start_tol, out))
+    out = compile_exact(f_, scale_ld_, limit_ld_, seg, start, start_tol, where);
   wrap_differences(out);
 }
 

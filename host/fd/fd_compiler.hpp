@@ -136,8 +136,14 @@ class Compiler {
   // after segment into one Compiled (its registers and vectors already sized)
   // allocates nothing on the common path. `start` may point to out.end. On a
   // CompileError `out` is unspecified.
+  // start_slack_lsb: a start up to tol/2 + start_slack_lsb output LSB from
+  // the polynomial's value is taken (its difference blended out linearly, as
+  // always); carried_lsb and bound_lsb then count all of it. A caller that
+  // knows the start's distance from the end of the previous polynomial (its
+  // register error) and the two polynomials' mismatch (a joint) apart states
+  // them itself (job::SegmentCompiler).
   void compile(const PolySegment& seg, const std::vector<mpz_class>* start, const std::string& where,
-               Compiled& out) const;
+               Compiled& out, double start_slack_lsb = 0) const;
 
   // The same for an exact target (the reference's exact rational path: no
   // double anywhere), with the same checks, rounding and bound.

@@ -36,7 +36,7 @@ Scratch& scratch() {
 }
 
 Compiled compile_exact(const Format& f_, long double scale_ld, long double limit_ld, const PolySegment& seg,
-                       const std::vector<mpz_class>* start, const std::string& where) {
+                       const std::vector<mpz_class>* start, double start_tol_lsb, const std::string& where) {
   ++path_counts().exact;
   const int N = f_.degree;
   const int A = f_.axes;
@@ -74,7 +74,7 @@ Compiled compile_exact(const Format& f_, long double scale_ld, long double limit
   const double q2_d = mpz_get_d(S.q2);               // = quant_bound_x2(N, K).get_d() (truncation)
   const double qbound_lsb = std::ldexp(q2_d, -(G + 1));  // = quant_bound_lsb(K): exact power-of-two scaling
 
-  const Dyadic htol = dyadic(f_.tol_lsb / 2);  // tol/2 output LSB = m 2^(e+G) register LSB
+  const Dyadic htol = dyadic(start_tol_lsb);  // output LSB = m 2^(e+G) register LSB
   const long double T_ld = static_cast<long double>(seg.h) * static_cast<long double>(K);
 
   Compiled out;
@@ -130,7 +130,7 @@ Compiled compile_exact(const Format& f_, long double scale_ld, long double limit
         mpz_mul_2exp(S.t, S.t, static_cast<unsigned long>(-s));
         far = mpz_cmp_si(S.t, htol.m) > 0;
       }
-      if (far) return compile_reference(f_, seg, start, where);  // words the refusal
+      if (far) return compile_reference(f_, seg, start, where, start_tol_lsb);  // words the refusal
     }
     // to_lsb(e0, G) = |e0 / 2^G| as a double, truncated (mpq_get_d).
     double e0_lsb = 0;
@@ -138,7 +138,7 @@ Compiled compile_exact(const Format& f_, long double scale_ld, long double limit
       long ex;
       const double dm = mpz_get_d_2exp(&ex, S.e);  // truncated to 53 bits
       const long p = ex + z - G;
-      if (p - 1 < -1021 || p > 1023) return compile_reference(f_, seg, start, where);  // not a normal double
+      if (p - 1 < -1021 || p > 1023) return compile_reference(f_, seg, start, where, start_tol_lsb);  // not a normal double
       e0_lsb = std::fabs(std::ldexp(dm, static_cast<int>(p)));
     }
     carried = std::max(carried, e0_lsb);
@@ -148,7 +148,7 @@ Compiled compile_exact(const Format& f_, long double scale_ld, long double limit
       const long double r0_ld =
           mpz_size(S.r0) <= 2 ? static_cast<long double>(mpz_get_d(S.r0)) : mw::mpz_ldexp(S.r0, 0);
       if (!range_ok(N, cf, scale_ld, T_ld, r0_ld, mw::mpz_ldexp(S.e, z), q2_d, limit_ld))
-        return compile_reference(f_, seg, start, where);  // decides and words it
+        return compile_reference(f_, seg, start, where, start_tol_lsb);  // decides and words it
     }
 
     // Registers: exact differences at scale 2^-z, rounded to nearest.

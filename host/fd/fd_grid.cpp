@@ -36,7 +36,7 @@ const HPowers& h_powers(double h) {
 }
 
 bool compile_grid(const Format& f, long double scale_ld, long double limit_ld, const PolySegment& seg,
-                  const std::vector<mpz_class>* start, Compiled& out) {
+                  const std::vector<mpz_class>* start, double start_tol_lsb, Compiled& out) {
   const int N = f.degree;
   const int A = f.axes;
   const int G = f.guard_bits;
@@ -73,7 +73,7 @@ bool compile_grid(const Format& f, long double scale_ld, long double limit_ld, c
   }
   const KData& kd = k_data(N, seg.ticks, f.tol_lsb);
   const double q2_d = kd.q2_d;
-  const Dyadic htol = dyadic(f.tol_lsb / 2);
+  const Dyadic htol = dyadic(start_tol_lsb);
   GridOut o;
   double carried = 0;
   int L1 = 0;  // limbs of a register, 0: not settled

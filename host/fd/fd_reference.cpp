@@ -228,7 +228,7 @@ namespace {
 // in t over [0, T = K h]. `range_hint(axis)` completes a range refusal.
 Compiled compile_exact_target(const Format& f_, std::vector<std::vector<mpq_class>> c, const mpq_class& h, uint64_t K,
                               const std::vector<mpz_class>* start, const std::string& where,
-                              const std::function<std::string(int)>& range_hint) {
+                              const std::function<std::string(int)>& range_hint, double start_tol_lsb) {
   const int N = f_.degree;
   const int A = f_.axes;
   auto fail = [&](const std::string& what) { throw CompileError(where + ": " + what); };
@@ -247,7 +247,8 @@ Compiled compile_exact_target(const Format& f_, std::vector<std::vector<mpq_clas
 
   const mpq_class T = h * mpq_class(mpz_class(std::to_string(K)));
   const mpq_class scale = register_scale(f_);
-  const mpq_class half_tol_reg = exact(f_.tol_lsb / 2) * mpq_class(pow2(G));
+  const double start_tol = start_tol_lsb < 0 ? f_.tol_lsb / 2 : start_tol_lsb;
+  const mpq_class half_tol_reg = exact(start_tol) * mpq_class(pow2(G));
   const mpq_class limit = mpq_class(pow2(f_.width - 1));  // |r0| must stay below 2^(W-1)
 
   Compiled out;
@@ -263,7 +264,8 @@ Compiled compile_exact_target(const Format& f_, std::vector<std::vector<mpq_clas
     mpq_class e0 = mpq_class(r0) - ca[0];
     if (abs(e0) > half_tol_reg && start)
       fail("axis " + std::to_string(a) + " starts " + fmt_double(to_lsb(e0, G)) +
-           " LSB away from the previous segment's end (more than tol/2 = " + fmt_double(f_.tol_lsb / 2) +
+           " LSB away from the previous segment's end (more than " +
+           (start_tol == f_.tol_lsb / 2 ? "tol/2 = " : "") + fmt_double(start_tol) +
            " LSB): the path is not continuous here");
     carried = std::max(carried, to_lsb(e0, G));
     // Blend e0 out linearly: q += e0 (1 - t/T).
@@ -304,7 +306,7 @@ Compiled compile_exact_target(const Format& f_, std::vector<std::vector<mpq_clas
 }  // namespace
 
 Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::vector<mpz_class>* start,
-                           const std::string& where) {
+                           const std::string& where, double start_tol_lsb) {
   ++path_counts().reference;
   check_segment(f_, seg, start, where);
   const mpq_class h = exact(seg.h);
@@ -317,7 +319,7 @@ Compiled compile_reference(const Format& f_, const PolySegment& seg, const std::
     c[a][0] += mpq_class(pow2(f_.guard_bits), 2);
   }
   return compile_exact_target(f_, std::move(c), h, seg.ticks, start, where,
-                              [&](int a) { return range_suggestion(f_, seg.coef[a], T, seg.ticks); });
+                              [&](int a) { return range_suggestion(f_, seg.coef[a], T, seg.ticks); }, start_tol_lsb);
 }
 
 }  // namespace detail
@@ -337,7 +339,7 @@ Compiled Compiler::compile_target(const ExactTarget& seg, const std::vector<mpz_
       fail("axis " + std::to_string(a) + " has degree " + std::to_string(seg.q[a].size() - 1) +
            ", the engine is built for degree " + std::to_string(f_.degree));
   if (start && static_cast<int>(start->size()) != f_.axes) fail("start state has the wrong number of axes");
-  Compiled out = compile_exact_target(f_, seg.q, mpq_class(1), seg.ticks, start, where, [](int) { return ""; });
+  Compiled out = compile_exact_target(f_, seg.q, mpq_class(1), seg.ticks, start, where, [](int) { return ""; }, -1);
   wrap_differences(out);
   return out;
 }

@@ -55,43 +55,51 @@ SegmentCompiler::SegmentCompiler(const Machine& m) : comp_(m.format()) {
   exact_joints_ = Machine::exact_joints(f);
 }
 
-namespace {
-
-mpq_class exact(double v) {
-  mpq_class q;
-  mpq_set_d(q.get_mpq_t(), v);
-  return q;
+void SegmentCompiler::load(const plan::TimeSegment& seg) {
+  ps_.ticks = seg.K;
+  for (size_t a = 0; a < ps_.coef.size(); ++a)
+    for (size_t j = 0; j < ps_.coef[a].size(); ++j) ps_.coef[a][j] = seg.coef[a][j];
 }
 
-}  // namespace
-
-void SegmentCompiler::compile_joined(const plan::TimeSegment& seg, const std::string& where) {
+double SegmentCompiler::joint_lsb(const plan::TimeSegment& seg) const {
   const fd::Format& f = comp_.format();
-  const mpq_class h = exact(ps_.h);
-  const mpq_class lsb_units = mpq_class(mpz_class(1) << f.frac_bits);         // 2^F per unit
-  const mpq_class scale = lsb_units * mpq_class(mpz_class(1) << f.guard_bits);  // register LSB per unit
-  const mpq_class K(static_cast<unsigned long>(seg.K));
-  const mpq_class T_prev = h * mpq_class(static_cast<unsigned long>(prev_.K));
-  fd::ExactTarget t;
-  t.ticks = seg.K;
-  t.q.assign(static_cast<size_t>(f.axes), std::vector<mpq_class>(static_cast<size_t>(f.degree) + 1, 0));
+  // long double (64-bit significand): each Horner step and the difference
+  // round by at most 2^-64 relative, the product h K too, so 64 2^-64 of the
+  // terms' magnitudes bounds the error with room to spare.
+  const long double T_prev = static_cast<long double>(ps_.h) * static_cast<long double>(prev_.K);
+  const long double lsb_units = std::ldexp(1.0L, f.frac_bits);
   double joint = 0;
   for (int a = 0; a < f.axes; ++a) {
-    mpq_class end = 0;  // the previous polynomial at its end, exactly
-    for (int j = f.degree; j >= 0; --j) end = end * T_prev + exact(prev_.coef[a][j]);
-    const mpq_class delta = end - exact(seg.coef[a][0]);
-    joint = std::max(joint, std::fabs(mpq_class(delta * lsb_units).get_d()));
-    mpq_class hj = 1;
-    auto& q = t.q[static_cast<size_t>(a)];
-    for (int j = 0; j <= f.degree; ++j, hj *= h) q[j] = exact(seg.coef[a][j]) * scale * hj;
-    q[0] += delta * scale + mpq_class(mpz_class(1) << f.guard_bits, 2);
-    q[1] -= delta * scale / K;
+    long double end = 0, mag = 0;
+    for (int j = f.degree; j >= 0; --j) {
+      end = end * T_prev + static_cast<long double>(prev_.coef[a][j]);
+      mag = mag * T_prev + std::fabs(static_cast<long double>(prev_.coef[a][j]));
+    }
+    const long double start = seg.coef[a][0];
+    const long double err = std::ldexp(64.0L * (mag + std::fabs(start)), -64);
+    joint = std::max(joint, static_cast<double>((std::fabs(end - start) + err) * lsb_units));
   }
+  return joint;
+}
+
+void SegmentCompiler::compile_joined(const plan::TimeSegment& seg, const std::string& where) {
+  const double joint = joint_lsb(seg);
   if (joint > Machine::kJointLsb)
     throw fd::CompileError(where + ": starts " + util::fmt("%g", joint) +
                            " LSB from where the previous segment's polynomial ends (more than " +
                            util::fmt("%g", Machine::kJointLsb) + "): the path is not continuous here");
-  c_ = comp_.compile_target(t, &c_.end, where);
+  // The start is the previous segment's exact register end: within that
+  // segment's Q(K) of its polynomial's end (the blend of its own start is 0
+  // there), and that end within `joint` of this polynomial's start. The
+  // compiler blends the whole difference out linearly, as the carried error
+  // always is; it is stated here in its two parts: the carried error, which
+  // the register bound counts, and the joint (offset_lsb), which moves
+  // positions and first differences only.
+  const double carried = comp_.quant_bound_lsb(prev_.K);
+  load(seg);
+  comp_.compile(ps_, &c_.end, where, c_, Machine::kJointLsb);
+  c_.carried_lsb = carried;
+  c_.bound_lsb = carried + comp_.quant_bound_lsb(seg.K);
   c_.offset_lsb = joint;
 }
 
@@ -101,9 +109,7 @@ const fd::Compiled& SegmentCompiler::compile(const plan::TimeSegment& seg, size_
     if (exact_joints_ && have_end_) {
       compile_joined(seg, where);
     } else {
-      ps_.ticks = seg.K;
-      for (size_t a = 0; a < ps_.coef.size(); ++a)
-        for (size_t j = 0; j < ps_.coef[a].size(); ++j) ps_.coef[a][j] = seg.coef[a][j];
+      load(seg);
       comp_.compile(ps_, have_end_ ? &c_.end : nullptr, where, c_);
     }
   } catch (const fd::CompileError& e) {

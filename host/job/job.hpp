@@ -60,11 +60,16 @@ class SegmentCompiler {
   const fd::Compiled& compile(const plan::TimeSegment& seg, size_t index);
 
  private:
-  // Machine::exact_joints: the target is the segment's polynomial plus
-  // delta (1 - t/T), delta = where the previous polynomial ends (exact) minus
-  // where this one starts, so that it starts exactly there; compiled from
-  // that exact target (|delta| at most kJointLsb, fd::Compiled::offset_lsb).
+  // Machine::exact_joints: the segment starts at the previous one's exact
+  // register end, which may be up to kJointLsb (plus the register error) from
+  // its polynomial's start at formats this fine; the compiler blends the
+  // difference out linearly (the target is the polynomial plus
+  // delta (1 - t/T)), and the joint |delta| is stated apart
+  // (fd::Compiled::offset_lsb).
   void compile_joined(const plan::TimeSegment& seg, const std::string& where);
+  // A bound of |delta| in output LSB, from the two polynomials in long double.
+  double joint_lsb(const plan::TimeSegment& seg) const;
+  void load(const plan::TimeSegment& seg);  // the segment's polynomial into ps_
   fd::Compiler comp_;
   fd::PolySegment ps_;
   fd::Compiled c_;

@@ -77,18 +77,20 @@ void check_segment(const Format& f, const PolySegment& seg, const std::vector<mp
 // The straightforward exact form (mpq throughout). The fast paths fall back
 // to it for every refusal and every case they cannot settle, so messages and
 // borderline decisions are this function's by construction.
+// start_tol_lsb < 0: tol/2 (Compiler::compile's start slack adds to it).
 Compiled compile_reference(const Format& f, const PolySegment& seg, const std::vector<mpz_class>* start,
-                           const std::string& where);
+                           const std::string& where, double start_tol_lsb = -1);
 // The grid path for a segment that passed the checks before any arithmetic
 // and the budget check: true with `out` filled, or false (nothing decided).
 // scale_ld = 2^(G+F), limit_ld = 2^(W-1) (1 - 2^-40), exact in long double.
+// start_tol_lsb: the largest |e0| taken at a given start (Compiler::compile).
 bool compile_grid(const Format& f, long double scale_ld, long double limit_ld, const PolySegment& seg,
-                  const std::vector<mpz_class>* start, Compiled& out);
+                  const std::vector<mpz_class>* start, double start_tol_lsb, Compiled& out);
 // The exact integer path: exact dyadic sums on limb arrays sized per axis,
 // mpz otherwise; what it cannot decide goes to compile_reference().
 // scale_ld = 2^(G+F), limit_ld = 2^(W-1) (1 - 2^-40) as compile_grid().
 Compiled compile_exact(const Format& f, long double scale_ld, long double limit_ld, const PolySegment& seg,
-                       const std::vector<mpz_class>* start, const std::string& where);
+                       const std::vector<mpz_class>* start, double start_tol_lsb, const std::string& where);
 
 // ---- shared by the fast paths ----
 
