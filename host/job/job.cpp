@@ -20,17 +20,24 @@ void JobConfig::validate() const {
 
 plan::PlanOptions JobConfig::plan_options() const {
   plan::PlanOptions po = plan;
-  po.period = machine.period;
+  po.period = machine.fit_period();
+  if (machine.fit_ticks() > 1) po.feed_share = std::min(po.feed_share, kFineFeedShare);
   return po;
 }
 
 plan::SegmentOptions JobConfig::segment_options() const {
   plan::SegmentOptions so;
   so.degree = machine.degree;
-  so.max_ticks = machine.longest_segment();
+  so.fine_ticks = machine.fit_ticks();
+  so.fine_period = machine.period;
+  // in fit ticks; longer polynomials are cut into pieces the compiler takes (engine_pieces)
+  so.max_ticks = so.fine_ticks == 1 ? machine.longest_segment() : kMaxFitTicks;
   so.fit_tol = machine.fit_budget(limits.tol);
   // each tick within feed_rel of its travel: the chord between two ticks
-  // within 2 feed_rel of the planned arc
+  // within 2 feed_rel of the planned arc; where the fit tick is coarser than
+  // the engine's, the fit's velocity error keeps the chords within 2
+  // feed_rel of the plan's, by default 2e-3 (fit_segments_fine)
+  if (so.fine_ticks > 1) so.feed_rel = kFineFeedRel;
   if (machine.feed_accuracy > 0) so.feed_rel = machine.feed_accuracy / 2;
   return so;
 }
@@ -59,6 +66,12 @@ void SegmentCompiler::load(const plan::TimeSegment& seg) {
   ps_.ticks = seg.K;
   for (size_t a = 0; a < ps_.coef.size(); ++a)
     for (size_t j = 0; j < ps_.coef[a].size(); ++j) ps_.coef[a][j] = seg.coef[a][j];
+}
+
+double SegmentCompiler::quant_bound(uint32_t K) {
+  if (K >= qbound_.size()) qbound_.resize(K + 1, -1.0);
+  if (qbound_[K] < 0) qbound_[K] = comp_.quant_bound_lsb(K);  // exact, in GMP: once per length
+  return qbound_[K];
 }
 
 double SegmentCompiler::joint_lsb(const plan::TimeSegment& seg) const {
@@ -95,11 +108,11 @@ void SegmentCompiler::compile_joined(const plan::TimeSegment& seg, const std::st
   // always is; it is stated here in its two parts: the carried error, which
   // the register bound counts, and the joint (offset_lsb), which moves
   // positions and first differences only.
-  const double carried = comp_.quant_bound_lsb(prev_.K);
+  const double carried = quant_bound(prev_.K);
   load(seg);
   comp_.compile(ps_, &c_.end, where, c_, Machine::kJointLsb);
   c_.carried_lsb = carried;
-  c_.bound_lsb = carried + comp_.quant_bound_lsb(seg.K);
+  c_.bound_lsb = carried + quant_bound(seg.K);
   c_.offset_lsb = joint;
 }
 
@@ -118,6 +131,28 @@ const fd::Compiled& SegmentCompiler::compile(const plan::TimeSegment& seg, size_
   have_end_ = true;
   prev_ = seg;
   return c_;
+}
+
+void engine_pieces(const plan::TimeSegment& seg, uint32_t kmax, double h, std::vector<plan::TimeSegment>& out) {
+  const uint64_t K = seg.K;
+  const uint64_t pieces = (K + kmax - 1) / kmax;
+  for (uint64_t i = 0; i < pieces; ++i) {
+    // equal pieces (lengths differ by at most one tick): no short remainder
+    const uint64_t a = K * i / pieces, b = K * (i + 1) / pieces;
+    plan::TimeSegment p = seg;
+    p.k0 = seg.k0 + static_cast<long long>(a);
+    p.K = static_cast<uint32_t>(b - a);
+    if (a > 0) {
+      // Taylor shift to tau0 = a h by repeated synthetic division
+      const double tau0 = static_cast<double>(a) * h;
+      for (int ax = 0; ax < plan::kMaxAxes; ++ax) {
+        auto& c = p.coef[ax];
+        for (int i0 = 0; i0 < seg.degree; ++i0)
+          for (int j = seg.degree - 1; j >= i0; --j) c[j] += tau0 * c[j + 1];
+      }
+    }
+    out.push_back(p);
+  }
 }
 
 plan::TimeSegment hold_segment(long long k0, const double* x, int dim, int degree) {
@@ -141,18 +176,24 @@ JobResult run_job(const plan::Path& p, const JobConfig& cfg, const Progress& pro
   req.options = cfg.plan_options();
   req.segments = cfg.segment_options();
   req.what = "the path";
+  const double H = m.fit_period();
+  const int n = m.fit_ticks();
   req.sample = [&](const plan::Plan& plan, std::vector<plan::TickSample>& ts) {
-    ts = plan::sample_ticks(p, plan, m.period);
+    ts = plan::sample_ticks(p, plan, H);
   };
   req.progress = progress;
   r.fit_tol = req.segments.fit_tol;
   PlanFitResult fit = plan_and_fit(req, r.ticks);
   r.plan = std::move(fit.plan);
-  r.segments = std::move(fit.segments);
   r.repairs = static_cast<int>(fit.repairs);
   r.rounds = fit.rounds;
-  r.segments.push_back(
-      hold_segment(static_cast<long long>(r.ticks.size()) - 1, r.ticks.back().x, p.dim(), m.degree));
+  const long long last = (static_cast<long long>(r.ticks.size()) - 1) * n;  // the end, on the engine's tick
+  const uint32_t kmax = m.longest_segment();
+  r.segments.reserve(fit.segments.size() + 1);
+  for (const plan::TimeSegment& s : fit.segments) engine_pieces(s, kmax, m.period, r.segments);
+  r.segments.push_back(hold_segment(last, r.ticks.back().x, p.dim(), m.degree));
+  r.engine_tick_count = static_cast<uint64_t>(last) + 1;
+  if (n > 1 && cfg.engine_ticks) r.ticks = plan::sample_ticks_range(p, r.plan, m.period, 0.0, 0, last);
 
   const auto t3 = Clock::now();
   SegmentCompiler sc(m);

@@ -15,10 +15,27 @@
 
 namespace traj::job {
 
+// The longest segment the fit makes, in fit ticks, where the fit tick is
+// more than one engine tick (Machine::fit_ticks): a second at the 1 ms fit
+// tick; the engine's pieces are cut from it (engine_pieces).
+constexpr uint32_t kMaxFitTicks = 1000;
+// The plan's share of the feed where the fit tick is coarser than the
+// engine's (plan::PlanOptions::feed_share): room for the fit's speed error,
+// which the chord check at every engine tick holds to the feed.
+constexpr double kFineFeedShare = 1 - 1e-4;
+// SegmentOptions::feed_rel where the fit tick is coarser than the engine's
+// and no --feed-accuracy is given: every chord within 2e-3 of the plan's.
+constexpr double kFineFeedRel = 1e-3;
+
 struct JobConfig {
   plan::Limits limits;
-  plan::PlanOptions plan;  // planner tuning; its period is set from `machine`
+  plan::PlanOptions plan;  // planner tuning; its period is set from `machine` (the fit tick)
   Machine machine;
+  // run_job: the plan sampled at every engine tick in JobResult::ticks (what
+  // the report compares the core's samples with). Off, the result holds the
+  // fit ticks' samples only, and the job's memory does not grow with the
+  // tick rate (`trajcore plan` without a report, the benchmarks).
+  bool engine_ticks = true;
   // Validates the limits and the machine; PlanError naming the field.
   void validate() const;
   // The planner options with the machine's tick period.
@@ -29,7 +46,10 @@ struct JobConfig {
 
 struct JobResult {
   plan::Plan plan;
+  // The plan at every engine tick (JobConfig::engine_ticks), else at every
+  // fit tick (Machine::fit_ticks apart); `engine_tick_count` either way.
   std::vector<plan::TickSample> ticks;
+  uint64_t engine_tick_count = 0;
   std::vector<plan::TimeSegment> segments;
   std::vector<fd::Compiled> compiled;
   stream::Header header;
@@ -70,6 +90,8 @@ class SegmentCompiler {
   // A bound of |delta| in output LSB, from the two polynomials in long double.
   double joint_lsb(const plan::TimeSegment& seg) const;
   void load(const plan::TimeSegment& seg);  // the segment's polynomial into ps_
+  double quant_bound(uint32_t K);          // fd::Compiler::quant_bound_lsb, remembered per K
+  std::vector<double> qbound_;
   fd::Compiler comp_;
   fd::PolySegment ps_;
   fd::Compiled c_;
@@ -77,6 +99,12 @@ class SegmentCompiler {
   bool exact_joints_ = false;
   plan::TimeSegment prev_;  // the last segment compiled (its polynomial's end)
 };
+
+// A fitted segment (on the engine's tick) in pieces the compiler takes: at
+// most `kmax` ticks, each the polynomial re-expanded at its start (Taylor
+// shift: the pieces join where the polynomial does, up to rounding, which
+// the segment compiler's joints take). Appended to `out`.
+void engine_pieces(const plan::TimeSegment& seg, uint32_t kmax, double h, std::vector<plan::TimeSegment>& out);
 
 // One tick at `x`: the last segment of a motion, so that the core's last
 // sample is the end point (a segment emits its start, not its end).

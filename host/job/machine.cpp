@@ -53,11 +53,11 @@ std::vector<fd::Format> Machine::carried_formats(int degree, int axes) {
     throw PlanError(std::to_string(axes) + " axes: the tool carries engines of 1 to " + std::to_string(plan::kMaxAxes));
   // {axes, degree, width, chunk_width, guard_bits, frac_bits}
   if (axes > 3) {
-    if (degree == 5) return {{8, 5, 96, 16, 48, 32}, {8, 5, 128, 16, 48, 44}};
+    if (degree == 5) return {{8, 5, 96, 16, 48, 32}, {8, 5, 128, 16, 64, 44}};
     throw PlanError("segment degree " + std::to_string(degree) + " with " + std::to_string(axes) +
                     " axes: the tool carries 8-axis engines of degree 5 only (--degree 5)");
   }
-  if (degree == 5) return {{3, 5, 96, 16, 48, 32}, {3, 5, 128, 16, 48, 44}};
+  if (degree == 5) return {{3, 5, 96, 16, 48, 32}, {3, 5, 128, 16, 64, 44}};
   if (degree == 3) return {{3, 3, 64, 16, 32, 16}, {3, 3, 96, 16, 48, 32}};
   throw PlanError("segment degree " + std::to_string(degree) + ": the tool carries engines for degree 3 and 5");
 }
@@ -149,6 +149,11 @@ uint32_t Machine::longest_segment() const {
   const fd::Format f = format();
   return static_cast<uint32_t>(
       std::min<uint64_t>(fd::Compiler::longest_segment(f.degree, f.guard_bits, f.tol_lsb), f.max_ticks));
+}
+
+int Machine::fit_ticks() const {
+  // 1e-9: a period that divides kFitPeriod (1e-3 / 2e-5) gives the whole quotient
+  return static_cast<int>(std::max(1.0, std::floor(kFitPeriod / period * (1 + 1e-9))));
 }
 
 stream::Header Machine::header() const { return stream::Header::from(format(), period, units); }

@@ -69,7 +69,8 @@ struct Machine {
   // The engine formats of the builds the tool carries for `degree`
   // (host/sim/CMakeLists.txt, TRAJ_SIM_BUILDS), narrowest first:
   //   quintic: Axes 3, Width 96, Chunk 16, Guard 48, F 32 (1 LSB = 2^-32 units, |x| < 32768)
-  //            Axes 3, Width 128, Chunk 16, Guard 48, F 44 (2^-44 units, |x| < 2^35: fine ticks)
+  //            Axes 3, Width 128, Chunk 16, Guard 64, F 44 (2^-44 units, |x| < 2^19: fine ticks;
+  //            64 guard bits: segments of up to about 16 000 ticks)
   //   cubic:   Axes 3, Width 64, Chunk 16, Guard 32, F 16 (|x| < 32768)
   //            Axes 3, Width 96, Chunk 16, Guard 48, F 32
   //   4 to 8 axes: the quintic formats with Axes 8 (a path's further axes
@@ -109,6 +110,16 @@ struct Machine {
   double fit_budget(double tol) const;
   // The longest segment (ticks) the compiler accepts in this format.
   uint32_t longest_segment() const;
+  // The fit's tick: the planner samples the plan, checks it and fits the
+  // segments on a grid of fit_ticks() engine ticks (kFitPeriod or a little
+  // less, at least one tick), so that its work and memory follow the
+  // motion's duration, not the tick rate. Where it is more than one engine
+  // tick the segments it accepts are checked for every engine tick by
+  // per-segment bounds (planner/fine_check.hpp), and each is cut into pieces
+  // the compiler takes (job::engine_pieces).
+  static constexpr double kFitPeriod = 1e-3;
+  int fit_ticks() const;
+  double fit_period() const { return fit_ticks() * period; }
   stream::Header header() const;
   // The largest |coordinate| the output holds: 2^(out_width-1-frac_bits) units
   // (32768 mm for the quintic engine).

@@ -91,9 +91,12 @@ constexpr size_t kResumeAfterFailure = 8;
 
 // The plan's positions of the (up to 3) ticks before ts[i], relative to
 // ts[i]: the history of a part that follows a failed one (only to look for
-// further failures; that round is not accepted).
-std::vector<std::array<double, plan::kMaxAxes>> plan_history(const std::vector<plan::TickSample>& ts, size_t i) {
+// further failures; that round is not accepted). None where the fit tick is
+// not the engine's (the history is of engine ticks).
+std::vector<std::array<double, plan::kMaxAxes>> plan_history(const std::vector<plan::TickSample>& ts, size_t i,
+                                                             const plan::SegmentOptions& so) {
   std::vector<std::array<double, plan::kMaxAxes>> h;
+  if (so.fine_ticks > 1) return h;
   for (size_t k = i >= 3 ? i - 3 : 0; k < i; ++k) {
     std::array<double, plan::kMaxAxes> q{};
     for (int a = 0; a < plan::kMaxAxes; ++a) q[a] = ts[k].x[a] - ts[i].x[a];
@@ -122,10 +125,10 @@ size_t fit_all(const PlanFitRequest& req, const plan::Plan& plan, const std::vec
       auto s = plan::fit_segments(*req.path, plan, whole ? ts : part, *req.limits, so, h, req.t_offset,
                                   req.k_base + static_cast<long long>(i0));
       if (failures == 0) {
-        so.history = plan::fitted_tail(s, req.path->dim(), h, 3);
+        so.history = plan::fitted_tail(s, req.path->dim(), so.engine_period(h), 3);
         segs.insert(segs.end(), s.begin(), s.end());
       } else {
-        so.history = plan_history(ts, i1);
+        so.history = plan_history(ts, i1, so);
       }
       i0 = i1;
     } catch (const plan::FitError& e) {
@@ -140,7 +143,7 @@ size_t fit_all(const PlanFitRequest& req, const plan::Plan& plan, const std::vec
                                   speed_floor(*req.limits, req.path->dim())));
       ++failures;
       i0 = std::max(i0 + 1, std::min(n, k + kResumeAfterFailure));
-      so.history = plan_history(ts, i0);
+      so.history = plan_history(ts, i0, so);
     }
   }
   return failures;

@@ -213,7 +213,7 @@ struct WindowPlan {
 // curves (all if `last`).
 WindowPlan plan_window(Window& win, const Carry& in, size_t commit_max, bool last, const JobConfig& cfg,
                        size_t index, std::vector<plan::TickSample>& ts) {
-  const double h = cfg.machine.period;
+  const double h = cfg.machine.fit_period();  // the window is planned and fitted on the fit tick
   WindowPlan wp;
   Path path = win.path();
   check_path_range(path, cfg.machine);
@@ -259,7 +259,7 @@ WindowPlan plan_window(Window& win, const Carry& in, size_t commit_max, bool las
     for (auto& q : next.history)
       for (int a = 0; a < path.dim(); ++a) q[a] -= ts.back().x[a] - ts.front().x[a];
   {
-    auto t = plan::fitted_tail(fit.segments, path.dim(), h, 3);
+    auto t = plan::fitted_tail(fit.segments, path.dim(), req.segments.engine_period(h), 3);
     next.history.insert(next.history.end(), t.begin(), t.end());
     while (next.history.size() > 3) next.history.erase(next.history.begin());
   }
@@ -302,7 +302,9 @@ StreamStats run_streaming(StreamSource& src, const JobConfig& cfg, const StreamO
     throw PlanError("streaming window: need 1 <= commit < window (got commit " + std::to_string(so.commit) +
                     ", window " + std::to_string(so.window) + ")");
   cfg.validate();
-  const double h = cfg.machine.period;
+  const double h = cfg.machine.fit_period();  // windows, commits and carries are on the fit tick
+  const int n = cfg.machine.fit_ticks();
+  const uint32_t kmax = cfg.machine.longest_segment();
 
   StreamStats st;
   Window win;
@@ -310,12 +312,18 @@ StreamStats run_streaming(StreamSource& src, const JobConfig& cfg, const StreamO
   std::vector<plan::TickSample> ts;  // the window's ticks; storage reused window after window
 
   SegmentCompiler sc(cfg.machine);
-  auto emit = [&](const plan::TimeSegment& seg) {
+  std::vector<plan::TimeSegment> pieces;  // one fitted segment on the engine's tick; storage reused
+  auto emit_engine = [&](const plan::TimeSegment& seg) {
     const fd::Compiled& c = sc.compile(seg, st.segments);
     if (st.first_segment < 0) st.first_segment = std::chrono::duration<double>(Clock::now() - t_start).count();
     sink(c, seg);
     ++st.segments;
     st.ticks += seg.K;
+  };
+  auto emit = [&](const plan::TimeSegment& fit) {  // a fitted segment, on the engine's tick
+    pieces.clear();
+    engine_pieces(fit, kmax, cfg.machine.period, pieces);
+    for (const plan::TimeSegment& seg : pieces) emit_engine(seg);
   };
 
   // A window's segments are emitted once the next window has planned from
@@ -363,7 +371,7 @@ StreamStats run_streaming(StreamSource& src, const JobConfig& cfg, const StreamO
     if (last) {
       for (const auto& sg : wp.segments) emit(sg);
       const Carry& end = wp.next;
-      emit(hold_segment(end.k_last, end.tick.x, win.splines.front().dim(), cfg.machine.degree));
+      emit_engine(hold_segment(end.k_last * n, end.tick.x, win.splines.front().dim(), cfg.machine.degree));
       st.motion_time = static_cast<double>(end.k_org) * h + end.T0;
       break;
     }

@@ -658,8 +658,10 @@ void insert_dwells(Plan& plan, std::vector<PlanOptions::Dwell> dwells) {
 
 }  // namespace
 
-Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o) {
-  L.validate();
+Plan plan_path(const Path& p, const Limits& limits, const PlanOptions& o) {
+  limits.validate();
+  Limits L = limits;
+  L.feed *= o.feed_share;
   if (const std::string m = util::tick_period_problem(o.period); !m.empty()) throw PlanError(m);
   if (p.size() == 0) throw PlanError("empty path");
   const int d = p.dim();
@@ -778,44 +780,46 @@ std::vector<TickSample> sample_ticks_range(const Path& p, const Plan& plan, doub
   return out;
 }
 
+TickSample sample_plan(const Path& p, const Plan& plan, double tp, double t, SampleHints& hints) {
+  const PathState ps = state_at(plan, tp, &hints.piece);
+  const size_t cj = std::min(p.curve_at(ps.s), p.size() - 1);
+  const double sl = std::clamp(ps.s - p.offset(cj), 0.0, p.arclength(cj).total());
+  if (cj != hints.curve) {
+    hints.curve = cj;
+    hints.table = 0;
+  }
+  const size_t ci = cj;
+  const double u = p.table(ci).u_at(sl, hints.table);
+  const int span = p.table(ci).span_of(hints.table);
+  const Frame f = frame_at(p, ci, u, ps.s, span);
+  TickSample ts{};
+  ts.t = t;
+  ts.tp = tp;
+  ts.s = ps.s;
+  ts.v = ps.v;
+  ts.a = ps.a;
+  ts.j = ps.j;
+  ts.u = u;
+  ts.curve = ci;
+  ts.span = span;
+  for (int a = 0; a < p.dim(); ++a) {
+    ts.x[a] = f.C[a];
+    ts.dx[a] = f.T[a] * ps.v;
+    ts.ddx[a] = f.K[a] * ps.v * ps.v + f.T[a] * ps.a;
+    ts.dddx[a] = f.Q[a] * ps.v * ps.v * ps.v + 3 * f.K[a] * ps.v * ps.a + f.T[a] * ps.j;
+  }
+  ts.a_cen = f.kappa * ps.v * ps.v;
+  ts.j_cen_geo = f.q_norm * ps.v * ps.v * ps.v + 3 * f.kappa * ps.v * std::fabs(ps.a);
+  return ts;
+}
+
 void append_ticks_range(const Path& p, const Plan& plan, double period, double t_offset, long long k_first,
                         long long k_last, std::vector<TickSample>& out, long long k_origin) {
   if (k_last < k_first) return;
   out.reserve(out.size() + static_cast<size_t>(k_last - k_first + 1));
-  int hint = 0, piece_hint = 0;
-  size_t ci = static_cast<size_t>(-1);
-  double u = 0;
-  const int d = p.dim();
-  for (long long k = k_first; k <= k_last; ++k) {
-    const double t = static_cast<double>(k - k_origin) * period - t_offset;
-    const PathState ps = state_at(plan, t, &hint);
-    const size_t cj = std::min(p.curve_at(ps.s), p.size() - 1);
-    const double sl = std::clamp(ps.s - p.offset(cj), 0.0, p.arclength(cj).total());
-    if (cj != ci) {
-      ci = cj;
-      piece_hint = 0;
-    }
-    u = p.table(ci).u_at(sl, piece_hint);
-    const Frame f = frame_at(p, ci, u, ps.s, p.table(ci).span_of(piece_hint));
-    TickSample ts{};
-    ts.t = k * period;
-    ts.s = ps.s;
-    ts.v = ps.v;
-    ts.a = ps.a;
-    ts.j = ps.j;
-    ts.u = u;
-    ts.curve = ci;
-    ts.span = p.table(ci).span_of(piece_hint);
-    for (int a = 0; a < d; ++a) {
-      ts.x[a] = f.C[a];
-      ts.dx[a] = f.T[a] * ps.v;
-      ts.ddx[a] = f.K[a] * ps.v * ps.v + f.T[a] * ps.a;
-      ts.dddx[a] = f.Q[a] * ps.v * ps.v * ps.v + 3 * f.K[a] * ps.v * ps.a + f.T[a] * ps.j;
-    }
-    ts.a_cen = f.kappa * ps.v * ps.v;
-    ts.j_cen_geo = f.q_norm * ps.v * ps.v * ps.v + 3 * f.kappa * ps.v * std::fabs(ps.a);
-    out.push_back(ts);
-  }
+  SampleHints hints;
+  for (long long k = k_first; k <= k_last; ++k)
+    out.push_back(sample_plan(p, plan, static_cast<double>(k - k_origin) * period - t_offset, k * period, hints));
 }
 
 Peaks peaks_of(const std::vector<TickSample>& ts, int dim) {

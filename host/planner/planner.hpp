@@ -101,6 +101,11 @@ struct PlanOptions {
   // overshoots a speed held exactly at the limit by ~1e-7 of it (a straight move along an axis whose
   // v_axis equals the feed would otherwise fail the fit and be capped far below).
   double axis_v_share = 0.999;
+  // Share of the feed the plan may reach. Where the fit tick is coarser than
+  // the engine's (job::Machine::fit_ticks) the chords between engine ticks
+  // come close to the arcs of the plan, and the fitted polynomial's small
+  // speed error along the path would take a plan at the feed above it.
+  double feed_share = 1;
   // Share of j_axis a curvature jump may take in the tick that steps the
   // acceleration (jump_speed in planner.cpp).
   double jump_j_share = 0.5;
@@ -208,13 +213,22 @@ PathState state_at(const Plan& plan, double t, int* hint = nullptr);
 
 // Per-tick samples of the planned trajectory: position and time derivatives.
 struct TickSample {
-  double t, s, v, a, j;  // path
+  double t, s, v, a, j;  // path (t: the tick's time, k h)
+  double tp;             // the plan's own time of the tick
   double u;
   size_t curve;
   int span;  // power-basis span of the curve that holds u
   double x[kMaxAxes], dx[kMaxAxes], ddx[kMaxAxes], dddx[kMaxAxes];
   double a_cen, j_cen_geo;  // centripetal acceleration kappa v^2, jerk bound |Q| v^3 + 3 kappa v |a|
 };
+// Where a search for the plan's piece, curve and arc-length table piece
+// starts (any values are correct; nearby ones are fast).
+struct SampleHints {
+  int piece = 0, table = 0;
+  size_t curve = static_cast<size_t>(-1);
+};
+// The plan at its time tp (t: the sample's tick time, kept as given).
+TickSample sample_plan(const Path& p, const Plan& plan, double tp, double t, SampleHints& hints);
 std::vector<TickSample> sample_ticks(const Path& p, const Plan& plan, double period);
 // Ticks k_first..k_last (global indices) of a plan that starts at global time
 // k_origin h + t_offset: tick k is at plan time (k - k_origin) h - t_offset

@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "planner/segments.hpp"
 
+#include "planner/fine_check.hpp"
 #include "planner/sampled.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 
 namespace traj::plan {
 namespace {
@@ -173,12 +175,48 @@ std::array<double, 6> hermite(int degree, double x0, double v0, double a0, doubl
   return c;
 }
 
+// Whether the exact maxima over [0, T] of |x'|, |x''|, |x'''| of every axis
+// are within the per-axis limits (the Bernstein bound, >= the exact maximum,
+// only skips the root search where it already shows the limit holds). jmax,
+// if given, gets each axis's largest |x'''| bound (the Bernstein bound, or
+// the exact maximum where that was needed).
+bool axes_within(const TimeSegment& seg, int d, double T, const Limits& L, double* jmax = nullptr) {
+  for (int a = 0; a < d; ++a) {
+    double c1[5], c2[4], c3[3];
+    for (int j = 0; j < 5; ++j) c1[j] = seg.coef[a][j + 1] * (j + 1);
+    for (int j = 0; j < 4; ++j) c2[j] = c1[j + 1] * (j + 1);
+    for (int j = 0; j < 3; ++j) c3[j] = c2[j + 1] * (j + 1);
+    auto within = [&](const double* c, int n, double lim, double* peak) {
+      const double b = bernstein_bound(c, n, T) * (1 + 1e-12);
+      if (b <= lim) {
+        if (peak) *peak = b;
+        return true;
+      }
+      const double m = max_abs_poly(c, n, T);
+      if (peak) *peak = m;
+      return m <= lim;
+    };
+    if (!within(c1, seg.degree - 1, L.v_axis[a], nullptr) || !within(c2, seg.degree - 2, L.a_axis[a], nullptr))
+      return false;
+    if (seg.degree == 5 && !within(c3, seg.degree - 3, L.j_axis[a], jmax ? &jmax[a] : nullptr)) return false;
+  }
+  return true;
+}
+
+// fit_segments where the fit tick is fine_ticks > 1 engine ticks (below).
+std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, const std::vector<TickSample>& ts,
+                                           const Limits& L, const SegmentOptions& o, long long k_base);
+
 }  // namespace
 
 std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std::vector<TickSample>& ts,
                                       const Limits& L, const SegmentOptions& o, double period, double t_offset,
                                       long long k_base) {
   if (o.degree != 3 && o.degree != 5) throw PlanError("segment degree must be 3 or 5");
+  if (o.fine_ticks > 1) {
+    if (ts.size() < 2) throw PlanError("motion shorter than one tick");
+    return fit_segments_fine(p, plan, ts, L, o, k_base);
+  }
   const int d = p.dim();
   const long long n = static_cast<long long>(ts.size()) - 1;
   if (n < 1) throw PlanError("motion shorter than one tick");
@@ -279,19 +317,7 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
         }
       }
     }
-    for (int a = 0; a < d; ++a) {
-      double c1[5], c2[4], c3[3];
-      for (int j = 0; j < 5; ++j) c1[j] = seg.coef[a][j + 1] * (j + 1);
-      for (int j = 0; j < 4; ++j) c2[j] = c1[j + 1] * (j + 1);
-      for (int j = 0; j < 3; ++j) c3[j] = c2[j + 1] * (j + 1);
-      auto within = [&](const double* c, int n, double lim) {
-        if (bernstein_bound(c, n, T) * (1 + 1e-12) <= lim) return true;
-        return max_abs_poly(c, n, T) <= lim;
-      };
-      if (!within(c1, o.degree - 1, L.v_axis[a]) || !within(c2, o.degree - 2, L.a_axis[a])) return false;
-      if (o.degree == 5 && !within(c3, o.degree - 3, L.j_axis[a])) return false;
-    }
-    return true;
+    return axes_within(seg, d, T, L);
   };
   // A kept segment: its fitted positions before its end become the tail.
   auto accept = [&](TimeSegment& seg) {
@@ -365,5 +391,290 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
   }
   return out;
 }
+
+namespace {
+
+// A sample the fine fit works with: the plan at engine tick e (global).
+struct FineSample {
+  const TickSample* s = nullptr;
+  long long e = 0;
+};
+
+// The fit on a fit tick of n = o.fine_ticks engine ticks (segments.hpp,
+// host/planner/README.md "Fine ticks"). Segments start and end at engine
+// ticks: at the fit ticks, at the engine ticks on both sides of each change
+// of curve or span between two fit ticks (found by bisection; a segment
+// ends at the one after it, as at every tick when the fit tick is the
+// engine's), and, where no segment between fit ticks passes, at engine
+// ticks between them sampled on demand. A segment passes when
+//   * per axis, the exact maxima of |x'|, |x''|, |x'''| are within the limits;
+//   * between consecutive samples a and b it uses (delta apart), its
+//     deviation e = fit - plan stays within fit_tol at every engine tick:
+//     |e| <= max(|e_a|, |e_b|) + delta^2/8 E2, E2 = max(|e''_a|, |e''_b|) +
+//     delta/2 E3, E3 = the fit's largest |x'''| + the plan's (its per-axis
+//     jerk limits: the planner's guarantee); and its velocity error keeps
+//     the chord between engine ticks within 2 feed_rel of the plan's:
+//     |e'| <= max(|e'_a|, |e'_b|) + delta^2/8 E3 <= 2 feed_rel v, v the
+//     plan's slowest speed between the two (at least the smaller end speed
+//     less delta^2/8 of the profile's jerk) but at least 1e-3 of the top
+//     speed;
+//   * fine_windows_ok: the sampled tangential and normal quantities and the
+//     chords at every engine tick, by per-segment bounds.
+// The search for the longest segment uses the first two; the third decides
+// on the one it found (and, where it fails, on shorter ones).
+std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, const std::vector<TickSample>& ts,
+                                           const Limits& L, const SegmentOptions& o, long long k_base) {
+  const int d = p.dim();
+  const long long n = o.fine_ticks;
+  const double h = o.fine_period;
+  const bool carried = ts[0].curve >= p.size();  // ts[0] ends the previous window's committed motion
+  SampleHints hints;
+  std::deque<TickSample> extra;  // the samples between fit ticks (stable addresses)
+  // engine tick e of the plan, placed from a later sample B (the earlier one may be carried)
+  auto sample_before = [&](const FineSample& B, long long e) {
+    const double back = static_cast<double>(B.e - e) * h;
+    return sample_plan(p, plan, B.s->tp - back, B.s->t - back, hints);
+  };
+  auto same_piece = [](const TickSample& a, const TickSample& b) { return a.curve == b.curve && a.span == b.span; };
+
+  double Jp = 0;  // the plan's jerk: within the per-axis limits
+  for (int a = 0; a < d; ++a) Jp += L.j_axis[a] * L.j_axis[a];
+  Jp = std::sqrt(Jp);
+  // The feed check's allowance between samples delta apart is delta^2/8 E3,
+  // E3 <= 2 Jp (the fit's jerk is within the same limits): where the plan is
+  // slow, its budget 2 feed_rel v is small, and more
+  // samples of the plan go between the fit ticks (at most half the budget
+  // for the allowance), so that the segments there need not be short.
+  // Below a thousandth of the top speed the budget stops shrinking (the
+  // report's feed figures start at a hundredth): the samples stay finite at
+  // a stop.
+  const double v_floor = 1e-3 * L.top_speed(d);
+  auto feed_budget = [&](double v) { return 2 * o.feed_rel * std::max(v, v_floor); };
+
+  std::vector<FineSample> W;  // the samples, in order
+  W.reserve(ts.size() + 16);
+  std::vector<long long> brk_e;  // engine ticks where a segment must end
+  std::vector<long long> between;
+  for (size_t i = 0; i < ts.size(); ++i) {
+    W.push_back({&ts[i], (k_base + static_cast<long long>(i)) * n});
+    if (i + 1 == ts.size() || (i == 0 && carried)) continue;
+    const FineSample A = W.back(), B{&ts[i + 1], A.e + n};
+    between.clear();
+    // each change of curve or span: the engine ticks before and at it
+    const TickSample* left = A.s;
+    long long lo = A.e;
+    while (!same_piece(*left, *B.s)) {
+      long long a = lo, b = B.e;  // a: on left's piece; b: past it
+      while (b - a > 1) {
+        const long long m = a + (b - a) / 2;
+        (same_piece(sample_before(B, m), *left) ? a : b) = m;
+      }
+      if (b - 1 > lo) between.push_back(b - 1);
+      brk_e.push_back(b);
+      if (b == B.e) break;
+      between.push_back(b);
+      extra.push_back(sample_before(B, b));
+      left = &extra.back();
+      lo = b;
+    }
+    // where slow, the samples the feed check needs
+    const double v_lo = std::max(0.0, std::min(A.s->v, B.s->v) - n * n * h * h / 8 * plan.J_t);
+    const double dmax = std::sqrt(4 * feed_budget(v_lo) / (2 * Jp));
+    const long long m = std::min<long long>(n, static_cast<long long>(std::ceil(n * h / dmax)));
+    for (long long k = 1; k < m; ++k) between.push_back(A.e + n * k / m);
+    std::sort(between.begin(), between.end());
+    between.erase(std::unique(between.begin(), between.end()), between.end());
+    for (long long e : between) {
+      extra.push_back(sample_before(B, e));
+      W.push_back({&extra.back(), e});
+    }
+  }
+  brk_e.push_back(W.back().e);
+
+  std::vector<TimeSegment> out;
+  std::vector<std::array<double, kMaxAxes>> tail = o.history;
+  if (tail.size() > 3) tail.erase(tail.begin(), tail.end() - 3);
+  std::string fail_why;
+
+  // The checks of a segment from S to E over the samples W[j0..j1) between
+  // them (the first two items above; `windows`: the third too).
+  auto try_fit = [&](const FineSample& S, const FineSample& E, size_t j0, size_t j1, bool windows,
+                     TimeSegment& seg) {
+    fail_why.clear();
+    const double T = static_cast<double>(E.e - S.e) * h;
+    seg.k0 = S.e;
+    seg.K = static_cast<uint32_t>(E.e - S.e);
+    seg.degree = o.degree;
+    seg.coef = {};
+    seg.max_dev = 0;
+    for (int a = 0; a < d; ++a)
+      seg.coef[a] = hermite(o.degree, S.s->x[a], S.s->dx[a], S.s->ddx[a], E.s->x[a], E.s->dx[a], E.s->ddx[a], T);
+    double jq[kMaxAxes] = {};
+    if (!axes_within(seg, d, T, L, jq)) {
+      fail_why = "a per-axis limit";
+      return false;
+    }
+    double Jq = 0;
+    for (int a = 0; a < d; ++a) Jq += jq[a] * jq[a];
+    const double E3 = std::sqrt(Jq) + Jp;
+    double c1[kMaxAxes][5] = {}, c2[kMaxAxes][4] = {};  // the fit's first two derivatives
+    for (int a = 0; a < d; ++a) {
+      for (int j = 0; j < 5; ++j) c1[a][j] = seg.coef[a][j + 1] * (j + 1);
+      for (int j = 0; j < 4; ++j) c2[a][j] = c1[a][j + 1] * (j + 1);
+    }
+    struct Err {
+      double e = 0, e1 = 0, e2 = 0;  // |fit - plan| and of its first two derivatives
+    };
+    auto err_at = [&](const FineSample& X) {
+      const double tau = static_cast<double>(X.e - S.e) * h;
+      Err r;
+      for (int a = 0; a < d; ++a) {
+        const double x = (S.s->x[a] + travel(seg.coef[a].data(), o.degree, tau)) - X.s->x[a];
+        const double v = poly_val(c1[a], o.degree - 1, tau) - X.s->dx[a];
+        const double ac = poly_val(c2[a], o.degree - 2, tau) - X.s->ddx[a];
+        r.e += x * x;
+        r.e1 += v * v;
+        r.e2 += ac * ac;
+      }
+      r.e = std::sqrt(r.e);
+      r.e1 = std::sqrt(r.e1);
+      r.e2 = std::sqrt(r.e2);
+      return r;
+    };
+    Err ea;  // at S: the fit interpolates the plan there
+    const FineSample* A = &S;
+    for (size_t j = j0; j <= j1; ++j) {
+      const FineSample& B = j < j1 ? W[j] : E;
+      const Err eb = j < j1 ? err_at(B) : Err{};
+      const long long gap = B.e - A->e;
+      double dev = std::max(ea.e, eb.e), fe = std::max(ea.e1, eb.e1), v_lo = std::min(A->s->v, B.s->v);
+      if (gap > 1) {
+        const double dl = static_cast<double>(gap) * h;
+        dev += dl * dl / 8 * (std::max(ea.e2, eb.e2) + dl / 2 * E3);
+        fe += dl * dl / 8 * E3;
+        v_lo = std::max(0.0, v_lo - dl * dl / 8 * plan.J_t);
+      }
+      seg.max_dev = std::max(seg.max_dev, dev);
+      if (dev > o.fit_tol) {
+        fail_why = "deviation " + std::to_string(dev);
+        return false;
+      }
+      if (fe > feed_budget(v_lo)) {
+        fail_why = "velocity error " + std::to_string(fe);
+        return false;
+      }
+      A = &B;
+      ea = eb;
+    }
+    if (!windows) return true;
+    if (!speed_within(seg, d, T, L.feed)) {
+      fail_why = "the path speed above the feed";
+      return false;
+    }
+    return fine_windows_ok(seg, d, h, L, tail, &fail_why);
+  };
+  auto accept = [&](TimeSegment& seg) {
+    // the tail so far and the segment's last ticks, relative to its end (the next start)
+    double end[kMaxAxes] = {};
+    for (int a = 0; a < d; ++a) end[a] = seg.travel(a, seg.K * h);
+    for (auto& q : tail)
+      for (int a = 0; a < d; ++a) q[a] -= end[a];
+    for (uint32_t k = seg.K > 3 ? seg.K - 3 : 0; k < seg.K; ++k) {
+      std::array<double, kMaxAxes> q{};
+      for (int a = 0; a < d; ++a) q[a] = seg.travel(a, k * h) - end[a];
+      tail.push_back(q);
+    }
+    if (tail.size() > 3) tail.erase(tail.begin(), tail.end() - 3);
+    out.push_back(seg);
+  };
+  auto fit_error = [&](const FineSample& S, const TimeSegment& seg) {
+    const SegmentPeaks pk = segment_peaks(seg, d, h);
+    std::string why = fail_why;
+    for (int a = 0; a < d; ++a)
+      why += "; axis " + std::to_string(a) + ": v " + std::to_string(pk.v[a]) + " a " + std::to_string(pk.a[a]) +
+             " j " + std::to_string(pk.j[a]);
+    return FitError("tick " + std::to_string(S.e) + " (t = " + std::to_string(S.s->t) +
+                        " s): no one-tick segment meets the limits (" + why + ")",
+                    S.e / n);
+  };
+
+  // Greedy: from each start, the longest segment that passes.
+  FineSample S = W[0];
+  size_t i = 0;  // S is W[i], or lies between W[i] and W[i + 1] (an engine tick sampled on demand)
+  size_t bi = 0;
+  size_t last_len = 16;  // samples spanned by the last segment
+  TimeSegment seg, best;
+  while (S.e < W.back().e) {
+    while (brk_e[bi] <= S.e) ++bi;
+    const long long emax = std::min(brk_e[bi], S.e + static_cast<long long>(o.max_ticks) * n);
+    size_t jmax = i + 1;
+    while (jmax + 1 < W.size() && W[jmax + 1].e <= emax) ++jmax;
+    // the longest W[j] (i < j <= jmax) that passes the first two checks:
+    // exponential search, then bisection to within 1/8 of its length
+    size_t lo = i, hi = jmax + 1;
+    if (W[i + 1].e <= emax) {
+      size_t probe = std::min(jmax, i + std::max<size_t>(1, 2 * last_len));
+      while (true) {
+        if (try_fit(S, W[probe], i + 1, probe, false, seg)) {
+          lo = probe;
+          if (probe == jmax) break;
+          probe = std::min(jmax, i + 2 * (probe - i));
+        } else {
+          hi = probe;
+          break;
+        }
+      }
+      while (lo < jmax && hi - lo > std::max<size_t>(1, (lo - i) / 8)) {
+        const size_t mid = lo + (hi - lo) / 2;
+        (try_fit(S, W[mid], i + 1, mid, false, seg) ? lo : hi) = mid;
+      }
+      // all three checks on the one found; where they fail, bisection below it
+      if (lo > i && !try_fit(S, W[lo], i + 1, lo, true, best)) {
+        size_t good = i, bad = lo;
+        while (bad - good > 1) {
+          const size_t mid = good + (bad - good) / 2;
+          (try_fit(S, W[mid], i + 1, mid, true, seg) ? good : bad) = mid;
+        }
+        lo = good;
+        if (lo > i) try_fit(S, W[lo], i + 1, lo, true, best);
+      }
+    }
+    if (lo > i) {
+      last_len = lo - i;
+      accept(best);
+      S = W[lo];
+      i = lo;
+      continue;
+    }
+    // No segment to a sample passes: the longest to an engine tick between S
+    // and W[i + 1], sampled on demand (bisection), but not before the plan's
+    // start (the carried tick's interval belongs to the previous window).
+    const FineSample& B = W[i + 1];
+    long long good = S.e, bad = B.e;
+    TickSample X, R;
+    while (bad - good > 1) {
+      const long long m = good + (bad - good) / 2;
+      X = sample_before(B, m);
+      if (X.tp >= 0 && try_fit(S, FineSample{&X, m}, i + 1, i + 1, true, seg)) {
+        good = m;
+        R = X;
+        best = seg;
+      } else {
+        bad = m;
+      }
+    }
+    if (good == S.e) {
+      try_fit(S, B, i + 1, i + 1, true, seg);
+      throw fit_error(S, seg);
+    }
+    last_len = 1;
+    accept(best);
+    extra.push_back(R);
+    S = FineSample{&extra.back(), good};
+  }
+  return out;
+}
+
+}  // namespace
 
 }  // namespace traj::plan

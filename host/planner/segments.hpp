@@ -73,6 +73,15 @@ struct SegmentOptions {
   // up to three ticks, which absolute coordinates would round to noise at
   // fine ticks. Empty at the start of a motion (at rest).
   std::vector<std::array<double, kMaxAxes>> history;
+  // The engine's tick where it is finer than the fit's: the fit tick
+  // (`period` of fit_segments) is `fine_ticks` engine ticks of `fine_period`;
+  // each segment accepted on the fit ticks is then checked for every engine
+  // tick by per-segment bounds (fine_check.hpp). 1: the fit tick is the
+  // engine's, and the checks above are made at every engine tick.
+  int fine_ticks = 1;
+  double fine_period = 0;
+  // The engine's tick, given the fit's.
+  double engine_period(double fit_period) const { return fine_ticks > 1 ? fine_period : fit_period; }
 };
 
 // ts[0] is global tick k_base; the plan starts at global time t_offset. A

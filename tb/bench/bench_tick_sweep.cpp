@@ -51,9 +51,10 @@ void butterfly(const std::string& file, double period) {
   job::JobConfig cfg;
   cfg.machine.period = period;
   cfg.machine.choose_format(cfg.limits);
+  cfg.engine_ticks = false;  // as `trajcore plan` without a report: no sample per engine tick
   const plan::Path p = input::load_path(file);
   const job::JobResult r = job::run_job(p, cfg);
-  row("butterfly", period, r.plan.duration(), since(t0), r.segments.size(), r.ticks.size(), cfg);
+  row("butterfly", period, r.plan.duration(), since(t0), r.segments.size(), r.engine_tick_count, cfg);
   std::printf("  stages: plan %.3f ticks %.3f fit %.3f compile %.3f s\n", r.t_plan, r.t_ticks, r.t_fit, r.t_compile);
 }
 
