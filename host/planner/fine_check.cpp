@@ -139,22 +139,27 @@ class Checker {
   // be negative (windows reaching into the tail).
   bool exact(long long i0, long long i1, const std::vector<std::array<double, kMaxAxes>>* tail = nullptr) {
     const int hn = tail ? static_cast<int>(tail->size()) : 0;
+    // positions relative to the window's first tick, from travels in long
+    // double: rounded at the scale of the window's few ticks of travel, not
+    // of the segment's (at 1 us, a long segment's travel in double rounds
+    // the second differences of chord speeds to percents of a jerk limit)
+    long double xl[4][kMaxAxes];
     double x[4][kMaxAxes];
-    auto pos = [&](long long k, double* out) {
+    auto pos = [&](long long k, long double* out) {
       if (k < 0) {
         const auto& q = (*tail)[static_cast<size_t>(hn + k)];
         for (int a = 0; a < d_; ++a) out[a] = q[a];
       } else {
-        for (int a = 0; a < d_; ++a) out[a] = seg_.travel(a, static_cast<double>(k) * h_);
+        for (int a = 0; a < d_; ++a) out[a] = seg_.travel_ld(a, static_cast<long double>(k) * h_);
       }
     };
     for (long long i = i0; i <= i1; ++i) {
       if (st_) ++st_->exact_windows;
       const bool has2 = i + 2 <= K_, has3 = i + 3 <= K_ && n_ == 5;
-      pos(i, x[0]);
-      pos(i + 1, x[1]);
-      if (has2) pos(i + 2, x[2]);
-      if (has3) pos(i + 3, x[3]);
+      const int m = has3 ? 4 : has2 ? 3 : 2;
+      for (int r = 0; r < m; ++r) pos(i + r, xl[r]);
+      for (int r = 0; r < m; ++r)
+        for (int a = 0; a < d_; ++a) x[r][a] = static_cast<double>(xl[r][a] - xl[0][a]);
       if (i >= 0 && chord_speed(x[0], x[1], d_, 1.0) > chord_max_) return fail("chord", i);
       if (!has2) continue;
       const SampledWindow w = sampled_window(x[0], x[1], x[2], has3 ? x[3] : nullptr, d_, h_, min_chord_);
@@ -165,9 +170,11 @@ class Checker {
   }
 
   std::string why;
+  long long fail_tick = -1;
 
  private:
   bool fail(const char* what, long long i) {
+    fail_tick = i;
     why = std::string(what) + " above its limit at tick " + std::to_string(i) + " of the segment";
     return false;
   }
@@ -201,7 +208,6 @@ class Checker {
     }
     d2_max = std::sqrt(d2_max);
     d3_max = std::sqrt(d3_max);
-    if (std::sqrt(std::max(0.0, P.hi())) * h_ > chord_max_ * (1 - 1e-12)) return false;
     double at = d2_max, an = d2_max, jt = 2 * d2_max / h_, jn = d3_max;
     // s' = P'/(2 s), s'' = (2 P P'' - P'^2) / (4 s^3)
     const double p_lo = P.lo();
@@ -297,13 +303,21 @@ bool speed_within(const TimeSegment& seg, int dim, double T, double v_max) {
 }
 
 bool fine_windows_ok(const TimeSegment& seg, int dim, double h, const Limits& L,
-                     const std::vector<std::array<double, kMaxAxes>>& tail, std::string* why, FineCheckStats* stats) {
+                     const std::vector<std::array<double, kMaxAxes>>& tail, std::string* why, FineCheckStats* stats,
+                     long long* fail_tick) {
+  if (fail_tick) *fail_tick = -1;
+  // the chords: within the path speed's bound (speed_within), as means of it
+  if (!speed_within(seg, dim, seg.K * h, L.feed)) {
+    if (why) *why = "the path speed above the feed";
+    return false;
+  }
   Checker c(seg, dim, h, L, stats);
   const long long K = seg.K;
   // the windows that reach back into the previous segment: starts -2, -1
   const long long back = -std::min<long long>(2, static_cast<long long>(tail.size()));
   bool ok = back >= 0 || c.exact(back, -1, &tail);
   if (ok) ok = c.check(0, K - 1);
+  if (!ok && fail_tick) *fail_tick = c.fail_tick;
   if (!ok && why) *why = c.why.empty() ? "sampled tangential or normal bound above its limit" : c.why;
   return ok;
 }

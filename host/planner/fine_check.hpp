@@ -30,7 +30,8 @@
 // bounds exceed a limit is halved; one of at most kExactWindows window starts
 // (near a stop, where the chord speed vanishes) is evaluated exactly, window
 // by window, as fit_segments does at every tick. So are the few windows that
-// reach back into the previous segment (its last ticks, `tail`).
+// reach back into the previous segment (its last ticks, `tail`). The chords
+// are means of the path speed |q'|, which speed_within bounds.
 #pragma once
 #include <array>
 #include <string>
@@ -56,10 +57,12 @@ struct FineCheckStats {
 // K, the sampled tangential acceleration and jerk and the normal
 // acceleration and jerk within L.a_tan, L.j_tan, L.a_cen, L.j_cen, and every
 // chord within L.feed h: what fit_segments checks at every tick when the fit
-// tick is the engine's. `why`, if given, says which failed first.
+// tick is the engine's. `why`, if given, says which failed first, and
+// `fail_tick` the window's start (ticks of the segment; -1 where no one
+// window failed).
 bool fine_windows_ok(const TimeSegment& seg, int dim, double h, const Limits& L,
                      const std::vector<std::array<double, kMaxAxes>>& tail, std::string* why = nullptr,
-                     FineCheckStats* stats = nullptr);
+                     FineCheckStats* stats = nullptr, long long* fail_tick = nullptr);
 
 // Whether the path speed |q'| of `seg` stays within v_max over [0, T]
 // (Bernstein bounds of |q'|^2, halved up to 6 times where they are above).

@@ -35,6 +35,12 @@ double TimeSegment::eval(int axis, double tau, int deriv) const {
 
 double TimeSegment::travel(int axis, double tau) const { return plan::travel(coef[axis].data(), degree, tau); }
 
+long double TimeSegment::travel_ld(int axis, long double tau) const {
+  long double v = 0;
+  for (int j = degree; j >= 1; --j) v = v * tau + coef[axis][j];
+  return v * tau;
+}
+
 namespace {
 
 // Real roots of c[0..n] (n <= 5) in the open interval (a, b), ascending.
@@ -122,14 +128,15 @@ SegmentPeaks segment_peaks(const TimeSegment& seg, int dim, double period) {
 std::vector<std::array<double, kMaxAxes>> fitted_tail(const std::vector<TimeSegment>& segs, int dim, double period,
                                                       int count) {
   std::vector<std::array<double, kMaxAxes>> t;
-  double to_end[kMaxAxes] = {};  // the end of segment i relative to the sequence's end
+  long double to_end[kMaxAxes] = {};  // the end of segment i relative to the sequence's end
   for (size_t i = segs.size(); i-- > 0 && static_cast<int>(t.size()) < count;) {
     const TimeSegment& sg = segs[i];
-    double end[kMaxAxes] = {};
-    for (int a = 0; a < dim; ++a) end[a] = travel(sg.coef[a].data(), sg.degree, sg.K * period);
+    long double end[kMaxAxes] = {};
+    for (int a = 0; a < dim; ++a) end[a] = sg.travel_ld(a, static_cast<long double>(sg.K) * period);
     for (uint32_t k = sg.K; k-- > 0 && static_cast<int>(t.size()) < count;) {
       std::array<double, kMaxAxes> q{};
-      for (int a = 0; a < dim; ++a) q[a] = travel(sg.coef[a].data(), sg.degree, k * period) - end[a] + to_end[a];
+      for (int a = 0; a < dim; ++a)
+        q[a] = static_cast<double>(sg.travel_ld(a, static_cast<long double>(k) * period) - end[a] + to_end[a]);
       t.insert(t.begin(), q);
     }
     for (int a = 0; a < dim; ++a) to_end[a] -= end[a];
@@ -398,6 +405,10 @@ namespace {
 struct FineSample {
   const TickSample* s = nullptr;
   long long e = 0;
+  // A segment may end here: not at the engine tick just before a change of
+  // curve or span (the next segment would have to cross it within one
+  // engine tick, as the planner's speed there does not allow).
+  bool end_ok = true;
 };
 
 // The fit on a fit tick of n = o.fine_ticks engine ticks (segments.hpp,
@@ -454,8 +465,9 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
   std::vector<FineSample> W;  // the samples, in order
   W.reserve(ts.size() + 16);
   std::vector<long long> brk_e;  // engine ticks where a segment must end
-  std::vector<long long> between;
+  std::vector<long long> between, no_end;
   for (size_t i = 0; i < ts.size(); ++i) {
+    no_end.clear();
     W.push_back({&ts[i], (k_base + static_cast<long long>(i)) * n});
     if (i + 1 == ts.size() || (i == 0 && carried)) continue;
     const FineSample A = W.back(), B{&ts[i + 1], A.e + n};
@@ -470,6 +482,8 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
         (same_piece(sample_before(B, m), *left) ? a : b) = m;
       }
       if (b - 1 > lo) between.push_back(b - 1);
+      if (b - 1 == A.e) W.back().end_ok = false;
+      no_end.push_back(b - 1);
       brk_e.push_back(b);
       if (b == B.e) break;
       between.push_back(b);
@@ -486,21 +500,30 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
     between.erase(std::unique(between.begin(), between.end()), between.end());
     for (long long e : between) {
       extra.push_back(sample_before(B, e));
-      W.push_back({&extra.back(), e});
+      W.push_back({&extra.back(), e, std::find(no_end.begin(), no_end.end(), e) == no_end.end()});
     }
   }
   brk_e.push_back(W.back().e);
+  std::vector<size_t> ends;  // the W indices a segment may end at
+  ends.reserve(W.size());
+  for (size_t j = 0; j < W.size(); ++j)
+    if (W[j].end_ok) ends.push_back(j);
 
   std::vector<TimeSegment> out;
   std::vector<std::array<double, kMaxAxes>> tail = o.history;
   if (tail.size() > 3) tail.erase(tail.begin(), tail.end() - 3);
   std::string fail_why;
+  long long fail_tick = -1;  // where fine_windows_ok found a window above a limit (ticks of the segment)
 
   // The checks of a segment from S to E over the samples W[j0..j1) between
-  // them (the first two items above; `windows`: the third too).
-  auto try_fit = [&](const FineSample& S, const FineSample& E, size_t j0, size_t j1, bool windows,
+  // them: kFull, all three items above; kScreen, a quicker look for the
+  // search (every third sample, no allowances between samples, 0.8 of the
+  // budgets), which the segment it finds must then pass in full.
+  enum Mode { kScreen, kFull };
+  auto try_fit = [&](const FineSample& S, const FineSample& E, size_t j0, size_t j1, Mode mode,
                      TimeSegment& seg) {
     fail_why.clear();
+    fail_tick = -1;
     const double T = static_cast<double>(E.e - S.e) * h;
     seg.k0 = S.e;
     seg.K = static_cast<uint32_t>(E.e - S.e);
@@ -517,30 +540,75 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
     double Jq = 0;
     for (int a = 0; a < d; ++a) Jq += jq[a] * jq[a];
     const double E3 = std::sqrt(Jq) + Jp;
-    double c1[kMaxAxes][5] = {}, c2[kMaxAxes][4] = {};  // the fit's first two derivatives
-    for (int a = 0; a < d; ++a) {
-      for (int j = 0; j < 5; ++j) c1[a][j] = seg.coef[a][j + 1] * (j + 1);
-      for (int j = 0; j < 4; ++j) c2[a][j] = c1[a][j + 1] * (j + 1);
-    }
     struct Err {
       double e = 0, e1 = 0, e2 = 0;  // |fit - plan| and of its first two derivatives
     };
+    // At a sample: the errors, and (`screen_ok`) whether the fit's own path
+    // speed there is within the feed and its path quantities (the limits of
+    // the samples' at h -> 0) within 0.97 of their limits: what the full
+    // check decides later, seen at the samples, so that the search rarely
+    // offers it a segment it refuses.
+    bool screen_ok = true;
     auto err_at = [&](const FineSample& X) {
       const double tau = static_cast<double>(X.e - S.e) * h;
       Err r;
+      double v[kMaxAxes], ac[kMaxAxes], jk[kMaxAxes], vv = 0;
       for (int a = 0; a < d; ++a) {
-        const double x = (S.s->x[a] + travel(seg.coef[a].data(), o.degree, tau)) - X.s->x[a];
-        const double v = poly_val(c1[a], o.degree - 1, tau) - X.s->dx[a];
-        const double ac = poly_val(c2[a], o.degree - 2, tau) - X.s->ddx[a];
+        // Horner for the travel and its first three derivatives at once
+        const auto& c = seg.coef[a];
+        double p0 = c[o.degree], p1 = 0, p2 = 0, p3 = 0;
+        for (int j = o.degree - 1; j >= 0; --j) {
+          p3 = p3 * tau + p2;
+          p2 = p2 * tau + p1;
+          p1 = p1 * tau + p0;
+          p0 = p0 * tau + (j > 0 ? c[j] : 0.0);
+        }
+        v[a] = p1;
+        ac[a] = 2 * p2;
+        jk[a] = 6 * p3;
+        vv += v[a] * v[a];
+        const double x = (S.s->x[a] - X.s->x[a]) + p0;
+        const double e1 = v[a] - X.s->dx[a], e2 = ac[a] - X.s->ddx[a];
         r.e += x * x;
-        r.e1 += v * v;
-        r.e2 += ac * ac;
+        r.e1 += e1 * e1;
+        r.e2 += e2 * e2;
       }
       r.e = std::sqrt(r.e);
       r.e1 = std::sqrt(r.e1);
       r.e2 = std::sqrt(r.e2);
+      const double sp = std::sqrt(vv);
+      if (sp > L.feed) screen_ok = false;
+      if (sp > 1e-9 * L.feed) {
+        double at = 0, jt = 0, an2 = 0, jn2 = 0;
+        for (int a = 0; a < d; ++a) {
+          at += ac[a] * v[a] / sp;
+          jt += jk[a] * v[a] / sp;
+        }
+        for (int a = 0; a < d; ++a) {
+          const double na = ac[a] - at * v[a] / sp, nj = jk[a] - jt * v[a] / sp;
+          an2 += na * na;
+          jn2 += nj * nj;
+        }
+        jt += an2 / sp;  // d2|q'|/dt2 = q'''.u + |q''_n|^2 / |q'|
+        const double m = 0.97;
+        if (std::fabs(at) > m * L.a_tan || an2 > m * m * L.a_cen * L.a_cen || std::fabs(jt) > m * L.j_tan ||
+            jn2 > m * m * L.j_cen * L.j_cen)
+          screen_ok = false;
+      }
       return r;
     };
+    if (mode == kScreen) {
+      for (size_t j = j0 + 2; j < j1; j += 3) {
+        const Err e = err_at(W[j]);
+        // the allowances of the full check for the gap before the sample
+        const double dl = static_cast<double>(W[j].e - W[j - 1].e) * h;
+        const double v_lo = std::max(0.0, std::min(W[j - 1].s->v, W[j].s->v) - dl * dl / 8 * plan.J_t);
+        if (e.e + dl * dl / 8 * (e.e2 + dl / 2 * E3) > 0.9 * o.fit_tol ||
+            e.e1 + dl * dl / 8 * E3 > 0.9 * feed_budget(v_lo) || !screen_ok)
+          return false;
+      }
+      return true;
+    }
     Err ea;  // at S: the fit interpolates the plan there
     const FineSample* A = &S;
     for (size_t j = j0; j <= j1; ++j) {
@@ -557,31 +625,32 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
       seg.max_dev = std::max(seg.max_dev, dev);
       if (dev > o.fit_tol) {
         fail_why = "deviation " + std::to_string(dev);
+        fail_tick = B.e - S.e;
         return false;
       }
       if (fe > feed_budget(v_lo)) {
         fail_why = "velocity error " + std::to_string(fe);
+        fail_tick = B.e - S.e;
+        return false;
+      }
+      if (!screen_ok) {
+        fail_why = "a path quantity of the fit at a sample";
         return false;
       }
       A = &B;
       ea = eb;
     }
-    if (!windows) return true;
-    if (!speed_within(seg, d, T, L.feed)) {
-      fail_why = "the path speed above the feed";
-      return false;
-    }
-    return fine_windows_ok(seg, d, h, L, tail, &fail_why);
+    return fine_windows_ok(seg, d, h, L, tail, &fail_why, nullptr, &fail_tick);
   };
   auto accept = [&](TimeSegment& seg) {
     // the tail so far and the segment's last ticks, relative to its end (the next start)
-    double end[kMaxAxes] = {};
-    for (int a = 0; a < d; ++a) end[a] = seg.travel(a, seg.K * h);
+    long double end[kMaxAxes] = {};
+    for (int a = 0; a < d; ++a) end[a] = seg.travel_ld(a, static_cast<long double>(seg.K) * h);
     for (auto& q : tail)
-      for (int a = 0; a < d; ++a) q[a] -= end[a];
+      for (int a = 0; a < d; ++a) q[a] = static_cast<double>(q[a] - end[a]);
     for (uint32_t k = seg.K > 3 ? seg.K - 3 : 0; k < seg.K; ++k) {
       std::array<double, kMaxAxes> q{};
-      for (int a = 0; a < d; ++a) q[a] = seg.travel(a, k * h) - end[a];
+      for (int a = 0; a < d; ++a) q[a] = static_cast<double>(seg.travel_ld(a, static_cast<long double>(k) * h) - end[a]);
       tail.push_back(q);
     }
     if (tail.size() > 3) tail.erase(tail.begin(), tail.end() - 3);
@@ -598,52 +667,74 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
                     S.e / n);
   };
 
-  // Greedy: from each start, the longest segment that passes.
+  // Greedy: from each start, the longest segment that passes, to a sample
+  // it may end at (ends[p]).
   FineSample S = W[0];
   size_t i = 0;  // S is W[i], or lies between W[i] and W[i + 1] (an engine tick sampled on demand)
   size_t bi = 0;
-  size_t last_len = 16;  // samples spanned by the last segment
+  size_t last_len = 16;  // end candidates spanned by the last segment
   TimeSegment seg, best;
+  auto fits = [&](size_t p, Mode mode, TimeSegment& out_seg) { return try_fit(S, W[ends[p]], i + 1, ends[p], mode, out_seg); };
   while (S.e < W.back().e) {
     while (brk_e[bi] <= S.e) ++bi;
     const long long emax = std::min(brk_e[bi], S.e + static_cast<long long>(o.max_ticks) * n);
-    size_t jmax = i + 1;
-    while (jmax + 1 < W.size() && W[jmax + 1].e <= emax) ++jmax;
-    // the longest W[j] (i < j <= jmax) that passes the first two checks:
-    // exponential search, then bisection to within 1/8 of its length
-    size_t lo = i, hi = jmax + 1;
-    if (W[i + 1].e <= emax) {
-      size_t probe = std::min(jmax, i + std::max<size_t>(1, 2 * last_len));
+    // the end candidates after S and within emax: positions p0..p1 of ends
+    const size_t p0 = static_cast<size_t>(std::upper_bound(ends.begin(), ends.end(), i) - ends.begin());
+    size_t p1 = p0;
+    while (p1 + 1 < ends.size() && W[ends[p1 + 1]].e <= emax) ++p1;
+    // the longest that passes the screen: exponential search, then bisection
+    // to within 1/8 of its length; then the full checks on it, and where they
+    // fail, the longest that ends before what failed, or bisection below it
+    bool found = false;
+    size_t lo = 0;  // p0 + lo - 1: the longest known to pass (lo = 0: none)
+    if (p0 < ends.size() && W[ends[p0]].e <= emax) {
+      const size_t n_c = p1 - p0 + 1;  // candidates
+      size_t hi = n_c + 1;
+      size_t probe = std::min(n_c, std::max<size_t>(1, 2 * last_len));
       while (true) {
-        if (try_fit(S, W[probe], i + 1, probe, false, seg)) {
+        if (fits(p0 + probe - 1, kScreen, seg)) {
           lo = probe;
-          if (probe == jmax) break;
-          probe = std::min(jmax, i + 2 * (probe - i));
+          if (probe == n_c) break;
+          probe = std::min(n_c, 2 * probe);
         } else {
           hi = probe;
           break;
         }
       }
-      while (lo < jmax && hi - lo > std::max<size_t>(1, (lo - i) / 8)) {
+      while (lo < n_c && hi - lo > std::max<size_t>(1, lo / 8)) {
         const size_t mid = lo + (hi - lo) / 2;
-        (try_fit(S, W[mid], i + 1, mid, false, seg) ? lo : hi) = mid;
+        (fits(p0 + mid - 1, kScreen, seg) ? lo : hi) = mid;
       }
-      // all three checks on the one found; where they fail, bisection below it
-      if (lo > i && !try_fit(S, W[lo], i + 1, lo, true, best)) {
-        size_t good = i, bad = lo;
+      if (lo > 0 && !fits(p0 + lo - 1, kFull, best)) {
+        size_t good = 0, bad = lo;
+        if (fail_tick >= 0) {
+          size_t c = lo;
+          while (c > 1 && W[ends[p0 + c - 1]].e - S.e > fail_tick) --c;
+          if (c < lo && fits(p0 + c - 1, kFull, best)) {
+            good = c;
+            bad = c + 1;
+          } else {
+            bad = std::min(bad, c);
+          }
+        }
         while (bad - good > 1) {
           const size_t mid = good + (bad - good) / 2;
-          (try_fit(S, W[mid], i + 1, mid, true, seg) ? good : bad) = mid;
+          if (fits(p0 + mid - 1, kFull, seg)) {
+            good = mid;
+            best = seg;
+          } else {
+            bad = mid;
+          }
         }
         lo = good;
-        if (lo > i) try_fit(S, W[lo], i + 1, lo, true, best);
       }
+      found = lo > 0;
     }
-    if (lo > i) {
-      last_len = lo - i;
+    if (found) {
+      last_len = lo;
       accept(best);
-      S = W[lo];
-      i = lo;
+      i = ends[p0 + lo - 1];
+      S = W[i];
       continue;
     }
     // No segment to a sample passes: the longest to an engine tick between S
@@ -655,7 +746,7 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
     while (bad - good > 1) {
       const long long m = good + (bad - good) / 2;
       X = sample_before(B, m);
-      if (X.tp >= 0 && try_fit(S, FineSample{&X, m}, i + 1, i + 1, true, seg)) {
+      if (X.tp >= 0 && try_fit(S, FineSample{&X, m}, i + 1, i + 1, kFull, seg)) {
         good = m;
         R = X;
         best = seg;
@@ -664,7 +755,7 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
       }
     }
     if (good == S.e) {
-      try_fit(S, B, i + 1, i + 1, true, seg);
+      try_fit(S, B, i + 1, i + 1, kFull, seg);
       throw fit_error(S, seg);
     }
     last_len = 1;

@@ -40,6 +40,9 @@ struct TimeSegment {
   double eval(int axis, double tau, int deriv = 0) const;
   // eval(axis, tau) - eval(axis, 0), rounded at the scale of the travel, not of the coordinate.
   double travel(int axis, double tau) const;
+  // The same in long double: the differences of travels over a few ticks of
+  // a long segment at fine ticks keep their precision.
+  long double travel_ld(int axis, long double tau) const;
 };
 
 // Exact maxima over a segment of |x'|, |x''|, |x'''| per axis (end points and

@@ -209,13 +209,15 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
     // the rest of one segment's travel, the next one starting where it ends
     std::vector<std::array<double, kMaxAxes>> step;
     step.reserve(n);
+    // (in long double: a step of a long segment at 1 us is a difference of
+    // travels a million times larger)
     for (const auto& sg : r.segments) {
-      double prev[kMaxAxes] = {};
+      long double prev[kMaxAxes] = {};
       for (uint32_t k = 1; k <= sg.K; ++k) {
         std::array<double, kMaxAxes> q{};
         for (int a = 0; a < d; ++a) {
-          const double t = sg.travel(a, k * h);
-          q[a] = t - prev[a];
+          const long double t = sg.travel_ld(a, static_cast<long double>(k) * h);
+          q[a] = static_cast<double>(t - prev[a]);
           prev[a] = t;
         }
         step.push_back(q);
