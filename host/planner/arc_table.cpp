@@ -207,4 +207,9 @@ double ArcTable::u_at(double s, int& hint) const {
   return std::clamp(m + r * x, p.u0, p.u1);
 }
 
+double ArcTable::span_end(int span) const {
+  const auto it = std::upper_bound(pc_.begin(), pc_.end(), span, [](int sp, const Piece& p) { return sp < p.span; });
+  return it == pc_.begin() ? 0.0 : std::prev(it)->s1;
+}
+
 }  // namespace traj::plan

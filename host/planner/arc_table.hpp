@@ -58,6 +58,9 @@ class ArcTable {
 
   // Power-basis span of the piece a query left in `hint`.
   int span_of(int hint) const { return pc_[hint].span; }
+  // Curve-local arc length where power-basis span `span` ends: a query at or
+  // below it (and above the span's start) is answered in that span.
+  double span_end(int span) const;
   size_t pieces() const { return pc_.size(); }
   size_t fallback_spans() const { return fallback_spans_; }
   long long speed_evals() const { return build_evals_; }  // speed evaluations for the series

@@ -216,15 +216,20 @@ double speed_with(const Frame& f, const Limits& L, const PlanOptions& o, double 
   auto cap = [&](double x) {
     if (x >= 0 && x < v) v = x;
   };
+  // p v^3 + q v <= r: its root only where it does not hold at the speed so
+  // far (the sum grows with v), which saves most of the cube roots
+  auto cap_cubic = [&](double p, double q, double r) {
+    if (!(p * v * v * v + q * v <= r)) cap(cubic_speed(p, q, r));
+  };
   for (int a = 0; a < dim; ++a) {
     const double T = std::fabs(f.T[a]), K = std::fabs(f.K[a]), Q = std::fabs(f.Q[a]);
     const double ab = o.axis_a_share * L.a_axis[a], jb = o.axis_j_share * L.j_axis[a];
     if (T > 0) cap(o.axis_v_share * L.v_axis[a] / T);
     if (K > 0) cap(std::sqrt(std::max(0.0, ab - T * A) / K));
-    cap(cubic_speed(Q, 3 * K * A, jb - T * J_t));
+    cap_cubic(Q, 3 * K * A, jb - T * J_t);
   }
   if (f.kappa > 0) cap(std::sqrt(o.cen_a_share * L.a_cen / f.kappa));
-  cap(cubic_speed(f.q_norm, 3 * f.kappa * A, o.axis_j_share * L.j_cen));
+  cap_cubic(f.q_norm, 3 * f.kappa * A, o.axis_j_share * L.j_cen);
   return v;
 }
 

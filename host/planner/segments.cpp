@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <deque>
 
 namespace traj::plan {
 namespace {
@@ -401,6 +400,23 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
 
 namespace {
 
+// Samples whose addresses stay put as more are added (chunks of 256).
+class SampleStore {
+ public:
+  const TickSample* add(const TickSample& s) {
+    if (chunks_.empty() || chunks_.back().size() == kChunk) {
+      chunks_.emplace_back();
+      chunks_.back().reserve(kChunk);
+    }
+    chunks_.back().push_back(s);
+    return &chunks_.back().back();
+  }
+
+ private:
+  static constexpr size_t kChunk = 256;
+  std::vector<std::vector<TickSample>> chunks_;
+};
+
 // A sample the fine fit works with: the plan at engine tick e (global).
 struct FineSample {
   const TickSample* s = nullptr;
@@ -440,13 +456,36 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
   const double h = o.fine_period;
   const bool carried = ts[0].curve >= p.size();  // ts[0] ends the previous window's committed motion
   SampleHints hints;
-  std::deque<TickSample> extra;  // the samples between fit ticks (stable addresses)
+  SampleStore extra;  // the samples between fit ticks
   // engine tick e of the plan, placed from a later sample B (the earlier one may be carried)
   auto sample_before = [&](const FineSample& B, long long e) {
     const double back = static_cast<double>(B.e - e) * h;
     return sample_plan(p, plan, B.s->tp - back, B.s->t - back, hints);
   };
   auto same_piece = [](const TickSample& a, const TickSample& b) { return a.curve == b.curve && a.span == b.span; };
+  // The first engine tick in (lo, B.e] past the curve span of `left` (at lo):
+  // by bisection on the profile's arc length against where the span ends
+  // (state_at only), confirmed on the two samples around it; by bisection on
+  // full samples where rounding at the span's end makes them disagree.
+  auto first_past = [&](const TickSample& left, long long lo, const FineSample& B) {
+    const double s_end = p.offset(left.curve) + p.table(left.curve).span_end(left.span);
+    int piece = 0;
+    auto s_at = [&](long long e) { return state_at(plan, B.s->tp - static_cast<double>(B.e - e) * h, &piece).s; };
+    long long a = lo, b = B.e;
+    while (b - a > 1) {
+      const long long m = a + (b - a) / 2;
+      (s_at(m) <= s_end ? a : b) = m;
+    }
+    if ((b - 1 == lo || same_piece(sample_before(B, b - 1), left)) && (b == B.e || !same_piece(sample_before(B, b), left)))
+      return b;
+    a = lo;
+    b = B.e;
+    while (b - a > 1) {
+      const long long m = a + (b - a) / 2;
+      (same_piece(sample_before(B, m), left) ? a : b) = m;
+    }
+    return b;
+  };
 
   double Jp = 0;  // the plan's jerk: within the per-axis limits
   for (int a = 0; a < d; ++a) Jp += L.j_axis[a] * L.j_axis[a];
@@ -476,19 +515,14 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
     const TickSample* left = A.s;
     long long lo = A.e;
     while (!same_piece(*left, *B.s)) {
-      long long a = lo, b = B.e;  // a: on left's piece; b: past it
-      while (b - a > 1) {
-        const long long m = a + (b - a) / 2;
-        (same_piece(sample_before(B, m), *left) ? a : b) = m;
-      }
+      const long long b = first_past(*left, lo, B);
       if (b - 1 > lo) between.push_back(b - 1);
       if (b - 1 == A.e) W.back().end_ok = false;
       no_end.push_back(b - 1);
       brk_e.push_back(b);
       if (b == B.e) break;
       between.push_back(b);
-      extra.push_back(sample_before(B, b));
-      left = &extra.back();
+      left = extra.add(sample_before(B, b));
       lo = b;
     }
     // where slow, the samples the feed check needs
@@ -498,10 +532,8 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
     for (long long k = 1; k < m; ++k) between.push_back(A.e + n * k / m);
     std::sort(between.begin(), between.end());
     between.erase(std::unique(between.begin(), between.end()), between.end());
-    for (long long e : between) {
-      extra.push_back(sample_before(B, e));
-      W.push_back({&extra.back(), e, std::find(no_end.begin(), no_end.end(), e) == no_end.end()});
-    }
+    for (long long e : between)
+      W.push_back({extra.add(sample_before(B, e)), e, std::find(no_end.begin(), no_end.end(), e) == no_end.end()});
   }
   brk_e.push_back(W.back().e);
   std::vector<size_t> ends;  // the W indices a segment may end at
@@ -760,8 +792,7 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
     }
     last_len = 1;
     accept(best);
-    extra.push_back(R);
-    S = FineSample{&extra.back(), good};
+    S = FineSample{extra.add(R), good};
   }
   return out;
 }
