@@ -38,7 +38,10 @@ plan::SegmentOptions JobConfig::segment_options() const {
   // the engine's, the fit's velocity error keeps the chords within 2
   // feed_rel of the plan's, by default 2e-3 (fit_segments_fine)
   if (so.fine_ticks > 1) so.feed_rel = kFineFeedRel;
-  if (machine.feed_accuracy > 0) so.feed_rel = machine.feed_accuracy / 2;
+  if (machine.feed_accuracy > 0) {
+    so.feed_rel = machine.feed_accuracy / 2;
+    so.feed_bound = true;
+  }
   return so;
 }
 

@@ -525,11 +525,13 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
       left = extra.add(sample_before(B, b));
       lo = b;
     }
-    // where slow, the samples the feed check needs
-    const double v_lo = std::max(0.0, std::min(A.s->v, B.s->v) - n * n * h * h / 8 * plan.J_t);
-    const double dmax = std::sqrt(4 * feed_budget(v_lo) / (2 * Jp));
-    const long long m = std::min<long long>(n, static_cast<long long>(std::ceil(n * h / dmax)));
-    for (long long k = 1; k < m; ++k) between.push_back(A.e + n * k / m);
+    // where slow, the samples the feed bound needs
+    if (o.feed_bound) {
+      const double v_lo = std::max(0.0, std::min(A.s->v, B.s->v) - n * n * h * h / 8 * plan.J_t);
+      const double dmax = std::sqrt(4 * feed_budget(v_lo) / (2 * Jp));
+      const long long m = std::min<long long>(n, static_cast<long long>(std::ceil(n * h / dmax)));
+      for (long long k = 1; k < m; ++k) between.push_back(A.e + n * k / m);
+    }
     std::sort(between.begin(), between.end());
     between.erase(std::unique(between.begin(), between.end()), between.end());
     for (long long e : between)
@@ -634,9 +636,10 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
         const Err e = err_at(W[j]);
         // the allowances of the full check for the gap before the sample
         const double dl = static_cast<double>(W[j].e - W[j - 1].e) * h;
-        const double v_lo = std::max(0.0, std::min(W[j - 1].s->v, W[j].s->v) - dl * dl / 8 * plan.J_t);
-        if (e.e + dl * dl / 8 * (e.e2 + dl / 2 * E3) > 0.9 * o.fit_tol ||
-            e.e1 + dl * dl / 8 * E3 > 0.9 * feed_budget(v_lo) || !screen_ok)
+        const double fb = o.feed_bound ? dl * dl / 8 : 0;  // the feed check's allowance between samples
+        const double v_lo = std::max(0.0, std::min(W[j - 1].s->v, W[j].s->v) - fb * plan.J_t);
+        if (e.e + dl * dl / 8 * (e.e2 + dl / 2 * E3) > 0.9 * o.fit_tol || e.e1 + fb * E3 > 0.9 * feed_budget(v_lo) ||
+            !screen_ok)
           return false;
       }
       return true;
@@ -651,8 +654,10 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
       if (gap > 1) {
         const double dl = static_cast<double>(gap) * h;
         dev += dl * dl / 8 * (std::max(ea.e2, eb.e2) + dl / 2 * E3);
-        fe += dl * dl / 8 * E3;
-        v_lo = std::max(0.0, v_lo - dl * dl / 8 * plan.J_t);
+        if (o.feed_bound) {
+          fe += dl * dl / 8 * E3;
+          v_lo = std::max(0.0, v_lo - dl * dl / 8 * plan.J_t);
+        }
       }
       seg.max_dev = std::max(seg.max_dev, dev);
       if (dev > o.fit_tol) {

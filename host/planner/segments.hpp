@@ -68,6 +68,12 @@ struct SegmentOptions {
   // max(feed_rel * v h, feed_abs), so that the chord between consecutive
   // output samples is within about 2 feed_rel of the planned arc.
   double feed_rel = 0.0025, feed_abs = 1e-8;
+  // Where the fit tick is coarser than the engine's: the chords within
+  // 2 feed_rel at every engine tick, bounded between the samples (true: a
+  // bound asked for, --feed-accuracy), or checked at the samples only (false:
+  // the default, whose feed accuracy the report measures but no one asked to
+  // bound; it needs no samples between fit ticks where the plan is slow).
+  bool feed_bound = false;
   // Fitted positions of the (up to 3) ticks before ts[0], oldest first,
   // relative to the fit's end there (a streaming window continuing a
   // committed one, or the part of a long fit after another): the sampled
