@@ -31,16 +31,20 @@
 // * TimeScale = 1: the time-scale unit (traj_time_scale: feed override, feed
 //   hold, a stop on the path when data runs out; LINK.md) sits between the
 //   servo tick and the engine when CONFIG enables it (m != 0): the unit ticks
-//   the engine and the step generator and STATUS take its interpolated
-//   output. Its count of engine ticks ahead (avail) is kept here: + K of each
-//   record stored, moved from the FIFO's share to the engine's as a segment's
-//   header leaves the FIFO, - 1 per real engine sample; RESET clears the
-//   FIFO's share. hold_i (a button, synchronised by the top), FEED's hold and
-//   STOP hold; RESUME lets a starved hold resume as auto-resume does. With
-//   the unit on, the engine underruns only at the job's end (the unit ticks
-//   it once past the last sample, END taken: the link's end of the job); the
-//   board tells the link the end of a STOP (S at 0, at a servo tick) by the
-//   same underrun input.
+//   the engine, reads its samples a word at a time through traj_fd_tm's
+//   sample RAM port (so TimeScale needs FdTimeMux = 1 and GuardBits a
+//   multiple of ChunkWidth), and the step generator and STATUS take its
+//   interpolated output, which it presents at the next servo tick (a fixed
+//   latency of one servo tick and Axes*OutWidth + 2 clocks). Its count of
+//   engine ticks ahead (avail) is kept here: + K of each record stored, moved
+//   from the FIFO's share to the engine's as a segment's header leaves the
+//   FIFO, - 1 per real engine sample; RESET clears the FIFO's share. hold_i
+//   (a button, synchronised by the top), FEED's hold and STOP hold; RESUME
+//   lets a starved hold resume as auto-resume does. With the unit on, the
+//   engine underruns only at the job's end (the unit ticks it once past the
+//   last sample, END taken: the link's end of the job, told with the output
+//   that follows); the board tells the link the end of a STOP (S at 0, at a
+//   servo tick) by the same underrun input.
 //   TimeScale = 0: no unit, hold_i unused, the link refuses time scaling.
 `default_nettype none
 `include "traj_check.svh"
@@ -78,11 +82,15 @@ module traj_board #(
   localparam int StepPeriodWidth = 16;
   localparam int StepFracBits    = 12;  // 1/4096 step: edges within 4.5 us at 1 ms (rtl/README.md)
   localparam int StepSubBits     = 3;   // up to 8 quadratic sub-chords per tick
+  localparam int TsAddrW         = ($clog2(Axes) + $clog2(OutWidth / ChunkWidth) > 0) ?
+                                   $clog2(Axes) + $clog2(OutWidth / ChunkWidth) : 1;
 
   `TRAJ_PARAM_CHECK(g_bad_derived, OutWidth == Width - GuardBits,
                     "traj_board: OutWidth is derived; do not override it")
   `TRAJ_PARAM_CHECK(g_bad_scale, (TimeScale == 0 || TimeScale == 1) && ScaleWidth >= 4 && ScaleWidth <= 24,
                     "traj_board: TimeScale must be 0 or 1, ScaleWidth 4..24")
+  `TRAJ_PARAM_CHECK(g_bad_scale_engine, TimeScale == 0 || (FdTimeMux && GuardBits % ChunkWidth == 0),
+                    "traj_board: TimeScale = 1 reads the samples through traj_fd_tm's sample RAM port: it needs FdTimeMux = 1 and GuardBits a multiple of ChunkWidth")
   `TRAJ_PARAM_CHECK(g_bad_min_tick, MinTickPeriod >= Axes * (StepPeriodWidth + StepFracBits + StepSubBits + 3) + 3,
                     "traj_board: MinTickPeriod must cover the step generator's preparation")
 
@@ -109,6 +117,8 @@ module traj_board #(
   logic                     tick, underrun, seg_done, tick_err;
   logic                     sample_valid /* verilator public_flat_rd */;  // the engine's (the simulated board times it)
   logic [Axes*OutWidth-1:0] sample, status_sample;
+  logic [TsAddrW-1:0]       ts_word_addr;  // the unit's word of the engine's sample RAM
+  logic [ChunkWidth-1:0]    ts_word;
   logic                     seg_start, new_seg_q;
   // tick and step generators
   logic [31:0]              period_used;
@@ -135,12 +145,23 @@ module traj_board #(
 
   if (FdTimeMux) begin : g_fd_tm
     logic [Axes*OutWidth-1:0] sample_hold_q;
-    /* verilator lint_off UNUSEDSIGNAL */
-    logic [ChunkWidth-1:0]    sample_word;  // the step generator takes sample_o whole
-    /* verilator lint_on UNUSEDSIGNAL */
+    logic [ChunkWidth-1:0]    sample_word;  // the time-scale unit's window (the step generator takes sample_o whole)
     localparam int SampleAddrW = ($clog2(Axes) + $clog2(Width / ChunkWidth) > 0) ? $clog2(Axes) + $clog2(Width / ChunkWidth) : 1;
     logic [SampleAddrW-1:0]   sample_addr;
-    assign sample_addr = '0;
+    if (TimeScale != 0) begin : g_word_addr
+      // the unit's word {axis, w} of the sample is chunk GuardBits/ChunkWidth + w
+      // of the axis's register r[0] in the sample RAM
+      localparam int ChB    = $clog2(Width / ChunkWidth);
+      localparam int WB     = $clog2(OutWidth / ChunkWidth);
+      localparam int AxB    = $clog2(Axes);
+      localparam int First  = GuardBits / ChunkWidth;
+      logic [31:0] ax, w;
+      assign ax = (AxB > 0) ? 32'(ts_word_addr) >> WB : 32'd0;
+      assign w  = (WB > 0) ? 32'(ts_word_addr) & ((32'd1 << WB) - 32'd1) : 32'd0;
+      assign sample_addr = SampleAddrW'((ax << ChB) | (32'(First) + w));
+    end else begin : g_no_word_addr
+      assign sample_addr = '0;
+    end
 
     traj_fd_tm #(
       .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits),
@@ -159,6 +180,7 @@ module traj_board #(
       if (out_valid) sample_hold_q <= out_sample;
     end
     assign status_sample = sample_hold_q;
+    assign ts_word       = sample_word;
   end else begin : g_fd_par
     traj_fd_engine #(
       .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits)
@@ -169,17 +191,8 @@ module traj_board #(
       .sample_valid_o(sample_valid), .sample_o(sample),
       .underrun_o(underrun), .seg_done_o(seg_done), .tick_err_o(tick_err)
     );
-    // registered as with the time-multiplexed engine when the unit's output
-    // (held until its next servo tick) is not the sample
-    if (TimeScale != 0) begin : g_status_hold
-      logic [Axes*OutWidth-1:0] sample_hold_q;
-      always_ff @(posedge clk_i) begin
-        if (out_valid) sample_hold_q <= out_sample;
-      end
-      assign status_sample = sample_hold_q;
-    end else begin : g_status_live
-      assign status_sample = sample;
-    end
+    assign status_sample = sample;
+    assign ts_word       = '0;  // (TimeScale needs FdTimeMux)
   end
 
   // -------------------------------------------------------------------
@@ -224,24 +237,28 @@ module traj_board #(
     // unit's servo tick and the engine's answer against the host's bounds
     logic             ts_busy /* verilator public_flat_rd */;
     logic             ts_eng_tick /* verilator public_flat_rd */;
-    logic             have_q, step_valid_q, under_q;
-    logic [Axes*OutWidth-1:0] step_sample_q;
+    logic             under_q;
     /* verilator lint_off UNUSEDSIGNAL */
     logic             unused_wide;  // bits above ScaleWidth: the link refuses them
     assign unused_wide = ^{sc_smax, sc_ovr};
     /* verilator lint_on UNUSEDSIGNAL */
     logic [ScaleWidth-1:0] s_now;
     logic [Axes*OutWidth-1:0] ts_sample;
-    assign scale_on = sc_m != '0;
+    // CONFIG (m != 0 turns the unit on) is taken only while not playing: a
+    // flop, off the paths of the ticks and the output multiplexer
+    always_ff @(posedge clk_i) begin
+      if (!rst_ni) scale_on <= 1'b0;
+      else scale_on <= sc_m != '0;
+    end
     assign ts_tick  = tick && scale_on;
     assign ts_held  = scale_on && (link_hold || hold_i || link_stop);
 
-    traj_time_scale #(.Axes(Axes), .OutWidth(OutWidth), .SW(ScaleWidth)) u_scale (
+    traj_time_scale #(.Axes(Axes), .OutWidth(OutWidth), .SW(ScaleWidth), .WordWidth(ChunkWidth)) u_scale (
       .clk_i, .rst_ni, .tick_i(ts_tick),
       .m_i(sc_m[ScaleWidth-1:0]), .s_max_i(sc_smax[ScaleWidth-1:0]), .override_i(sc_ovr[ScaleWidth-1:0]),
       .shift_i(sc_shift), .hold_i(ts_held), .auto_resume_i(sc_auto || resume_q), .end_i(link_end),
       .avail_i(ahead),
-      .eng_tick_o(ts_eng_tick), .eng_valid_i(sample_valid), .eng_sample_i(sample),
+      .eng_tick_o(ts_eng_tick), .eng_valid_i(sample_valid), .eng_addr_o(ts_word_addr), .eng_word_i(ts_word),
       .sample_valid_o(ts_valid), .sample_o(ts_sample), .s_o(s_now), .starved_o(ts_starved_q),
       .starved_count_o(ts_count), .busy_o(ts_busy), .err_o(ts_err)
     );
@@ -259,39 +276,26 @@ module traj_board #(
       end
     end
 
-    // The step generator times its steps from each sample's arrival, so the
-    // unit's samples (ready a varying number of clocks after their servo
-    // tick: the engine ticks they need) reach it at the next servo tick, a
-    // fixed latency of one tick: the unit's sample_o still holds the last
-    // result in the cycle of the tick that starts the next.
+    // The unit presents each servo tick's output at the next servo tick (the
+    // step generator times its steps from each sample's arrival: a fixed
+    // latency). The engine's underrun (with the unit on: the job's end)
+    // reaches the link with the output that follows it, so that the last
+    // sample reaches the step generator as playback stops.
     always_ff @(posedge clk_i) begin
-      if (!rst_ni) begin
-        have_q       <= 1'b0;
-        step_valid_q <= 1'b0;
-        under_q      <= 1'b0;
-      end else begin
-        if (ts_valid) have_q <= 1'b1;
-        step_valid_q <= ts_tick && have_q;
-        under_q      <= (under_q && !ts_tick) || (underrun && scale_on);
-      end
-    end
-    always_ff @(posedge clk_i) begin  // datapath, not reset
-      if (ts_tick) step_sample_q <= ts_sample;
+      if (!rst_ni) under_q <= 1'b0;
+      else under_q <= (under_q && !ts_valid) || (underrun && scale_on);
     end
     assign eng_tick      = scale_on ? ts_eng_tick : tick;
-    assign out_valid     = scale_on ? step_valid_q : sample_valid;
-    assign out_sample    = scale_on ? step_sample_q : sample;
-    // the engine's underrun (with the unit on: the job's end) reaches the
-    // link at the next servo tick, so that the last sample reaches the step
-    // generator before playback stops
-    assign link_underrun = scale_on ? ((ts_tick && under_q) || done_q) : underrun;
+    assign out_valid     = scale_on ? ts_valid : sample_valid;
+    assign out_sample    = scale_on ? ts_sample : sample;
+    assign link_underrun = scale_on ? ((ts_valid && under_q) || done_q) : underrun;
     assign ts_s          = 32'(s_now);
     assign ts_starved    = ts_starved_q;
   end else begin : g_no_scale
     /* verilator lint_off UNUSEDSIGNAL */
     logic unused_scale;
     assign unused_scale = ^{sc_m, sc_smax, sc_ovr, sc_shift, sc_auto, link_hold, link_stop, link_end,
-                            link_resume, hold_i, stored, stored_k, cleared};
+                            link_resume, hold_i, stored, stored_k, cleared, ts_word, ts_word_addr};
     /* verilator lint_on UNUSEDSIGNAL */
     assign eng_tick      = tick;
     assign out_valid     = sample_valid;
@@ -303,6 +307,7 @@ module traj_board #(
     assign ts_starved    = 1'b0;
     assign ts_held       = 1'b0;
     assign ts_err        = 1'b0;
+    assign ts_word_addr  = '0;
   end
 
   traj_tick_gen #(.PeriodWidth(32)) u_tick (

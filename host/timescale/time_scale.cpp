@@ -125,12 +125,19 @@ int64_t stop_ticks_bound(const IntBounds& b) {
   return 3 * m + (b.s_max + m * m + m - 1) / m + 4;
 }
 
-uint64_t unit_tick_clocks(const IntBounds& b, int p, int axes, int engine_clocks) {
-  const uint64_t shift = static_cast<uint64_t>(32 - b.scale_bits + p);
+uint64_t unit_tick_clocks(const IntBounds& b, int p, int axes, int engine_clocks, int out_width, int scale_width) {
   const uint64_t stop = static_cast<uint64_t>(stop_ticks_bound(b));
-  const uint64_t engine_ticks = (uint64_t(1) << (p + 1)) + 2;
-  return 3 + 2 * (shift + 1) + 4 * (stop + 1) + 5 + engine_ticks * (static_cast<uint64_t>(engine_clocks) + 2) +
-         34 * static_cast<uint64_t>(axes) + 2;
+  const uint64_t n = uint64_t(axes) * uint64_t(out_width);       // sample bits
+  const uint64_t ncmp = std::max<uint64_t>(2 * uint64_t(scale_width) + 45, 65);  // a serial pass
+  const uint64_t ec = static_cast<uint64_t>(engine_clocks);
+  const uint64_t prime = 2 * (ec + 3) + n + 1;                    // or the readout, n + 1
+  const uint64_t check = 4 * (stop + 1) + 1 + ncmp + 1;
+  const uint64_t phi = 2 * (ncmp + 1);
+  const uint64_t advance = (uint64_t(1) << (p + 1)) * (ec + 37) + n + 2;
+  const uint64_t interp = uint64_t(axes) * (34 + uint64_t(out_width));
+  // the latch and the plan (2), the tick's own step and its commit (5), and
+  // the clock of the servo tick itself
+  return prime + 2 + check + 5 + phi + advance + interp + 1;
 }
 
 int64_t SCurve::stop_travel() const {

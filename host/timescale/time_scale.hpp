@@ -72,17 +72,24 @@ IntBounds integer_bounds(const RampBounds& b, double servo_period);
 // tb/timescale checks it against SCurve from extreme and random states.
 int64_t stop_ticks_bound(const IntBounds& b);
 
-// Clocks the hardware unit (rtl/traj_time_scale.sv) takes for one servo tick,
-// at most, from its schedule: the tick (3), trajectory time and ahead >>
-// shift a bit per clock (2 (shift + 1)), the check's stop one S-curve step
-// per 4 clocks after a first step toward the target (4 (stop + 1)), the
-// decision and the tick's own step (5), the engine ticks trajectory time
-// needs, at most 2^(p+1) at s <= 2 and the two that prime the window at the
-// first tick (each engine_clocks + 2: the strobe, the answer, the taking),
-// the interpolation (34 per axis) and the output (2). engine_clocks: the
-// most clocks the engine takes from a tick to its sample. A servo tick
-// shorter than this may find the unit busy (STATUS tick error).
-uint64_t unit_tick_clocks(const IntBounds& b, int p, int axes, int engine_clocks);
+// The shortest servo tick (clocks) at which the hardware unit
+// (rtl/traj_time_scale.sv) never finds a servo tick busy: one clock more than
+// its work for a servo tick takes at most, from its schedule (rtl/README.md):
+// the window primed (the first tick: two engine ticks and a copy of a sample,
+// Axes*OutWidth + 1 clocks; later ticks read the previous output out instead,
+// as long), the check's stop one S-curve step per 4 clocks after a first step
+// toward the target (4 (stop + 1) + 1), three bit-serial passes over
+// X 2^shift + frac (kNCmp = max(2 SW + 45, 65) clocks each and one), the
+// tick's own step (5), the engine ticks trajectory time needs, at most
+// 2^(p+1) at s <= 2 (each a 33-clock decrement, the strobe and the answer:
+// engine_clocks + 37) and a copy of the sample before the last, and the
+// interpolation (Axes (33 + OutWidth)). engine_clocks: the most clocks the
+// engine takes from a tick to its sample. out_width and scale_width: the
+// unit's OutWidth and SW (the defaults are the largest the unit builds, so the
+// bound holds for every build). A servo tick shorter than this may find the
+// unit busy (STATUS tick error).
+uint64_t unit_tick_clocks(const IntBounds& b, int p, int axes, int engine_clocks, int out_width = 64,
+                          int scale_width = 24);
 
 // The S-curve of s: each servo tick k changes by -1, 0 or +1 and S by the
 // new k, toward the target (landing on it exactly, k = 0 there). The choice

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // trajcore: narrow-pin wrapper of the time-scale unit behind the
-// time-multiplexed FD engine (traj_fd_tm -> traj_time_scale), for iCE40
-// synthesis and place-and-route measurements of the pair a board would
-// carry. Stream words from bytes (traj_byte_words), the configuration
+// time-multiplexed FD engine (traj_fd_tm -> traj_time_scale, the unit reading
+// the samples through the engine's sample RAM port), for iCE40 synthesis and
+// place-and-route measurements of the pair a board would carry. Stream words from bytes (traj_byte_words), the configuration
 // (m, s_max, override, shift, hold, auto_resume, end, avail) from a serial
 // shift register (cfg_i, cfg_en_i: so that none of it is a constant), the
 // servo strobe and the reset registered, the output samples XOR-folded into
@@ -14,7 +14,7 @@ module traj_time_scale_synth_top #(
   parameter int Axes       = 3,
   parameter int Degree     = 5,
   parameter int Width      = 96,
-  parameter int ChunkWidth = 32,
+  parameter int ChunkWidth = 16,
   parameter int GuardBits  = 48,
   parameter int SW         = 16
 ) (
@@ -34,24 +34,37 @@ module traj_time_scale_synth_top #(
 );
   localparam int OutWidth = Width - GuardBits;
   localparam int CfgW     = 3 * SW + 6 + 3 + 32;
+  localparam int AxB      = $clog2(Axes);
+  localparam int ChB      = $clog2(Width / ChunkWidth);
+  localparam int WB       = $clog2(OutWidth / ChunkWidth);
+  localparam int TsAddrW  = (AxB + WB > 0) ? AxB + WB : 1;
+
+  `TRAJ_PARAM_CHECK(g_bad_guard, GuardBits % ChunkWidth == 0,
+                    "traj_time_scale_synth_top: GuardBits must be a multiple of ChunkWidth (the unit reads whole words)")
 
   logic                     rst_nq, tick_q;
   logic [CfgW-1:0]          cfg_q;
   logic [ChunkWidth-1:0]    word;
   logic                     word_valid, word_ready;
   logic                     eng_tick, eng_valid, underrun, seg_done, eng_err;
-  logic [Axes*OutWidth-1:0] eng_sample, sample;
+  logic [Axes*OutWidth-1:0] sample;
   logic                     sample_valid, ts_err;
+  logic [ChunkWidth-1:0]    sample_word;
+  logic [TsAddrW-1:0]       ts_addr;
   /* verilator lint_off UNUSEDSIGNAL */
   logic                     word_user;
-  logic [ChunkWidth-1:0]    sample_word;
+  logic [Axes*OutWidth-1:0] eng_sample;  // read through the sample RAM port instead
   logic [SW-1:0]            s;
   logic                     starved, busy;
   logic [15:0]              starved_count;
   /* verilator lint_on UNUSEDSIGNAL */
-  localparam int SaW = ($clog2(Axes) + $clog2(Width / ChunkWidth) > 0) ? $clog2(Axes) + $clog2(Width / ChunkWidth) : 1;
+  localparam int SaW = (AxB + ChB > 0) ? AxB + ChB : 1;
   logic [SaW-1:0]           sample_addr;
-  assign sample_addr = '0;
+  // the unit's word {axis, w}: chunk GuardBits/ChunkWidth + w of the axis
+  logic [31:0]              ax, w;
+  assign ax          = (AxB > 0) ? 32'(ts_addr) >> WB : 32'd0;
+  assign w           = (WB > 0) ? 32'(ts_addr) & ((32'd1 << WB) - 32'd1) : 32'd0;
+  assign sample_addr = SaW'((ax << ChB) | (32'(GuardBits / ChunkWidth) + w));
 
   always_ff @(posedge clk_i) begin
     rst_nq <= rst_ni;
@@ -77,12 +90,12 @@ module traj_time_scale_synth_top #(
     .underrun_o(underrun), .seg_done_o(seg_done), .tick_err_o(eng_err)
   );
 
-  traj_time_scale #(.Axes(Axes), .OutWidth(OutWidth), .SW(SW)) u_scale (
+  traj_time_scale #(.Axes(Axes), .OutWidth(OutWidth), .SW(SW), .WordWidth(ChunkWidth)) u_scale (
     .clk_i, .rst_ni(rst_nq), .tick_i(tick_q),
     .m_i(cfg_q[0 +: SW]), .s_max_i(cfg_q[SW +: SW]), .override_i(cfg_q[2*SW +: SW]),
     .shift_i(cfg_q[3*SW +: 6]), .hold_i(cfg_q[3*SW+6]), .auto_resume_i(cfg_q[3*SW+7]),
     .end_i(cfg_q[3*SW+8]), .avail_i(cfg_q[3*SW+9 +: 32]),
-    .eng_tick_o(eng_tick), .eng_valid_i(eng_valid), .eng_sample_i(eng_sample),
+    .eng_tick_o(eng_tick), .eng_valid_i(eng_valid), .eng_addr_o(ts_addr), .eng_word_i(sample_word),
     .sample_valid_o(sample_valid), .sample_o(sample), .s_o(s), .starved_o(starved),
     .starved_count_o(starved_count), .busy_o(busy), .err_o(ts_err)
   );

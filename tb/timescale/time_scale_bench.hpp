@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <random>
 #include <string>
@@ -19,8 +20,8 @@
 
 namespace traj::tsbench {
 
-constexpr int kAxes = 3, kOutWidth = 48, kSW = 16;
-using Unit = TimeScale<kAxes, kOutWidth, kSW>;
+constexpr int kAxes = 3, kOutWidth = 48, kSW = 16, kWordWidth = 16;
+using Unit = TimeScale<kAxes, kOutWidth, kSW, kWordWidth>;
 
 // A smooth random trajectory sampled at the engine tick, in LSB, that starts
 // and ends at rest (a sum of raised-cosine moves per axis).
@@ -58,11 +59,16 @@ struct Scenario {
 };
 
 // Drives `step(in) -> Out` (the unit, or the lockstep of RTL and unit) with
-// the scenario; returns "" or what first differed from the reference.
-// The servo period is the unit's bound (timescale::unit_tick_clocks) and
-// one clock: a servo tick longer than the bound says would find the unit
-// busy and set err_o. *busy_max: the most clocks from a servo tick to its
-// sample.
+// the scenario; returns "" or what first differed from the reference. The
+// unit presents a servo tick's output at the next servo tick (sample_valid_o
+// after its bits are read out): the reference's output of each servo tick the
+// unit takes is queued and compared then, with S and the automatic-hold
+// count. The engine answers a tick `engine_latency` clocks after it sees the
+// strobe and keeps its sample in a RAM read through the unit's word port (the
+// word at the address of the clock before). The servo period is the unit's
+// bound (timescale::unit_tick_clocks: a servo tick that took longer would
+// find the unit busy and set err_o). *busy_max: the longest run of busy
+// clocks.
 template <class Step>
 std::string run_scenario(const Scenario& sc, Step&& step, uint64_t* outputs = nullptr, uint64_t* starved = nullptr,
                          uint64_t* busy_max = nullptr) {
@@ -78,14 +84,35 @@ std::string run_scenario(const Scenario& sc, Step&& step, uint64_t* outputs = nu
   in.auto_resume = true;
   uint64_t received = sc.link_per_tick ? std::min<uint64_t>(sc.n_samples, 3) : sc.n_samples;
   uint64_t issued = 0;
-  int pending = -1;  // clocks until the engine answers
+  int pending = -1;      // clocks until the engine answers
+  uint64_t ram_idx = 0;  // the sample in the engine's RAM
+  // the engine's sample RAM word at an address {axis, word}
+  const auto word = [&](uint32_t addr) {
+    const uint32_t ax = addr >> Unit::kWB, w = addr & ((1u << Unit::kWB) - 1);
+    if (ax >= static_cast<uint32_t>(kAxes)) return uint64_t{0};
+    const u128 v = wrap(static_cast<u128>(samples[ram_idx * kAxes + ax]), kOutWidth);
+    return static_cast<uint64_t>(bits(v, static_cast<int>(w) * kWordWidth, kWordWidth));
+  };
+  struct Expect {
+    std::vector<int64_t> y;
+    int64_t s;
+    uint64_t starved;
+    uint64_t tick;
+  };
+  std::deque<Expect> expect;
+  bool primed = false;
   // reset
   in.rst_n = false;
   for (int i = 0; i < 3; ++i) step(in);
   in.rst_n = true;
-  const uint64_t period = timescale::unit_tick_clocks(sc.b, sc.p, kAxes, sc.engine_latency) + 1;
-  uint64_t outs = 0, hold_until = 0, pause_until = 0;
-  for (uint64_t t = 0; t < sc.max_servo_ticks; ++t) {
+  const uint64_t period =
+      timescale::unit_tick_clocks(sc.b, sc.p, kAxes, sc.engine_latency, kOutWidth, kSW);
+  uint64_t outs = 0, hold_until = 0, pause_until = 0, busy_run = 0;
+  bool done = false;
+  for (uint64_t t = 0; t < sc.max_servo_ticks && !done; ++t) {
+    // the run ends one servo tick after the one that reached the last sample
+    // (which presents its output)
+    done = in.end && ref.engine_index() + 1 >= sc.n_samples && primed;
     // link and events, before the servo tick
     if (sc.pause_every && t % sc.pause_every == sc.pause_every / 2) pause_until = t + sc.pause_len;
     if (sc.link_per_tick && t >= pause_until) received = std::min<uint64_t>(sc.n_samples, received + sc.link_per_tick);
@@ -94,44 +121,48 @@ std::string run_scenario(const Scenario& sc, Step&& step, uint64_t* outputs = nu
     if (sc.override_every && t % sc.override_every == 0 && t > 0)
       in.override_s = static_cast<uint32_t>(rng() % (sc.b.s_max + 1));
     in.end = received == sc.n_samples;
-    bool got = false;
     for (uint64_t c = 0; c < period; ++c) {
       in.tick = c == 0;
       in.avail = static_cast<uint32_t>(received > issued ? received - issued : 0);
       in.eng_valid = pending == 0;
-      if (in.eng_valid) {
-        const uint64_t idx = std::min<uint64_t>(issued - 1, received - 1);  // underrun: the last again
-        for (int a = 0; a < kAxes; ++a) in.eng_sample[a] = wrap(static_cast<u128>(samples[idx * kAxes + a]), kOutWidth);
+      if (in.tick && (primed || in.avail >= 2)) {  // a servo tick the unit takes: the reference's
+        primed = true;
+        ref.set_override(in.override_s);
+        ref.hold(in.hold);
+        const std::vector<int64_t> y = ref.tick(samples, received, in.end);
+        expect.push_back({y, ref.s(), ref.starved_holds(), t});
       }
       const Unit::Out o = step(in);
       if (pending >= 0) --pending;
+      if (in.eng_valid) ram_idx = std::min<uint64_t>(issued - 1, received - 1);  // underrun: the last again
       if (o.eng_tick) {
         ++issued;
         pending = sc.engine_latency;
       }
+      in.eng_word = word(o.eng_addr);
+      busy_run = o.busy ? busy_run + 1 : 0;
+      if (busy_max) *busy_max = std::max(*busy_max, busy_run);
       if (o.err) return "servo tick " + std::to_string(t) + ": err_o";
       if (o.sample_valid) {
-        if (busy_max) *busy_max = std::max(*busy_max, c);
-        got = true;
+        if (expect.empty()) return "servo tick " + std::to_string(t) + ": an output before any servo tick was taken";
+        const Expect e = expect.front();
+        expect.pop_front();
         ++outs;
-        ref.set_override(in.override_s);
-        ref.hold(in.hold);
-        const std::vector<int64_t> y = ref.tick(samples, received, in.end);
+        const std::string at = "servo tick " + std::to_string(e.tick) + " (presented at " + std::to_string(t) + ")";
         for (int a = 0; a < kAxes; ++a)
-          if (sext(o.sample[a], kOutWidth) != y[a])
-            return "servo tick " + std::to_string(t) + " axis " + std::to_string(a) + ": unit " +
+          if (sext(o.sample[a], kOutWidth) != e.y[a])
+            return at + " axis " + std::to_string(a) + ": unit " +
                    std::to_string(static_cast<long long>(sext(o.sample[a], kOutWidth))) + ", reference " +
-                   std::to_string(y[a]);
-        if (static_cast<int64_t>(o.s) != ref.s())
-          return "servo tick " + std::to_string(t) + ": S " + std::to_string(o.s) + ", reference " + std::to_string(ref.s());
-        if (o.starved_count != (ref.starved_holds() & 0xffff))
-          return "servo tick " + std::to_string(t) + ": starved count " + std::to_string(o.starved_count) + ", reference " +
-                 std::to_string(ref.starved_holds());
+                   std::to_string(e.y[a]);
+        if (static_cast<int64_t>(o.s) != e.s)
+          return at + ": S " + std::to_string(o.s) + ", reference " + std::to_string(e.s);
+        if (o.starved_count != (e.starved & 0xffff))
+          return at + ": starved count " + std::to_string(o.starved_count) + ", reference " + std::to_string(e.starved);
       }
     }
-    (void)got;
-    if (in.end && ref.engine_index() + 1 >= sc.n_samples) break;
   }
+  // the last servo tick taken presents its output at the next one
+  if (expect.size() > 1) return std::to_string(expect.size()) + " servo ticks' outputs not presented (1 expected)";
   if (outputs) *outputs = outs;
   if (starved) *starved = ref.starved_holds();
   return "";

@@ -40,15 +40,13 @@ class Lockstep {
     rtl_->end_i = in.end;
     rtl_->avail_i = in.avail;
     rtl_->eng_valid_i = in.eng_valid;
-    for (int w = 0; w < (kAxes * kOutWidth + 31) / 32; ++w) rtl_->eng_sample_i[w] = 0;
-    for (int a = 0; a < kAxes; ++a)
-      for (int b = 0; b < kOutWidth; ++b)
-        if ((in.eng_sample[a] >> b) & 1) rtl_->eng_sample_i[(a * kOutWidth + b) / 32] |= 1u << ((a * kOutWidth + b) % 32);
+    rtl_->eng_word_i = static_cast<uint32_t>(in.eng_word);
     rtl_->clk_i = 0;
     rtl_->eval();
     const Unit::Out h = unit_.outputs();
     Unit::Out r{};
     r.eng_tick = rtl_->eng_tick_o;
+    r.eng_addr = rtl_->eng_addr_o;
     r.sample_valid = rtl_->sample_valid_o;
     for (int a = 0; a < kAxes; ++a) r.sample[a] = traj::vl_bits(rtl_->sample_o, a * kOutWidth, kOutWidth);
     r.s = rtl_->s_o;
@@ -75,6 +73,9 @@ class Lockstep {
                " hls " + std::to_string(static_cast<unsigned long long>(hv));
     };
     differ("eng_tick_o", r.eng_tick, h.eng_tick);
+    // the word address (combinational from datapath counters, not reset) where
+    // the unit reads the engine's sample RAM
+    if (h.eng_addr_used) differ("eng_addr_o", r.eng_addr, h.eng_addr);
     differ("sample_valid_o", r.sample_valid, h.sample_valid);
     differ("s_o", r.s, h.s);
     differ("starved_o", r.starved, h.starved);
