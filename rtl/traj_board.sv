@@ -206,7 +206,7 @@ module traj_board #(
     logic [WordBits-1:0] word_q;      // words of the segment leaving the FIFO so far
     logic [31:0]         hdr_k;       // its K, as its header words pass
     logic [31:0]         fifo_k_q;    // K of the segments stored, not yet left the FIFO
-    logic [31:0]         eng_k_q;     // samples of the segments in the engine not yet played
+    logic [31:0]         ahead_q;     // fifo_k_q + the samples of the segments in the engine not yet played
     logic                hdr_done, real_sample;
     if (ChunkWidth >= 32) begin : g_hdr1
       assign hdr_k = seg_tdata[31:0];
@@ -219,18 +219,21 @@ module traj_board #(
     end
     assign hdr_done    = seg_tvalid && seg_tready && word_q == WordBits'(HdrWords - 1);
     assign real_sample = sample_valid && !underrun;
+    // ahead_q is kept whole (a flop on the unit's avail_i, no adder after
+    // it): a header moving K from the FIFO's share to the engine's leaves the
+    // sum as it is
     always_ff @(posedge clk_i) begin
       if (!rst_ni) begin
         word_q   <= '0;
         fifo_k_q <= '0;
-        eng_k_q  <= '0;
+        ahead_q  <= '0;
       end else begin
         if (seg_tvalid && seg_tready) word_q <= (word_q == WordBits'(SegWords - 1)) ? '0 : word_q + 1'b1;
         fifo_k_q <= (cleared ? 32'h0 : fifo_k_q) + (stored ? stored_k : 32'h0) - (hdr_done ? hdr_k : 32'h0);
-        eng_k_q  <= eng_k_q + (hdr_done ? hdr_k : 32'h0) - {31'h0, real_sample};
+        ahead_q  <= ahead_q - (cleared ? fifo_k_q : 32'h0) + (stored ? stored_k : 32'h0) - {31'h0, real_sample};
       end
     end
-    assign ahead = fifo_k_q + eng_k_q;
+    assign ahead = ahead_q;
 
     logic             scale_on, done_q, resume_q, ts_valid, ts_tick, ts_starved_q;
     // the unit's busy and engine strobe: the simulated board measures the
