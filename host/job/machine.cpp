@@ -53,11 +53,11 @@ std::vector<fd::Format> Machine::carried_formats(int degree, int axes) {
     throw PlanError(std::to_string(axes) + " axes: the tool carries engines of 1 to " + std::to_string(plan::kMaxAxes));
   // {axes, degree, width, chunk_width, guard_bits, frac_bits}
   if (axes > 3) {
-    if (degree == 5) return {{8, 5, 96, 16, 48, 32}, {8, 5, 128, 16, 64, 44}};
+    if (degree == 5) return {{8, 5, 96, 16, 48, 32}, {8, 5, 128, 16, 67, 44}};
     throw PlanError("segment degree " + std::to_string(degree) + " with " + std::to_string(axes) +
                     " axes: the tool carries 8-axis engines of degree 5 only (--degree 5)");
   }
-  if (degree == 5) return {{3, 5, 96, 16, 48, 32}, {3, 5, 128, 16, 64, 44}};
+  if (degree == 5) return {{3, 5, 96, 16, 48, 32}, {3, 5, 128, 16, 67, 44}};
   if (degree == 3) return {{3, 3, 64, 16, 32, 16}, {3, 3, 96, 16, 48, 32}};
   throw PlanError("segment degree " + std::to_string(degree) + ": the tool carries engines for degree 3 and 5");
 }

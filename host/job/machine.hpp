@@ -69,8 +69,9 @@ struct Machine {
   // The engine formats of the builds the tool carries for `degree`
   // (host/sim/CMakeLists.txt, TRAJ_SIM_BUILDS), narrowest first:
   //   quintic: Axes 3, Width 96, Chunk 16, Guard 48, F 32 (1 LSB = 2^-32 units, |x| < 32768)
-  //            Axes 3, Width 128, Chunk 16, Guard 64, F 44 (2^-44 units, |x| < 2^19: fine ticks;
-  //            64 guard bits: segments of up to about 16 000 ticks)
+  //            Axes 3, Width 128, Chunk 16, Guard 67, F 44 (2^-44 units, |x| < 65536: fine ticks;
+  //            67 guard bits: segments of up to about 24 000 ticks, which
+  //            the fit's long polynomials at 1 us need)
   //   cubic:   Axes 3, Width 64, Chunk 16, Guard 32, F 16 (|x| < 32768)
   //            Axes 3, Width 96, Chunk 16, Guard 48, F 32
   //   4 to 8 axes: the quintic formats with Axes 8 (a path's further axes

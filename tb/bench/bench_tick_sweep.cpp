@@ -3,7 +3,7 @@
 // path: load_path + choose_format + run_job, as `trajcore plan` does) and of a
 // streamed raster (run_streaming, as `trajcore plan --raster N`) at tick
 // periods 1 ms, 100 us, 20 us and 1 us. Each case runs in a child process of
-// its own, so that its max RSS is its own, 7 times (the median host time). Real-time factor = seconds of
+// its own, so that its max RSS is its own, 21 times (the median host time). Real-time factor = seconds of
 // motion per host second (one core).
 //   usage: bench_tick_sweep <butterfly.json> [raster_pieces=200] [--short] [--one PERIOD]
 //   --short: 1 ms and 100 us only (the test that keeps it working)
@@ -43,7 +43,7 @@ double rss_mib() {
 
 // Each case runs kRuns times in its process (the butterfly loaded afresh
 // each time); the row gives the median host time.
-constexpr int kRuns = 7;
+constexpr int kRuns = 21;
 
 double median(std::vector<double> t) {
   std::sort(t.begin(), t.end());
