@@ -21,7 +21,11 @@ void JobConfig::validate() const {
 plan::PlanOptions JobConfig::plan_options() const {
   plan::PlanOptions po = plan;
   po.period = machine.fit_period();
-  if (machine.fit_ticks() > 1) po.feed_share = std::min(po.feed_share, kFineFeedShare);
+  if (machine.fit_ticks() > 1) {
+    po.feed_share = std::min(po.feed_share, kFineFeedShare);
+    po.corner_stops = true;
+    po.corner_rest = 2 * machine.period;
+  }
   return po;
 }
 

@@ -325,6 +325,7 @@ double jump_speed(double dk, double j_axis, const PlanOptions& o) {
 }
 
 double corner_speed(const double* T1, const double* T2, int d, const Limits& L, const PlanOptions& o) {
+  if (o.corner_stops) return 0;
   const double h = o.period;
   double v = L.feed, dn2 = 0;
   for (int a = 0; a < d; ++a) {
@@ -333,7 +334,13 @@ double corner_speed(const double* T1, const double* T2, int d, const Limits& L, 
     if (dt > 0) v = std::min({v, L.j_axis[a] * h * h / (10 * dt), L.a_axis[a] * h / (1.9 * dt)});
   }
   const double dn = std::sqrt(dn2);
-  if (dn > 0) v = std::min({v, o.cen_a_share * L.a_cen * h / dn, L.j_cen * h * h / (10 * dn)});
+  // the speed's own second derivative through the turn (the sampled
+  // tangential jerk): the polynomial that turns the velocity within the tick
+  // slows down and speeds up again, |x'''.u| up to 10 v |dT| / h^2 plus
+  // |x''_n|^2 / v of about 3.6 v |dT|^2 / h^2; 30 covers both for a
+  // right angle (the fit checks it at every tick, or at every engine tick
+  // where the fit tick is coarser: there the turn's speed dip is seen whole)
+  if (dn > 0) v = std::min({v, o.cen_a_share * L.a_cen * h / dn, L.j_cen * h * h / (10 * dn), L.j_tan * h * h / (30 * dn)});
   return v;
 }
 
@@ -704,7 +711,20 @@ Plan plan_path(const Path& p, const Limits& limits, const PlanOptions& o) {
       return changed.empty() || changed[blk] != 0;
     });
     if (marked.empty()) {
-      insert_dwells(plan, o.dwells);
+      std::vector<PlanOptions::Dwell> dwells = o.dwells;
+      if (o.corner_stops && o.corner_rest > 0) {
+        // one rest per stop (a G4 dwell there already is one)
+        const double tol = 1e-6 * std::max(1.0, plan.length);
+        auto rests_at = [&](double s) {
+          for (const auto& dw : dwells)
+            if (std::fabs(dw.s - s) <= tol) return true;
+          return false;
+        };
+        for (size_t i = 0; i < n; ++i)
+          if (g.corner[i] && g.vlim[i] == 0 && g.s[i] > 0 && g.s[i] < plan.length && !rests_at(g.s[i]))
+            dwells.push_back({g.s[i], o.corner_rest});
+      }
+      insert_dwells(plan, std::move(dwells));
       return plan;
     }
     plan.refinements += static_cast<int>(marked.size());

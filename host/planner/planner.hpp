@@ -106,6 +106,17 @@ struct PlanOptions {
   // come close to the arcs of the plan, and the fitted polynomial's small
   // speed error along the path would take a plan at the feed above it.
   double feed_share = 1;
+  // Corners (tangent breaks) are stops, not passed at the speed of a turn
+  // within one tick. Where the fit tick is coarser than the engine's the
+  // segments must end on engine ticks, and a turn at speed over a fit tick
+  // reads as a large tangential jerk at the engine's (|x''_n|^2 / |x'| at the
+  // almost vanishing corner speed): the machine stops there instead (the
+  // corner speed was a stop in practice, a few um/s).
+  bool corner_stops = false;
+  // With corner_stops: the plan rests this long at each corner (seconds; 0:
+  // none), so that engine ticks fall where it stands still and the segments
+  // meet there at rest (fit_segments_fine).
+  double corner_rest = 0;
   // Share of j_axis a curvature jump may take in the tick that steps the
   // acceleration (jump_speed in planner.cpp).
   double jump_j_share = 0.5;

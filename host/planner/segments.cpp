@@ -417,23 +417,27 @@ class SampleStore {
   std::vector<std::vector<TickSample>> chunks_;
 };
 
+// Tangent angle (rad) above which two curves or spans meet at a corner (the
+// planner's default PlanOptions::corner_tol).
+constexpr double kCornerAngle = 1e-6;
+
 // A sample the fine fit works with: the plan at engine tick e (global).
 struct FineSample {
   const TickSample* s = nullptr;
   long long e = 0;
-  // A segment may end here: not at the engine tick just before a change of
-  // curve or span (the next segment would have to cross it within one
-  // engine tick, as the planner's speed there does not allow).
+  // A segment may end here: not within a fit tick before a change of curve
+  // or span (the segment across it would turn the velocity, or step the
+  // acceleration, in less than the fit tick the planner's speed there
+  // allows for it).
   bool end_ok = true;
 };
 
 // The fit on a fit tick of n = o.fine_ticks engine ticks (segments.hpp,
 // host/planner/README.md "Fine ticks"). Segments start and end at engine
-// ticks: at the fit ticks, at the engine ticks on both sides of each change
-// of curve or span between two fit ticks (found by bisection; a segment
-// ends at the one after it, as at every tick when the fit tick is the
-// engine's), and, where no segment between fit ticks passes, at engine
-// ticks between them sampled on demand. A segment passes when
+// ticks: at the fit ticks, at breaks (a corner, where the plan rests), and,
+// where no segment between fit ticks passes, at engine ticks between them
+// sampled on demand; none ends within half a fit tick of a curvature step.
+// A segment passes when
 //   * per axis, the exact maxima of |x'|, |x''|, |x'''| are within the limits;
 //   * between consecutive samples a and b it uses (delta apart), its
 //     deviation e = fit - plan stays within fit_tol at every engine tick:
@@ -441,14 +445,16 @@ struct FineSample {
 //     delta/2 E3, E3 = the fit's largest |x'''| + the plan's (its per-axis
 //     jerk limits: the planner's guarantee); and its velocity error keeps
 //     the chord between engine ticks within 2 feed_rel of the plan's:
-//     |e'| <= max(|e'_a|, |e'_b|) + delta^2/8 E3 <= 2 feed_rel v, v the
-//     plan's slowest speed between the two (at least the smaller end speed
-//     less delta^2/8 of the profile's jerk) but at least 1e-3 of the top
-//     speed;
-//   * fine_windows_ok: the sampled tangential and normal quantities and the
-//     chords at every engine tick, by per-segment bounds.
-// The search for the longest segment uses the first two; the third decides
-// on the one it found (and, where it fails, on shorter ones).
+//     with feed_bound, |e'| <= max(|e'_a|, |e'_b|) + delta^2/8 E3 <=
+//     2 feed_rel v, v the plan's slowest speed between the two (the smaller
+//     end speed less delta^2/8 of the profile's jerk); else at the samples;
+//     no check below a hundredth of the top speed;
+//   * its path speed and, by fine_windows_ok, the sampled tangential and
+//     normal quantities and the chords at every engine tick, by per-segment
+//     bounds.
+// The search for the longest segment uses a screen (every third sample, no
+// allowances, the fit's own path quantities at the samples); the full checks
+// decide on the one it found (and, where they fail, on shorter ones).
 std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, const std::vector<TickSample>& ts,
                                            const Limits& L, const SegmentOptions& o, long long k_base) {
   const int d = p.dim();
@@ -495,49 +501,128 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
   // slow, its budget 2 feed_rel v is small, and more
   // samples of the plan go between the fit ticks (at most half the budget
   // for the allowance), so that the segments there need not be short.
-  // Below a thousandth of the top speed the budget stops shrinking (the
-  // report's feed figures start at a hundredth): the samples stay finite at
-  // a stop.
-  const double v_floor = 1e-3 * L.top_speed(d);
-  auto feed_budget = [&](double v) { return 2 * o.feed_rel * std::max(v, v_floor); };
+  // Below a hundredth of the top speed there is no feed check, as the
+  // report's feed figures start there: the samples stay few near a stop,
+  // and a corner passed slowly (where the plan's velocity turns within a
+  // tick and the fit's over a fit tick) needs none.
+  const double v_floor = 1e-2 * L.top_speed(d);
+  auto feed_budget = [&](double v) { return v < v_floor ? 1e300 : 2 * o.feed_rel * v; };
 
   std::vector<FineSample> W;  // the samples, in order
   W.reserve(ts.size() + 16);
-  std::vector<long long> brk_e;  // engine ticks where a segment must end
-  std::vector<long long> between, no_end;
+  // Changes of curve or span (found by bisection, the engine ticks on both
+  // sides of each sampled) are of three kinds:
+  //  * a corner the plan passes at rest: a segment ends at the first tick
+  //    after it (`brk`), so that each side keeps its own direction (a
+  //    polynomial turning there at almost no speed would read as a large
+  //    tangential jerk, a_n^2 / v, in the samples);
+  //  * a corner passed at speed, or a step of the curvature: no segment ends
+  //    within w = half a fit tick of it (`cross`), so that the one across it
+  //    turns the velocity, or steps the acceleration, over a fit tick at
+  //    least, as the planner's corner and jump speeds (for one fit tick)
+  //    allow;
+  //  * smooth (a G2 join, a knot of a C2 spline): passed like any point, its
+  //    samples dropped.
+  std::vector<long long> brk, cross;
+  const long long w = std::max<long long>(1, n / 2);
+  // one-sided tangent and curvature vector at the end (end = true) or start of a sample's span
+  auto geometry = [&](const TickSample& x, bool end, double* T, double* K) {
+    const geo::Curve& c = p.curve(x.curve);
+    const auto& sp = c.spans()[static_cast<size_t>(x.span)];
+    double buf[3 * kMaxAxes];
+    c.eval_span(x.span, end ? sp.u1 : sp.u0, 2, buf);
+    double n1 = 0, dot = 0;
+    for (int a = 0; a < d; ++a) n1 += buf[d + a] * buf[d + a];
+    n1 = std::sqrt(n1);
+    for (int a = 0; a < d; ++a) {
+      T[a] = n1 > 0 ? buf[d + a] / n1 : 0;
+      dot += buf[2 * d + a] * T[a];
+    }
+    for (int a = 0; a < d; ++a) K[a] = n1 > 0 ? (buf[2 * d + a] - dot * T[a]) / (n1 * n1) : 0;
+  };
+  enum Kind { kSmooth, kCross, kBreak };
+  auto kind_of = [&](const TickSample& left, const TickSample& past) {
+    double T1[kMaxAxes], K1[kMaxAxes], T2[kMaxAxes], K2[kMaxAxes];
+    geometry(left, true, T1, K1);
+    geometry(past, false, T2, K2);
+    double dot = 0, kscale = 0, kjump = 0;
+    for (int a = 0; a < d; ++a) {
+      dot += T1[a] * T2[a];
+      kscale = std::max({kscale, std::fabs(K1[a]), std::fabs(K2[a])});
+      kjump = std::max(kjump, std::fabs(K2[a] - K1[a]));
+    }
+    const bool corner = std::acos(std::clamp(dot, -1.0, 1.0)) > kCornerAngle;
+    const bool step = kjump > 1e-9 * (1 + kscale);
+    return corner ? kBreak : step ? kCross : kSmooth;
+  };
+  std::vector<std::pair<long long, const TickSample*>> between;
   for (size_t i = 0; i < ts.size(); ++i) {
-    no_end.clear();
     W.push_back({&ts[i], (k_base + static_cast<long long>(i)) * n});
     if (i + 1 == ts.size() || (i == 0 && carried)) continue;
     const FineSample A = W.back(), B{&ts[i + 1], A.e + n};
     between.clear();
-    // each change of curve or span: the engine ticks before and at it
     const TickSample* left = A.s;
     long long lo = A.e;
     while (!same_piece(*left, *B.s)) {
       const long long b = first_past(*left, lo, B);
-      if (b - 1 > lo) between.push_back(b - 1);
-      if (b - 1 == A.e) W.back().end_ok = false;
-      no_end.push_back(b - 1);
-      brk_e.push_back(b);
+      const TickSample* before = b - 1 == lo ? left : extra.add(sample_before(B, b - 1));
+      const TickSample* past = b == B.e ? B.s : extra.add(sample_before(B, b));
+      const Kind k = kind_of(*left, *past);
+      if (k == kCross) {
+        cross.push_back(b);
+        if (b - 1 > lo) between.push_back({b - 1, before});
+        if (b < B.e) between.push_back({b, past});
+      }
+      if (k == kBreak) {
+        // The planner stops at a corner and rests there a few engine ticks
+        // (PlanOptions::corner_stops, corner_rest): the segments meet on a
+        // tick where the plan stands still (near the stop the arc length
+        // cannot tell the curves apart to the tick, so it is looked for on
+        // both sides of b); without one, just past the corner.
+        long long at = b;
+        const TickSample* still = past;
+        for (long long m = std::max(lo + 1, b - 4); m <= std::min(B.e, b + 4); ++m) {
+          const TickSample* x = m == b ? past : m == b - 1 ? before : m == B.e ? B.s : extra.add(sample_before(B, m));
+          if (x->v == 0 && x->a == 0) {
+            at = m;
+            still = x;
+            break;
+          }
+        }
+        brk.push_back(at);
+        if (at < B.e) between.push_back({at, still});
+      }
       if (b == B.e) break;
-      between.push_back(b);
-      left = extra.add(sample_before(B, b));
+      left = past;
       lo = b;
     }
     // where slow, the samples the feed bound needs
     if (o.feed_bound) {
       const double v_lo = std::max(0.0, std::min(A.s->v, B.s->v) - n * n * h * h / 8 * plan.J_t);
       const double dmax = std::sqrt(4 * feed_budget(v_lo) / (2 * Jp));
-      const long long m = std::min<long long>(n, static_cast<long long>(std::ceil(n * h / dmax)));
-      for (long long k = 1; k < m; ++k) between.push_back(A.e + n * k / m);
+      const long long m = std::min<long long>(n, static_cast<long long>(std::ceil(n * h / std::max(dmax, 1e-300))));
+      for (long long k = 1; k < m; ++k) between.push_back({A.e + n * k / m, nullptr});
     }
-    std::sort(between.begin(), between.end());
-    between.erase(std::unique(between.begin(), between.end()), between.end());
-    for (long long e : between)
-      W.push_back({extra.add(sample_before(B, e)), e, std::find(no_end.begin(), no_end.end(), e) == no_end.end()});
+    std::sort(between.begin(), between.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+    long long last = A.e;
+    for (const auto& [e, smp] : between) {
+      if (e == last) continue;
+      W.push_back({smp ? smp : extra.add(sample_before(B, e)), e});
+      last = e;
+    }
   }
-  brk_e.push_back(W.back().e);
+  brk.push_back(W.back().e);
+  // no end within w of a change crossed (FineSample::end_ok), but the path's ends and the breaks
+  for (size_t j = 1, b = 0; j + 1 < W.size(); ++j) {
+    while (b < cross.size() && cross[b] + w <= W[j].e) ++b;
+    if (b < cross.size() && W[j].e > cross[b] - w && !std::binary_search(brk.begin(), brk.end(), W[j].e))
+      W[j].end_ok = false;
+  }
+  // an engine tick may end a segment where no crossed change is within w of it
+  auto end_allowed = [&](long long e) {
+    const auto it = std::upper_bound(cross.begin(), cross.end(), e - w);
+    return it == cross.end() || *it - w >= e;
+  };
   std::vector<size_t> ends;  // the W indices a segment may end at
   ends.reserve(W.size());
   for (size_t j = 0; j < W.size(); ++j)
@@ -708,13 +793,13 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
   // it may end at (ends[p]).
   FineSample S = W[0];
   size_t i = 0;  // S is W[i], or lies between W[i] and W[i + 1] (an engine tick sampled on demand)
-  size_t bi = 0;
+  size_t bi = 0;  // the next break
   size_t last_len = 16;  // end candidates spanned by the last segment
   TimeSegment seg, best;
   auto fits = [&](size_t p, Mode mode, TimeSegment& out_seg) { return try_fit(S, W[ends[p]], i + 1, ends[p], mode, out_seg); };
   while (S.e < W.back().e) {
-    while (brk_e[bi] <= S.e) ++bi;
-    const long long emax = std::min(brk_e[bi], S.e + static_cast<long long>(o.max_ticks) * n);
+    while (brk[bi] <= S.e) ++bi;
+    const long long emax = std::min(brk[bi], S.e + static_cast<long long>(o.max_ticks) * n);
     // the end candidates after S and within emax: positions p0..p1 of ends
     const size_t p0 = static_cast<size_t>(std::upper_bound(ends.begin(), ends.end(), i) - ends.begin());
     size_t p1 = p0;
@@ -774,16 +859,21 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
       S = W[i];
       continue;
     }
-    // No segment to a sample passes: the longest to an engine tick between S
-    // and W[i + 1], sampled on demand (bisection), but not before the plan's
-    // start (the carried tick's interval belongs to the previous window).
+    // No segment to a sample it may end at passes: the longest to an engine
+    // tick between S and W[i + 1], sampled on demand (bisection), but not
+    // before the plan's start (the carried tick's interval belongs to the
+    // previous window) nor within w of a change crossed.
     const FineSample& B = W[i + 1];
     long long good = S.e, bad = B.e;
+    {
+      const auto it = std::upper_bound(cross.begin(), cross.end(), S.e - w);  // the next change near or after S
+      if (it != cross.end()) bad = std::min(bad, std::max(S.e + 1, *it - w + 1));
+    }
     TickSample X, R;
     while (bad - good > 1) {
       const long long m = good + (bad - good) / 2;
       X = sample_before(B, m);
-      if (X.tp >= 0 && try_fit(S, FineSample{&X, m}, i + 1, i + 1, kFull, seg)) {
+      if (X.tp >= 0 && end_allowed(m) && try_fit(S, FineSample{&X, m}, i + 1, i + 1, kFull, seg)) {
         good = m;
         R = X;
         best = seg;
@@ -792,7 +882,10 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
       }
     }
     if (good == S.e) {
-      try_fit(S, B, i + 1, i + 1, kFull, seg);
+      // the reason: the shortest segment it may make (to the next end, or to B)
+      const size_t p_first = static_cast<size_t>(std::upper_bound(ends.begin(), ends.end(), i) - ends.begin());
+      if (bad > S.e + 1 || p_first >= ends.size()) try_fit(S, B, i + 1, i + 1, kFull, seg);
+      else try_fit(S, W[ends[p_first]], i + 1, ends[p_first], kFull, seg);
       throw fit_error(S, seg);
     }
     last_len = 1;
