@@ -463,6 +463,46 @@ module traj_link_proto #(
   logic [2:0]        ans_code_q;
   logic              tx_take_ans, tx_take_stat, stat_due;
 
+  // Time scaling's configuration (CONFIG's and FEED's fields, FEED's hold).
+  // Without a unit (ScaleWidth = 0) CONFIG refuses any nonzero time-scaling
+  // byte and FEED is refused, so they stay 0: constants, and the shadows
+  // that would feed them go unused.
+  if (ScaleWidth != 0) begin : g_scale_cfg
+    always_ff @(posedge clk_i) begin
+      if (!rst_ni) begin
+        cfg_m_q    <= '0;
+        cfg_smax_q <= '0;
+        cfg_ovr_q  <= '0;
+        cfg_shl_q  <= '0;
+        cfg_auto_q <= 1'b0;
+        hold_q     <= 1'b0;
+      end else begin
+        if (v_config_q) begin
+          cfg_m_q    <= sh_m_q;
+          cfg_smax_q <= sh_smax_q;
+          cfg_ovr_q  <= sh_ovr_q;
+          cfg_shl_q  <= sh_shl_q;
+          cfg_auto_q <= sh_auto_q;
+        end
+        if (v_feed_q) begin
+          cfg_ovr_q <= sh_ovr_q;
+          hold_q    <= sh_hold_q;
+        end
+      end
+    end
+  end else begin : g_no_scale_cfg
+    assign cfg_m_q    = '0;
+    assign cfg_smax_q = '0;
+    assign cfg_ovr_q  = '0;
+    assign cfg_shl_q  = '0;
+    assign cfg_auto_q = 1'b0;
+    assign hold_q     = 1'b0;
+    /* verilator lint_off UNUSEDSIGNAL */
+    logic unused_sh;
+    assign unused_sh = ^{sh_m_q, sh_smax_q, sh_ovr_q, sh_shl_q, sh_auto_q, sh_hold_q, v_feed_q};
+    /* verilator lint_on UNUSEDSIGNAL */
+  end
+
   // stat_cnt_q: ticks left to the next STATUS, minus one
   assign stat_due = tick_i && (cfg_stat_q != '0) && (stat_cnt_q == '0);
 
@@ -480,12 +520,6 @@ module traj_link_proto #(
       cfg_pulse_q <= 16'd1;
       cfg_setup_q <= '0;
       cfg_en_q    <= 1'b0;
-      cfg_m_q     <= '0;
-      cfg_smax_q  <= '0;
-      cfg_ovr_q   <= '0;
-      cfg_shl_q   <= '0;
-      cfg_auto_q  <= 1'b0;
-      hold_q      <= 1'b0;
       stat_cnt_q  <= '0;
       n_played_q  <= '0;
       n_ticks_q   <= '0;
@@ -517,15 +551,6 @@ module traj_link_proto #(
         cfg_pulse_q <= sh_pulse_q;
         cfg_setup_q <= sh_setup_q;
         cfg_en_q    <= sh_en_q;
-        cfg_m_q     <= sh_m_q;
-        cfg_smax_q  <= sh_smax_q;
-        cfg_ovr_q   <= sh_ovr_q;
-        cfg_shl_q   <= sh_shl_q;
-        cfg_auto_q  <= sh_auto_q;
-      end
-      if (v_feed_q) begin
-        cfg_ovr_q <= sh_ovr_q;
-        hold_q    <= sh_hold_q;
       end
       if (v_start_q && !halt_q) begin
         playing_q <= 1'b1;
