@@ -8,16 +8,17 @@
 #            hx8k       (iCE40HX8K-CT256 breakout, rtl/board/traj_hx8k_top.sv, BRAM FIFO)
 #   env: SEEDS          nextpnr placement seeds ("1 2 3 4 5")
 #        OUT            work directory (build/bitstreams/work_BOARD)
+#        PARAMS         parameters of the top, "Name=Value ..." (e.g. "TimeScale=1")
 #        YOSYS_EXTRA    more synth_ice40 options (e.g. "-abc9 -device u")
 #        NEXTPNR_EXTRA  more nextpnr-ice40 options (e.g. "--opt-timing")
 #
-# Output: build/bitstreams/BOARD.bin from the first seed in SEEDS; one line per
-# seed: logic cells, block RAM, SPRAM, Fmax of the core clock. Exit status 0
-# when every seed meets the core clock, 1 when a tool fails, 2 when a seed
-# misses timing.
+# Output: build/bitstreams/BOARD.bin (BOARD_<PARAMS>.bin with PARAMS) from the
+# first seed in SEEDS; one line per seed: logic cells, block RAM, SPRAM, Fmax
+# of the core clock. Exit status 0 when every seed meets the core clock, 1
+# when a tool fails, 2 when a seed misses timing.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-[ $# -eq 1 ] || { sed -n '6,12p' "$0" | sed 's/^# \{0,1\}//' >&2; exit 1; }
+[ $# -eq 1 ] || { sed -n '6,13p' "$0" | sed 's/^# \{0,1\}//' >&2; exit 1; }
 board=$1
 SEEDS=${SEEDS:-"1 2 3 4 5"}
 
@@ -35,14 +36,22 @@ mkdir -p "$out" "$dist"
 # last "<cell>: used/avail" figure of a nextpnr log, "used" only
 cell_count() { { grep -E "$1:" "$2" || true; } | tail -1 | sed -E "s/.*$1: *([0-9]+)\/.*/\1/"; }
 
+# "Name=Value ..." -> "chparam -set Name Value ... top;"
+chparam=""
+for p in ${PARAMS:-}; do
+  [[ $p == *=* ]] || { echo "bitstream.sh: parameter '$p' is not Name=Value" >&2; exit 1; }
+  chparam+=" -set ${p%%=*} ${p#*=}"
+done
+[ -z "$chparam" ] || chparam="chparam$chparam $top;"
+
 files=$("$root/scripts/unit_files.sh" "$top")
 json=$out/$top.json
-if ! yosys -q -l "$out/yosys.log" -p "read_verilog -sv -I$root/rtl $files; synth_ice40 $synth_opts ${YOSYS_EXTRA:-} -top $top -json $json" \
+if ! yosys -q -l "$out/yosys.log" -p "read_verilog -sv -I$root/rtl $files; $chparam synth_ice40 $synth_opts ${YOSYS_EXTRA:-} -top $top -json $json" \
      >/dev/null 2>&1; then
   echo "bitstream.sh: yosys failed, see $out/yosys.log" >&2; exit 1
 fi
 
-echo "$board: $top on $device-$package, core clock $mhz MHz, pins $(basename "$pcf")"
+echo "$board: $top on $device-$package, core clock $mhz MHz, pins $(basename "$pcf")${PARAMS:+, $PARAMS}"
 printf '%-5s %6s %5s %6s %10s\n' seed LCs BRAM SPRAM Fmax_MHz
 status=0 shipped=""
 for seed in $SEEDS; do
@@ -50,7 +59,8 @@ for seed in $SEEDS; do
   asc=$out/${board}_s$seed.asc
   if ! nextpnr-ice40 --"$device" --package $package --pcf "$pcf" --freq $mhz --timing-allow-fail ${NEXTPNR_EXTRA:-} \
         --seed "$seed" --json "$json" --asc "$asc" >"$log" 2>&1; then
-    echo "seed $seed: nextpnr-ice40 failed ($(grep -m1 ERROR "$log" || echo "no ERROR line")), see $log" >&2
+    need=$({ grep -E "ICESTORM_LC: *[0-9]+/" "$log" || true; } | tail -1 | sed -E 's/.*ICESTORM_LC: *([0-9]+\/ *[0-9]+).*/\1/; s/ //g')
+    echo "seed $seed: nextpnr-ice40 failed ($(grep -m1 ERROR "$log" || echo "no ERROR line"))${need:+; logic cells $need}, see $log" >&2
     status=1; continue
   fi
   lcs=$(cell_count ICESTORM_LC "$log"); bram=$(cell_count ICESTORM_RAM "$log"); spram=$(cell_count ICESTORM_SPRAM "$log")
@@ -64,7 +74,8 @@ for seed in $SEEDS; do
   [ -n "$shipped" ] || shipped=$asc
 done
 [ -n "$shipped" ] || { echo "bitstream.sh: no seed placed" >&2; exit 1; }
-icepack "$shipped" "$dist/$board.bin"
+bin=$dist/$board${PARAMS:+_$(echo "$PARAMS" | tr ' =' '_-')}.bin  # a build with other parameters beside the default's
+icepack "$shipped" "$bin"
 # icetime's pin-file reader takes no -nowarn
 sed 's/ -nowarn//' "$pcf" >"$out/icetime.pcf"
 if icetime -d "${device}" -P $package -p "$out/icetime.pcf" -c $mhz -t "$shipped" >"$out/icetime.log" 2>&1; then
@@ -72,5 +83,5 @@ if icetime -d "${device}" -P $package -p "$out/icetime.pcf" -c $mhz -t "$shipped
 else
   echo "icetime ($(basename "$shipped")) did not run: $(tail -1 "$out/icetime.log")"
 fi
-echo "bitstream: $dist/$board.bin"
+echo "bitstream: $bin"
 exit $status

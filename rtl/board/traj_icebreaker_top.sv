@@ -3,22 +3,31 @@
 //   12 MHz oscillator -> SB_PLL40_PAD -> ClkHz core clock (icepll -i 12 -o 30:
 //   DIVR 0, DIVF 79, DIVQ 5, FILTER_RANGE 1)
 //   reset: power-on, PLL lock, user button BTN_N (traj_reset_sync)
+//   feed hold (TimeScale = 1): button BTN1 of the snap-off PMOD2 section
+//   (active high, the section's own pull-down; 2-flop synchroniser)
 //   UART to the FTDI FT2232H channel B: rx_i (2-flop synchroniser), tx_o
 //   PMOD1A: step/dir of 3 axes, the drivers' enable, the external tick input
 //   LEDs: green = playing (blinks with the ticks), red = tick or step error
 // Inputs have the iCE40 pull-ups on (SB_IO PULLUP): an unplugged PMOD tick
-// input stays high (no edges), the button and RX idle high.
+// input stays high (no edges), the button and RX idle high. BTN1 has none
+// (the board pulls it down; with the PMOD2 section snapped off, wire it back
+// or tie the pin low).
 // The portable logic is traj_board (host link, segment FIFO in SPRAM, the
 // time-multiplexed FD engine traj_fd_tm in the main job's format, tick and
-// step generators).
+// step generators). TimeScale = 1 adds the time-scale unit (feed override,
+// feed hold, a stop on the path when data runs out); that build needs more
+// logic cells than the UP5K has (rtl/README.md, "Boards and bitstreams"),
+// so the default is 0: no time scaling (the link refuses it), BTN1 unused.
 `default_nettype none
 
 module traj_icebreaker_top #(
-  parameter int ClkHz = 30_000_000,  // must match the PLL settings below
-  parameter int Baud  = 1_000_000
+  parameter int ClkHz     = 30_000_000,  // must match the PLL settings below
+  parameter int Baud      = 1_000_000,
+  parameter int TimeScale = 0            // 1: the time-scale unit (does not fit the UP5K, above)
 ) (
   input  logic       clk_i,       // 35: 12 MHz oscillator
   input  logic       btn_ni,      // 10: user button BTN_N
+  input  logic       hold_i,      // 20: BTN1 (snap-off PMOD2), feed hold
   input  logic       rx_i,        // 6: FTDI channel B TXD -> FPGA
   output logic       tx_o,        // 9: FPGA -> FTDI channel B RXD
   input  logic       tick_ext_i,  // PMOD1A pin 10
@@ -32,6 +41,7 @@ module traj_icebreaker_top #(
   logic clk, lock, rst_n;
   logic btn_pin, rx_pin, tick_pin;
   logic [1:0] rx_q;
+  logic hold;  // the hold button, synchronised
   logic run, err, beat;
 
   SB_PLL40_PAD #(
@@ -61,14 +71,30 @@ module traj_icebreaker_top #(
   traj_reset_sync u_rst (.clk_i(clk), .lock_i(lock), .btn_ni(btn_pin), .rst_no(rst_n));
 
   always_ff @(posedge clk) rx_q <= {rx_q[0], rx_pin};  // synchroniser (settled before reset ends)
+  // the hold button (TimeScale = 1 only): a 2-flop synchroniser (a level,
+  // held by a person; the unit samples it once per servo tick); without the
+  // unit the pin has no buffer (nothing reads it)
+  if (TimeScale != 0) begin : g_hold
+    logic       hold_pin;
+    logic [1:0] hold_q;
+    SB_IO #(.PIN_TYPE(6'b000001), .PULLUP(1'b0)) u_hold (.PACKAGE_PIN(hold_i), .D_IN_0(hold_pin));
+    always_ff @(posedge clk) hold_q <= {hold_q[0], hold_pin};
+    assign hold = hold_q[1];
+  end else begin : g_no_hold
+    /* verilator lint_off UNUSEDSIGNAL */
+    logic unused_hold;
+    assign unused_hold = hold_i;  // BTN1 has no use without the unit
+    /* verilator lint_on UNUSEDSIGNAL */
+    assign hold = 1'b0;
+  end
 
   traj_board #(
     .ClkHz(ClkHz), .Baud(Baud), .Axes(3), .Degree(5), .Width(96), .ChunkWidth(16), .GuardBits(48),
-    .FifoDepth(16384), .FdTimeMux(1'b1)
+    .FifoDepth(16384), .FdTimeMux(1'b1), .TimeScale(TimeScale), .ScaleWidth(20)
   ) u_board (
     .clk_i(clk), .rst_ni(rst_n), .rx_i(rx_q[1]), .tx_o,
     .tick_ext_i(tick_pin),
-    .hold_i(1'b0),  // TimeScale = 0: the unit does not fit beside the board logic yet (rtl/README.md)
+    .hold_i(hold),
     .step_o, .dir_o, .enable_o,
     .run_o(run), .err_o(err), .heartbeat_o(beat)
   );
