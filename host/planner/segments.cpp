@@ -510,19 +510,18 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
 
   std::vector<FineSample> W;  // the samples, in order
   W.reserve(ts.size() + 16);
-  // Changes of curve or span (found by bisection, the engine ticks on both
-  // sides of each sampled) are of three kinds:
-  //  * a corner the plan passes at rest: a segment ends at the first tick
-  //    after it (`brk`), so that each side keeps its own direction (a
-  //    polynomial turning there at almost no speed would read as a large
-  //    tangential jerk, a_n^2 / v, in the samples);
-  //  * a corner passed at speed, or a step of the curvature: no segment ends
-  //    within w = half a fit tick of it (`cross`), so that the one across it
-  //    turns the velocity, or steps the acceleration, over a fit tick at
-  //    least, as the planner's corner and jump speeds (for one fit tick)
-  //    allow;
-  //  * smooth (a G2 join, a knot of a C2 spline): passed like any point, its
-  //    samples dropped.
+  // Changes of curve or span (found by bisection) are of three kinds, by
+  // the geometry on their two sides:
+  //  * a corner, where the plan stops and rests (PlanOptions::corner_stops):
+  //    the segments meet on a tick where it stands still (`brk`), so that
+  //    each side keeps its own direction (a polynomial turning there at
+  //    almost no speed would read as a large tangential jerk, a_n^2 / v, in
+  //    the samples);
+  //  * a step of the curvature: the engine ticks on both sides are samples,
+  //    and no segment ends within w = half a fit tick of it (`cross`), so
+  //    that the one across it steps the acceleration over a fit tick at
+  //    least, as the planner's jump speed (for one fit tick) allows;
+  //  * smooth (a G2 join, a knot of a C2 spline): passed like any point.
   std::vector<long long> brk, cross;
   const long long w = std::max<long long>(1, n / 2);
   // one-sided tangent and curvature vector at the end (end = true) or start of a sample's span
@@ -565,12 +564,11 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
     long long lo = A.e;
     while (!same_piece(*left, *B.s)) {
       const long long b = first_past(*left, lo, B);
-      const TickSample* before = b - 1 == lo ? left : extra.add(sample_before(B, b - 1));
       const TickSample* past = b == B.e ? B.s : extra.add(sample_before(B, b));
       const Kind k = kind_of(*left, *past);
       if (k == kCross) {
         cross.push_back(b);
-        if (b - 1 > lo) between.push_back({b - 1, before});
+        if (b - 1 > lo) between.push_back({b - 1, extra.add(sample_before(B, b - 1))});
         if (b < B.e) between.push_back({b, past});
       }
       if (k == kBreak) {
@@ -582,7 +580,7 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
         long long at = b;
         const TickSample* still = past;
         for (long long m = std::max(lo + 1, b - 4); m <= std::min(B.e, b + 4); ++m) {
-          const TickSample* x = m == b ? past : m == b - 1 ? before : m == B.e ? B.s : extra.add(sample_before(B, m));
+          const TickSample* x = m == b ? past : m == B.e ? B.s : extra.add(sample_before(B, m));
           if (x->v == 0 && x->a == 0) {
             at = m;
             still = x;
