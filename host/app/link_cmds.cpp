@@ -104,6 +104,10 @@ void add_upload(CLI::App& app, LinkCommands& lc) {
       ->capture_default_str();
   c->add_option("--prefill", a.opt.prefill, "segments stored before START (0: as many as the FIFO takes)")
       ->capture_default_str();
+  c->add_option("--ahead", a.opt.ahead,
+                "segments stored ahead of the one playing, as the board's STATUS reports it (0: as many as the FIFO "
+                "takes); a short look-ahead bounds how long the board plays on when the host is gone")
+      ->capture_default_str();
   c->add_flag("--resume", a.opt.resume,
               "continue the board's job from its next sequence number (after the tool was stopped or killed)");
   c->add_option("--timeout-ms", a.opt.timeout_ms, "answer timeout, ms, plus the transmission time in flight")
@@ -263,6 +267,12 @@ link::FaultOptions faults_of(const BoardArgs& a) {
   return f;
 }
 
+// With --once the board ends after the job's end and this much silence from
+// the tool. The pty's own slave descriptor hides the tool's hang-up, so
+// silence is the sign; it must outlast a tool waiting out its answer timeout
+// after a lost frame (the tests give --timeout-ms 3000).
+constexpr double kOnceIdleS = 5;
+
 // Serves `board` to one tool after another on a pty or TCP port (printed on
 // stdout) until SIGINT/SIGTERM, or with --once until a job's end.
 template <class Board>
@@ -275,7 +285,7 @@ link::ServeStats serve_tools(const BoardArgs& a, Board& board) {
   while (!g_interrupted.load()) {
     auto t = listener->accept(100);
     if (!t) continue;
-    link::serve(*t, board, g_interrupted, faults_of(a), stats, a.once ? 0.5 : 0);
+    link::serve(*t, board, g_interrupted, faults_of(a), stats, a.once ? kOnceIdleS : 0);
     if (a.once && board.end_reached()) break;
   }
   return stats;

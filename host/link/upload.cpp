@@ -420,6 +420,13 @@ class Uploader : public FeedPort {
     return true;
   }
 
+  // The sequence number --ahead stops at: that many past the segment playing
+  // in the latest STATUS (segments_played counts from the job's RESET, as seq).
+  uint32_t ahead_limit() const {
+    if (o_.ahead == 0) return base_ + 0x7FFFFFFF;
+    return (prog_.have_status ? prog_.status.segments_played : 0) + uint32_t(o_.ahead);
+  }
+
   // Sends what the credits allow; true if anything was sent.
   bool send_allowed(uint32_t limit) {
     bool sent = false;
@@ -611,9 +618,10 @@ class Uploader : public FeedPort {
 
   // Stores segments until the FIFO (or --prefill) is full or the stream ends.
   void prefill() {
-    const uint32_t limit = o_.prefill ? base_ + uint32_t(o_.prefill) : base_ + 0x7FFFFFFF;
     auto last = Clock::now();
     for (;;) {
+      const uint32_t prefill = o_.prefill ? base_ + uint32_t(o_.prefill) : base_ + 0x7FFFFFFF;
+      const uint32_t limit = seq_diff(prefill, ahead_limit()) < 0 ? prefill : ahead_limit();
       check_interrupt();
       poll_controls();
       send_allowed(limit);
@@ -643,9 +651,9 @@ class Uploader : public FeedPort {
     while (!all_sent_and_stored()) {
       check_interrupt();
       poll_controls();
-      send_allowed(base_ + 0x7FFFFFFF);
+      send_allowed(ahead_limit());
       wait_answers(last);
-      // blocked by credits and nothing in flight: ask, the board may have made room
+      // blocked by credits (or --ahead) and nothing in flight: ask, the board may have made room (or played on)
       if (send_next_ == base_ && since(last_poll) > 0.02 && !all_sent_and_stored()) {
         send(Type::kStatusReq, 0);
         last_poll = Clock::now();

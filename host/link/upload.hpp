@@ -29,6 +29,7 @@ struct UploadOptions {
   double pulse_us = 2.0, dir_setup_us = 2.0;
   double status_period_s = 0.1;    // the board's periodic STATUS (0: on request only)
   size_t prefill = 0;              // segments stored before START (0: as many as the FIFO takes)
+  size_t ahead = 0;                // segments stored ahead of the one playing (0: as many as the FIFO takes)
   bool resume = false;             // continue the board's job from its next_seq
   int timeout_ms = 100;            // answer timeout, plus the transmission time of what is in flight
   int baud = 1000000;              // for the transmission time (pseudo-terminals and TCP are faster)

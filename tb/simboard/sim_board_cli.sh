@@ -15,8 +15,8 @@
 #           (the segments re-compiled), and the pins equal the prediction of
 #           the re-compiled stream, twice as many ticks.
 #   timescale: a G1 zigzag planned with --time-scale 1.2 at a 125 us engine
-#           tick; the board overrides to 120 % (FEED), holds by its pin and
-#           pauses the link at given times, the tool sets 50 % and holds and
+#           tick, uploaded 20 segments ahead; the board overrides to 120 %
+#           (FEED), holds by its pin and pauses the link at given times, the tool sets 50 % and holds and
 #           resumes through its control socket; the board's check: the pins
 #           equal the path through its re-timed output, which lies on the
 #           stream's exact prediction and ends on its last sample, and a
@@ -86,8 +86,10 @@ clean | faults | restart | coarse)
   fi
   ;;
 timescale)
-  start_board --once --feed 0.1:120 --hold 0.3:0.4 --starve 0.8:6
-  "$T" upload plan.trj --port "$(cat port)" --step-shift 26 --timeout-ms 3000 --retries 1000 \
+  start_board --once --feed 0.1:120 --hold 0.3:0.4 --starve 0.8:1.5
+  # --ahead 20: about 0.7 s of motion stored ahead (the FIFO would take the
+  # whole job), so that the link's pause empties it
+  "$T" upload plan.trj --port "$(cat port)" --step-shift 26 --timeout-ms 3000 --retries 1000 --ahead 20 \
     --control "$PWD/feed.sock" > upload.txt 2> upload.err &
   tool=$!
   ask() { echo "$1" | socat -t 20 - UNIX-CONNECT:feed.sock; }  # one command, its answer
