@@ -106,7 +106,8 @@ void add_upload(CLI::App& app, LinkCommands& lc) {
       ->capture_default_str();
   c->add_option("--ahead", a.opt.ahead,
                 "segments stored ahead of the one playing, as the board's STATUS reports it (0: as many as the FIFO "
-                "takes); a short look-ahead bounds how long the board plays on when the host is gone")
+                "takes); a short look-ahead bounds how long the board plays on when the host is gone, too short a one "
+                "underruns when the host answers late")
       ->capture_default_str();
   c->add_flag("--resume", a.opt.resume,
               "continue the board's job from its next sequence number (after the tool was stopped or killed)");

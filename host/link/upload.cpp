@@ -618,10 +618,10 @@ class Uploader : public FeedPort {
 
   // Stores segments until the FIFO (or --prefill) is full or the stream ends.
   void prefill() {
+    const uint32_t prefill_end = o_.prefill ? base_ + uint32_t(o_.prefill) : base_ + 0x7FFFFFFF;
     auto last = Clock::now();
     for (;;) {
-      const uint32_t prefill = o_.prefill ? base_ + uint32_t(o_.prefill) : base_ + 0x7FFFFFFF;
-      const uint32_t limit = seq_diff(prefill, ahead_limit()) < 0 ? prefill : ahead_limit();
+      const uint32_t limit = seq_diff(prefill_end, ahead_limit()) < 0 ? prefill_end : ahead_limit();
       check_interrupt();
       poll_controls();
       send_allowed(limit);

@@ -251,6 +251,31 @@ TEST(Upload, CleanLinkPlaysEveryRecordOnce) {
   EXPECT_EQ(r.progress.resends, 0u);
 }
 
+// --ahead N: the board never holds more than N segments beyond those it has
+// started (as its own STATUS says), where the FIFO would take more; every
+// record still played once.
+TEST(Upload, AheadBoundsWhatTheBoardStoresBeyondWhatItPlays) {
+  const auto& path = raster_stream(40);
+  auto most_ahead = [&](size_t ahead) {
+    BoardOptions bo = fast_board(64);
+    bo.speed = 10;  // paced, so that the tool waits for the board (16 segments ahead: about 50 ms)
+    Rig rig(bo, {});
+    RecordSource src(path);
+    UploadOptions o = tool();
+    o.ahead = ahead;
+    o.status_period_s = 0.002;
+    uint32_t most = 0;
+    upload(rig.port(), src, o, [&](const UploadProgress& p) {
+      if (p.have_status) most = std::max(most, p.status.next_seq - p.status.segments_played);
+    });
+    rig.disconnect();
+    EXPECT_TRUE(rig.played() == file_records(path));
+    return most;
+  };
+  EXPECT_LE(most_ahead(16), 16u);
+  EXPECT_GT(most_ahead(0), 32u);  // without it the FIFO fills
+}
+
 struct FaultCase {
   const char* name;
   FaultOptions f;
