@@ -273,7 +273,9 @@ class Uploader : public FeedPort {
     if ((s.flags & status_flag::kUnderrunHalt) || s.underruns != underruns_at_start_)
       fail("the board underran after " + std::to_string(s.segments_played) + " segments played (FIFO empty before "
            "the job's end: the host or the link was too slow; " + std::to_string(s.underruns) + " underruns, " +
-           std::to_string(s.next_seq) + " stored); it holds position and waits: run again with --resume");
+           std::to_string(s.next_seq) + " stored" +
+           (o_.ahead ? "; --ahead " + std::to_string(o_.ahead) + " stores too little ahead for this stream" : "") +
+           "); it holds position and waits: run again with --resume");
     if (!(s.flags & (status_flag::kPlaying | status_flag::kEndReached)))
       fail("the board stopped playing after " + std::to_string(s.segments_played) + " segments (reset, or stopped by "
            "another host?); it holds still");
@@ -637,8 +639,11 @@ class Uploader : public FeedPort {
     for (int attempt = 0; attempt <= o_.max_retries; ++attempt) {
       command(t, 0);
       const Status s = query_status();
-      if (s.flags & (status_flag::kPlaying | status_flag::kEndReached)) {
+      // started and already run dry (a short --ahead): named as an underrun
+      const bool underran = (s.flags & status_flag::kUnderrunHalt) || s.underruns != underruns_at_start_;
+      if ((s.flags & (status_flag::kPlaying | status_flag::kEndReached)) || underran) {
         watching_ = true;
+        on_status(s);
         return;
       }
     }
