@@ -103,11 +103,13 @@ void add_upload(CLI::App& app, LinkCommands& lc) {
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   c->add_option("--prefill", a.opt.prefill, "segments stored before START (0: as many as the FIFO takes)")
+      ->check(CLI::Range(0, 65535))
       ->capture_default_str();
   c->add_option("--ahead", a.opt.ahead,
                 "segments stored ahead of the one playing, as the board's STATUS reports it (0: as many as the FIFO "
                 "takes); a short look-ahead bounds how long the board plays on when the host is gone, too short a one "
                 "underruns when the host answers late")
+      ->check(CLI::Range(0, 65535))
       ->capture_default_str();
   c->add_flag("--resume", a.opt.resume,
               "continue the board's job from its next sequence number (after the tool was stopped or killed)");
