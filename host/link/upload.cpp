@@ -639,8 +639,10 @@ class Uploader : public FeedPort {
     for (int attempt = 0; attempt <= o_.max_retries; ++attempt) {
       command(t, 0);
       const Status s = query_status();
-      // started and already run dry (a short --ahead): named as an underrun
-      const bool underran = (s.flags & status_flag::kUnderrunHalt) || s.underruns != underruns_at_start_;
+      // started and already run dry (a short --ahead): named as an underrun.
+      // The count, not the halt flag: a RESUME after an underrun may still
+      // see the flag of the old one.
+      const bool underran = s.underruns != underruns_at_start_;
       if ((s.flags & (status_flag::kPlaying | status_flag::kEndReached)) || underran) {
         watching_ = true;
         on_status(s);
