@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "input/gcode_curves.hpp"
+#include "input/gcode_flow.hpp"
 #include "input/gcode_lexer.hpp"
 
 namespace traj::input {
@@ -112,13 +113,12 @@ class Interpreter {
   // dwell to it) or the program has ended; false once the program has ended
   // and every move was taken.
   bool read_more(std::istream& in) {
+    if (!flow_) flow_ = std::make_unique<gcode::GcodeFlow>(in, name_, params_);
     while (out_.moves.size() < 2 && !ended_) {
-      if (!std::getline(in, text_)) {
+      if (!flow_->next(text_, line_no_)) {
         finish(line_no_, false);
         break;
       }
-      ++line_no_;
-      if (!text_.empty() && text_.back() == '\r') text_.pop_back();
       if (text_.size() > kMaxLineChars) {
         line_ = line_no_;
         fail(text_.substr(0, 16) + "...", "the line is too long (" + std::to_string(text_.size()) +
@@ -160,6 +160,7 @@ class Interpreter {
   std::set<std::string> noted_;
   std::string text_;  // the line being read
   int line_no_ = 0;
+  std::unique_ptr<gcode::GcodeFlow> flow_;  // the lines in the order the program runs them (O-words)
   bool seen_content_ = false, in_percent_ = false, ended_ = false;
 
   // Machine state (mm, the program's start X0 Y0 Z0; the further axes at 0).

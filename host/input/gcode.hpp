@@ -18,7 +18,8 @@
 // coordinates: the holder's, G54 being zero), T with M6 (the tool G43
 // without H takes), comments, N, '/', '%', M2/M30; parameters (#n, #<name>)
 // and expressions ([ ], operators, functions) as LinuxCNC reads them
-// (gcode_lexer.hpp).
+// (gcode_lexer.hpp); O-words: subroutines, conditions and loops as LinuxCNC
+// runs them (gcode_flow.hpp).
 // Accepted with a note: S, M3/M4/M5, M7/M8/M9, T, M6, G40, G54, G80,
 // G64 Q, M1 (the optional stop: the move before it ends in an exact stop and
 // the program goes on, as LinuxCNC with its optional-stop switch off; CAM

@@ -70,6 +70,18 @@ class LineParser {
   LineParser(std::string s, int line, const std::string& file, const Parameters& params)
       : s_(std::move(s)), line_(line), file_(file), params_(params) {}
 
+  // Values until the end of the text (an O-word's condition or arguments).
+  std::vector<double> values() {
+    std::vector<double> v;
+    while (pos_ < s_.size()) {
+      start_ = pos_;
+      if (!v.empty() && std::isalpha(static_cast<unsigned char>(s_[pos_])))
+        error(cut(s_.substr(pos_)), "an O-word's line carries nothing but its values ([expression] ...)");
+      v.push_back(real_value(0));
+    }
+    return v;
+  }
+
   Block parse() {
     Block b;
     b.line = line_;
@@ -90,7 +102,7 @@ class LineParser {
         b.settings.push_back(setting());
       } else {
         if (!std::isalpha(static_cast<unsigned char>(c))) error(std::string(1, c), "expected a letter");
-        if (c == 'O') error("O", "subroutines and control flow (O-words) are not supported");
+        if (c == 'O') error("O", "an O-word (subroutine or control flow) must begin its line and stand alone on it");
         ++pos_;
         Word w;
         w.letter = c;
@@ -342,6 +354,55 @@ void Parameters::apply(const std::vector<Setting>& settings) {
     else
       named[s.name] = s.value;
   }
+}
+
+std::optional<OLine> o_line(const std::string& text, int line, const std::string& file) {
+  // cheap test first: most lines are not O-words
+  const size_t first = text.find_first_not_of(" \t");
+  if (first == std::string::npos) return std::nullopt;
+  const char c0 = static_cast<char>(std::toupper(static_cast<unsigned char>(text[first])));
+  if (c0 != 'O' && c0 != 'N') return std::nullopt;
+  const std::string s = strip(text, line, file);
+  size_t pos = 0;
+  if (pos < s.size() && s[pos] == 'N') {  // a line number first
+    ++pos;
+    while (pos < s.size() && (std::isdigit(static_cast<unsigned char>(s[pos])) || s[pos] == '.')) ++pos;
+  }
+  if (pos >= s.size() || s[pos] != 'O') return std::nullopt;
+  ++pos;
+  OLine o;
+  if (pos < s.size() && s[pos] == '<') {
+    const size_t close = s.find('>', pos);
+    if (close == std::string::npos || close == pos + 1) fail(file, line, cut(s), "an O-word's name <...> is not closed or empty");
+    o.label = s.substr(pos, close + 1 - pos);
+    pos = close + 1;
+  } else {
+    const size_t begin = pos;
+    while (pos < s.size() && std::isdigit(static_cast<unsigned char>(s[pos]))) ++pos;
+    if (pos == begin) fail(file, line, cut(s), "an O-word needs a number or a <name>");
+    o.label = s.substr(begin, pos - begin);
+    o.label.erase(0, std::min(o.label.find_first_not_of('0'), o.label.size() - 1));
+  }
+  // longer keywords before those they start with (ELSEIF, ELSE; ENDSUB ... before nothing shorter)
+  static const std::pair<const char*, OKeyword> kKeywords[] = {
+      {"ENDSUB", OKeyword::kEndsub},     {"ENDWHILE", OKeyword::kEndwhile}, {"ENDREPEAT", OKeyword::kEndrepeat},
+      {"ENDIF", OKeyword::kEndif},       {"ELSEIF", OKeyword::kElseif},     {"ELSE", OKeyword::kElse},
+      {"SUB", OKeyword::kSub},           {"CALL", OKeyword::kCall},         {"RETURN", OKeyword::kReturn},
+      {"IF", OKeyword::kIf},             {"WHILE", OKeyword::kWhile},       {"DO", OKeyword::kDo},
+      {"REPEAT", OKeyword::kRepeat},     {"BREAK", OKeyword::kBreak},       {"CONTINUE", OKeyword::kContinue}};
+  for (const auto& [name, kw] : kKeywords) {
+    if (s.compare(pos, std::char_traits<char>::length(name), name) != 0) continue;
+    o.keyword = kw;
+    o.text = "O" + o.label + " " + name;
+    o.values = s.substr(pos + std::char_traits<char>::length(name));
+    return o;
+  }
+  fail(file, line, cut(s), "an O-word needs a keyword: sub endsub call return if elseif else endif while endwhile "
+                            "do repeat endrepeat break continue");
+}
+
+std::vector<double> o_values(const OLine& o, int line, const std::string& file, const Parameters& params) {
+  return LineParser(o.values, line, file, params).values();
 }
 
 Block lex_line(const std::string& text, int line, const std::string& file, const Parameters& params) {

@@ -17,10 +17,16 @@
 // ignored. A numbered parameter the program has not set is refused (LinuxCNC
 // takes it from its parameter file, which trajcore does not read), as are
 // numbers 5000 and above (the machine's state) and the predefined named
-// parameters #<_...> the program has not set. O-words (subroutines, control
-// flow) are refused here, where the text is at hand.
+// parameters #<_...> the program has not set.
+//
+// O-words (subroutines and control flow, LinuxCNC's "O<label> keyword
+// [value]..." lines) are recognised by o_line without evaluating anything
+// (a line skipped by a false condition, or a subroutine's body before its
+// call, may read parameters that are not set yet) and evaluated by o_values
+// when they run; gcode_flow.hpp runs them. lex_line refuses an O-word.
 #pragma once
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -54,6 +60,25 @@ struct Block {
   std::vector<Word> words;       // without the line number N
   std::vector<Setting> settings; // parameter settings, in the order written
 };
+
+enum class OKeyword {
+  kSub, kEndsub, kCall, kReturn, kIf, kElseif, kElse, kEndif, kWhile, kEndwhile, kDo, kRepeat, kEndrepeat, kBreak,
+  kContinue
+};
+
+struct OLine {
+  std::string label;   // "100" (a number, without leading zeros) or "<NAME>" (upper case, blanks removed)
+  OKeyword keyword = OKeyword::kSub;
+  std::string text;    // "O100 WHILE", "O<CONE> CALL": for messages
+  std::string values;  // the text after the keyword, blanks and comments removed (o_values evaluates it)
+};
+
+// The O-word of a line (an optional line number N first, then O<label> and
+// its keyword), or nothing for any other line. Throws InputError for an
+// O-word line that is malformed (no label, an unknown keyword).
+std::optional<OLine> o_line(const std::string& text, int line, const std::string& file);
+// The values after an O-word's keyword ("[#1 GT 2]", call arguments "[1] [2+3]"), evaluated with `params`.
+std::vector<double> o_values(const OLine& o, int line, const std::string& file, const Parameters& params);
 
 // Splits one line into a block, evaluating its values with `params` (the
 // parameters before the line). Throws InputError "<file>:<line>: <word>:

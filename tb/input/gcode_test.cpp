@@ -199,7 +199,7 @@ TEST(Gcode, PathControlAndNotes) {
 
 TEST(Gcode, Refusals) {
   const std::pair<const char*, const char*> cases[] = {
-      {"O100 sub\nM2\n", "t.ngc:1: O: subroutines and control flow (O-words) are not supported"},
+      {"O100 sub\nM2\n", "t.ngc:1: O100 sub: no endsub before the end of the file"},
       {"G41\nM2\n", "t.ngc:1: G41: cutter radius compensation is not supported"},
       {"G43 H1\nM2\n",
        "t.ngc:1: G43: a tool length offset needs the machine's tool table (trajcore --tool-table FILE, LinuxCNC's format)"},
@@ -468,6 +468,62 @@ TEST(Gcode, ParametersAndExpressions) {
   ASSERT_EQ(tp.moves.size(), 8u);
   for (size_t i = 0; i < 8; ++i)
     for (int a = 0; a < 3; ++a) EXPECT_NEAR(at(tp.moves[i], 1)[a], want[i][a], 1e-12) << tp.moves[i].where;
+}
+
+// Subroutines, conditions and loops; every expected point is from rs274's
+// output for the same program (LinuxCNC 2.9).
+TEST(Gcode, SubroutinesAndControlFlow) {
+  const auto ends = [](const Toolpath& tp) {
+    std::vector<Eigen::Vector3d> e;
+    for (const Move& m : tp.moves) e.push_back(end_of(m));
+    return e;
+  };
+  const auto expect_points = [&](const Toolpath& tp, const std::vector<Eigen::Vector3d>& want) {
+    const auto got = ends(tp);
+    ASSERT_EQ(got.size(), want.size());
+    for (size_t i = 0; i < want.size(); ++i) EXPECT_LT((got[i] - want[i]).norm(), 1e-12) << tp.moves[i].where;
+  };
+  // arguments (#3 not passed: 0), globals seen, a caller's local hidden and kept, endsub's value,
+  // repeat, do-while, if/elseif/else (rs274: the repeat's second move has zero length, dropped here)
+  expect_points(read("#<g> = 5\no<foo> sub\ng1 x#1 y#2 z#3 f100\n#<loc> = 7\n#<_glob> = 9\n"
+                     "o<foo> endsub [#1*2]\no<foo> call [3] [4]\ng1 x#<_value> y#<_value_returned> z#<_glob>\n"
+                     "o<foo> call\ng1 x#<_value> y#<_value_returned> z#<g>\no200 repeat [2]\ng1 x1 y2\n"
+                     "o200 endrepeat\no300 do\ng1 x5\no300 while [0]\no400 if [1 GT 2]\ng1 x7\n"
+                     "o400 elseif [1]\ng1 x8\no400 else\ng1 x9\no400 endif\nm2\n"),
+                {{3, 4, 0}, {6, 1, 9}, {0, 0, 0}, {0, 1, 5}, {1, 2, 5}, {5, 2, 5}, {8, 2, 5}});
+  // return from inside an if, while with continue and break
+  expect_points(read("o<foo> sub\no10 if [#1 GT 2]\no<foo> return [#1]\no10 endif\ng1 x#1 f100\n"
+                     "o<foo> endsub\no<foo> call [1]\no<foo> call [5]\ng1 y#<_value>\n#<_n> = #<_value>\n"
+                     "o20 while [#<_n> GT 0]\n#<_n> = [#<_n> - 1]\no21 if [#<_n> EQ 2]\no20 continue\n"
+                     "o21 endif\no22 if [#<_n> EQ 1]\no20 break\no22 endif\ng1 z#<_n>\no20 endwhile\nm2\n"),
+                {{1, 0, 0}, {1, 5, 0}, {1, 5, 4}, {1, 5, 3}});
+  // recursion (LinuxCNC's factorial.ngc, whose body calls itself)
+  expect_points(read("o<factorial> sub\no<factorialif> if [[#1] EQ 0]\no<factorial> return [1]\n"
+                     "o<factorialif> else\no<factorial> call [[#1] - 1]\no<factorial> return [#<_value> * #1]\n"
+                     "o<factorialif> endif\no<factorial> endsub\no<factorial> call [5]\nG1 X#<_value> F100\nM2\n"),
+                {{120, 0, 0}});
+}
+
+TEST(Gcode, ControlFlowRefusals) {
+  std::string deep = "o<r> sub\no1 if [#1 GT 0]\no<r> call [#1 - 1]\no1 endif\nG1 X#1 F100\no<r> endsub\n";
+  const std::pair<std::string, const char*> cases[] = {
+      {"O1 endif\nM2\n", "t.ngc:1: O1 ENDIF: no opening line of its kind (if) before it"},
+      {"O1 if [0]\nG1 X1 F100\nM2\n",
+       "t.ngc:1: O1: its closing line (endif, endwhile, endrepeat, while) is missing before the end of the file"},
+      {"O<x> call\nM2\n", "t.ngc:1: O<X> CALL: the subroutine is not defined before the call (subroutine files are not read)"},
+      {"O1 if [1]\nO1 endif\nO1 if [1]\nO1 endif\nM2\n", "t.ngc:3: O1 IF: the label is used again (first in line 1)"},
+      {"O2 repeat [2]\nO2 break\nO2 endrepeat\nM2\n",
+       "t.ngc:2: O2 BREAK: the label O2 is another construct's (line 1), not of the kind: while or do loop"},
+      {"O1 while [1]\nO1 endwhile\nM2\n", "t.ngc:2: O1 ENDWHILE: the loop turned more than 1 000 000 times"},
+      {"O1 sub\nO1 sub\nM2\n", "t.ngc:2: O1 SUB: subroutines cannot be nested (O1 is open)"},
+      {"O1 return\nM2\n", "t.ngc:1: O1 RETURN: outside a subroutine"},
+      {"O1 if [1] G1 X1\nM2\n", "t.ngc:1: G1X1: an O-word's line carries nothing but its values ([expression] ...)"},
+      // rs274: call [8] nests 9 calls and runs, call [9] is "Too many subroutine levels"
+      {deep + "o<r> call [9]\nM2\n", "t.ngc:3: O<R> CALL: calls nested more than 9 deep (LinuxCNC's limit)"},
+  };
+  for (const auto& [program, want] : cases) EXPECT_EQ(refusal(program), want) << program;
+  // rs274 prints 9 moves; the innermost, G1 X0 from X0, has zero length (no move here)
+  EXPECT_EQ(read(deep + "o<r> call [8]\nM2\n").moves.size(), 8u);
 }
 
 // Block delete skips a line's settings with its words.
