@@ -29,8 +29,19 @@ plan::SpeedCap cap_around(const plan::TickSample& t, double ratio, double shrink
 // The slowest a repair cap goes: 1e-6 of the fastest the path can move
 // (Limits::top_speed; from the feed alone, a program's F far above the axes'
 // speed would hold every cap above the speed a kink needs, and the repairs
-// would not converge).
-double speed_floor(const plan::Limits& l, int dim) { return 1e-6 * l.top_speed(dim); }
+// would not converge), and never above the speed at which a stop at a corner
+// can turn within one tick: the one-tick polynomial turns the velocity by up
+// to 2v, at a jerk of about 30 times that over h^2 (the planner's corner
+// speed, host/planner/README.md), so v <= j h^2 / 60 for the smallest jerk
+// limit j, taken here with a further half. With slow rotary axes (3000
+// deg/s^3 at 1 ms against a top speed of 100) that is 2.5e-5, below 1e-6 of
+// the top speed: a stop that falls badly within its tick was capped at the
+// floor round after round, and the plan failed.
+double speed_floor(const plan::Limits& l, int dim, double period) {
+  double j = std::min(l.j_tan, l.j_cen);
+  for (int a = 0; a < dim; ++a) j = std::min(j, l.j_axis[a]);
+  return std::min(1e-6 * l.top_speed(dim), j * period * period / 120);
+}
 
 // The repair caps of earlier rounds, to tell how often a place has been
 // capped already: a place capped again is slowed by a further 0.8 per time it
@@ -73,7 +84,7 @@ size_t cap_tick_violations(const PlanFitRequest& req, const std::vector<plan::Ti
     const double q = plan::tick_ratio(ts[k], *req.limits, dim);
     if (q > 1 + 1e-9 && static_cast<long long>(k) > last + 5) {
       caps.push_back(cap_around(ts[k], q, earlier.shrink(ts[k].s), req.options.period, req.path->length(),
-                                speed_floor(*req.limits, dim)));
+                                speed_floor(*req.limits, dim, req.options.period)));
       last = static_cast<long long>(k);
     }
   }
@@ -140,7 +151,7 @@ size_t fit_all(const PlanFitRequest& req, const plan::Plan& plan, const std::vec
       const size_t k = static_cast<size_t>(std::max<long long>(idx, 0));
       for (size_t j : {k, std::min(k + 1, n)})
         caps.push_back(cap_around(ts[j], 0, 0.8 * earlier.shrink(ts[j].s), h, req.path->length(),
-                                  speed_floor(*req.limits, req.path->dim())));
+                                  speed_floor(*req.limits, req.path->dim(), h)));
       ++failures;
       i0 = std::max(i0 + 1, std::min(n, k + kResumeAfterFailure));
       so.history = plan_history(ts, i0, so);
