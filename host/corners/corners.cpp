@@ -3,7 +3,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <array>
 #include <memory>
+#include <optional>
+#include <unordered_map>
 #include <stdexcept>
 
 #include <Eigen/SparseCholesky>
@@ -39,6 +42,10 @@ struct Join {
   bool curved = false;
   double u_in = 0, u_out = 0;
   Eigen::MatrixXd ctrl;
+  // Both legs straight and the wide blend chosen (README.md, "Wide blends"): its curve (each leg
+  // loses 2d = its l0).
+  bool wide = false;
+  geo::BSpline wide_curve;
 };
 
 // Turning angle between unit tangents, accurate near 0 and near pi.
@@ -100,12 +107,12 @@ double param_at_length(const geo::Curve& c, double s, bool from_end) {
   return u;
 }
 
-// Largest curvature of c on [u0, u1], sampled at 17 points (exact for a circular arc, whose curvature
-// is constant; an estimate for other curves).
-double max_curvature(const geo::Curve& c, double u0, double u1) {
+// Largest curvature of c on [u0, u1], sampled at n + 1 points (exact for a circular arc, whose
+// curvature is constant; an estimate for other curves).
+double max_curvature(const geo::Curve& c, double u0, double u1, int n = 16) {
   double k = 0;
-  for (int i = 0; i <= 16; ++i) {
-    const Eigen::MatrixXd e = c.eval(u0 + (u1 - u0) * i / 16, 2);
+  for (int i = 0; i <= n; ++i) {
+    const Eigen::MatrixXd e = c.eval(u0 + (u1 - u0) * i / n, 2);
     const Vec d1 = e.col(1), d2 = e.col(2);
     const double a = d1.squaredNorm();
     if (a > 0) k = std::max(k, (d2 - (d2.dot(d1) / a) * d1).norm() / a);
@@ -614,6 +621,287 @@ double fitted_run_deviation(const geo::BSpline& s, const std::vector<Vec>& poly,
   return worst;
 }
 
+// ---------------------------------------------------------------------------------------------
+// Wide blends of line-line corners (README.md, "Wide blends").
+
+struct WideShape {
+  double r1, r2, eps;  // l1 / l0, l2 / l1, e / l0
+};
+
+// Wide blends (README.md, "Wide blends"): per turn 5, 10, ..., 175 degrees, the seven-point shape
+// {l1/l0, l2/l1, e/l0} of least peak |d3x/ds3| at the largest size the tolerance allows, for legs of
+// 4 tolerances (kWideShort: inner shapes) and of 16 (kWideLong: from 40 degrees the curve leaves
+// the legs on the outer side first). Printed by tb/bench/bench_blend_shape --cxx (Nelder-Mead);
+// any row is a valid shape (the deviation is measured for the actual turn), the table only picks
+// good ones.
+constexpr int kWideRows = 35;
+const WideShape kWideShort[kWideRows] = {
+    {0.8334, 0.6002, -0.0109},  // 5 deg
+    {0.8336, 0.6008, -0.0220},  // 10 deg
+    {0.8340, 0.6018, -0.0332},  // 15 deg
+    {0.8346, 0.6032, -0.0448},  // 20 deg
+    {0.8353, 0.6050, -0.0568},  // 25 deg
+    {0.8361, 0.6073, -0.0694},  // 30 deg
+    {0.8372, 0.6100, -0.0825},  // 35 deg
+    {0.8385, 0.6133, -0.0962},  // 40 deg
+    {0.8400, 0.6170, -0.1106},  // 45 deg
+    {0.8417, 0.6214, -0.1258},  // 50 deg
+    {0.8436, 0.6262, -0.1418},  // 55 deg
+    {0.8457, 0.6317, -0.1586},  // 60 deg
+    {0.8482, 0.6378, -0.1763},  // 65 deg
+    {0.8508, 0.6445, -0.1948},  // 70 deg
+    {0.8469, 0.6445, -0.2089},  // 75 deg
+    {0.8204, 0.6285, -0.2093},  // 80 deg
+    {0.7917, 0.6140, -0.2108},  // 85 deg
+    {0.7651, 0.6031, -0.2153},  // 90 deg
+    {0.7608, 0.6078, -0.2304},  // 95 deg
+    {0.7568, 0.6135, -0.2463},  // 100 deg
+    {0.7532, 0.6203, -0.2629},  // 105 deg
+    {0.7499, 0.6283, -0.2805},  // 110 deg
+    {0.7533, 0.6374, -0.3015},  // 115 deg
+    {0.7472, 0.6494, -0.3204},  // 120 deg
+    {0.7460, 0.6616, -0.3420},  // 125 deg
+    {0.7505, 0.6781, -0.3685},  // 130 deg
+    {0.7609, 0.6987, -0.4007},  // 135 deg
+    {0.7723, 0.7208, -0.4358},  // 140 deg
+    {0.7863, 0.7453, -0.4755},  // 145 deg
+    {0.8016, 0.7713, -0.5193},  // 150 deg
+    {0.8201, 0.8006, -0.5696},  // 155 deg
+    {0.8357, 0.8301, -0.6217},  // 160 deg
+    {0.8669, 0.8670, -0.6931},  // 165 deg
+    {0.8988, 0.9058, -0.7725},  // 170 deg
+    {0.9451, 0.9504, -0.8754},  // 175 deg
+};
+const WideShape kWideLong[kWideRows] = {
+    {0.8334, 0.6002, -0.0109},  // 5 deg
+    {0.8336, 0.6008, -0.0220},  // 10 deg
+    {0.8340, 0.6018, -0.0332},  // 15 deg
+    {0.8346, 0.6032, -0.0448},  // 20 deg
+    {0.8282, 0.5997, -0.0553},  // 25 deg
+    {0.8259, 0.5996, -0.0667},  // 30 deg
+    {0.8221, 0.5988, -0.0781},  // 35 deg
+    {0.9391, 0.7032, +0.0192},  // 40 deg
+    {0.9309, 0.7302, +0.0363},  // 45 deg
+    {0.9260, 0.7635, +0.0556},  // 50 deg
+    {0.9224, 0.8051, +0.0777},  // 55 deg
+    {0.9159, 0.8596, +0.1031},  // 60 deg
+    {0.8906, 0.9133, +0.1248},  // 65 deg
+    {0.8920, 0.9240, +0.1426},  // 70 deg
+    {0.8936, 0.9359, +0.1608},  // 75 deg
+    {0.8955, 0.9488, +0.1793},  // 80 deg
+    {0.8871, 0.9749, +0.1984},  // 85 deg
+    {0.8971, 0.9803, +0.2172},  // 90 deg
+    {0.8990, 0.9962, +0.2364},  // 95 deg
+    {0.9105, 0.9993, +0.2548},  // 100 deg
+    {0.9224, 1.0000, +0.2721},  // 105 deg
+    {0.9332, 1.0000, +0.2885},  // 110 deg
+    {0.9428, 1.0000, +0.3038},  // 115 deg
+    {0.9515, 1.0000, +0.3183},  // 120 deg
+    {0.9589, 1.0000, +0.3315},  // 125 deg
+    {0.9657, 1.0000, +0.3439},  // 130 deg
+    {0.9719, 1.0000, +0.3552},  // 135 deg
+    {0.9772, 1.0000, +0.3654},  // 140 deg
+    {0.9821, 1.0000, +0.3746},  // 145 deg
+    {0.9863, 1.0000, +0.3826},  // 150 deg
+    {0.9899, 1.0000, +0.3895},  // 155 deg
+    {0.9932, 1.0000, +0.3953},  // 160 deg
+    {0.9958, 1.0000, +0.3999},  // 165 deg
+    {0.9979, 1.0000, +0.4033},  // 170 deg
+    {0.9993, 1.0000, +0.4054},  // 175 deg
+};
+
+// The seven-point blend at corner v: P0, P1, P2 at l0, l1, l2 before v on the arriving line, P3 at
+// distance e from v along the bisector (outward for e > 0), P4..P6 the mirror image on the leaving
+// line; clamped cubic knots {0,0,0,0, 1/4, 1/2, 3/4, 1,1,1,1}. P0..P2 (P4..P6) collinear: the joins
+// are G2 with curvature 0, as the five-point blend's.
+geo::BSpline wide_blend(const Vec& v, const Vec& t_in, const Vec& t_out, double l0, const WideShape& s) {
+  const Vec inward = (t_out - t_in).normalized();
+  const double l1 = s.r1 * l0, l2 = s.r2 * l1, e = s.eps * l0;
+  geo::BSpline b;
+  b.degree = 3;
+  b.ctrl.resize(7, v.size());
+  b.ctrl.row(0) = (v - l0 * t_in).transpose();
+  b.ctrl.row(1) = (v - l1 * t_in).transpose();
+  b.ctrl.row(2) = (v - l2 * t_in).transpose();
+  b.ctrl.row(3) = (v - e * inward).transpose();
+  b.ctrl.row(4) = (v + l2 * t_out).transpose();
+  b.ctrl.row(5) = (v + l1 * t_out).transpose();
+  b.ctrl.row(6) = (v + l0 * t_out).transpose();
+  b.knots.resize(11);
+  b.knots << 0, 0, 0, 0, 0.25, 0.5, 0.75, 1, 1, 1, 1;
+  b.name = "corner blend";
+  return b;
+}
+
+// Largest of n + 1 samples of f on [0, 1], each local maximum refined by golden section.
+template <class F>
+double sampled_max(const F& f, int n) {
+  std::vector<double> y(n + 1);
+  for (int i = 0; i <= n; ++i) y[i] = f(double(i) / n);
+  double worst = -INFINITY;
+  for (int i = 0; i <= n; ++i) {
+    worst = std::max(worst, y[i]);
+    const bool peak = (i == 0 || y[i] >= y[i - 1]) && (i == n || y[i] >= y[i + 1]);
+    if (peak)
+      worst = std::max(worst, -golden_min([&](double u) { return -f(u); }, std::max(0, i - 1) / double(n),
+                                          std::min(n, i + 1) / double(n)));
+  }
+  return worst;
+}
+
+// The corner's canonical plane: v = 0, arriving along x, leaving at angle `turn`.
+struct CanonicalCorner {
+  Vec v = Vec::Zero(2), t_in = Vec::Zero(2), t_out = Vec::Zero(2);
+  explicit CanonicalCorner(double turn) {
+    t_in << 1, 0;
+    t_out << std::cos(turn), std::sin(turn);
+  }
+};
+
+// |d3x/ds3| over n + 1 samples (the planner's |Q|: the jerk per v^3 of a pass at constant speed,
+// which bounds a blend's speed under a jerk limit J at (J / |Q|)^(1/3)): its largest value and the
+// integral of |Q|^(1/3) ds (the time of a pass at that bound, times J^(1/3); midpoint rule).
+struct JerkGeometry {
+  double peak = 0, pass = 0;
+};
+JerkGeometry jerk_geometry(const geo::Curve& c, int n) {
+  JerkGeometry r;
+  for (int i = 0; i <= n; ++i) {
+    const Eigen::MatrixXd e = c.eval(c.u_begin() + (c.u_end() - c.u_begin()) * i / n, 3);
+    const Eigen::VectorXd d1 = e.col(1), d2 = e.col(2), d3 = e.col(3);
+    // x_u = g T, x_uu = g' T + g^2 K, x_uuu = g'' T + 3 g g' K + g^3 Q (g = |x_u|)
+    const double g = d1.norm();
+    const Eigen::VectorXd T = d1 / g;
+    const double g1 = d2.dot(T);
+    const Eigen::VectorXd K = (d2 - g1 * T) / (g * g);
+    const double g2 = K.dot(d2) * g + T.dot(d3);
+    const double q = ((d3 - g2 * T - 3 * g * g1 * K) / (g * g * g)).norm();
+    r.peak = std::max(r.peak, q);
+    r.pass += std::cbrt(q) * g * (c.u_end() - c.u_begin()) / n * ((i == 0 || i == n) ? 0.5 : 1.0);
+  }
+  return r;
+}
+
+// A wide blend's shape at one turn, in the corner's plane at unit size (l0 = 1): its deviation (the
+// Hausdorff distance between the blend and the two legs it replaces: every blend point's distance
+// to the legs and every leg point's to the blend, sampled with every local maximum refined) and
+// its peak |d3x/ds3|. Both scale with the size: deviation as l0, |d3x/ds3| as 1 / l0^2.
+struct WideFigures {
+  double deviation = 0, peak_q = 0, pass = 0, peak_kappa = 0;
+};
+WideFigures wide_figures(double turn, const WideShape& s) {
+  const CanonicalCorner k(turn);
+  const Vec& v = k.v;
+  const geo::Curve c(wide_blend(v, k.t_in, k.t_out, 1, s), "corner blend");
+  const Vec a = -k.t_in, b = k.t_out;
+  const int n = 64;
+  WideFigures w;
+  const double off = sampled_max(
+      [&](double u) {
+        const Vec p = point_at(c, u);
+        return std::sqrt(std::min(dist2_to_segment(p, a, v), dist2_to_segment(p, v, b)));
+      },
+      n);
+  // A leg point's distance to the blend: Newton on (C(u) - p) . C'(u) = 0 from the nearest of n
+  // samples. Any curve point's distance is at least the true one, so a poor convergence can only
+  // overstate the deviation (a smaller blend), never understate it.
+  std::vector<Vec> at(n + 1);
+  for (int i = 0; i <= n; ++i) at[i] = point_at(c, double(i) / n);
+  auto to_blend = [&](const Vec& p) {
+    int arg = 0;
+    double best = INFINITY;
+    for (int i = 0; i <= n; ++i) {
+      const double d = (at[i] - p).squaredNorm();
+      if (d < best) best = d, arg = i;
+    }
+    best = std::sqrt(best);
+    double u = double(arg) / n;
+    for (int it = 0; it < 8; ++it) {
+      const Eigen::MatrixXd e = c.eval(u, 2);
+      const Vec r = e.col(0) - p, d1 = e.col(1), d2 = e.col(2);
+      best = std::min(best, r.norm());
+      const double f = r.dot(d1), df = d1.squaredNorm() + r.dot(d2);
+      if (!(df > 0)) break;
+      const double un = std::clamp(u - f / df, 0.0, 1.0);
+      if (std::fabs(un - u) < 1e-13) break;
+      u = un;
+    }
+    return std::min(best, (point_at(c, u) - p).norm());
+  };
+  // the blend is symmetric about the bisector: the leaving leg's figure is the arriving one's
+  const double leg = sampled_max([&](double x) { return to_blend(Vec(a * (1 - x))); }, 32);
+  w.deviation = std::max(off, leg);
+  const JerkGeometry jg = jerk_geometry(c, 2 * n);
+  w.peak_q = jg.peak;
+  w.pass = jg.pass;
+  w.peak_kappa = max_curvature(c, 0, 1, 2 * n);
+  return w;
+}
+
+// Jerk figures of the five-point blend at unit spacing (d = 1; the peak scales as 1 / d^2, the pass
+// time as d^(1/3)).
+JerkGeometry five_point_jerk(double turn) {
+  const CanonicalCorner k(turn);
+  return jerk_geometry(geo::Curve(corner_blend(k.v, k.t_in, k.t_out, 1), "corner blend"), 128);
+}
+
+// The wide blend chosen at a line-line corner, or none where the five-point blend of spacing d5 has
+// a peak |d3x/ds3| as low (within 5 %). `leg` is the most either leg may lose.
+struct WideChoice {
+  bool chosen = false, shortened = false;
+  double l0 = 0, deviation = 0, peak_kappa = 0;
+  WideShape shape{};
+};
+// The figures of the table's shapes and of the five-point blend at the rows' own turns, for the
+// choice (computed once, on first use).
+struct RowFigures {
+  WideFigures wide[2];
+  JerkGeometry five;
+};
+const RowFigures& row_figures(int row) {
+  static const std::vector<RowFigures> rows = [] {
+    std::vector<RowFigures> r(kWideRows);
+    for (int i = 0; i < kWideRows; ++i) {
+      const double turn = (i + 1) * 5 * M_PI / 180;
+      r[i] = {{wide_figures(turn, kWideShort[i]), wide_figures(turn, kWideLong[i])}, five_point_jerk(turn)};
+    }
+    return r;
+  }();
+  return rows[row];
+}
+
+// Exact figures per turn and shape (CAM programs repeat their angles: rasters, pockets).
+using WideCache = std::unordered_map<double, std::array<std::optional<WideFigures>, 2>>;
+
+WideChoice choose_wide(double turn, double tol, double leg, double d5, WideCache& cache) {
+  // The choice takes the figures of the nearest row's turn (they change slowly with the turn); the
+  // shape chosen is then measured at the corner's own turn, which sets its size.
+  const int row = std::clamp(static_cast<int>(std::lround(turn * 36 / M_PI)) - 1, 0, kWideRows - 1);
+  const WideShape* shapes[2] = {&kWideShort[row], &kWideLong[row]};
+  const RowFigures& rf = row_figures(row);
+  double best = 0.95 * rf.five.peak / (d5 * d5);
+  const double pass5 = rf.five.pass * std::cbrt(d5);
+  const double kappa5 = blend_peak_curvature(d5, turn);
+  int pick = -1;
+  for (int i = 0; i < 2; ++i) {
+    const WideFigures& f = rf.wide[i];
+    // the largest size within the tolerance (the deviation scales with l0) and the legs
+    const double l0 = std::min(tol / f.deviation, leg);
+    const double q = f.peak_q / (l0 * l0);
+    // a lower jerk bound, no higher curvature (where the acceleration bounds the speed), and a pass
+    // at the jerk bound no longer: a longer blend at a higher speed can take more time, which a
+    // corner passed far below the feed cannot win back on its approach
+    if (q < best && f.peak_kappa / l0 <= kappa5 && f.pass * std::cbrt(l0) <= pass5) best = q, pick = i;
+  }
+  WideChoice w;
+  if (pick < 0) return w;
+  std::optional<WideFigures>& exact = cache[turn][pick];
+  if (!exact) exact = wide_figures(turn, *shapes[pick]);
+  const double l0 = std::min(tol / exact->deviation * (1 - 1e-12), leg);
+  return {true, l0 >= leg, l0, exact->deviation * l0, exact->peak_kappa / l0, *shapes[pick]};
+}
+
+
 }  // namespace
 
 const char* to_string(StopReason r) {
@@ -695,6 +983,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
 
   // Spacing: the tolerance's, shortened to the share of each leg.
   std::vector<size_t> blend_of(joins.size(), 0);
+  WideCache wide_cache;
   for (size_t k = 0; k < joins.size(); ++k) {
     Join& j = joins[k];
     if (j.kind != JoinKind::kBlend) continue;
@@ -709,6 +998,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       j.d = std::min(d_tol, d_leg);
       b.deviation = blend_deviation(j.d, j.turn);
       b.shortened = d_leg < d_tol;
+      b.peak_curvature = blend_peak_curvature(j.d, j.turn);
     } else {
       const CurvedFit f = fit_curved(el[k], el[k + 1], j.turn, tol, o);
       if (!f.ok) {
@@ -725,12 +1015,12 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       b.g2 = f.in.g2 && f.out.g2;
       b.shortened = f.shortened;
       b.curved = true;
+      b.peak_curvature = blend_peak_curvature(j.d, j.turn);
     }
     b.move = el[k].move;
     b.turn = j.turn;
     b.d = j.d;
     b.tol = tol;
-    b.peak_curvature = blend_peak_curvature(j.d, j.turn);
     blend_of[k] = res.blends.size();
     res.blends.push_back(b);
     ++res.corners_blended;
@@ -795,6 +1085,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
     for (size_t i = 0; i < m; ++i) {
       Blend& b = res.blends[blend_of[k + i]];
       b.in_run = true;
+      b.wide = false;
       b.deviation = dev;
     }
     res.runs.push_back(run);
@@ -808,13 +1099,13 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
   auto emit_blend = [&](size_t k) {
     const Element& l = el[k];
     const Element& r = el[k + 1];
-    geo::BSpline bl = corner_blend(l.b, l.t_end, r.t_start, joins[k].d);
+    geo::BSpline bl = joins[k].wide ? joins[k].wide_curve : corner_blend(l.b, l.t_end, r.t_start, joins[k].d);
     if (joins[k].curved) bl.ctrl = joins[k].ctrl;
     bl.ctrl.row(0) = last_end.transpose();
     const input::Move& ml = tp.moves[l.move];
     const input::Move& mr = tp.moves[r.move];
     res.curves.push_back({bl, blend_where(ml, mr), std::min(ml.feed, mr.feed), Kind::kFeed, false, true});
-    last_end = bl.ctrl.row(4).transpose();
+    last_end = bl.ctrl.row(bl.n_ctrl() - 1).transpose();
   };
   for (size_t k = 0; k < el.size(); ++k) {
     const Element& e = el[k];
@@ -836,15 +1127,20 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       continue;
     }
     const double cut0 = blend_before ? 2 * joins[k - 1].d : 0;
-    const double cut1 = blend_after ? 2 * joins[k].d : 0;
     const Vec a = blend_before ? last_end : Vec(e.a);
-    const Vec b = e.b - cut1 * e.t_end;
-    if (e.length - cut0 - cut1 >= o.min_line || !blend_after) {
-      res.curves.push_back({geo::make_line(a, b), m.where, m.feed, m.kind, stop_here, false, stop_here ? m.dwell : 0.0});
-      last_end = b;
-    } else {
-      last_end = a;  // the remnant is dropped: the next blend starts here, on the same segment line
-    }
+    // the segment up to its blend's start (a remnant shorter than min_line is dropped: the next blend
+    // starts at a, on the same segment line); true when pushed
+    auto emit_line = [&](double cut1) {
+      const Vec b = e.b - cut1 * e.t_end;
+      if (e.length - cut0 - cut1 >= o.min_line || !blend_after) {
+        res.curves.push_back({geo::make_line(a, b), m.where, m.feed, m.kind, stop_here, false, stop_here ? m.dwell : 0.0});
+        last_end = b;
+        return true;
+      }
+      last_end = a;
+      return false;
+    };
+    const bool line_pushed = emit_line(blend_after ? 2 * joins[k].d : 0);
     if (blend_after && o.merge_runs) {
       // the longest run from here that measures within the tolerance (halved until one does)
       size_t m = run_length(k);
@@ -867,6 +1163,25 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       if (m >= 2) {
         k += m - 1;  // segments k+1 .. k+m-1 are replaced; segment k+m starts at the run's end
         continue;
+      }
+    }
+    if (blend_after && o.wide && !joins[k].curved && el[k + 1].segment) {
+      // a corner blended on its own: the wide blend where it is better, the segment re-cut for it
+      const double leg = o.share * std::min(e.length, el[k + 1].length);
+      const WideChoice w = choose_wide(joins[k].turn, res.blends[blend_of[k]].tol, leg, joins[k].d, wide_cache);
+      if (w.chosen) {
+        if (line_pushed) res.curves.pop_back();
+        Join& j = joins[k];
+        Blend& bl = res.blends[blend_of[k]];
+        j.d = 0.5 * w.l0;
+        j.wide = true;
+        j.wide_curve = wide_blend(e.b, e.t_end, el[k + 1].t_start, w.l0, w.shape);
+        bl.d = j.d;
+        bl.deviation = w.deviation;
+        bl.shortened = w.shortened;
+        bl.peak_curvature = w.peak_kappa;
+        bl.wide = true;
+        emit_line(w.l0);
       }
     }
     if (blend_after) emit_blend(k);

@@ -56,6 +56,9 @@ struct BlendOptions {
   // A tangent join (turn <= kink) next to a curved move whose curvature vector steps by more than this
   // (1/mm) is blended too (README.md, "Curvature steps").
   double curvature_step = 1e-6;
+  // A line-line corner takes the seven-point wide blend (README.md, "Wide blends") where its peak
+  // |d3x/ds3| is at least 5 % below the five-point blend's; false: the five-point blend always.
+  bool wide = true;
 };
 
 // One curve of the output chain, with what it inherits from its move.
@@ -95,6 +98,9 @@ struct Blend {
   // (an estimate). g2: curvature continuous at both joins (else G1 with a curvature step at a curved leg).
   bool curved = false;
   bool g2 = true;
+  // Both legs straight and the seven-point wide blend taken (README.md, "Wide blends"): d is half its
+  // l0, deviation and peak_curvature are measured.
+  bool wide = false;
 };
 
 // A run of corners merged into one curve.

@@ -13,6 +13,8 @@
 //             side), sampled as CAM does: chords within 5 um, 0.2 to 2 mm long
 //   zigzag    a 3-D surface-finishing raster over z = f(x, y): rows of 40 G1
 //             chords along x, short step-over chords along y between rows
+//   pocket    a square spiral pocket: 90-degree corners between long legs
+//             (40 mm down to 4 mm), the corners blended on their own
 //   360-gon   a circle of radius 20 mm as 360 chords
 //   circle    the same circle exact (one arc of four quarter pieces), for the
 //             ratio of the 360-gon to the circle it stands for
@@ -190,6 +192,26 @@ input::Toolpath polygon_toolpath(int n, double r, double feed) {
     pts.push_back(p);
   }
   return polyline_toolpath(pts, feed, std::to_string(n) + "-gon");
+}
+
+// (d) A square spiral pocket: 90-degree corners between long legs (40 mm down to 4 mm, 2 mm step).
+input::Toolpath pocket_toolpath(double feed) {
+  std::vector<VectorXd> pts;
+  double x = 0, y = 0, len = 40;
+  const double dx[4] = {1, 0, -1, 0}, dy[4] = {0, 1, 0, -1};
+  auto add = [&]() {
+    VectorXd p(2);
+    p << x, y;
+    pts.push_back(p);
+  };
+  add();
+  for (int k = 0; len >= 4; ++k) {
+    x += len * dx[k % 4];
+    y += len * dy[k % 4];
+    add();
+    if (k % 2 == 1) len -= 2;
+  }
+  return polyline_toolpath(pts, feed, "pocket");
 }
 
 input::Toolpath circle_toolpath(double r, double feed) {
@@ -537,6 +559,7 @@ void run_all(const std::vector<LimitSet>& sets, const Preparation& prep, bool sm
     const double feed = ls.cfg.limits.feed;
     if (!small && selected("outline", only)) run_case("outline", ls, outline_toolpath(feed), prep);
     if (!small && selected("zigzag", only)) run_case("zigzag", ls, zigzag_toolpath(feed), prep);
+    if (!small && selected("pocket", only)) run_case("pocket", ls, pocket_toolpath(feed), prep);
     if (selected(ngon_name.c_str(), only) || selected("circle", only)) {
       const Row poly = run_case(ngon_name.c_str(), ls, polygon_toolpath(ngon, 20, feed), prep);
       const Row circ = run_case("circle", ls, circle_toolpath(20, feed), prep);

@@ -140,12 +140,19 @@ std::vector<Vec> corner_pts(double turn, double leg) {
 
 // (a) The deviation: distance from the corner to the blend equals (d/2) sin(turn/2) = tol where the
 // legs are long enough; no blend point is farther than tol from the polyline.
+// (The five-point blend: BlendOptions::wide off; the wide blend has its own tests below.)
+BlendOptions five_point_only() {
+  BlendOptions o;
+  o.wide = false;
+  return o;
+}
+
 TEST(CornerBlend, DeviationIsTheToleranceAtEveryAngle) {
   for (double deg : {0.01, 1.0, 10.0, 45.0, 90.0, 135.0, 170.0, 179.0}) {
     for (double tol : {1e-3, 0.05}) {
       const double turn = deg * kPi / 180;
       const auto pts = corner_pts(turn, 1e4);
-      const BlendResult r = traj::corners::blend_corners(polyline(pts), tol);
+      const BlendResult r = traj::corners::blend_corners(polyline(pts), tol, five_point_only());
       ASSERT_EQ(r.corners_blended, 1) << deg;
       ASSERT_EQ(r.curves.size(), 3u);
       const ref::Spline s = to_ref(r.curves[1].curve);
@@ -162,7 +169,7 @@ TEST(CornerBlend, DeviationIsTheToleranceAtEveryAngle) {
 TEST(CornerBlend, ShortLegShrinksTheBlend) {
   const double turn = 60 * kPi / 180;
   const auto pts = corner_pts(turn, 0.02);
-  const BlendResult r = traj::corners::blend_corners(polyline(pts), 0.05);
+  const BlendResult r = traj::corners::blend_corners(polyline(pts), 0.05, five_point_only());
   ASSERT_EQ(r.corners_blended, 1);
   EXPECT_TRUE(r.blends[0].shortened);
   EXPECT_DOUBLE_EQ(r.blends[0].d, 0.005);  // 2d = half of 0.02
@@ -177,7 +184,7 @@ TEST(CornerBlend, JoinsAreG2AndPeakCurvatureMatches) {
   for (double deg : {1.0, 30.0, 90.0, 150.0, 179.0}) {
     const double turn = deg * kPi / 180;
     const auto pts = corner_pts(turn, 10);
-    const BlendResult r = traj::corners::blend_corners(polyline(pts), 0.05);
+    const BlendResult r = traj::corners::blend_corners(polyline(pts), 0.05, five_point_only());
     ASSERT_EQ(r.curves.size(), 3u);
     const ref::Spline s = to_ref(r.curves[1].curve);
     const Vec t_in = (pts[1] - pts[0]).normalized(), t_out = (pts[2] - pts[1]).normalized();
@@ -210,6 +217,88 @@ TEST(CornerBlend, JoinsAreG2AndPeakCurvatureMatches) {
     EXPECT_NEAR(peak, kp, 1e-9 * kp) << deg;
     EXPECT_NEAR(best / 2000.0, 0.5, 1e-3) << deg;
   }
+}
+
+// |d3x/ds3| of the reference curve at u (x_u = g T, x_uu = g' T + g^2 K, x_uuu = g'' T + 3 g g' K
+// + g^3 Q, g = |x_u|), from the reference's third derivative.
+double jerk_geometry_ref(const ref::Spline& s, double u) {
+  const auto D = ref::cox_de_boor_derivs(s, u, 3);
+  Vec d1(s.dim()), d2(s.dim()), d3(s.dim());
+  for (int k = 0; k < s.dim(); ++k) d1[k] = D[1][k], d2[k] = D[2][k], d3[k] = D[3][k];
+  const double g = d1.norm();
+  const Vec T = d1 / g;
+  const double g1 = d2.dot(T);
+  const Vec K = (d2 - g1 * T) / (g * g);
+  const double g2 = K.dot(d2) * g + T.dot(d3);
+  return ((d3 - g2 * T - 3 * g * g1 * K) / (g * g * g)).norm();
+}
+
+struct Peaks {
+  double kappa = 0, q = 0;
+};
+Peaks peaks_ref(const ref::Spline& s) {
+  Peaks p;
+  for (int i = 0; i <= 4000; ++i) {
+    const double u = i / 4000.0;
+    p.kappa = std::max(p.kappa, curvature_ref(eval_ref(s, u)));
+    p.q = std::max(p.q, jerk_geometry_ref(s, u));
+  }
+  return p;
+}
+
+// (b2) Wide blends (README.md, "Wide blends"): where a line-line corner takes the seven-point blend,
+// it joins both legs G2 (tangent, curvature 0), it and the polyline it replaces are within the
+// tolerance of each other (both ways, measured here by the reference), the reported deviation is
+// that measurement, and its peak |d3x/ds3| and curvature are below the five-point blend's at the
+// same corner (so its speed bound under a jerk limit is higher).
+TEST(CornerBlend, WideBlendIsG2WithinTheToleranceAndFlatter) {
+  const double tol = 0.045;
+  int wide = 0;
+  std::printf("turn  legs_mm  wide  deviation/tol  kappa 5pt -> wide  |Q| 5pt -> wide  speed bound gain (|Q| ratio^-1/3)\n");
+  for (double deg : {10.0, 30.0, 60.0, 90.0, 120.0, 150.0, 170.0}) {
+    for (double leg : {0.5, 1.6, 10.0}) {
+      const double turn = deg * kPi / 180;
+      const auto pts = corner_pts(turn, leg);
+      const BlendResult r = traj::corners::blend_corners(polyline(pts), tol);
+      const BlendResult r5 = traj::corners::blend_corners(polyline(pts), tol, five_point_only());
+      ASSERT_EQ(r.corners_blended, 1);
+      ASSERT_EQ(r.curves.size(), 3u);
+      const traj::corners::Blend& b = r.blends[0];
+      const ref::Spline s = to_ref(r.curves[1].curve), s5 = to_ref(r5.curves[1].curve);
+      const Peaks pw = peaks_ref(s), p5 = peaks_ref(s5);
+      std::printf("%4.0f %7.2f  %4s  %13.6f  %8.3f -> %7.3f  %9.1f -> %9.1f  %.2f\n", deg, leg, b.wide ? "yes" : "no",
+                  b.deviation / tol, p5.kappa, pw.kappa, p5.q, pw.q, std::cbrt(p5.q / pw.q));
+      if (!b.wide) continue;
+      ++wide;
+      EXPECT_EQ(r.curves[1].curve.n_ctrl(), 7);
+      // joins: the legs' ends, their tangents, curvature 0
+      const Eval e0 = eval_ref(s, 0), e1 = eval_ref(s, 1);
+      const Vec t_in = (pts[1] - pts[0]).normalized(), t_out = (pts[2] - pts[1]).normalized();
+      EXPECT_LE((e0.c - r.curves[0].curve.ctrl.row(1).transpose()).norm(), 1e-12 * leg);
+      EXPECT_LE((e1.c - r.curves[2].curve.ctrl.row(0).transpose()).norm(), 1e-12 * leg);
+      EXPECT_LE((e0.d1.normalized() - t_in).norm(), 1e-12);
+      EXPECT_LE((e1.d1.normalized() - t_out).norm(), 1e-12);
+      EXPECT_LE(curvature_ref(e0), 1e-9 * pw.kappa);
+      EXPECT_LE(curvature_ref(e1), 1e-9 * pw.kappa);
+      // both ways within the tolerance: the blend from the polyline, the replaced legs (and the
+      // corner) from the blend
+      const double out = max_dist_curve_to_polyline(s, pts, 4000);
+      double back = 0;
+      for (int i = 0; i <= 64; ++i) {
+        const double x = i / 64.0;
+        back = std::max(back, dist_point_to_curve(s, Vec(e0.c + x * (pts[1] - e0.c))));
+        back = std::max(back, dist_point_to_curve(s, Vec(pts[1] + x * (e1.c - pts[1]))));
+      }
+      EXPECT_LE(out, tol * (1 + 1e-9)) << deg << " deg, legs " << leg;
+      EXPECT_LE(back, tol * (1 + 1e-9)) << deg << " deg, legs " << leg;
+      EXPECT_NEAR(b.deviation, std::max(out, back), 1e-6 * tol) << deg << " deg, legs " << leg;
+      EXPECT_NEAR(b.peak_curvature, pw.kappa, 1e-3 * pw.kappa) << deg << " deg, legs " << leg;
+      // flatter than the five-point blend it replaces
+      EXPECT_LT(pw.q, p5.q) << deg << " deg, legs " << leg;
+      EXPECT_LE(pw.kappa, p5.kappa * (1 + 1e-3)) << deg << " deg, legs " << leg;
+    }
+  }
+  EXPECT_GE(wide, 10);
 }
 
 // Joins left as they are: collinear (passed), reversal, exact stop, rapid.
@@ -429,7 +518,9 @@ TEST(CornerBlend, RandomPolylinesWithRunsStayWithinTolerance) {
       const double off = max_dist_curve_to_polyline(s, pts, 40 * (c.curve.n_ctrl() - 3));
       EXPECT_LE(off, tol * (1 + 1e-9));
       worst = std::max(worst, off);
-      for (int i = 2; i <= c.curve.n_ctrl() - 3; ++i, ++vertex) {
+      // a blend (five-point or wide) has one vertex, a run one per inner control point
+      const int vertices = c.curve.name == "corner blend" ? 1 : c.curve.n_ctrl() - 4;
+      for (int i = 0; i < vertices; ++i, ++vertex) {
         const double dv = dist_point_to_curve(s, pts[vertex]);
         EXPECT_LE(dv, tol * (1 + 1e-9));
         worst = std::max(worst, dv);
