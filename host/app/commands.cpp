@@ -202,10 +202,10 @@ Loaded load(const std::string& file, const std::string& format, const std::strin
   std::snprintf(b, sizeof b,
                 "Toolpath\n  moves                %zu programmed; %zu feed and %zu rapid curves after blending, %zu exact "
                 "stops\n"
-                "  corners              %d blended (largest blend deviation %.4g mm, within %g %% of the tolerance), "
-                "%zu kept as stops\n",
-                tp.moves.size(), tpp.feed_moves, tpp.rapids, tpp.stops, tpp.corners_blended, tpp.blend_deviation,
-                100 * job::ToolpathOptions{}.blend_share, tpp.corner_stops);
+                "  corners              %d blended, %d of them wide (largest blend deviation %.4g mm, within %g %% of the "
+                "tolerance), %zu kept as stops\n",
+                tp.moves.size(), tpp.feed_moves, tpp.rapids, tpp.stops, tpp.corners_blended, tpp.wide_blends,
+                tpp.blend_deviation, 100 * job::ToolpathOptions{}.blend_share, tpp.corner_stops);
   double fastest = 0;
   for (const auto& m : tp.moves)
     if (m.kind == input::Move::Kind::kFeed) fastest = std::max(fastest, m.feed > 0 ? m.feed : cfg.limits.feed);
@@ -276,12 +276,12 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
     std::fprintf(text, "Toolpath (streamed: blended in %zu chunks, at most %zu moves held, %zu moves cut between chunks)\n"
                 "  moves                %zu programmed; %zu feed and %zu rapid curves after blending, %zu exact "
                 "stops\n"
-                "  corners              %d blended (largest blend deviation %.4g mm, within %g %% of the tolerance), "
-                "%zu kept as stops\n"
+                "  corners              %d blended, %d of them wide (largest blend deviation %.4g mm, within %g %% of "
+                "the tolerance), %zu kept as stops\n"
                 "  local speed caps     %zu from tick checks and the fit\n",
                 t.chunks, t.max_pending, t.split_moves, t.moves, t.feed_curves, t.rapid_curves, t.stops,
-                t.corners_blended, t.blend_deviation, 100 * job::ToolpathOptions{}.blend_share, t.corner_stops,
-                st.caps);
+                t.corners_blended, t.wide_blends, t.blend_deviation, 100 * job::ToolpathOptions{}.blend_share,
+                t.corner_stops, st.caps);
   }
   return 0;
 }

@@ -18,6 +18,7 @@ input::Toolpath blend_toolpath(const input::Toolpath& tp, double tol, double sha
     if (m.tolerance >= 0) m.tolerance *= share;
   const corners::BlendResult b = corners::blend_corners(part, tol * share);
   r.corners_blended = b.corners_blended;
+  r.wide_blends = static_cast<int>(std::count_if(b.blends.begin(), b.blends.end(), [](const auto& x) { return x.wide; }));
   r.blend_deviation = b.max_deviation;
   r.corner_stops = b.stops.size();
   return corners::to_toolpath(b, tp);

@@ -44,6 +44,7 @@ struct ToolpathPlan {
   JobConfig cfg;     // the job's configuration with the caps and the feed limit of the toolpath
   size_t feed_moves = 0, rapids = 0, stops = 0;
   int corners_blended = 0;     // corners replaced by a G2 transition
+  int wide_blends = 0;         // of them, line-line corners with a wide blend (host/corners, "Wide blends")
   double blend_deviation = 0;  // largest distance of a transition from its corner, mm
   size_t corner_stops = 0;     // corners left as stops (rapids, exact stops, reversals, arc ends)
 };

@@ -108,6 +108,7 @@ void ToolpathStream::blend_next_chunk() {
   ToolpathPlan stats;
   const input::Toolpath b = opt_.blend ? blend_toolpath(part, job_cfg_.limits.tol, opt_.blend_share, stats) : part;
   totals_.corners_blended += stats.corners_blended;
+  totals_.wide_blends += stats.wide_blends;
   totals_.blend_deviation = std::max(totals_.blend_deviation, stats.blend_deviation);
   totals_.corner_stops += stats.corner_stops;
   for (const input::Move& m : b.moves) {
