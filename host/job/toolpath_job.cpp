@@ -11,12 +11,15 @@ namespace traj::job {
 
 using plan::PlanError;
 
-input::Toolpath blend_toolpath(const input::Toolpath& tp, double tol, double share, ToolpathPlan& r) {
+input::Toolpath blend_toolpath(const input::Toolpath& tp, double tol, const ToolpathOptions& o, ToolpathPlan& r) {
+  const double share = o.blend_share;
   if (!(share > 0 && share < 1)) throw PlanError("blend share must be in (0, 1)");
   input::Toolpath part = tp;
   for (auto& m : part.moves)
     if (m.tolerance >= 0) m.tolerance *= share;
-  const corners::BlendResult b = corners::blend_corners(part, tol * share);
+  corners::BlendOptions bo;
+  bo.wide = o.wide_blends;
+  const corners::BlendResult b = corners::blend_corners(part, tol * share, bo);
   r.corners_blended = b.corners_blended;
   r.wide_blends = static_cast<int>(std::count_if(b.blends.begin(), b.blends.end(), [](const auto& x) { return x.wide; }));
   r.blend_deviation = b.max_deviation;
@@ -36,7 +39,7 @@ ToolpathPlan toolpath_plan(const input::Toolpath& original, const JobConfig& cfg
   if (original.moves.empty()) throw PlanError("the toolpath has no moves");
   ToolpathPlan r;
   r.cfg = cfg;
-  const input::Toolpath tp = o.blend ? blend_toolpath(original, cfg.limits.tol, o.blend_share, r) : original;
+  const input::Toolpath tp = o.blend ? blend_toolpath(original, cfg.limits.tol, o, r) : original;
   if (o.blend) r.cfg.limits.tol = cfg.limits.tol * (1 - o.blend_share);
   const double rapid = rapid_speed(cfg, tp.axes, o);
   double fastest = 0;

@@ -37,6 +37,7 @@ struct ToolpathOptions {
   double rapid = 0;   // mm/s; 0: the smallest velocity limit of X Y Z (the further axes' own limits hold through the planner)
   bool blend = true;  // blend the corners between feed moves (host/corners)
   double blend_share = 0.9;  // share of the tolerance for the blends; the fit gets the rest
+  bool wide_blends = true;   // corners::BlendOptions::wide (host/corners, "Wide blends")
 };
 
 struct ToolpathPlan {
@@ -54,9 +55,9 @@ struct ToolpathPlan {
 ToolpathPlan toolpath_plan(const input::Toolpath& tp, const JobConfig& cfg, const ToolpathOptions& o = {});
 
 // Parts of toolpath_plan, for a toolpath streamed in chunks (job/toolpath_stream.hpp):
-// the corners blended within `share` of each move's tolerance (default: of
-// `tol`), with r's corner counts and largest deviation set; and the rapid speed.
-input::Toolpath blend_toolpath(const input::Toolpath& tp, double tol, double share, ToolpathPlan& r);
+// the corners blended within o.blend_share of each move's tolerance (default:
+// of `tol`), with r's corner counts and largest deviation set; and the rapid speed.
+input::Toolpath blend_toolpath(const input::Toolpath& tp, double tol, const ToolpathOptions& o, ToolpathPlan& r);
 double rapid_speed(const JobConfig& cfg, int axes, const ToolpathOptions& o);
 
 }  // namespace traj::job

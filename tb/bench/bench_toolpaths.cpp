@@ -85,6 +85,7 @@ struct Preparation {
   const char* what;
   Prepare fn;
   bool blend = false;  // job::ToolpathOptions::blend: corner blending within blend_share of the tolerance
+  bool wide = true;    // job::ToolpathOptions::wide_blends
 };
 
 // The preparations --prepare can name; corner blending plugs in as one more entry.
@@ -93,6 +94,8 @@ const std::vector<Preparation>& preparations() {
       {"none", "identity: the toolpath as programmed", [](const input::Toolpath& tp, double) { return tp; }, false},
       {"blend", "corners and curvature steps blended within 90 % of the tolerance (host/corners), the fit within the rest",
        [](const input::Toolpath& tp, double) { return tp; }, true},
+      {"blend5", "as blend, with the five-point blend at every corner blended on its own (no wide blends)",
+       [](const input::Toolpath& tp, double) { return tp; }, true, false},
   };
   return list;
 }
@@ -532,6 +535,7 @@ Row run_case(const char* name, const LimitSet& ls, const input::Toolpath& progra
     prepared = prep.fn(programmed, ls.cfg.limits.tol);
     job::ToolpathOptions opts;
     opts.blend = prep.blend;
+    opts.wide_blends = prep.wide;
     row.traj = run_trajcore(programmed, prepared, ls.cfg, opts, probe);
   } catch (const std::exception& e) {
     row.traj.error = std::string("preparation: ") + e.what();
