@@ -357,7 +357,7 @@ class Interpreter {
   void check_letter(const Word& w) const {
     switch (w.letter) {
       case 'X': case 'Y': case 'Z': case 'I': case 'J': case 'K': case 'R': case 'P': case 'Q': case 'L':
-      case 'F': case 'S': case 'T': case 'H':
+      case 'F': case 'S': case 'T': case 'H': case '@': case '^':
         return;
       case 'A': case 'B': case 'C': case 'U': case 'V': case 'W':
         if (further_.find(w.letter) != std::string::npos) return;
@@ -404,6 +404,7 @@ class Interpreter {
     if (nurbs_) fail(t, "G5.2 NURBS not closed with G5.3");
     note("G28/G30", t, "reference-point move to the machine origin X0 Y0 Z0, further axes at 0 (LinuxCNC's parameters 5161-5166 and "
                        "5181-5186 at their default 0)");
+    if (polar()) fail(text(has('@') ? '@' : '^'), "polar coordinates (@ ^) are supported with G0 and G1 only");
     const bool named = any_axis();
     const Vector3d mid = named ? end_point() : pos_;
     if (named) ext_end_ = further_end_point();
@@ -463,8 +464,9 @@ class Interpreter {
     motion_text_ = t;
   }
 
+  bool polar() const { return has('@') || has('^'); }
   bool any_axis() const {
-    if (has('X') || has('Y') || has('Z')) return true;
+    if (has('X') || has('Y') || has('Z') || polar()) return true;
     for (char c : further_)
       if (has(c)) return true;
     return false;
@@ -496,7 +498,33 @@ class Interpreter {
     const double z_offset = machine_coords_ ? 0.0 : tlo_;
     for (int i = 0; i < 3; ++i)
       if (has(letters[i])) e[i] = value(letters[i]) * units_ + (absolute_ ? (i == 2 ? z_offset : 0.0) : pos_[i]);
+    if (polar()) polar_end_point(e);
     return e;
+  }
+
+  // LinuxCNC's polar coordinates in X Y (whatever the plane), about the
+  // origin of the program's coordinates: @ the distance, ^ the angle in
+  // degrees from +X. G90: the word given sets its coordinate, the other is
+  // the current point's; G91: @ adds to the current distance, then ^ to the
+  // current angle. G0 and G1 only (rs274 takes them with arcs and cycles
+  // too; those are refused here, with the other moves, in motion()).
+  void polar_end_point(Vector3d& e) {
+    const std::string word = text(has('@') ? '@' : '^');
+    if (has('X') || has('Y')) fail(word, "X or Y words with polar coordinates (@ ^)");
+    const bool at_origin = pos_[0] == 0 && pos_[1] == 0;
+    double r = std::hypot(pos_[1], pos_[0]), theta = std::atan2(pos_[1], pos_[0]);
+    if (absolute_) {
+      if (has('@') && !has('^') && at_origin) fail(word, "a polar distance (@) at the origin needs an angle (^)");
+      if (has('@')) r = value('@') * units_;
+      if (has('^')) theta = value('^') * kPi / 180;
+    } else {
+      if (at_origin) fail(word, "incremental polar coordinates (G91 @ ^) at the origin have no direction");
+      if (has('@')) r += value('@') * units_;
+      if (has('^') && r == 0) fail(word, "incremental polar coordinates (G91 @ ^) at the origin have no direction");
+      if (has('^')) theta += value('^') * kPi / 180;
+    }
+    e[0] = r * std::cos(theta);
+    e[1] = r * std::sin(theta);
   }
 
   // G53: this block's G0 or G1 goes to machine coordinates, the moves' own
@@ -505,6 +533,7 @@ class Interpreter {
   void machine_move(const std::string& t, bool explicit_g) {
     if (motion_ != Motion::kRapid && motion_ != Motion::kLine) fail(t, "G53 needs G0 or G1 (as in LinuxCNC)");
     if (!absolute_) fail(t, "G53 in incremental distance mode (G91): machine coordinates are absolute");
+    if (polar()) fail(text(has('@') ? '@' : '^'), "polar coordinates (@ ^) with G53 are not supported");
     struct Within {
       bool& flag;
       ~Within() { flag = false; }
@@ -569,6 +598,8 @@ class Interpreter {
       nurbs_point(explicit_g);
       return;
     }
+    if (polar() && !(motion_ == Motion::kRapid || motion_ == Motion::kLine) && motion_ != Motion::kNone)
+      fail(text(has('@') ? '@' : '^'), "polar coordinates (@ ^) are supported with G0 and G1 only");
     if (is_cycle(motion_)) {
       if (any_axis()) canned_cycle(word);  // a block with an axis word runs it (with R alone rs274 refuses R)
       return;
@@ -586,7 +617,7 @@ class Interpreter {
       return;
     }
     if (motion_ == Motion::kNone) {
-      char c = has('X') ? 'X' : has('Y') ? 'Y' : 'Z';
+      char c = has('X') ? 'X' : has('Y') ? 'Y' : has('Z') ? 'Z' : has('@') ? '@' : '^';
       for (char f : further_)
         if (!has(c) && has(f)) c = f;
       fail(text(c), "axis word with no motion mode (G0, G1, G2, G3, G5, ...) in effect");

@@ -101,7 +101,9 @@ class LineParser {
       if (c == '#') {
         b.settings.push_back(setting());
       } else {
-        if (!std::isalpha(static_cast<unsigned char>(c))) error(std::string(1, c), "expected a letter");
+        // @ and ^: LinuxCNC's polar coordinates (distance, angle)
+        if (!std::isalpha(static_cast<unsigned char>(c)) && c != '@' && c != '^')
+          error(std::string(1, c), "expected a letter");
         if (c == 'O') error("O", "an O-word (subroutine or control flow) must begin its line and stand alone on it");
         ++pos_;
         Word w;

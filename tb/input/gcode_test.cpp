@@ -277,6 +277,16 @@ TEST(Gcode, Refusals) {
       {"F1 (open\nM2\n", "t.ngc:1: (: comment not closed on its line"},
       {"G0 X1\nG80\nX2\nM2\n", "t.ngc:3: X2: axis word with no motion mode (G0, G1, G2, G3, G5, ...) in effect"},
       {"F1\nG3 X1 Y1 K1 I1\nM2\n", "t.ngc:2: K1: K word given for an arc in this plane"},
+      // polar coordinates (@ ^): where rs274 refuses them, and where trajcore does
+      {"G0 X1 Y1\nG1 F1 X2 @1\nM2\n", "t.ngc:2: @1: X or Y words with polar coordinates (@ ^)"},
+      {"F1 G1 @5\nM2\n", "t.ngc:1: @5: a polar distance (@) at the origin needs an angle (^)"},
+      {"F1 G91 G1 ^5\nM2\n", "t.ngc:1: ^5: incremental polar coordinates (G91 @ ^) at the origin have no direction"},
+      {"F1 G0 X1\nG91 G1 @-1 ^5\nM2\n",
+       "t.ngc:2: @-1: incremental polar coordinates (G91 @ ^) at the origin have no direction"},
+      {"F1 G0 X1\nG2 @2 ^90 R2\nM2\n", "t.ngc:2: @2: polar coordinates (@ ^) are supported with G0 and G1 only"},
+      {"G0 X1\nG28 ^90\nM2\n", "t.ngc:2: ^90: polar coordinates (@ ^) are supported with G0 and G1 only"},
+      {"G0 X1\nG53 G0 ^90\nM2\n", "t.ngc:2: ^90: polar coordinates (@ ^) with G53 are not supported"},
+      {"G0 X1\nG80\n^90\nM2\n", "t.ngc:3: ^90: axis word with no motion mode (G0, G1, G2, G3, G5, ...) in effect"},
   };
   for (const auto& [program, message] : cases) EXPECT_EQ(refusal(program), message) << program;
   // nesting is bounded (recursion for any input), and a long text is cut in the message
@@ -289,6 +299,19 @@ TEST(Gcode, Refusals) {
 // G28/G30 as LinuxCNC with its reference parameters at 0: a rapid to the
 // point the axis words give (in the block's distance mode), then for the
 // axes named (all without axis words) a rapid to the machine origin.
+// LinuxCNC's polar coordinates (@ distance, ^ angle in degrees, about the
+// XY origin): end points worked out by hand. rs274 agrees on
+// tb/input/gcode/polar_moves.ngc and LinuxCNC's spiral.ngc (the cross-check).
+TEST(Gcode, PolarCoordinates) {
+  const Toolpath tp = read("G21 G90 F60\nG1 @10 ^90\nG91 ^90\n@5\nG90 ^0\n@2\nG20 @1 ^180\nG21 G91 G0 @1 ^-90\nM2\n");
+  const std::vector<Eigen::Vector3d> ends = {{0, 10, 0},  {-10, 0, 0}, {-15, 0, 0},  {15, 0, 0},
+                                             {2, 0, 0},   {-25.4, 0, 0}, {0, 26.4, 0}};
+  ASSERT_EQ(tp.moves.size(), ends.size());
+  for (size_t i = 0; i < ends.size(); ++i)
+    EXPECT_LT((end_of(tp.moves[i]) - ends[i]).norm(), 1e-12) << "move " << i << " ends at " << end_of(tp.moves[i]).transpose();
+  EXPECT_EQ(tp.moves.back().kind, Move::Kind::kRapid);
+}
+
 TEST(Gcode, ReferenceMoves) {
   const Toolpath tp = read("G0 X5 Y6 Z7\nG28 G91 Z2\nG90 G30 X1\nG0 X4 Y4 Z4\nG28\nM2\n");
   ASSERT_EQ(tp.moves.size(), 7u);
