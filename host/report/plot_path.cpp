@@ -6,7 +6,10 @@
 // rapid speed does not squeeze the feed moves into a few colours); steps
 // faster than that within the feed limit (rapids) in grey, steps above the
 // feed limit in a colour of their own; start, end and direction of travel
-// marked.
+// marked. A feed move's output runs above its planned feed by the fit's feed
+// error (about 0.2 %, or --feed-accuracy): steps up to kFeedSlack (or that
+// accuracy, if larger) above the scale's top keep the top colour, so that a
+// feed move is never drawn as a rapid.
 //
 // A 2-D path, or a 3-D one whose z range is negligible (at most 1e-6 of its
 // x-y extent), is drawn as one x-y plot. A 3-D path is drawn in three
@@ -35,6 +38,7 @@ using Pos = std::function<std::array<double, 3>(size_t)>;
 constexpr size_t kMaxPoints = 40000;  // points of the path in the whole file
 constexpr int kBands = 20;            // colour bands over [0, scale]; kBands: above the feed; kRapid: between
 constexpr int kRapid = kBands + 1;
+constexpr double kFeedSlack = 0.01;   // relative: a step this far above the scale's top is still a feed move
 
 // The samples and what colours them.
 struct Feed {
@@ -42,10 +46,11 @@ struct Feed {
   const Pos& pos;
   int d;
   double h, feed, allow_v;
-  double scale;           // top of the colour scale (<= feed): faster steps within the feed are "rapid"
+  double scale;           // top of the colour scale (<= feed)
+  double rapid_above;     // steps faster than this (and within the feed) are "rapid": scale plus its slack
   std::string scale_what; // what the scale's top is, when below the feed
   size_t over = 0;        // steps above feed + allow_v
-  size_t rapid = 0;       // steps above scale + allow_v, within feed + allow_v
+  size_t rapid = 0;       // steps above rapid_above, within feed + allow_v
   double smin = 0, smax = 0;  // range of the chord speed
 };
 
@@ -98,7 +103,7 @@ void measure_feed(Feed& F) {
     F.smin = k ? std::min(F.smin, s) : s;
     F.smax = std::max(F.smax, s);
     if (s > F.feed + F.allow_v) ++F.over;
-    else if (s > F.scale + F.allow_v) ++F.rapid;
+    else if (s > F.rapid_above) ++F.rapid;
   }
 }
 
@@ -156,7 +161,7 @@ std::vector<std::string> feed_bands(const Feed& F, const View& v, size_t max_poi
       int b;
       if (stroke_over) {
         b = kBands;
-      } else if (len / (steps * h) > scale + F.allow_v) {
+      } else if (len / (steps * h) > F.rapid_above) {
         b = kRapid;
       } else {
         const double f = std::clamp(len / (steps * h) / scale * kBands, 0.0, kBands - 1e-9);
@@ -310,7 +315,7 @@ void draw_heading(std::ostringstream& o, const Feed& F, double left, const std::
             " fill=\"#444\"");
   o << text(left, 59,
             "output feed " + vfmt(F.smin) + " \xE2\x80\xA6 " + vfmt(F.smax) + " " + u + "/s (" +
-                (std::isfinite(F.feed) ? "commanded " + vfmt(F.feed) + " " + u + "/s" : "no feed limit given") +
+                (std::isfinite(F.feed) ? "feed limit " + vfmt(F.feed) + " " + u + "/s" : "no feed limit given") +
                 (F.scale < F.feed ? "; colours up to " + F.scale_what + ", " + vfmt(F.scale) + " " + u + "/s" : "") +
                 ")" +
                 (F.over ? "; " + std::to_string(F.over) + " steps above the feed" : ""),
@@ -427,7 +432,8 @@ std::string path_svg(size_t n, const std::function<std::array<double, 3>(size_t)
     scale = cfg.limits.top_speed(d);
     scale_what = "the axes' top speed";
   }
-  Feed F{n, pos, d, h, feed, allow_v, scale, scale_what};
+  const double rapid_above = scale * (1 + std::max(kFeedSlack, cfg.machine.feed_accuracy)) + allow_v;
+  Feed F{n, pos, d, h, feed, allow_v, scale, rapid_above, scale_what};
   measure_feed(F);
   return needs_three_views(F) ? drawing_svg(F, cfg.machine.units) : flat_svg(F, cfg.machine.units);
 }

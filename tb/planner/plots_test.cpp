@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "input/path_json.hpp"
+#include "report/plot_svg.hpp"
 #include "report/report.hpp"
 
 using namespace traj;
@@ -628,4 +629,24 @@ TEST(Plots, SizeBoundedOnLongNoisyHelix) {
   const std::string svg = slurp(dir / "path_feed.svg");
   EXPECT_EQ(xml_problem(svg), "");
   EXPECT_EQ(count_of(svg, "id=\"panel-"), 3u);
+}
+
+// The path plot's "rapid" grey is for steps faster than the fastest feed
+// move; a feed move's output runs up to about 0.2 % above its feed (the
+// fit's feed error: LinuxCNC's flowsnake.ngc at F10 drew 312 steps of its
+// feed moves as rapids), so steps within 1 % above the scale's top keep its
+// colour. A straight line in x-y at 0.4 % and at 50 % above the scale.
+TEST(Plots, FeedJustAboveTheScaleIsNoRapid) {
+  JobConfig cfg;
+  cfg.limits.feed = 100;
+  const double h = 1e-3, scale = 10;
+  auto line_at = [&](double speed) {
+    const auto pos = [&](size_t k) { return std::array<double, 3>{speed * h * double(k), 0.5 * speed * h * double(k), 0}; };
+    return svg::path_svg(2000, pos, 2, cfg, h, 1e-9, scale);
+  };
+  const double v = scale / std::hypot(1.0, 0.5);  // the x component of a path speed of `scale`
+  const std::string near = line_at(1.004 * v), fast = line_at(1.5 * v);
+  EXPECT_EQ(xml_problem(near), "");
+  EXPECT_EQ(near.find(">rapid<"), std::string::npos);
+  EXPECT_NE(fast.find(">rapid<"), std::string::npos);
 }
