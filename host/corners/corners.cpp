@@ -266,6 +266,7 @@ double curved_blend_deviation(const geo::BSpline& blend, const Piece& in, const 
 // (d/2) sin(turn/2) + 4 kappa d^2 = tol (kappa: the largest curvature on the longest cut pieces; the
 // leg departs from its tangent at the corner by <= kappa s^2 / 2 over arc length s), within the share
 // of each leg, and shrinks by 10 % until the measured deviation (curved_blend_deviation) is within tol.
+constexpr double kMinCurvedSpacing = 1e-6;  // of the tolerance: the smallest blend spacing tried at a curved corner
 struct CurvedFit {
   bool ok = false, shortened = false;
   double d = 0, deviation = 0;
@@ -309,8 +310,23 @@ CurvedFit fit_curved(const Element& l, const Element& r, double turn, double tol
     g.ok = g.deviation <= tol;
     return g;
   };
-  double d = std::min(cap, d_tol);
-  for (int it = 0; it < 200 && d > 0 && !f.ok; ++it, d *= 0.9) f = at(d);
+  // A blend that meets the tolerance only when next to nothing (d below kMinCurvedSpacing tol: a
+  // cusp or a near reversal of a drawing's curves) leaves the corner a stop; so does a cut that
+  // rounds to a leg's end (split_at needs u strictly inside).
+  auto cuts_inside = [&](const CurvedFit& g) {
+    auto inside = [](const Element& e, double u) {
+      return e.segment || (u > e.curve->u_begin() && u < e.curve->u_end());
+    };
+    return inside(l, g.in.u) && inside(r, g.out.u);
+  };
+  // A leg whose curvature is unbounded at the corner (a Bezier whose handle there is retracted, as
+  // drawings have at cusp nodes: curvature ~ 1/sqrt(s)) gives d_tol ~ 0; the blend may still meet
+  // the tolerance a little way along it, so the search starts from the straight legs' spacing.
+  double d = std::min(cap, d_tol >= kMinCurvedSpacing * tol ? d_tol : blend_spacing_for(tol, turn));
+  for (int it = 0; it < 200 && d >= kMinCurvedSpacing * tol && !f.ok; ++it, d *= 0.9) {
+    f = at(d);
+    if (f.ok && !cuts_inside(f)) f.ok = false, d = 0;
+  }
   if (!f.ok) return f;
   f.shortened = f.d >= cap || cap < d_tol;
   // At a tangent join (a curvature step) the starting d is far inside the tolerance (the turn costs
@@ -319,7 +335,7 @@ CurvedFit fit_curved(const Element& l, const Element& r, double turn, double tol
   if (turn <= o.kink)
     for (int it = 0; it < 20 && !f.shortened; ++it) {
       const CurvedFit g = at(std::min(cap, 1.2 * f.d));
-      if (!g.ok) break;
+      if (!g.ok || !cuts_inside(g)) break;
       f = g;
     }
   return f;

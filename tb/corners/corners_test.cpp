@@ -910,6 +910,49 @@ TEST(CurvedCorner, LineSpaceCubicLine) {
   }
 }
 
+// Drawings' cusp nodes: a cubic whose handle at the corner is retracted (P1 = P0: its curvature grows
+// as 1/sqrt(s) towards the corner). The corners of Rust's "panics" Ferris (rust-lang book) that
+// stopped the run with "split_at: u = 1 is not inside the domain": a 176.6-degree turn between two such
+// cubics, a 10-degree one from a cubic into one, a 24-degree one from a line. Each is blended within
+// tol of the reference polylines, continuous and tangent, its cuts inside the legs.
+TEST(CurvedCorner, RetractedHandleAtTheCorner) {
+  auto bez = [](std::initializer_list<double> xy, const std::string& where) {
+    Eigen::MatrixXd P(4, 2);
+    int i = 0;
+    for (double c : xy) P(i / 2, i % 2) = c, ++i;
+    Move m;
+    m.curve = geo::make_bezier(P);
+    m.feed = 100;
+    m.where = where;
+    return m;
+  };
+  const std::vector<std::vector<Move>> cases = {
+      {bez({181.473, 124.569, 181.473, 124.569, 187.86, 98.8354, 163.127, 97.3828}, "in"),
+       bez({163.127, 97.3828, 163.127, 97.3828, 131.588, 103.457, 153.035, 136.755}, "out")},
+      {bez({66.5623, 123.338, 66.4398, 123.366, 66.3175, 123.394, 66.195, 123.416}, "in"),
+       bez({66.195, 123.416, 66.195, 123.416, 38.7757, 109.956, 54.4042, 83.0255}, "out")},
+      {line_move(v2(32.1532, 138.179), v2(47.3922, 144.906), "in"),
+       bez({47.3922, 144.906, 47.3922, 144.906, 43.7113, 119.253, 75.6007, 115.796}, "out")}};
+  for (size_t c = 0; c < cases.size(); ++c) {
+    Toolpath tp;
+    tp.axes = 2;
+    tp.moves = cases[c];
+    std::vector<std::vector<Vec>> poly(2);
+    for (int m = 0; m < 2; ++m) {
+      const ref::Spline rs = to_ref(geo::clamp(tp.moves[m].curve));
+      for (int k = 0; k <= 8000; ++k) poly[m].push_back(eval_ref(rs, k / 8000.0).c);
+    }
+    auto dist = [&](const Vec& p) { return std::min(dist_to_polyline(p, poly[0]), dist_to_polyline(p, poly[1])); };
+    const double tol = 0.001;
+    const BlendResult r = traj::corners::blend_corners(tp, tol);
+    const std::string what = "case " + std::to_string(c);
+    ASSERT_EQ(r.corners_blended, 1) << what;
+    ASSERT_EQ(r.curves.size(), 3u) << what;
+    EXPECT_LE(r.blends[0].deviation, tol * (1 + 1e-12)) << what;
+    check_curved_chain(r, dist, {poly[1].front()}, tol * (1 + 1e-6), what);
+  }
+}
+
 // (g) LinuxCNC's arcspiral.ngc (1000 arcs of slowly shrinking radius, if installed): its arc-arc
 // corners are blended and every output curve lies within tol of the programmed moves (distance to
 // each move by a 2000-point polyline of its reference evaluation, chord error < 1e-7 mm here).
