@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -200,8 +201,10 @@ const std::set<std::string> kNotDrawn = {"defs", "symbol", "clipPath", "mask", "
 // Walks the element tree, collecting one cut per subpath.
 class Walker {
  public:
-  Walker(std::string name, Affine page, Eigen::Vector2d viewport)
-      : name_(std::move(name)), page_(std::move(page)), viewport_(std::move(viewport)) {}
+  Walker(std::string name, Affine page, Eigen::Vector2d viewport, const tinyxml2::XMLElement* root)
+      : name_(std::move(name)), page_(std::move(page)), viewport_(std::move(viewport)) {
+    index_ids(root);
+  }
 
   void children(const tinyxml2::XMLElement* parent, const Affine& ctm, int depth) {
     for (const tinyxml2::XMLElement* e = parent->FirstChildElement(); e; e = e->NextSiblingElement())
@@ -230,10 +233,11 @@ class Walker {
     if (noted_.insert(kind).second) notes.push_back(name_ + ": " + text);
   }
 
-  void element(const tinyxml2::XMLElement* e, const Affine& parent_ctm, int depth) {
+  // `used`: drawn through a <use> (the element may be in <defs>).
+  void element(const tinyxml2::XMLElement* e, const Affine& parent_ctm, int depth, bool used = false) {
     if (foreign_namespace(e->Name())) return;
     const std::string tag = local_name(e->Name());
-    if (kNotDrawn.count(tag)) return;
+    if (kNotDrawn.count(tag) && !used) return;
     const bool shape = kShapes.count(tag) > 0;
     const std::string where = label(e, tag, shape ? shapes + 1 : 0);
     if (shape) ++shapes;
@@ -242,7 +246,10 @@ class Walker {
       note_once("hidden", "elements with display:none (hidden layers) skipped, first " + where);
       return;
     }
-    if (tag == "use") fail(where, "<use> (a clone) is not followed: unlink it first (Inkscape: Edit > Clone > Unlink Clone)");
+    if (tag == "use") {
+      use(e, where, parent_ctm, depth);
+      return;
+    }
     if (tag == "svg") fail(where, "nested <svg> elements are not supported");
     if (!shape && !kGroups.count(tag)) {
       note_once(tag, "<" + util::excerpt(tag) + "> not converted (first " + where + "; Inkscape: Path > Object to Path)");
@@ -272,10 +279,59 @@ class Walker {
     }
   }
 
+  void index_ids(const tinyxml2::XMLElement* parent) {
+    for (const tinyxml2::XMLElement* e = parent->FirstChildElement(); e; e = e->NextSiblingElement()) {
+      if (const char* id = e->Attribute("id")) ids_.emplace(id, e);  // the first of a repeated id, as browsers
+      index_ids(e);
+    }
+  }
+
+  // <use href="#id" x y transform>: the element drawn again, in the use's
+  // coordinates: its transform, then a translation by (x, y) (SVG 1.1, 5.6).
+  // A <symbol> is drawn as a group (width, height and a viewBox of its own
+  // are refused); other files (href to another document) are refused.
+  void use(const tinyxml2::XMLElement* e, const std::string& where, const Affine& parent_ctm, int depth) {
+    const char* h = e->Attribute("href");
+    if (!h) h = e->Attribute("xlink:href");
+    if (!h) fail(where, "<use> without href");
+    const std::string href = trim(h);
+    if (href.empty() || href[0] != '#') fail(where, "<use> of '" + util::excerpt(href) + "': only #id (an element of this file) is followed");
+    const auto it = ids_.find(href.substr(1));
+    if (it == ids_.end()) fail(where, "<use> of " + util::excerpt(href) + ": the file has no element with that id");
+    const tinyxml2::XMLElement* ref = it->second;
+    for (const tinyxml2::XMLNode* a = e; a; a = a->Parent())
+      if (a == ref) fail(where, "<use> of " + util::excerpt(href) + ": it contains the <use> itself");
+    if (!active_.insert(ref).second) fail(where, "<use> of " + util::excerpt(href) + ": the clones refer to each other in a cycle");
+    Affine ctm = parent_ctm;
+    try {
+      if (const char* t = e->Attribute("transform")) ctm = parent_ctm * svg::parse_transform(t);
+    } catch (const PathDataError& err) {
+      fail(where, std::string("transform: ") + err.what());
+    }
+    Affine shift = Affine::Identity();
+    try {
+      shift(0, 2) = coordinate(e, "x", viewport_);
+      shift(1, 2) = coordinate(e, "y", viewport_);
+    } catch (const std::runtime_error& err) {
+      fail(where, err.what());
+    }
+    ctm = ctm * shift;
+    if (local_name(ref->Name()) == "symbol") {
+      if (ref->Attribute("viewBox") || ref->Attribute("width") || ref->Attribute("height"))
+        fail(where, "<use> of a <symbol> with its own viewBox or size is not supported");
+      children(ref, ctm, depth);
+    } else {
+      element(ref, ctm, depth + 1, true);
+    }
+    active_.erase(ref);
+  }
+
   std::string name_;
   Affine page_;
   Eigen::Vector2d viewport_;
   std::set<std::string> noted_;
+  std::map<std::string, const tinyxml2::XMLElement*> ids_;
+  std::set<const tinyxml2::XMLElement*> active_;  // the elements being drawn through <use>, for cycles
 };
 
 struct Viewport {
@@ -367,7 +423,7 @@ Toolpath read_document(tinyxml2::XMLDocument& doc, const std::string& name) {
   Affine flip = Affine::Identity();
   flip(1, 1) = -1;
   if (!std::isnan(vp.height_mm)) flip(1, 2) = vp.height_mm;
-  Walker walker(name, flip * vp.user_to_mm, vp.user_size);
+  Walker walker(name, flip * vp.user_to_mm, vp.user_size, root);
   Affine ctm = Affine::Identity();
   try {
     if (const char* t = root->Attribute("transform")) ctm = svg::parse_transform(t);

@@ -20,7 +20,9 @@
 // Percentages in shape attributes refer to the root viewport (viewBox, else width/height).
 // Errors (InputError "<file>: <element>: <why>", the element named by its id or as "path #3", the
 // third shape in document order): unreadable XML, malformed path data (with the character offset),
-// unknown units, <use> clones and nested <svg> (not followed), a file without any shape.
+// unknown units, nested <svg>, a <use> that cannot be followed (another file, an unknown id, a
+// cycle, a <symbol> with its own viewBox or size), a file without any shape. A <use> of #id draws
+// that element again (from <defs> too) under the use's transform and x, y.
 #pragma once
 #include <string>
 

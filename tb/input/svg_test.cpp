@@ -224,6 +224,31 @@ TEST(SvgDocument, TransformedRectCornersByHand) {
   }
 }
 
+// <use>: the element again under the use's transform, then translated by its x, y (SVG 1.1 5.6):
+// a line from a <defs> (not drawn there), a line drawn and cloned, a <symbol>'s content, and a
+// clone of a clone (xlink:href). End points by hand; y_mm = 100 - y.
+TEST(SvgDocument, UseDrawsTheElementAgain) {
+  const Toolpath tp = traj::input::parse_svg(
+      doc(R"~(<defs><line id="d" x1="1" y1="0" x2="3" y2="0"/></defs>)~"
+          R"~(<use href="#d" x="10" y="5"/>)~"
+          R"~(<line id="l" x1="0" y1="0" x2="0" y2="2"/>)~"
+          R"~(<use id="u" href="#l" transform="rotate(90)" x="1" y="0"/>)~"
+          R"~(<symbol id="s"><line x1="0" y1="0" x2="4" y2="0"/></symbol><use href="#s" transform="translate(50,50)"/>)~"
+          R"~(<use xmlns:xlink="http://www.w3.org/1999/xlink" xlink:href="#u" x="20"/>)~"),
+      "t.svg");
+  const auto f = feeds(tp);
+  auto P = [](double x, double y) { return Eigen::Vector2d(x, 100 - y); };
+  // rotate(90) then translate(1, 0): (x, y) -> (-y, x + 1); the outer use adds x = 20 first
+  const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> want = {
+      {P(11, 5), P(13, 5)}, {P(0, 0), P(0, 2)}, {P(0, 1), P(-2, 1)}, {P(50, 50), P(54, 50)}, {P(20, 1), P(18, 1)}};
+  ASSERT_EQ(f.size(), want.size());
+  for (size_t i = 0; i < want.size(); ++i) {
+    EXPECT_LT((first(f[i]->curve) - want[i].first).norm(), 1e-12) << i;
+    EXPECT_LT((last(f[i]->curve) - want[i].second).norm(), 1e-12) << i;
+  }
+  EXPECT_EQ(f[0]->where, "t.svg: line d");
+}
+
 TEST(SvgDocument, RoundedRectCornersAreQuarterEllipses) {
   const Toolpath tp = traj::input::parse_svg(doc(R"~(<rect x="10" y="10" width="40" height="20" rx="5" ry="3"/>)~"), "t.svg");
   const auto f = feeds(tp);
@@ -341,7 +366,17 @@ TEST(SvgDocument, Errors) {
   EXPECT_NE(e.find("arc flag"), std::string::npos) << e;
   e = error_of(doc(R"~(<circle r="1cm"/><rect width="5em" height="1"/>)~"));
   EXPECT_NE(e.find("t.svg: rect #2: width: unknown unit 'em'"), std::string::npos) << e;
-  EXPECT_NE(error_of(doc(R"~(<use href="#a"/>)~")).find("t.svg: use without id: <use>"), std::string::npos);
+  e = error_of(doc(R"~(<use href="#a"/>)~"));
+  EXPECT_NE(e.find("t.svg: use without id: <use> of #a: the file has no element with that id"), std::string::npos) << e;
+  e = error_of(doc(R"~(<use href="other.svg#a"/>)~"));
+  EXPECT_NE(e.find("<use> of 'other.svg#a': only #id (an element of this file) is followed"), std::string::npos) << e;
+  e = error_of(doc(R"~(<g id="g"><path d="M0 0 L1 1"/><use href="#g"/></g>)~"));
+  EXPECT_NE(e.find("<use> of #g: it contains the <use> itself"), std::string::npos) << e;
+  e = error_of(doc(R"~(<defs><g id="a"><use href="#b"/></g><g id="b"><use href="#a"/></g></defs><use href="#a"/>)~"));
+  EXPECT_NE(e.find("the clones refer to each other in a cycle"), std::string::npos) << e;
+  e = error_of(doc(R"~(<symbol id="s" viewBox="0 0 1 1"><path d="M0 0 L1 1"/></symbol><use href="#s"/>)~"));
+  EXPECT_NE(e.find("<use> of a <symbol> with its own viewBox or size is not supported"), std::string::npos) << e;
+  EXPECT_NE(error_of(doc(R"~(<use/>)~")).find("t.svg: use without id: <use> without href"), std::string::npos);
   e = error_of(doc(R"~(<text>only text</text>)~"));
   EXPECT_NE(e.find("t.svg: no paths: no path, line, polyline, polygon, rect, circle or ellipse with any length; <text> not converted"), std::string::npos) << e;
   EXPECT_NE(error_of(doc(R"~(<svg><path d="M0 0 L1 1"/></svg>)~")).find("nested <svg>"), std::string::npos);
