@@ -29,6 +29,7 @@ class BadAttribute : public std::runtime_error {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kMmPerPx = 25.4 / 96.0;
 constexpr int kMaxDepth = 200;
+constexpr long kMaxShapes = 1000000;  // shapes drawn, clones included (a file of a few lines can clone 10^10)
 
 std::string local_name(const char* name) {
   const std::string n = name;
@@ -239,8 +240,11 @@ class Walker {
     const std::string tag = local_name(e->Name());
     if (kNotDrawn.count(tag) && !used) return;
     const bool shape = kShapes.count(tag) > 0;
-    const std::string where = label(e, tag, shape ? shapes + 1 : 0);
-    if (shape) ++shapes;
+    // shapes are numbered in document order; a clone's shape is named by its own id or the <use>'s
+    const std::string where = label(e, tag, shape && !cloning_ ? shapes + 1 : 0);
+    if (shape && !cloning_) ++shapes;
+    if (shape && ++drawn_ > kMaxShapes)
+      fail(where, "more than " + std::to_string(kMaxShapes) + " shapes to draw (clones of clones multiply: <use>)");
     if (depth > kMaxDepth) fail(where, "elements nested deeper than " + std::to_string(kMaxDepth));
     if (property(e, "display") == "none") {
       note_once("hidden", "elements with display:none (hidden layers) skipped, first " + where);
@@ -316,6 +320,8 @@ class Walker {
       fail(where, err.what());
     }
     ctm = ctm * shift;
+    const bool was_cloning = cloning_;
+    cloning_ = true;
     if (local_name(ref->Name()) == "symbol") {
       if (ref->Attribute("viewBox") || ref->Attribute("width") || ref->Attribute("height"))
         fail(where, "<use> of a <symbol> with its own viewBox or size is not supported");
@@ -323,6 +329,7 @@ class Walker {
     } else {
       element(ref, ctm, depth + 1, true);
     }
+    cloning_ = was_cloning;
     active_.erase(ref);
   }
 
@@ -332,6 +339,8 @@ class Walker {
   std::set<std::string> noted_;
   std::map<std::string, const tinyxml2::XMLElement*> ids_;
   std::set<const tinyxml2::XMLElement*> active_;  // the elements being drawn through <use>, for cycles
+  bool cloning_ = false;                          // drawing through a <use>
+  long drawn_ = 0;                                // shapes drawn, clones included
 };
 
 struct Viewport {

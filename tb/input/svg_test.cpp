@@ -377,6 +377,15 @@ TEST(SvgDocument, Errors) {
   e = error_of(doc(R"~(<symbol id="s" viewBox="0 0 1 1"><path d="M0 0 L1 1"/></symbol><use href="#s"/>)~"));
   EXPECT_NE(e.find("<use> of a <symbol> with its own viewBox or size is not supported"), std::string::npos) << e;
   EXPECT_NE(error_of(doc(R"~(<use/>)~")).find("t.svg: use without id: <use> without href"), std::string::npos);
+  // clones of clones: 10 levels of 10 clones would be 10^10 lines
+  std::string bomb = R"~(<defs><line id="g0" x1="0" y1="0" x2="1" y2="0"/>)~";
+  for (int level = 1; level <= 10; ++level) {
+    bomb += "<g id=\"g" + std::to_string(level) + "\">";
+    for (int i = 0; i < 10; ++i) bomb += "<use href=\"#g" + std::to_string(level - 1) + "\"/>";
+    bomb += "</g>";
+  }
+  e = error_of(doc(bomb + R"~(</defs><use href="#g10"/>)~"));
+  EXPECT_NE(e.find("more than 1000000 shapes to draw (clones of clones multiply: <use>)"), std::string::npos) << e;
   e = error_of(doc(R"~(<text>only text</text>)~"));
   EXPECT_NE(e.find("t.svg: no paths: no path, line, polyline, polygon, rect, circle or ellipse with any length; <text> not converted"), std::string::npos) << e;
   EXPECT_NE(error_of(doc(R"~(<svg><path d="M0 0 L1 1"/></svg>)~")).find("nested <svg>"), std::string::npos);
