@@ -35,9 +35,17 @@ FileKind file_kind(const std::string& file, const std::string& format) {
 
 bool is_toolpath(FileKind k) { return k == FileKind::kGcode || k == FileKind::kSvg || k == FileKind::kDxf; }
 
+std::string no_moves(const std::string& file) {
+  return file + ": the program makes no move (no G0, G1, G2, G3, G5 or canned cycle): nothing to plan";
+}
+
 Toolpath read_toolpath(const std::string& file, FileKind kind, const GcodeOptions& gcode) {
   switch (kind) {
-    case FileKind::kGcode: return read_gcode(file, gcode);
+    case FileKind::kGcode: {
+      Toolpath tp = read_gcode(file, gcode);
+      if (tp.moves.empty()) throw InputError(no_moves(file));
+      return tp;
+    }
     case FileKind::kSvg: return read_svg(file);
     case FileKind::kDxf: return read_dxf(file);
     default: throw InputError(file + ": not a toolpath file (JSON paths are curves: load_path)");

@@ -18,7 +18,9 @@ enum class FileKind { kJson, kJsonl, kGcode, kSvg, kDxf };
 FileKind file_kind(const std::string& file, const std::string& format = {});
 bool is_toolpath(FileKind k);
 
-// read_gcode (with `gcode`), read_svg or read_dxf by kind (InputError for JSON kinds).
+// read_gcode (with `gcode`), read_svg or read_dxf by kind (InputError for JSON kinds, and for a
+// G-code program that makes no move: no_moves).
 Toolpath read_toolpath(const std::string& file, FileKind kind, const GcodeOptions& gcode = {});
+std::string no_moves(const std::string& file);
 
 }  // namespace traj::input

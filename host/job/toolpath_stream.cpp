@@ -22,7 +22,7 @@ JobConfig stream_config(const JobConfig& cfg, double rapid, const ToolpathOption
 
 ToolpathStream::ToolpathStream(const std::string& file, input::FileKind kind, const JobConfig& cfg,
                                const ToolpathOptions& o, size_t chunk)
-    : job_cfg_(cfg), opt_(o), chunk_(std::max<size_t>(chunk, 2)) {
+    : file_(file), job_cfg_(cfg), opt_(o), chunk_(std::max<size_t>(chunk, 2)) {
   if (kind == input::FileKind::kGcode) {
     reader_ = std::make_unique<input::GcodeReader>(file, o.gcode);
     axes_ = reader_->axes();
@@ -43,7 +43,11 @@ ToolpathStream::ToolpathStream(input::Toolpath tp, const JobConfig& cfg, const T
 const std::vector<std::string>& ToolpathStream::notes() const { return reader_ ? reader_->notes() : whole_.notes; }
 
 bool ToolpathStream::read(input::Move& m) {
-  if (reader_) return reader_->next(m);
+  if (reader_) {
+    if (reader_->next(m)) return true;
+    if (totals_.moves == 0) throw input::InputError(input::no_moves(file_));
+    return false;
+  }
   if (whole_next_ >= whole_.moves.size()) return false;
   m = std::move(whole_.moves[whole_next_++]);
   return true;

@@ -60,6 +60,7 @@ class ToolpathStream : public StreamSource {
   bool at_free_junction(size_t j) const;
   void blend_next_chunk();
 
+  std::string file_;  // the file read (messages)
   std::unique_ptr<input::GcodeReader> reader_;
   input::Toolpath whole_;  // SVG, DXF, or a toolpath given in memory
   size_t whole_next_ = 0;
