@@ -37,16 +37,26 @@ Toolpath toolpath_from_cuts(const std::vector<Cut>& cuts, int axes) {
       rapid.where = cut.front().where;
       tp.moves.push_back(std::move(rapid));
     }
+    Eigen::VectorXd end = start;
     for (const CutPiece& piece : cut) {
+      if (negligible(piece.curve)) continue;
       Move m;
       m.kind = Move::Kind::kFeed;
       m.curve = piece.curve;
+      m.curve.ctrl.row(0) = end.transpose();  // moves it by at most kNegligibleMm after a dropped piece
       m.where = piece.where;
+      end = end_point(m.curve);
       tp.moves.push_back(std::move(m));
     }
-    at = end_point(cut.back().curve);
+    at = end;
   }
   return tp;
+}
+
+bool negligible(const geo::BSpline& c) {
+  double polygon = 0;
+  for (int i = 1; i < c.n_ctrl(); ++i) polygon += (c.ctrl.row(i) - c.ctrl.row(i - 1)).norm();
+  return polygon <= kNegligibleMm;
 }
 
 }  // namespace traj::input

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "geometry/curve.hpp"
+#include "input/cuts.hpp"
 #include "input/svg.hpp"
 #include "input/svg_path.hpp"
 
@@ -247,6 +248,26 @@ TEST(SvgDocument, UseDrawsTheElementAgain) {
     EXPECT_LT((last(f[i]->curve) - want[i].second).norm(), 1e-12) << i;
   }
   EXPECT_EQ(f[0]->where, "t.svg: line d");
+}
+
+// A path closed by relative steps that return to its start only within rounding (the Vanderbilt
+// Commodores logo on Wikimedia: 7e-15 off): its 'z' would add a piece of 1e-15 mm, which the planner
+// refuses ("zero-length curve"); the negligible piece is left out, the moves still meet exactly.
+// 0.1 + 0.2 - 10.3 != 0 exactly in binary; 1 + 10.1 + 0.2 - 10.3 lands 1e-15 away from 1.
+TEST(SvgDocument, NearlyClosedPathHasNoNegligiblePiece) {
+  const Toolpath tp = traj::input::parse_svg(doc(R"~(<path d="m1 1 l10.1 0.2 0.2 10.3 -10.3 -10.5z"/>)~"), "t.svg");
+  const auto f = feeds(tp);
+  ASSERT_EQ(f.size(), 3u);
+  for (size_t i = 0; i + 1 < f.size(); ++i) EXPECT_EQ(last(f[i]->curve), first(f[i + 1]->curve)) << i;
+  EXPECT_LT((last(f[2]->curve) - Eigen::Vector2d(1, 99)).norm(), 1e-12);
+  // a negligible piece between two others: the next one starts where the kept one ends
+  BSpline a = svg::parse_path_data("M0 0 L5 0").front().segments.front();
+  BSpline tiny = svg::parse_path_data("M5 0 L5 1e-12").front().segments.front();
+  BSpline b = svg::parse_path_data("M5 1e-12 L5 5").front().segments.front();
+  const Toolpath t2 = traj::input::toolpath_from_cuts({{{a, "a"}, {tiny, "tiny"}, {b, "b"}}}, 2);
+  ASSERT_EQ(t2.moves.size(), 2u);
+  EXPECT_EQ(last(t2.moves[0].curve), first(t2.moves[1].curve));
+  EXPECT_EQ(t2.moves[1].where, "b");
 }
 
 TEST(SvgDocument, RoundedRectCornersAreQuarterEllipses) {
