@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "input/cuts.hpp"
 #include "input/gcode_curves.hpp"
 #include "input/gcode_flow.hpp"
 #include "input/gcode_lexer.hpp"
@@ -165,6 +166,7 @@ class Interpreter {
 
   // Machine state (mm, the program's start X0 Y0 Z0; the further axes at 0).
   Vector3d pos_ = Vector3d::Zero();
+  Eigen::RowVectorXd last_end_;  // where the last move emitted ends (all its columns)
   std::string further_;     // the machine's axes after X Y Z (A B C U V W)
   Eigen::VectorXd ext_;     // their positions (mm; degrees for A B C)
   Eigen::VectorXd ext_end_; // their positions at the end of the move being made
@@ -589,6 +591,12 @@ class Interpreter {
     m.tolerance = tolerance_;
     m.exact_stop = exact_stop_ || kind == Move::Kind::kRapid;
     m.where = where(line_);
+    // A move of 1e-9 mm or less (X[0.1+0.2] after X0.3: 6e-17) is left out, as the drawings' pieces
+    // (cuts.hpp); the next move starts where the last one kept ends (it moves by as little).
+    if (negligible(m.curve)) return;
+    if (last_end_.size() == m.curve.ctrl.cols() && (m.curve.ctrl.row(0) - last_end_).norm() <= kNegligibleMm)
+      m.curve.ctrl.row(0) = last_end_;
+    last_end_ = m.curve.ctrl.row(m.curve.n_ctrl() - 1);
     out_.moves.push_back(std::move(m));
   }
 

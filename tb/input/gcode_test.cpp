@@ -299,6 +299,17 @@ TEST(Gcode, Refusals) {
 // G28/G30 as LinuxCNC with its reference parameters at 0: a rapid to the
 // point the axis words give (in the block's distance mode), then for the
 // axes named (all without axis words) a rapid to the machine origin.
+// A move of 1e-9 mm or less (X[0.1+0.2] then X0.3: 5.6e-17 in binary) is left out, and the next
+// move starts where the last one kept ends: the planner refuses such a move ("zero-length curve").
+TEST(Gcode, NegligibleMoveLeftOut) {
+  const Toolpath tp = read("G21 G90 F600\nG1 X10 Y0\nG1 X[0.1+0.2] Y0\nG1 X0.3 Y0\nG1 X0.3 Y5\nM2\n");
+  ASSERT_EQ(tp.moves.size(), 3u);
+  EXPECT_EQ(end_of(tp.moves[1]), Eigen::Vector3d(0.1 + 0.2, 0, 0));
+  EXPECT_EQ(tp.moves[2].curve.ctrl.row(0), tp.moves[1].curve.ctrl.row(tp.moves[1].curve.n_ctrl() - 1));
+  EXPECT_EQ(end_of(tp.moves[2]), Eigen::Vector3d(0.3, 5, 0));
+  EXPECT_NE(0.1 + 0.2, 0.3);  // the premise: the move left out has a length
+}
+
 // LinuxCNC's polar coordinates (@ distance, ^ angle in degrees, about the
 // XY origin): end points worked out by hand. rs274 agrees on
 // tb/input/gcode/polar_moves.ngc and LinuxCNC's spiral.ngc (the cross-check).
