@@ -96,9 +96,11 @@ class Collector : public DL_CreationAdapter {
     if (key == "$INSUNITS") insunits = value;
   }
 
-  void addBlock(const DL_BlockData&) override {
+  void addBlock(const DL_BlockData& d) override {
     flush();
     in_block_ = true;
+    block_ = d.name;
+    blocks_[block_].base = Eigen::Vector3d(d.bpx, d.bpy, d.bpz);
   }
   void endBlock() override {
     flush();
@@ -106,20 +108,20 @@ class Collector : public DL_CreationAdapter {
   }
 
   void addLine(const DL_LineData& d) override {
-    if (!begin("LINE")) return;
+    begin("LINE");
     add({geo::make_line(Eigen::Vector3d(d.x1, d.y1, d.z1), Eigen::Vector3d(d.x2, d.y2, d.z2))});
   }
   void addArc(const DL_ArcData& d) override {
-    if (!begin("ARC")) return;
+    begin("ARC");
     const double a0 = d.angle1 * kPi / 180;
     circle_arc(d.cx, d.cy, d.cz, d.radius, a0, ccw_end(a0, d.angle2 * kPi / 180, "ARC"), false);
   }
   void addCircle(const DL_CircleData& d) override {
-    if (!begin("CIRCLE")) return;
+    begin("CIRCLE");
     circle_arc(d.cx, d.cy, d.cz, d.radius, 0, 2 * kPi, true);
   }
   void addEllipse(const DL_EllipseData& d) override {
-    if (!begin("ELLIPSE")) return;
+    begin("ELLIPSE");
     const Eigen::Vector3d c(d.cx, d.cy, d.cz), major(d.mx, d.my, d.mz);
     const Eigen::Vector3d n = ocs_axes(getExtrusion()->getDirection()).col(2);
     const Eigen::Vector3d minor = d.ratio * n.cross(major);
@@ -133,7 +135,7 @@ class Collector : public DL_CreationAdapter {
     add({e});
   }
   void addPolyline(const DL_PolylineData& d) override {
-    if (!begin("POLYLINE")) return;
+    begin("POLYLINE");
     if (d.flags & (16 | 64)) {
       fail("polygon meshes and polyface meshes are not supported");
     }
@@ -144,7 +146,7 @@ class Collector : public DL_CreationAdapter {
   }
   void endSequence() override { flush(); }
   void addSpline(const DL_SplineData& d) override {
-    if (!begin("SPLINE")) return;
+    begin("SPLINE");
     spline_ = PendingSpline{d, {}, {}, 0};
   }
   void addKnot(const DL_KnotData& d) override {
@@ -161,7 +163,18 @@ class Collector : public DL_CreationAdapter {
   void addPoint(const DL_PointData&) override { skip("POINT"); }
   void addXLine(const DL_XLineData&) override { skip("XLINE"); }
   void addRay(const DL_RayData&) override { skip("RAY"); }
-  void addInsert(const DL_InsertData&) override { skip("INSERT", " (block references are not expanded: explode them in the CAD program)"); }
+  // INSERT: the block's entities drawn again (block_transform); inside a block, kept for when that
+  // block is drawn (blocks may be defined in any order).
+  void addInsert(const DL_InsertData& d) override {
+    const Eigen::Matrix3d ocs = ocs_axes(getExtrusion()->getDirection());
+    begin("INSERT");
+    if (in_block_) {
+      blocks_[block_].items.push_back({{}, "", std::make_shared<Insert>(Insert{d, ocs})});
+      return;
+    }
+    where_ += " of block " + util::excerpt(d.name);
+    expand(Insert{d, ocs}, Affine3::Identity(), where_, 0);
+  }
   void addTrace(const DL_TraceData&) override { skip("TRACE"); }
   void add3dFace(const DL_3dFaceData&) override { skip("3DFACE"); }
   void addSolid(const DL_SolidData&) override { skip("SOLID"); }
@@ -190,19 +203,22 @@ class Collector : public DL_CreationAdapter {
     if (span <= 0) span += 2 * kPi;
     return a0 + span;
   }
-  // Starts a new entity; false inside a block definition (not drawn).
-  bool begin(const char* type) {
+  // Starts a new entity (inside a block definition its curves go to the block, drawn by the INSERTs
+  // of it; where_ is then its type, named after the INSERT's).
+  void begin(const char* type) {
     flush();
-    if (in_block_) return false;
+    if (in_block_) {
+      where_ = type;
+      return;
+    }
     ++count_;
     where_ = file_ + ": entity " + std::to_string(count_) + " (" + type + ")";
-    return true;
   }
   void skip(const std::string& type, const std::string& why = "") {
-    if (!begin(type.c_str())) return;
+    begin(type.c_str());
     if (std::find(noted_.begin(), noted_.end(), type) != noted_.end()) return;
     noted_.push_back(type);
-    notes.push_back(where_ + ": " + type + " entities skipped" + why);
+    notes.push_back((in_block_ ? file_ + ": block " + util::excerpt(block_) : where_) + ": " + type + " entities skipped" + why);
   }
   [[noreturn]] void fail(const std::string& why) const { throw InputError(where_ + ": " + why); }
 
@@ -210,7 +226,71 @@ class Collector : public DL_CreationAdapter {
     std::vector<geo::BSpline> kept;
     for (geo::BSpline& p : pieces)
       if (!degenerate(p)) kept.push_back(std::move(p));
-    if (!kept.empty()) entities.push_back({std::move(kept), where_});
+    if (kept.empty()) return;
+    if (in_block_) blocks_[block_].items.push_back({std::move(kept), where_, nullptr});
+    else entities.push_back({std::move(kept), where_});
+  }
+
+  using Affine3 = Eigen::Matrix4d;
+  struct Insert {
+    DL_InsertData data;
+    Eigen::Matrix3d ocs;
+  };
+  // A block's entity (its curves in block coordinates, its type) or an INSERT in it.
+  struct BlockItem {
+    std::vector<geo::BSpline> pieces;
+    std::string type;
+    std::shared_ptr<Insert> insert;
+  };
+  struct Block {
+    Eigen::Vector3d base = Eigen::Vector3d::Zero();
+    std::vector<BlockItem> items;
+  };
+  static constexpr int kMaxInsertDepth = 16;
+  static constexpr long kMaxInserted = 100000;  // entities and array cells drawn by INSERTs (they multiply)
+
+  // The block's entities through `parent` and the INSERT's own placement, per array cell: world =
+  // parent * ocs * translate(insertion point) * rotate(angle) * translate(cell) * scale * translate(-base).
+  void expand(const Insert& ins, const Affine3& parent, const std::string& where, int depth) {
+    const DL_InsertData& d = ins.data;
+    const auto it = blocks_.find(d.name);
+    if (it == blocks_.end()) fail("the file has no block " + util::excerpt(d.name));
+    if (depth >= kMaxInsertDepth)
+      fail("blocks inserted in one another deeper than " + std::to_string(kMaxInsertDepth) + " (a block that inserts itself?)");
+    if (!(d.cols >= 1 && d.rows >= 1) || double(d.cols) * d.rows > kMaxInserted)
+      fail("INSERT array of " + std::to_string(d.cols) + " x " + std::to_string(d.rows) + ": out of range");
+    // each cell counts too: blocks of nothing but INSERTs multiply without drawing
+    if ((inserted_ += long(d.cols) * d.rows) > kMaxInserted)
+      fail("more than " + std::to_string(kMaxInserted) + " entities drawn by INSERTs (arrays of blocks multiply)");
+    const Block& b = it->second;
+    Affine3 ocs = Affine3::Identity(), rot = Affine3::Identity(), scale = Affine3::Identity(), base = Affine3::Identity();
+    ocs.topLeftCorner<3, 3>() = ins.ocs;
+    const double a = d.angle * kPi / 180;
+    rot.topLeftCorner<2, 2>() << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
+    rot.topRightCorner<3, 1>() = Eigen::Vector3d(d.ipx, d.ipy, d.ipz);
+    scale.diagonal().head<3>() = Eigen::Vector3d(d.sx, d.sy, d.sz);
+    base.topRightCorner<3, 1>() = -b.base;
+    for (int r = 0; r < d.rows; ++r)
+      for (int c = 0; c < d.cols; ++c) {
+        Affine3 cell = Affine3::Identity();
+        cell.topRightCorner<3, 1>() = Eigen::Vector3d(c * d.colSp, r * d.rowSp, 0);
+        const Affine3 m = parent * ocs * rot * cell * scale * base;
+        for (const BlockItem& item : b.items) {
+          if (item.insert) {
+            expand(*item.insert, m, where, depth + 1);
+            continue;
+          }
+          if (++inserted_ > kMaxInserted)
+            fail("more than " + std::to_string(kMaxInserted) + " entities drawn by INSERTs (arrays of blocks multiply)");
+          std::vector<geo::BSpline> pieces = item.pieces;
+          for (geo::BSpline& p : pieces)
+            for (int i = 0; i < p.n_ctrl(); ++i) {
+              const Eigen::Vector4d q = m * Eigen::Vector4d(p.ctrl(i, 0), p.ctrl(i, 1), p.ctrl(i, 2), 1);
+              p.ctrl.row(i) = q.head<3>().transpose();
+            }
+          entities.push_back({std::move(pieces), where + ", its " + item.type});
+        }
+      }
   }
 
   void circle_arc(double cx, double cy, double cz, double r, double a0, double a1, bool closed) {
@@ -287,6 +367,9 @@ class Collector : public DL_CreationAdapter {
   std::string where_;
   int count_ = 0;
   bool in_block_ = false;
+  std::string block_;  // the block being defined
+  std::map<std::string, Block> blocks_;
+  long inserted_ = 0;
   std::vector<std::string> noted_;
   std::optional<PendingPolyline> polyline_;
   std::optional<PendingSpline> spline_;

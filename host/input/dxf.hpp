@@ -13,8 +13,10 @@
 // backwards where that joins it; the joint is closed exactly), in the order of each chain's first
 // entity in the file; the rest are each a cut of their own. Cuts are joined by rapids, the first from
 // the origin (input/cuts.hpp).
-// Entities inside BLOCK definitions are not drawn (block references, INSERT, are not expanded: a
-// note); TEXT, HATCH, DIMENSION, POINT and others are skipped with a note.
+// Entities inside BLOCK definitions are drawn by the INSERTs of the block (base point, scale,
+// rotation, insertion point, column/row array; blocks inserted in blocks), each named
+// "<file>: entity <n> (INSERT) of block <name>, its <TYPE>"; TEXT, HATCH, DIMENSION, POINT and
+// others are skipped with a note.
 // Errors: InputError "<file>: entity <n> (<TYPE>): <why>" (n counts the entities of the ENTITIES
 // section from 1), "<file>: cannot open", "<file>: no curves".
 #pragma once

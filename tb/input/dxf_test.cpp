@@ -266,19 +266,84 @@ TEST(DxfReader, UnitsAnd3D) {
   EXPECT_NE(error_of(d).find("$INSUNITS 3 not supported"), std::string::npos);
 }
 
-TEST(DxfReader, BlocksAreNotDrawnAndSkippedEntitiesNoted) {
+// INSERT draws its block's entities again: minus the block's base point, scaled, rotated by the
+// angle (degrees), moved to the insertion point, per cell of a column/row array (spacing along the
+// rotated axes); a block inserted in a block goes through both. End points by hand. A block alone
+// (no INSERT) is not drawn; a TEXT is skipped with a note.
+TEST(DxfReader, InsertDrawsTheBlock) {
   Dxf d;
-  d.blocks = "0\nBLOCK\n8\n0\n2\nB1\n70\n0\n10\n0\n20\n0\n30\n0\n3\nB1\n0\nLINE\n8\n0\n10\n0\n20\n0\n30\n0\n11\n99\n21\n0\n31\n0\n0\nENDBLK\n8\n0\n";
-  d.entities = {{{0, "INSERT"}, {8, "0"}, {2, "B1"}, {10, "0"}, {20, "0"}, {30, "0"}},
-                {{0, "TEXT"}, {8, "0"}, {10, "0"}, {20, "0"}, {30, "0"}, {40, "1"}, {1, "hi"}},
-                line(1, 1, 2, 2)};
+  // B1: base (1, 0), a line (1,0)-(3,0); B2: base (0,0), an INSERT of B1 at (0, 10)
+  d.blocks = "0\nBLOCK\n8\n0\n2\nB1\n70\n0\n10\n1\n20\n0\n30\n0\n3\nB1\n"
+             "0\nLINE\n8\n0\n10\n1\n20\n0\n30\n0\n11\n3\n21\n0\n31\n0\n0\nENDBLK\n8\n0\n"
+             "0\nBLOCK\n8\n0\n2\nB2\n70\n0\n10\n0\n20\n0\n30\n0\n3\nB2\n"
+             "0\nINSERT\n8\n0\n2\nB1\n10\n0\n20\n10\n30\n0\n0\nENDBLK\n8\n0\n";
+  d.entities = {
+      // B1 at (100, 0), scale 2, rotated 90 degrees: (x, y) -> (100 - 2 y', 2 x'), x' = x - 1
+      {{0, "INSERT"}, {8, "0"}, {2, "B1"}, {10, "100"}, {20, "0"}, {30, "0"}, {41, "2"}, {42, "2"}, {43, "1"}, {50, "90"}},
+      {{0, "TEXT"}, {8, "0"}, {10, "0"}, {20, "0"}, {30, "0"}, {40, "1"}, {1, "hi"}},
+      // B1 in a 2 x 1 array, column spacing 50, at (0, -20)
+      {{0, "INSERT"}, {8, "0"}, {2, "B1"}, {10, "0"}, {20, "-20"}, {30, "0"}, {70, "2"}, {71, "1"}, {44, "50"}},
+      // B2 at (0, 100): B1 at (0, 110)
+      {{0, "INSERT"}, {8, "0"}, {2, "B2"}, {10, "0"}, {20, "100"}, {30, "0"}},
+      line(300, 300, 301, 300)};
   const Toolpath tp = d.read();
   const auto f = feeds(tp);
-  ASSERT_EQ(f.size(), 1u);
-  EXPECT_NE(f[0]->where.find("entity 3 (LINE)"), std::string::npos) << f[0]->where;
-  ASSERT_EQ(tp.notes.size(), 2u);
-  EXPECT_NE(tp.notes[0].find("INSERT"), std::string::npos);
-  EXPECT_NE(tp.notes[1].find("TEXT"), std::string::npos);
+  const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> want = {
+      {{100, 0, 0}, {100, 4, 0}}, {{0, -20, 0}, {2, -20, 0}}, {{50, -20, 0}, {52, -20, 0}}, {{0, 110, 0}, {2, 110, 0}},
+      {{300, 300, 0}, {301, 300, 0}}};
+  ASSERT_EQ(f.size(), want.size());
+  for (size_t i = 0; i < want.size(); ++i) {
+    EXPECT_LT((first(f[i]->curve) - want[i].first).norm(), 1e-12) << i << ": " << first(f[i]->curve).transpose();
+    EXPECT_LT((last(f[i]->curve) - want[i].second).norm(), 1e-12) << i << ": " << last(f[i]->curve).transpose();
+  }
+  EXPECT_NE(f[0]->where.find("entity 1 (INSERT) of block B1, its LINE"), std::string::npos) << f[0]->where;
+  EXPECT_NE(f[4]->where.find("entity 5 (LINE)"), std::string::npos) << f[4]->where;
+  ASSERT_EQ(tp.notes.size(), 1u);
+  EXPECT_NE(tp.notes[0].find("TEXT"), std::string::npos);
+}
+
+TEST(DxfReader, InsertErrors) {
+  auto error_of = [](const Dxf& d) {
+    try {
+      d.read();
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  Dxf d;
+  d.entities = {{{0, "INSERT"}, {8, "0"}, {2, "NOPE"}, {10, "0"}, {20, "0"}, {30, "0"}}};
+  std::string e = error_of(d);
+  EXPECT_NE(e.find("entity 1 (INSERT) of block NOPE: the file has no block NOPE"), std::string::npos) << e;
+  // a block that inserts itself
+  d.blocks = "0\nBLOCK\n8\n0\n2\nS\n70\n0\n10\n0\n20\n0\n30\n0\n3\nS\n"
+             "0\nLINE\n8\n0\n10\n0\n20\n0\n30\n0\n11\n1\n21\n0\n31\n0\n"
+             "0\nINSERT\n8\n0\n2\nS\n10\n1\n20\n0\n30\n0\n0\nENDBLK\n8\n0\n";
+  d.entities = {{{0, "INSERT"}, {8, "0"}, {2, "S"}, {10, "0"}, {20, "0"}, {30, "0"}}};
+  e = error_of(d);
+  EXPECT_NE(e.find("blocks inserted in one another deeper than 16 (a block that inserts itself?)"), std::string::npos) << e;
+  // arrays: 400 x 300 cells; arrays of arrays: 2 x (300 x 300)
+  d.blocks = "0\nBLOCK\n8\n0\n2\nB\n70\n0\n10\n0\n20\n0\n30\n0\n3\nB\n"
+             "0\nLINE\n8\n0\n10\n0\n20\n0\n30\n0\n11\n1\n21\n0\n31\n0\n0\nENDBLK\n8\n0\n"
+             "0\nBLOCK\n8\n0\n2\nC\n70\n0\n10\n0\n20\n0\n30\n0\n3\nC\n"
+             "0\nINSERT\n8\n0\n2\nB\n10\n0\n20\n0\n30\n0\n70\n300\n71\n300\n44\n2\n45\n2\n0\nENDBLK\n8\n0\n";
+  d.entities = {{{0, "INSERT"}, {8, "0"}, {2, "B"}, {10, "0"}, {20, "0"}, {30, "0"}, {70, "400"}, {71, "300"}, {44, "2"}, {45, "2"}}};
+  e = error_of(d);
+  EXPECT_NE(e.find("entity 1 (INSERT) of block B: INSERT array of 400 x 300: out of range"), std::string::npos) << e;
+  d.entities = {{{0, "INSERT"}, {8, "0"}, {2, "C"}, {10, "0"}, {20, "0"}, {30, "0"}, {70, "2"}, {44, "1000"}}};
+  e = error_of(d);
+  EXPECT_NE(e.find("more than 100000 entities drawn by INSERTs"), std::string::npos) << e;
+  // blocks of nothing but INSERTs, 10 of the one before in each of 15: 10^15 cells, no entity
+  d.blocks = "0\nBLOCK\n8\n0\n2\nA0\n70\n0\n10\n0\n20\n0\n30\n0\n3\nA0\n0\nENDBLK\n8\n0\n";
+  for (int k = 1; k <= 15; ++k) {
+    const std::string n = "A" + std::to_string(k), prev = "A" + std::to_string(k - 1);
+    d.blocks += "0\nBLOCK\n8\n0\n2\n" + n + "\n70\n0\n10\n0\n20\n0\n30\n0\n3\n" + n + "\n";
+    for (int i = 0; i < 10; ++i) d.blocks += "0\nINSERT\n8\n0\n2\n" + prev + "\n10\n0\n20\n0\n30\n0\n";
+    d.blocks += "0\nENDBLK\n8\n0\n";
+  }
+  d.entities = {{{0, "INSERT"}, {8, "0"}, {2, "A15"}, {10, "0"}, {20, "0"}, {30, "0"}}, line(0, 0, 1, 0)};
+  e = error_of(d);
+  EXPECT_NE(e.find("more than 100000 entities drawn by INSERTs"), std::string::npos) << e;
 }
 
 TEST(DxfReader, Errors) {
