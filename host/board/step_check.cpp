@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "fd/fd_ticker.hpp"
 #include "traj_step_gen.hpp"
@@ -184,41 +185,58 @@ PathCheck check_on_path(const std::vector<int64_t>& engine, const std::vector<in
     return c;
   }
   auto y = [&](uint64_t k, int a) { return engine[k * axes + a]; };
-  uint64_t i = 0;      // the engine interval [i, i+1] of the last output
-  double pos_prev = 0;  // its position, engine ticks
+  // Where output o lies on the engine interval [k, k+1] (a fraction from the axis that moves most)
+  // and how far off that point it is (per axis, LSB); nullopt if its fraction is outside [0, 1].
+  auto place = [&](const int64_t* o, uint64_t k) -> std::optional<std::pair<double, double>> {
+    double f = 0;
+    if (k + 1 < n) {
+      int big = 0;
+      for (int a = 1; a < axes; ++a)
+        if (std::llabs(y(k + 1, a) - y(k, a)) > std::llabs(y(k + 1, big) - y(k, big))) big = a;
+      const double d = static_cast<double>(y(k + 1, big) - y(k, big));
+      f = d == 0 ? 0 : static_cast<double>(o[big] - y(k, big)) / d;
+      if (f < -1e-9 || f > 1 + 1e-9) return std::nullopt;
+      f = std::clamp(f, 0.0, 1.0);
+    }
+    // distances from differences (small integers): the positions themselves (up to 2^47 LSB)
+    // would lose 1e-4 LSB in a double
+    double off = 0;
+    for (int a = 0; a < axes; ++a) {
+      const double next = k + 1 < n ? static_cast<double>(y(k + 1, a) - y(k, a)) : 0.0;
+      off = std::max(off, std::fabs(f * next - static_cast<double>(o[a] - y(k, a))));
+    }
+    return std::make_pair(static_cast<double>(k) + f, off);
+  };
+  uint64_t i = 0;        // the engine interval [i, i+1] of the last output
+  double pos_prev = 0;   // its position, engine ticks
+  double advance = 0;    // the last advance: s changes slowly, so the next is about as large
   const uint64_t reach = static_cast<uint64_t>(std::ceil(max_advance)) + 2;
   for (uint64_t t = 0; t < m && c.first_problem.empty(); ++t) {
     const int64_t* o = &out[t * axes];
-    bool found = false;
-    for (uint64_t k = i; k < n && k <= i + reach && !found; ++k) {
-      double f = 0;
-      if (k + 1 < n) {  // the fraction along [k, k+1] from the axis that moves most
-        int big = 0;
-        for (int a = 1; a < axes; ++a)
-          if (std::llabs(y(k + 1, a) - y(k, a)) > std::llabs(y(k + 1, big) - y(k, big))) big = a;
-        const double d = static_cast<double>(y(k + 1, big) - y(k, big));
-        f = d == 0 ? 0 : static_cast<double>(o[big] - y(k, big)) / d;
-        if (f < -1e-9 || f > 1 + 1e-9) continue;
-        f = std::clamp(f, 0.0, 1.0);
-      }
-      // distances from differences (small integers): the positions
-      // themselves (up to 2^47 LSB) would lose 1e-4 LSB in a double
-      double off = 0;
-      for (int a = 0; a < axes; ++a) {
-        const double next = k + 1 < n ? static_cast<double>(y(k + 1, a) - y(k, a)) : 0.0;
-        off = std::max(off, std::fabs(f * next - static_cast<double>(o[a] - y(k, a))));
-      }
-      const double pos = static_cast<double>(k) + f;
-      if (off > tol_lsb + 1e-6 || pos + 1e-6 < pos_prev) continue;
-      c.worst_lsb = std::max(c.worst_lsb, off);
-      if (t > 0) c.largest_advance = std::max(c.largest_advance, pos - pos_prev);
-      pos_prev = pos;
-      i = k;
-      found = true;
+    // Of the places on the path within reach and within tol, ahead of the last, the one nearest
+    // the position the last advance predicts: where the path comes back within tol of itself (a
+    // reversal: out and back along a line) the output matches a place on the way in and one on the
+    // way out, and the earliest would fall behind.
+    std::optional<std::pair<double, double>> best;
+    uint64_t best_k = i;
+    const double predicted = pos_prev + advance;
+    for (uint64_t k = i; k < n && k <= i + reach; ++k) {
+      const auto p = place(o, k);
+      if (!p || p->second > tol_lsb + 1e-6 || p->first + 1e-6 < pos_prev) continue;
+      if (!best || std::fabs(p->first - predicted) < std::fabs(best->first - predicted)) best = p, best_k = k;
     }
-    if (!found)
+    if (!best) {
       c.first_problem = "output sample " + std::to_string(t) + " is not on the path within " +
                         std::to_string(tol_lsb) + " LSB after engine tick " + std::to_string(i);
+      break;
+    }
+    c.worst_lsb = std::max(c.worst_lsb, best->second);
+    if (t > 0) {
+      advance = best->first - pos_prev;
+      c.largest_advance = std::max(c.largest_advance, advance);
+    }
+    pos_prev = best->first;
+    i = best_k;
   }
   if (c.first_problem.empty() && c.largest_advance > max_advance + 0.01)
     c.first_problem = "the output advanced " + std::to_string(c.largest_advance) + " engine ticks in one sample (at most " +

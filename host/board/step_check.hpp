@@ -66,7 +66,10 @@ StepCheck check_steps_scaled(const std::vector<int>& shifts, const SimulatedBoar
 // polyline through the engine samples within `tol_lsb` per axis, at a
 // position (in engine ticks) that never goes back and advances by at most
 // `max_advance` per output sample; the last output is the last engine
-// sample (nothing lost).
+// sample (nothing lost). Where the path comes back within `tol_lsb` of
+// itself (out and back along a line) an output matches more than one
+// place: the check takes the one nearest the position its last advance
+// predicts (s changes slowly), not the earliest, which would fall behind.
 struct PathCheck {
   uint64_t samples = 0;
   double worst_lsb = 0;        // largest distance from the polyline, per axis

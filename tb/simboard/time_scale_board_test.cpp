@@ -355,5 +355,43 @@ TEST(SimBoardTimeScale, G1PolylineHoldOverrideStarvation) { run_case(zigzag(), "
 // bounds (an override and a hold) break the acceleration or jerk limit.
 TEST(SimBoardTimeScale, RampsFasterThanTheBoundsBreakALimit) { run_case(zigzag(), "zigzag_fast", 18, 4); }
 
+// board::check_on_path where the path comes back onto itself: x out to 1000 LSB and back
+// (engine samples 10 LSB apart, y 0), outputs 9.5 engine ticks apart, interpolated with floor
+// as the unit does. Near the turn an output matches a place on the way out and one on the way
+// back; the check follows the one its last advance predicts (outline_2d.ngc under an override
+// failed so on the simulated board: "output sample 10823 is not on the path"). An output 3 LSB
+// off the path, or one that goes back, is still found.
+TEST(SimBoardTimeScale, OnPathCheckFollowsAPathThatComesBack) {
+  std::vector<int64_t> engine;
+  for (int k = 0; k <= 100; ++k) engine.insert(engine.end(), {10 * k, 0, 0});
+  for (int k = 99; k >= 0; --k) engine.insert(engine.end(), {10 * k, 0, 0});
+  const int64_t n = static_cast<int64_t>(engine.size() / 3);
+  auto at = [&](int64_t q) {  // position q / 16 engine ticks, floor-interpolated per axis
+    const int64_t k = std::min(q / 16, n - 1), f = q % 16;
+    const int64_t y0 = engine[3 * k], y1 = k + 1 < n ? engine[3 * (k + 1)] : y0;
+    const int64_t d = (y1 - y0) * f;
+    return std::array<int64_t, 3>{y0 + (d >= 0 ? d / 16 : -((-d + 15) / 16)), 0, 0};
+  };
+  std::vector<int64_t> out;
+  for (int64_t q = 0; q < 16 * (n - 1); q += 152) {  // 9.5 engine ticks
+    const auto p = at(q);
+    out.insert(out.end(), p.begin(), p.end());
+  }
+  out.insert(out.end(), {0, 0, 0});
+  const board::PathCheck ok = board::check_on_path(engine, out, 3, 2.0, 9.6);
+  EXPECT_TRUE(ok.ok()) << ok.first_problem;
+  EXPECT_NEAR(ok.largest_advance, 9.5, 1e-9);
+  std::vector<int64_t> off = out;
+  ASSERT_EQ(out.size(), 3u * 23);
+  off.at(3 * 11 + 1) += 3;  // just past the turn
+  const std::string off_problem = board::check_on_path(engine, off, 3, 2.0, 9.6).first_problem;
+  EXPECT_NE(off_problem.find("output sample 11 is not on the path"), std::string::npos) << off_problem;
+  std::vector<int64_t> back = out;
+  std::copy(out.begin() + 3 * 5, out.begin() + 3 * 6, back.begin() + 3 * 6);  // sample 6 repeats sample 5's place... 
+  std::copy(out.begin() + 3 * 4, out.begin() + 3 * 5, back.begin() + 3 * 7);  // ...and sample 7 goes back to 4's
+  EXPECT_NE(board::check_on_path(engine, back, 3, 2.0, 9.6).first_problem.find("output sample 7 is not on the path"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace traj
