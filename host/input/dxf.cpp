@@ -377,12 +377,18 @@ class Collector : public DL_CreationAdapter {
 
 // mm per drawing unit for $INSUNITS; a note for unitless drawings.
 double units_to_mm(int insunits, const std::string& file, std::vector<std::string>& notes) {
+  // a drawing in other units than mm says so (a part drawn in metres may land far from the origin)
+  auto scaled = [&](double k, const char* name) {
+    notes.push_back(file + ": $INSUNITS " + std::to_string(insunits) + ": drawn in " + name + ", 1 unit = " +
+                    util::fmt("%g", k) + " mm");
+    return k;
+  };
   switch (insunits) {
-    case 1: return 25.4;
-    case 2: return 304.8;
+    case 1: return scaled(25.4, "inches");
+    case 2: return scaled(304.8, "feet");
     case 4: return 1.0;
-    case 5: return 10.0;
-    case 6: return 1000.0;
+    case 5: return scaled(10.0, "centimetres");
+    case 6: return scaled(1000.0, "metres");
     case -1:
     case 0:
       notes.push_back(file + ": $INSUNITS " + (insunits < 0 ? "missing" : "0 (unitless)") + ": taken as millimetres");

@@ -253,8 +253,12 @@ TEST(DxfReader, UnitsAnd3D) {
   ASSERT_EQ(tp.moves.size(), 2u);
   EXPECT_EQ(last(tp.moves[0].curve), Eigen::Vector3d(25.4, 50.8, 127));
   EXPECT_LT((last(tp.moves[1].curve) - Eigen::Vector3d(3, 4, 6) * 25.4).norm(), 1e-12);
+  ASSERT_EQ(tp.notes.size(), 1u);
+  EXPECT_NE(tp.notes[0].find("$INSUNITS 1: drawn in inches, 1 unit = 25.4 mm"), std::string::npos) << tp.notes[0];
   d.insunits = 6;
-  EXPECT_EQ(last(d.read().moves[0].curve), Eigen::Vector3d(1000, 2000, 5000));
+  tp = d.read();
+  EXPECT_EQ(last(tp.moves[0].curve), Eigen::Vector3d(1000, 2000, 5000));
+  EXPECT_NE(tp.notes.at(0).find("drawn in metres, 1 unit = 1000 mm"), std::string::npos);
   d.insunits = 0;
   tp = d.read();
   EXPECT_EQ(last(tp.moves[0].curve), Eigen::Vector3d(1, 2, 5));
