@@ -940,7 +940,7 @@ TEST(CurvedCorner, RetractedHandleAtTheCorner) {
     std::vector<std::vector<Vec>> poly(2);
     for (int m = 0; m < 2; ++m) {
       const ref::Spline rs = to_ref(geo::clamp(tp.moves[m].curve));
-      for (int k = 0; k <= 8000; ++k) poly[m].push_back(eval_ref(rs, k / 8000.0).c);
+      for (int k = 0; k <= 4000; ++k) poly[m].push_back(eval_ref(rs, k / 4000.0).c);
     }
     auto dist = [&](const Vec& p) { return std::min(dist_to_polyline(p, poly[0]), dist_to_polyline(p, poly[1])); };
     const double tol = 0.001;
