@@ -185,16 +185,18 @@ PathCheck check_on_path(const std::vector<int64_t>& engine, const std::vector<in
     return c;
   }
   auto y = [&](uint64_t k, int a) { return engine[k * axes + a]; };
-  // Where output o lies on the engine interval [k, k+1] (a fraction from the axis that moves most)
-  // and how far off that point it is (per axis, LSB); nullopt if its fraction is outside [0, 1].
-  auto place = [&](const int64_t* o, uint64_t k) -> std::optional<std::pair<double, double>> {
+  // Where output o lies on the engine interval [k, k+1] (a fraction from the axis that moves most;
+  // on an interval where nothing moves, any fraction: the one nearest `predicted`) and how far off
+  // that point it is (per axis, LSB); nullopt if its fraction is outside [0, 1].
+  auto place = [&](const int64_t* o, uint64_t k, double predicted) -> std::optional<std::pair<double, double>> {
     double f = 0;
     if (k + 1 < n) {
       int big = 0;
       for (int a = 1; a < axes; ++a)
         if (std::llabs(y(k + 1, a) - y(k, a)) > std::llabs(y(k + 1, big) - y(k, big))) big = a;
       const double d = static_cast<double>(y(k + 1, big) - y(k, big));
-      f = d == 0 ? 0 : static_cast<double>(o[big] - y(k, big)) / d;
+      f = d == 0 ? std::clamp(predicted - static_cast<double>(k), 0.0, 1.0)
+                 : static_cast<double>(o[big] - y(k, big)) / d;
       if (f < -1e-9 || f > 1 + 1e-9) return std::nullopt;
       f = std::clamp(f, 0.0, 1.0);
     }
@@ -217,17 +219,26 @@ PathCheck check_on_path(const std::vector<int64_t>& engine, const std::vector<in
     // the position the last advance predicts: where the path comes back within tol of itself (a
     // reversal: out and back along a line) the output matches a place on the way in and one on the
     // way out, and the earliest would fall behind.
+    // A place more than max_advance ahead cannot be the output's (where the trajectory rests, every
+    // engine sample of the rest matches).
     std::optional<std::pair<double, double>> best;
+    std::optional<double> beyond;  // the nearest matching place too far ahead
     uint64_t best_k = i;
-    const double predicted = pos_prev + advance;
+    const double predicted = pos_prev + advance, furthest = pos_prev + max_advance + 0.01;
     for (uint64_t k = i; k < n && k <= i + reach; ++k) {
-      const auto p = place(o, k);
+      const auto p = place(o, k, predicted);
       if (!p || p->second > tol_lsb + 1e-6 || p->first + 1e-6 < pos_prev) continue;
+      if (t > 0 && p->first > furthest) {
+        if (!beyond) beyond = p->first;
+        continue;
+      }
       if (!best || std::fabs(p->first - predicted) < std::fabs(best->first - predicted)) best = p, best_k = k;
     }
     if (!best) {
-      c.first_problem = "output sample " + std::to_string(t) + " is not on the path within " +
-                        std::to_string(tol_lsb) + " LSB after engine tick " + std::to_string(i);
+      c.first_problem = beyond ? "the output advanced " + std::to_string(*beyond - pos_prev) +
+                                     " engine ticks in one sample (at most " + std::to_string(max_advance) + ")"
+                               : "output sample " + std::to_string(t) + " is not on the path within " +
+                                     std::to_string(tol_lsb) + " LSB after engine tick " + std::to_string(i);
       break;
     }
     c.worst_lsb = std::max(c.worst_lsb, best->second);

@@ -69,7 +69,9 @@ StepCheck check_steps_scaled(const std::vector<int>& shifts, const SimulatedBoar
 // sample (nothing lost). Where the path comes back within `tol_lsb` of
 // itself (out and back along a line) an output matches more than one
 // place: the check takes the one nearest the position its last advance
-// predicts (s changes slowly), not the earliest, which would fall behind.
+// predicts (s changes slowly), not the earliest, which would fall behind,
+// and never one more than `max_advance` ahead; where the trajectory rests
+// (engine samples alike) the position follows the prediction.
 struct PathCheck {
   uint64_t samples = 0;
   double worst_lsb = 0;        // largest distance from the polyline, per axis

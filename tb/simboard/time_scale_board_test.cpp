@@ -391,6 +391,22 @@ TEST(SimBoardTimeScale, OnPathCheckFollowsAPathThatComesBack) {
   std::copy(out.begin() + 3 * 4, out.begin() + 3 * 5, back.begin() + 3 * 7);  // ...and sample 7 goes back to 4's
   EXPECT_NE(board::check_on_path(engine, back, 3, 2.0, 9.6).first_problem.find("output sample 7 is not on the path"),
             std::string::npos);
+  // A rest of 40 engine samples: every one matches an output there; none more than 9.6 ahead
+  // of the last output may be taken (the sim_timescale CLI run failed so: "advanced 9.998").
+  std::vector<int64_t> rest;
+  for (int k = 0; k <= 50; ++k) rest.insert(rest.end(), {7 * k, 0, 0});
+  for (int k = 0; k < 40; ++k) rest.insert(rest.end(), {350, 0, 0});
+  for (int k = 51; k <= 100; ++k) rest.insert(rest.end(), {7 * k, 0, 0});
+  std::vector<int64_t> rest_out;
+  const int64_t rn = static_cast<int64_t>(rest.size() / 3);
+  for (int64_t q = 0; q < 16 * (rn - 1); q += 153) {  // 9.5625 engine ticks
+    const int64_t k = q / 16, f = q % 16, y0 = rest[3 * k], y1 = rest[3 * (k + 1)];
+    rest_out.insert(rest_out.end(), {y0 + (y1 - y0) * f / 16, 0, 0});
+  }
+  rest_out.insert(rest_out.end(), rest.end() - 3, rest.end());
+  const board::PathCheck at_rest = board::check_on_path(rest, rest_out, 3, 2.0, 9.6);
+  EXPECT_TRUE(at_rest.ok()) << at_rest.first_problem;
+  EXPECT_LE(at_rest.largest_advance, 9.6 + 0.01);
 }
 
 }  // namespace
