@@ -259,12 +259,7 @@ class Walker {
       note_once(tag, "<" + util::excerpt(tag) + "> not converted (first " + where + "; Inkscape: Path > Object to Path)");
       return;
     }
-    Affine ctm = parent_ctm;
-    try {
-      if (const char* t = e->Attribute("transform")) ctm = parent_ctm * svg::parse_transform(t);
-    } catch (const PathDataError& err) {
-      fail(where, std::string("transform: ") + err.what());
-    }
+    const Affine ctm = transformed(e, parent_ctm, where);
     if (!shape) {
       children(e, ctm, depth);
       return;
@@ -281,6 +276,16 @@ class Walker {
       for (geo::BSpline& seg : sp.segments) cut.push_back({svg::transformed(seg, m), name_ + ": " + where});
       cuts.push_back(std::move(cut));
     }
+  }
+
+  // The element's coordinates: its transform attribute after its parent's.
+  Affine transformed(const tinyxml2::XMLElement* e, const Affine& parent_ctm, const std::string& where) const {
+    try {
+      if (const char* t = e->Attribute("transform")) return parent_ctm * svg::parse_transform(t);
+    } catch (const PathDataError& err) {
+      fail(where, std::string("transform: ") + err.what());
+    }
+    return parent_ctm;
   }
 
   void index_ids(const tinyxml2::XMLElement* parent) {
@@ -306,12 +311,7 @@ class Walker {
     for (const tinyxml2::XMLNode* a = e; a; a = a->Parent())
       if (a == ref) fail(where, "<use> of " + util::excerpt(href) + ": it contains the <use> itself");
     if (!active_.insert(ref).second) fail(where, "<use> of " + util::excerpt(href) + ": the clones refer to each other in a cycle");
-    Affine ctm = parent_ctm;
-    try {
-      if (const char* t = e->Attribute("transform")) ctm = parent_ctm * svg::parse_transform(t);
-    } catch (const PathDataError& err) {
-      fail(where, std::string("transform: ") + err.what());
-    }
+    Affine ctm = transformed(e, parent_ctm, where);
     Affine shift = Affine::Identity();
     try {
       shift(0, 2) = coordinate(e, "x", viewport_);
