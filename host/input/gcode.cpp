@@ -406,7 +406,7 @@ class Interpreter {
     if (nurbs_) fail(t, "G5.2 NURBS not closed with G5.3");
     note("G28/G30", t, "reference-point move to the machine origin X0 Y0 Z0, further axes at 0 (LinuxCNC's parameters 5161-5166 and "
                        "5181-5186 at their default 0)");
-    if (polar()) fail(text(has('@') ? '@' : '^'), "polar coordinates (@ ^) are supported with G0 and G1 only");
+    if (polar()) refuse_polar();
     const bool named = any_axis();
     const Vector3d mid = named ? end_point() : pos_;
     if (named) ext_end_ = further_end_point();
@@ -467,6 +467,11 @@ class Interpreter {
   }
 
   bool polar() const { return has('@') || has('^'); }
+  std::string polar_word() const { return text(has('@') ? '@' : '^'); }
+  // polar coordinates in a block whose motion does not take them
+  [[noreturn]] void refuse_polar() const {
+    fail(polar_word(), "polar coordinates (@ ^) are supported with G0 and G1 only");
+  }
   bool any_axis() const {
     if (has('X') || has('Y') || has('Z') || polar()) return true;
     for (char c : further_)
@@ -511,7 +516,7 @@ class Interpreter {
   // current angle. G0 and G1 only (rs274 takes them with arcs and cycles
   // too; those are refused here, with the other moves, in motion()).
   void polar_end_point(Vector3d& e) {
-    const std::string word = text(has('@') ? '@' : '^');
+    const std::string word = polar_word();
     if (has('X') || has('Y')) fail(word, "X or Y words with polar coordinates (@ ^)");
     const bool at_origin = pos_[0] == 0 && pos_[1] == 0;
     double r = std::hypot(pos_[1], pos_[0]), theta = std::atan2(pos_[1], pos_[0]);
@@ -535,7 +540,7 @@ class Interpreter {
   void machine_move(const std::string& t, bool explicit_g) {
     if (motion_ != Motion::kRapid && motion_ != Motion::kLine) fail(t, "G53 needs G0 or G1 (as in LinuxCNC)");
     if (!absolute_) fail(t, "G53 in incremental distance mode (G91): machine coordinates are absolute");
-    if (polar()) fail(text(has('@') ? '@' : '^'), "polar coordinates (@ ^) with G53 are not supported");
+    if (polar()) fail(polar_word(), "polar coordinates (@ ^) with G53 are not supported");
     struct Within {
       bool& flag;
       ~Within() { flag = false; }
@@ -607,7 +612,7 @@ class Interpreter {
       return;
     }
     if (polar() && !(motion_ == Motion::kRapid || motion_ == Motion::kLine) && motion_ != Motion::kNone)
-      fail(text(has('@') ? '@' : '^'), "polar coordinates (@ ^) are supported with G0 and G1 only");
+      refuse_polar();
     if (is_cycle(motion_)) {
       if (any_axis()) canned_cycle(word);  // a block with an axis word runs it (with R alone rs274 refuses R)
       return;
