@@ -185,73 +185,117 @@ PathCheck check_on_path(const std::vector<int64_t>& engine, const std::vector<in
     return c;
   }
   auto y = [&](uint64_t k, int a) { return engine[k * axes + a]; };
-  // Where output o lies on the engine interval [k, k+1] (a fraction from the axis that moves most;
-  // on an interval where nothing moves, any fraction: the one nearest `predicted`) and how far off
-  // that point it is (per axis, LSB); nullopt if its fraction is outside [0, 1].
-  auto place = [&](const int64_t* o, uint64_t k, double predicted) -> std::optional<std::pair<double, double>> {
-    double f = 0;
-    if (k + 1 < n) {
-      int big = 0;
-      for (int a = 1; a < axes; ++a)
-        if (std::llabs(y(k + 1, a) - y(k, a)) > std::llabs(y(k + 1, big) - y(k, big))) big = a;
-      const double d = static_cast<double>(y(k + 1, big) - y(k, big));
-      f = d == 0 ? std::clamp(predicted - static_cast<double>(k), 0.0, 1.0)
-                 : static_cast<double>(o[big] - y(k, big)) / d;
-      if (f < -1e-9 || f > 1 + 1e-9) return std::nullopt;
-      f = std::clamp(f, 0.0, 1.0);
-    }
-    // distances from differences (small integers): the positions themselves (up to 2^47 LSB)
-    // would lose 1e-4 LSB in a double
-    double off = 0;
-    for (int a = 0; a < axes; ++a) {
-      const double next = k + 1 < n ? static_cast<double>(y(k + 1, a) - y(k, a)) : 0.0;
-      off = std::max(off, std::fabs(f * next - static_cast<double>(o[a] - y(k, a))));
-    }
-    return std::make_pair(static_cast<double>(k) + f, off);
+  // The places on the engine interval [k, k+1] (positions k + f, f in [0, 1]; the last sample: k)
+  // where the polyline is within tol of output o on every axis: an interval, since each axis bounds f
+  // to an interval; nullopt if there is none. off: the distance there (per axis, LSB) at the fraction
+  // of the axis that moves most, taken into the interval. Distances come from differences (small
+  // integers): the positions themselves (up to 2^47 LSB) would lose 1e-4 LSB in a double.
+  struct Place {
+    double lo, hi, off;  // positions (engine ticks), and the distance from the path there (LSB)
   };
-  uint64_t i = 0;        // the engine interval [i, i+1] of the last output
-  double pos_prev = 0;   // its position, engine ticks
-  double advance = 0;    // the last advance: s changes slowly, so the next is about as large
-  const uint64_t reach = static_cast<uint64_t>(std::ceil(max_advance)) + 2;
-  for (uint64_t t = 0; t < m && c.first_problem.empty(); ++t) {
-    const int64_t* o = &out[t * axes];
-    // Of the places on the path within reach and within tol, ahead of the last, the one nearest
-    // the position the last advance predicts: where the path comes back within tol of itself (a
-    // reversal: out and back along a line) the output matches a place on the way in and one on the
-    // way out, and the earliest would fall behind.
-    // A place more than max_advance ahead cannot be the output's (where the trajectory rests, every
-    // engine sample of the rest matches).
-    std::optional<std::pair<double, double>> best;
-    std::optional<double> beyond;  // the nearest matching place too far ahead
-    uint64_t best_k = i;
-    const double predicted = pos_prev + advance, furthest = pos_prev + max_advance + 0.01;
-    for (uint64_t k = i; k < n && k <= i + reach; ++k) {
-      const auto p = place(o, k, predicted);
-      if (!p || p->second > tol_lsb + 1e-6 || p->first + 1e-6 < pos_prev) continue;
-      if (t > 0 && p->first > furthest) {
-        if (!beyond) beyond = p->first;
+  const double tol = tol_lsb + 1e-6;
+  auto place = [&](const int64_t* o, uint64_t k) -> std::optional<Place> {
+    double lo = 0, hi = k + 1 < n ? 1.0 : 0.0, f_big = 0, d_big = 0;
+    for (int a = 0; a < axes; ++a) {
+      const double d = k + 1 < n ? static_cast<double>(y(k + 1, a) - y(k, a)) : 0.0;
+      const double e = static_cast<double>(o[a] - y(k, a));
+      if (d == 0) {
+        if (std::fabs(e) > tol) return std::nullopt;
         continue;
       }
-      if (!best || std::fabs(p->first - predicted) < std::fabs(best->first - predicted)) best = p, best_k = k;
+      const double f0 = (e - tol) / d, f1 = (e + tol) / d;
+      lo = std::max(lo, std::min(f0, f1));
+      hi = std::min(hi, std::max(f0, f1));
+      if (std::fabs(d) > std::fabs(d_big)) d_big = d, f_big = e / d;
     }
-    if (!best) {
-      c.first_problem = beyond ? "the output advanced " + std::to_string(*beyond - pos_prev) +
-                                     " engine ticks in one sample (at most " + std::to_string(max_advance) + ")"
+    if (lo > hi) return std::nullopt;
+    const double f = std::clamp(f_big, lo, hi);
+    double off = 0;
+    for (int a = 0; a < axes; ++a) {
+      const double d = k + 1 < n ? static_cast<double>(y(k + 1, a) - y(k, a)) : 0.0;
+      off = std::max(off, std::fabs(f * d - static_cast<double>(o[a] - y(k, a))));
+    }
+    return Place{static_cast<double>(k) + lo, static_cast<double>(k) + hi, off};
+  };
+  // Every place each output may be at: intervals of positions (engine ticks) on the path within
+  // tol of it that some place of the output before reaches (not behind it, at most max_advance
+  // ahead). A single guess per output goes wrong where the path comes back near itself (out and back
+  // along a line) or rests (every sample of the rest matches): the sets keep every choice until the
+  // outputs that follow decide. The check fails where the set becomes empty.
+  const double slack = 1e-6, step = max_advance + 0.01;
+  const uint64_t reach = static_cast<uint64_t>(std::ceil(max_advance)) + 2;
+  std::vector<std::vector<Place>> sets(m);
+  for (uint64_t t = 0; t < m && c.first_problem.empty(); ++t) {
+    const int64_t* o = &out[t * axes];
+    const uint64_t k0 = t == 0 ? 0 : static_cast<uint64_t>(std::max(0.0, std::floor(sets[t - 1].front().lo)));
+    const uint64_t k1 = (t == 0 ? 0 : static_cast<uint64_t>(std::floor(sets[t - 1].back().hi))) + reach;
+    std::optional<double> beyond;  // the nearest matching place too far ahead
+    for (uint64_t k = k0; k < n && k <= k1; ++k) {
+      const auto p = place(o, k);
+      if (!p) continue;
+      const Place& cand = *p;
+      if (t == 0) {
+        sets[t].push_back(cand);
+        continue;
+      }
+      for (const Place& q : sets[t - 1]) {
+        const double lo = std::max(cand.lo, q.lo - slack), hi = std::min(cand.hi, q.hi + step);
+        if (lo > hi) {
+          if (cand.lo > q.hi + step && (!beyond || cand.lo - q.hi < *beyond)) beyond = cand.lo - q.hi;
+          continue;
+        }
+        if (!sets[t].empty() && lo <= sets[t].back().hi) {
+          sets[t].back().hi = std::max(sets[t].back().hi, hi);
+          sets[t].back().off = std::max(sets[t].back().off, cand.off);
+        } else {
+          sets[t].push_back({lo, hi, cand.off});
+        }
+      }
+    }
+    if (sets[t].empty())
+      c.first_problem = beyond ? "the output advanced " + std::to_string(*beyond) + " engine ticks in one sample (at most " +
+                                     std::to_string(max_advance) + ")"
                                : "output sample " + std::to_string(t) + " is not on the path within " +
-                                     std::to_string(tol_lsb) + " LSB after engine tick " + std::to_string(i);
-      break;
-    }
-    c.worst_lsb = std::max(c.worst_lsb, best->second);
-    if (t > 0) {
-      advance = best->first - pos_prev;
-      c.largest_advance = std::max(c.largest_advance, advance);
-    }
-    pos_prev = best->first;
-    i = best_k;
+                                     std::to_string(tol_lsb) + " LSB after engine tick " + std::to_string(k0);
   }
-  if (c.first_problem.empty() && c.largest_advance > max_advance + 0.01)
-    c.first_problem = "the output advanced " + std::to_string(c.largest_advance) + " engine ticks in one sample (at most " +
-                      std::to_string(max_advance) + ")";
+  // One assignment, for the figures (the distance from the path, the largest advance): the places
+  // from which the outputs after can still be placed (a pass from the end back), then from the
+  // start the one nearest the position the last advance predicts (s changes slowly).
+  if (c.first_problem.empty()) {
+    for (uint64_t t = m - 1; t-- > 0;) {
+      std::vector<Place> keep;
+      for (const Place& q : sets[t])
+        for (const Place& b : sets[t + 1]) {
+          const double lo = std::max(q.lo, b.lo - step), hi = std::min(q.hi, b.hi + slack);
+          if (lo > hi) continue;
+          if (!keep.empty() && lo <= keep.back().hi) keep.back().hi = std::max(keep.back().hi, hi);
+          else keep.push_back({lo, hi, q.off});
+        }
+      sets[t] = std::move(keep);
+    }
+    double at = 0, advance = 0;
+    for (uint64_t t = 0; t < m; ++t) {
+      const double want = at + advance, lo = t == 0 ? -INFINITY : at - slack, hi = t == 0 ? INFINITY : at + step;
+      std::optional<double> best;
+      double off = 0;
+      for (const Place& q : sets[t]) {
+        const double l = std::max(q.lo, lo), h = std::min(q.hi, hi);
+        if (l > h) continue;
+        const double x = std::clamp(want, l, h);
+        if (!best || std::fabs(x - want) < std::fabs(*best - want)) best = x, off = q.off;
+      }
+      if (!best) {  // cannot happen: every place kept reaches one of the next output's
+        c.first_problem = "output sample " + std::to_string(t) + ": no place left (check_on_path)";
+        break;
+      }
+      if (t > 0) {
+        advance = *best - at;
+        c.largest_advance = std::max(c.largest_advance, advance);
+      }
+      c.worst_lsb = std::max(c.worst_lsb, off);
+      at = *best;
+    }
+  }
   c.ends_on_last = std::equal(out.end() - axes, out.end(), engine.end() - axes);
   if (c.first_problem.empty() && !c.ends_on_last) c.first_problem = "the last output is not the trajectory's last sample";
   return c;

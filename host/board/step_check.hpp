@@ -67,11 +67,11 @@ StepCheck check_steps_scaled(const std::vector<int>& shifts, const SimulatedBoar
 // position (in engine ticks) that never goes back and advances by at most
 // `max_advance` per output sample; the last output is the last engine
 // sample (nothing lost). Where the path comes back within `tol_lsb` of
-// itself (out and back along a line) an output matches more than one
-// place: the check takes the one nearest the position its last advance
-// predicts (s changes slowly), not the earliest, which would fall behind,
-// and never one more than `max_advance` ahead; where the trajectory rests
-// (engine samples alike) the position follows the prediction.
+// itself (out and back along a line, a stop at a corner) or rests (engine
+// samples alike) an output matches more than one place: the check keeps,
+// per output, every place that some place of the output before reaches,
+// and fails where none is left; its figures are those of one such
+// assignment (the latest places, taken from the end back).
 struct PathCheck {
   uint64_t samples = 0;
   double worst_lsb = 0;        // largest distance from the polyline, per axis
