@@ -203,9 +203,9 @@ Loaded load(const std::string& file, const std::string& format, const std::strin
                 "Toolpath\n  moves                %zu programmed; %zu feed and %zu rapid curves after blending, %zu exact "
                 "stops\n"
                 "  corners              %d blended, %d of them wide (largest blend deviation %.4g mm, within %g %% of the "
-                "tolerance), %zu kept as stops\n",
+                "tolerance), %zu kept as stops (%zu of them faster so)\n",
                 tp.moves.size(), tpp.feed_moves, tpp.rapids, tpp.stops, tpp.corners_blended, tpp.wide_blends,
-                tpp.blend_deviation, 100 * job::ToolpathOptions{}.blend_share, tpp.corner_stops);
+                tpp.blend_deviation, 100 * job::ToolpathOptions{}.blend_share, tpp.corner_stops, tpp.faster_stops);
   double fastest = 0;
   for (const auto& m : tp.moves)
     if (m.kind == input::Move::Kind::kFeed) fastest = std::max(fastest, m.feed > 0 ? m.feed : cfg.limits.feed);
@@ -277,11 +277,11 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
                 "  moves                %zu programmed; %zu feed and %zu rapid curves after blending, %zu exact "
                 "stops\n"
                 "  corners              %d blended, %d of them wide (largest blend deviation %.4g mm, within %g %% of "
-                "the tolerance), %zu kept as stops\n"
+                "the tolerance), %zu kept as stops (%zu of them faster so)\n"
                 "  local speed caps     %zu from tick checks and the fit\n",
                 t.chunks, t.max_pending, t.split_moves, t.moves, t.feed_curves, t.rapid_curves, t.stops,
                 t.corners_blended, t.wide_blends, t.blend_deviation, 100 * job::ToolpathOptions{}.blend_share,
-                t.corner_stops, st.caps);
+                t.corner_stops, t.faster_stops, st.caps);
   }
   return 0;
 }

@@ -926,6 +926,7 @@ const char* to_string(StopReason r) {
     case StopReason::kExactStop: return "exact stop";
     case StopReason::kReversal: return "reversal";
     case StopReason::kCurvedMove: return "curved move";
+    case StopReason::kFaster: return "faster as a stop";
   }
   return "?";
 }
@@ -986,6 +987,37 @@ geo::BSpline run_spline(const std::vector<Vec>& v, const Vec& t_in, double d_fir
   return b;
 }
 
+namespace {
+
+// The corner between segments l and r (join j, spacing d set) with the blend it takes if blended on its
+// own: the wide one where choose_wide takes it (as the emission below chooses), else the five-point.
+CornerCandidate candidate(const std::vector<Element>& el, const std::vector<Join>& joins, size_t k, double tol,
+                          double feed, const BlendOptions& o, WideCache& cache) {
+  const Element& l = el[k];
+  const Element& r = el[k + 1];
+  const Join& j = joins[k];
+  CornerCandidate c;
+  const WideChoice w = o.wide ? choose_wide(j.turn, tol, o.share * std::min(l.length, r.length), j.d, cache)
+                              : WideChoice{};
+  c.blend = w.chosen ? wide_blend(l.b, l.t_end, r.t_start, w.l0, w.shape) : corner_blend(l.b, l.t_end, r.t_start, j.d);
+  c.v = l.b;
+  c.t_in = l.t_end;
+  c.t_out = r.t_start;
+  c.leg_in = l.length;
+  c.leg_out = r.length;
+  c.feed = feed;
+  c.turn = j.turn;
+  // the straight-on segments before and after: joins that pass or blend a turn of at most stop_turn
+  auto on = [&](size_t jk) { return joins[jk].kind != JoinKind::kStop && joins[jk].turn <= o.stop_turn; };
+  c.run_in = l.length;
+  for (size_t i = k; i > 0 && on(i - 1) && el[i - 1].segment; --i) c.run_in += el[i - 1].length;
+  c.run_out = r.length;
+  for (size_t i = k + 1; i + 1 < el.size() && on(i) && el[i + 1].segment; ++i) c.run_out += el[i + 1].length;
+  return c;
+}
+
+}  // namespace
+
 BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const BlendOptions& o) {
   if (!(default_tol > 0)) throw std::invalid_argument("blend_corners: default tolerance must be positive");
   if (!(o.share > 0 && o.share <= 1)) throw std::invalid_argument("blend_corners: share must be in (0, 1]");
@@ -1012,6 +1044,12 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       const double d_tol = blend_spacing_for(tol, j.turn);
       const double d_leg = 0.5 * o.share * std::min(el[k].length, el[k + 1].length);
       j.d = std::min(d_tol, d_leg);
+      if (o.stop_if_faster && j.turn > o.stop_turn &&
+          o.stop_if_faster(candidate(el, joins, k, tol, std::min(ml.feed, mr.feed), o, wide_cache))) {
+        j.kind = JoinKind::kStop;
+        res.stops.push_back({el[k].move, ml.where, StopReason::kFaster, j.turn});
+        continue;
+      }
       b.deviation = blend_deviation(j.d, j.turn);
       b.shortened = d_leg < d_tol;
       b.peak_curvature = blend_peak_curvature(j.d, j.turn);

@@ -17,6 +17,7 @@
 #pragma once
 #include <Eigen/Dense>
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,22 @@ struct RunShape {
   // Spans (mm of chord length) of the smoothed run (README.md, "Runs"): a least-squares cubic over the
   // polygon, tried first; 0: runs interpolate their vertices.
   double fit_span = 2.0;
+};
+
+// A point or direction of at most 8 coordinates (the core's axes), held on the stack: the blend
+// searches evaluate millions of them, and a heap vector would allocate for each.
+using Point = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 8, 1>;
+
+// A line-line corner about to be blended on its own, as BlendOptions::stop_if_faster sees it.
+struct CornerCandidate {
+  geo::BSpline blend;              // the transition it would take (five-point or wide), from leg to leg
+  Point v, t_in, t_out;            // the corner and the unit directions of the legs
+  double leg_in = 0, leg_out = 0;  // the legs' lengths, mm
+  // The straight-on path before and after (mm): the leg and the segments beyond it joined by turns of
+  // at most stop_turn, where the motion may speed up towards the corner and after it.
+  double run_in = 0, run_out = 0;
+  double feed = 0;                 // the smaller of the two moves' feeds (0: none programmed)
+  double turn = 0;                 // rad
 };
 
 struct BlendOptions {
@@ -59,6 +76,13 @@ struct BlendOptions {
   // A line-line corner takes the seven-point wide blend (README.md, "Wide blends") where its peak
   // |d3x/ds3| is at least 5 % below the five-point blend's; false: the five-point blend always.
   bool wide = true;
+  // Asked for each line-line corner turning by more than stop_turn that would be blended on its own
+  // (a run's corners are not asked): true leaves it an exact stop (StopReason::kFaster). Under a jerk
+  // limit a sharp corner's blend is passed slowly over its whole length, and at a high feed that can
+  // take longer than stopping at the corner (README.md, "Stops that are faster"); the caller knows
+  // the limits (job/toolpath_job plans both locally). Unset: every such corner is blended.
+  std::function<bool(const CornerCandidate&)> stop_if_faster;
+  double stop_turn = 0.35;  // rad (20 degrees)
 };
 
 // One curve of the output chain, with what it inherits from its move.
@@ -72,7 +96,7 @@ struct ChainCurve {
   double dwell = 0;         // seconds at rest after it (the move's G4, on its last curve)
 };
 
-enum class StopReason { kRapid, kExactStop, kReversal, kCurvedMove };
+enum class StopReason { kRapid, kExactStop, kReversal, kCurvedMove, kFaster };
 const char* to_string(StopReason r);
 
 // A corner (tangent break) left as it is: the planner stops there (or passes it at its corner speed).
@@ -118,10 +142,6 @@ struct BlendResult {
   std::vector<Run> runs;
   std::vector<CornerStop> stops;
 };
-
-// A point or direction of at most 8 coordinates (the core's axes), held on the stack: the blend
-// searches evaluate millions of them, and a heap vector would allocate for each.
-using Point = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 8, 1>;
 
 // Closed forms of the five-point blend (README.md derives them).
 double blend_deviation(double d, double turn);

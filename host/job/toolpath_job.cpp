@@ -11,7 +11,46 @@ namespace traj::job {
 
 using plan::PlanError;
 
-input::Toolpath blend_toolpath(const input::Toolpath& tp, double tol, const ToolpathOptions& o, ToolpathPlan& r) {
+namespace {
+
+void add_line(plan::Path& p, const corners::Point& a, const corners::Point& b, const char* where) {
+  if ((b - a).norm() > 1e-9) p.add(geo::make_line(a, b), where);
+}
+
+// Whether the corner is passed sooner as an exact stop than through its blend: both planned at the
+// job's limits, from rest to rest on straight legs along the corner's, each half the straight-on path
+// on its side (the blend takes at most half of its leg) but no longer than a speed-up from rest to the
+// feed needs. A plan that fails keeps the blend.
+bool stop_is_faster(const corners::CornerCandidate& c, const JobConfig& cfg) {
+  plan::Limits L = cfg.limits;
+  if (c.feed > 0) L.feed = std::min(L.feed, c.feed);
+  plan::PlanOptions po = cfg.plan_options();
+  po.caps.clear();
+  po.dwells.clear();
+  // a jerk-limited speed-up from rest to the feed covers at most feed (feed / a + a / j)
+  const double reach = L.feed * (L.feed / L.a_tan + L.a_tan / L.j_tan);
+  const double h_in = std::max(0.5 * c.leg_in, std::min(0.5 * c.run_in, reach));
+  const double h_out = std::max(0.5 * c.leg_out, std::min(0.5 * c.run_out, reach));
+  const corners::Point a = c.v - h_in * c.t_in, b = c.v + h_out * c.t_out;
+  const corners::Point b0 = c.blend.ctrl.row(0).transpose(), b1 = c.blend.ctrl.row(c.blend.n_ctrl() - 1).transpose();
+  plan::Path blended, stopped;
+  add_line(blended, a, b0, "leg in");
+  blended.add(c.blend, "blend");
+  add_line(blended, b1, b, "leg out");
+  add_line(stopped, a, c.v, "leg in");
+  add_line(stopped, c.v, b, "leg out");
+  try {
+    return plan::plan_path(stopped, L, po).duration() < plan::plan_path(blended, L, po).duration();
+  } catch (const PlanError&) {
+    return false;
+  }
+}
+
+}  // namespace
+
+input::Toolpath blend_toolpath(const input::Toolpath& tp, const JobConfig& cfg, const ToolpathOptions& o,
+                               ToolpathPlan& r) {
+  const double tol = cfg.limits.tol;
   const double share = o.blend_share;
   if (!(share > 0 && share < 1)) throw PlanError("blend share must be in (0, 1)");
   input::Toolpath part = tp;
@@ -19,11 +58,15 @@ input::Toolpath blend_toolpath(const input::Toolpath& tp, double tol, const Tool
     if (m.tolerance >= 0) m.tolerance *= share;
   corners::BlendOptions bo;
   bo.wide = o.wide_blends;
+  if (o.faster_stops) bo.stop_if_faster = [&cfg](const corners::CornerCandidate& c) { return stop_is_faster(c, cfg); };
   const corners::BlendResult b = corners::blend_corners(part, tol * share, bo);
   r.corners_blended = b.corners_blended;
   r.wide_blends = static_cast<int>(std::count_if(b.blends.begin(), b.blends.end(), [](const auto& x) { return x.wide; }));
   r.blend_deviation = b.max_deviation;
   r.corner_stops = b.stops.size();
+  r.faster_stops = static_cast<size_t>(std::count_if(b.stops.begin(), b.stops.end(), [](const auto& x) {
+    return x.reason == corners::StopReason::kFaster;
+  }));
   return corners::to_toolpath(b, tp);
 }
 
@@ -39,7 +82,7 @@ ToolpathPlan toolpath_plan(const input::Toolpath& original, const JobConfig& cfg
   if (original.moves.empty()) throw PlanError("the toolpath has no moves");
   ToolpathPlan r;
   r.cfg = cfg;
-  const input::Toolpath tp = o.blend ? blend_toolpath(original, cfg.limits.tol, o, r) : original;
+  const input::Toolpath tp = o.blend ? blend_toolpath(original, cfg, o, r) : original;
   if (o.blend) r.cfg.limits.tol = cfg.limits.tol * (1 - o.blend_share);
   const double rapid = rapid_speed(cfg, tp.axes, o);
   double fastest = 0;

@@ -38,6 +38,9 @@ struct ToolpathOptions {
   bool blend = true;  // blend the corners between feed moves (host/corners)
   double blend_share = 0.9;  // share of the tolerance for the blends; the fit gets the rest
   bool wide_blends = true;   // corners::BlendOptions::wide (host/corners, "Wide blends")
+  // A line-line corner of more than 20 degrees is left an exact stop where that is faster at the
+  // job's limits than its blend (corners::BlendOptions::stop_if_faster; both planned locally).
+  bool faster_stops = true;
 };
 
 struct ToolpathPlan {
@@ -47,7 +50,8 @@ struct ToolpathPlan {
   int corners_blended = 0;     // corners replaced by a G2 transition
   int wide_blends = 0;         // of them, line-line corners with a wide blend (host/corners, "Wide blends")
   double blend_deviation = 0;  // largest distance of a transition from its corner, mm
-  size_t corner_stops = 0;     // corners left as stops (rapids, exact stops, reversals, arc ends)
+  size_t corner_stops = 0;     // corners left as stops (rapids, exact stops, reversals, arc ends, faster so)
+  size_t faster_stops = 0;     // of them, corners where a stop is faster than the blend
 };
 
 // PlanError naming the move if the moves do not chain (a reader's bug) or a
@@ -56,8 +60,10 @@ ToolpathPlan toolpath_plan(const input::Toolpath& tp, const JobConfig& cfg, cons
 
 // Parts of toolpath_plan, for a toolpath streamed in chunks (job/toolpath_stream.hpp):
 // the corners blended within o.blend_share of each move's tolerance (default:
-// of `tol`), with r's corner counts and largest deviation set; and the rapid speed.
-input::Toolpath blend_toolpath(const input::Toolpath& tp, double tol, const ToolpathOptions& o, ToolpathPlan& r);
+// of cfg.limits.tol; cfg's limits also decide the faster stops), with r's corner
+// counts and largest deviation set; and the rapid speed.
+input::Toolpath blend_toolpath(const input::Toolpath& tp, const JobConfig& cfg, const ToolpathOptions& o,
+                               ToolpathPlan& r);
 double rapid_speed(const JobConfig& cfg, int axes, const ToolpathOptions& o);
 
 }  // namespace traj::job

@@ -110,11 +110,12 @@ void ToolpathStream::blend_next_chunk() {
   if (part.moves.empty()) return;
   ++totals_.chunks;
   ToolpathPlan stats;
-  const input::Toolpath b = opt_.blend ? blend_toolpath(part, job_cfg_.limits.tol, opt_, stats) : part;
+  const input::Toolpath b = opt_.blend ? blend_toolpath(part, job_cfg_, opt_, stats) : part;
   totals_.corners_blended += stats.corners_blended;
   totals_.wide_blends += stats.wide_blends;
   totals_.blend_deviation = std::max(totals_.blend_deviation, stats.blend_deviation);
   totals_.corner_stops += stats.corner_stops;
+  totals_.faster_stops += stats.faster_stops;
   for (const input::Move& m : b.moves) {
     StreamCurve c;
     c.curve = m.curve;

@@ -49,7 +49,7 @@ class ToolpathStream : public StreamSource {
     size_t feed_curves = 0, rapid_curves = 0, stops = 0;
     int corners_blended = 0, wide_blends = 0;
     double blend_deviation = 0;  // largest, mm
-    size_t corner_stops = 0;
+    size_t corner_stops = 0, faster_stops = 0;  // corners left as stops; of them, faster so
     size_t max_pending = 0;      // most moves held at once
   };
   const Totals& totals() const { return totals_; }

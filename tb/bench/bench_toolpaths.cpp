@@ -86,6 +86,7 @@ struct Preparation {
   Prepare fn;
   bool blend = false;  // job::ToolpathOptions::blend: corner blending within blend_share of the tolerance
   bool wide = true;    // job::ToolpathOptions::wide_blends
+  bool faster_stops = true;  // job::ToolpathOptions::faster_stops
 };
 
 // The preparations --prepare can name; corner blending plugs in as one more entry.
@@ -96,6 +97,8 @@ const std::vector<Preparation>& preparations() {
        [](const input::Toolpath& tp, double) { return tp; }, true},
       {"blend5", "as blend, with the five-point blend at every corner blended on its own (no wide blends)",
        [](const input::Toolpath& tp, double) { return tp; }, true, false},
+      {"blend-all", "as blend, with every corner blended (none left a stop where that is faster)",
+       [](const input::Toolpath& tp, double) { return tp; }, true, true, false},
   };
   return list;
 }
@@ -536,6 +539,7 @@ Row run_case(const char* name, const LimitSet& ls, const input::Toolpath& progra
     job::ToolpathOptions opts;
     opts.blend = prep.blend;
     opts.wide_blends = prep.wide;
+    opts.faster_stops = prep.faster_stops;
     row.traj = run_trajcore(programmed, prepared, ls.cfg, opts, probe);
   } catch (const std::exception& e) {
     row.traj.error = std::string("preparation: ") + e.what();

@@ -351,6 +351,52 @@ TEST(CornerBlend, StopsAndPassedJoins) {
   }
 }
 
+// stop_if_faster is asked about line-line corners sharper than stop_turn only, sees the corner, its
+// legs, the straight-on path beyond them and the blend it would take, and a corner it answers true for
+// is an exact stop on the programmed vertex.
+TEST(CornerBlend, StopIfFasterAsksSharpCornersOnly) {
+  const double a10 = 10 * kPi / 180;
+  const Vec A = v2(0, 0), B = v2(10, 0), C = B + 10 * v2(std::cos(a10), std::sin(a10));
+  const Vec D = C + 5 * v2(std::cos(a10 + kPi / 2), std::sin(a10 + kPi / 2));
+  std::vector<traj::corners::CornerCandidate> asked;
+  BlendOptions o;
+  o.merge_runs = false;
+  o.stop_if_faster = [&](const traj::corners::CornerCandidate& c) {
+    asked.push_back(c);
+    return true;
+  };
+  const double tol = 0.01;
+  const BlendResult r = traj::corners::blend_corners(polyline({A, B, C, D}), tol, o);
+  ASSERT_EQ(asked.size(), 1u);  // the 90 degree corner at C, not the 10 degree one at B
+  const auto& c = asked[0];
+  EXPECT_NEAR((c.v - C).norm(), 0, 1e-12);
+  EXPECT_NEAR(c.turn, kPi / 2, 1e-12);
+  EXPECT_NEAR(c.leg_in, 10, 1e-12);
+  EXPECT_NEAR(c.leg_out, 5, 1e-12);
+  EXPECT_NEAR(c.run_in, 20, 1e-12);  // through the 10 degree corner
+  EXPECT_NEAR(c.run_out, 5, 1e-12);
+  EXPECT_NEAR(c.feed, 100, 0);
+  // the blend starts on the arriving leg and ends on the leaving one, within the tolerance of C
+  const Vec b0 = c.blend.ctrl.row(0).transpose(), b1 = c.blend.ctrl.row(c.blend.n_ctrl() - 1).transpose();
+  EXPECT_NEAR(dist_to_segment(b0, B, C), 0, 1e-12);
+  EXPECT_NEAR(dist_to_segment(b1, C, D), 0, 1e-12);
+  const double closest = dist_point_to_curve(to_ref(c.blend), C);
+  EXPECT_LE(closest, tol * (1 + 1e-9));
+  EXPECT_GT(closest, 0.5 * tol);
+  // answered true: a stop at C (the chain has a curve ending exactly there), the 10 degree corner blended
+  EXPECT_EQ(r.corners_blended, 1);
+  ASSERT_EQ(r.stops.size(), 1u);
+  EXPECT_EQ(r.stops[0].reason, StopReason::kFaster);
+  bool ends_at_c = false;
+  for (const auto& cc : r.curves) ends_at_c |= (cc.curve.ctrl.row(cc.curve.n_ctrl() - 1).transpose() - C).norm() == 0;
+  EXPECT_TRUE(ends_at_c);
+  // answered false: both blended
+  o.stop_if_faster = [](const traj::corners::CornerCandidate&) { return false; };
+  const BlendResult all = traj::corners::blend_corners(polyline({A, B, C, D}), tol, o);
+  EXPECT_EQ(all.corners_blended, 2);
+  EXPECT_TRUE(all.stops.empty());
+}
+
 // A degree-1 move of many points is a polyline: its inner vertices are blended too.
 TEST(CornerBlend, PolylineMoveIsSplitAtItsVertices) {
   Eigen::MatrixXd P(4, 2);

@@ -245,3 +245,69 @@ TEST(ToolpathStream, CamProgramStreamedAgreesWithWholePath) {
               cw.sample_dev, cs.vertex_dev, cw.vertex_dev, agree, vs.worst, vw.worst);
   std::filesystem::remove_all(dir);
 }
+
+namespace {
+
+// A square spiral pocket (legs 24 mm down to 4 mm, 90 degree corners) at feed `feed`, limits of a
+// fast machine (bench_toolpaths' set (i)).
+input::Toolpath spiral_pocket(double feed) {
+  input::Toolpath tp;
+  tp.axes = 2;
+  double x = 0, y = 0, len = 24;
+  const double dx[4] = {1, 0, -1, 0}, dy[4] = {0, 1, 0, -1};
+  for (int k = 0; len >= 4; ++k) {
+    Eigen::VectorXd a(2), b(2);
+    a << x, y;
+    x += len * dx[k % 4];
+    y += len * dy[k % 4];
+    b << x, y;
+    input::Move m;
+    m.curve = geo::make_line(a, b);
+    m.feed = feed;
+    m.where = "pocket: G1 " + std::to_string(k + 1);
+    tp.moves.push_back(m);
+    if (k % 2 == 1) len -= 4;
+  }
+  return tp;
+}
+
+job::JobConfig fast_machine() {
+  job::JobConfig c;
+  auto& L = c.limits;
+  for (int a = 0; a < plan::kMaxAxes; ++a) L.v_axis[a] = 100, L.a_axis[a] = 3000, L.j_axis[a] = 60000;
+  L.a_tan = L.a_cen = 3000;
+  L.j_tan = L.j_cen = 60000;
+  L.feed = 100;
+  L.tol = 0.05;
+  c.machine.period = 0.5e-3;
+  return c;
+}
+
+double planned_time(const input::Toolpath& tp, const job::JobConfig& cfg, bool faster_stops, size_t& stops) {
+  job::ToolpathOptions o;
+  o.faster_stops = faster_stops;
+  const job::ToolpathPlan r = job::toolpath_plan(tp, cfg, o);
+  stops = r.faster_stops;
+  return plan::plan_path(r.path, r.cfg.limits, r.cfg.plan_options()).duration();
+}
+
+}  // namespace
+
+// At 100 mm/s a 90 degree corner's blend is passed at a few mm/s over its whole length, and stopping
+// at the corner is faster: the corners are left stops, and the whole pocket, planned whole, takes less
+// time than with every corner blended. At 2 mm/s the blends pass at the feed: all stay blended.
+TEST(ToolpathPlan, SharpCornersStopWhereThatIsFaster) {
+  const job::JobConfig cfg = fast_machine();
+  size_t stops_on = 0, stops_off = 0;
+  const input::Toolpath fast = spiral_pocket(100);
+  const double t_on = planned_time(fast, cfg, true, stops_on);
+  const double t_off = planned_time(fast, cfg, false, stops_off);
+  EXPECT_EQ(stops_on, fast.moves.size() - 1);
+  EXPECT_EQ(stops_off, 0u);
+  EXPECT_LT(t_on, 0.9 * t_off) << t_on << " s with the stops, " << t_off << " s blended";
+  const input::Toolpath slow = spiral_pocket(2);
+  const double s_on = planned_time(slow, cfg, true, stops_on);
+  const double s_off = planned_time(slow, cfg, false, stops_off);
+  EXPECT_EQ(stops_on, 0u);
+  EXPECT_EQ(s_on, s_off);
+}
