@@ -23,7 +23,7 @@ void add_line(plan::Path& p, const corners::Point& a, const corners::Point& b, c
 // feed needs. A plan that fails keeps the blend.
 bool stop_is_faster(const corners::CornerCandidate& c, const JobConfig& cfg) {
   plan::Limits L = cfg.limits;
-  if (c.feed > 0) L.feed = std::min(L.feed, c.feed);
+  if (c.feed > 0) L.feed = c.feed;  // the moves' own feed (toolpath_plan lets it exceed the job's)
   plan::PlanOptions po = cfg.plan_options();
   po.caps.clear();
   po.dwells.clear();

@@ -305,6 +305,11 @@ TEST(ToolpathPlan, SharpCornersStopWhereThatIsFaster) {
   EXPECT_EQ(stops_on, fast.moves.size() - 1);
   EXPECT_EQ(stops_off, 0u);
   EXPECT_LT(t_on, 0.9 * t_off) << t_on << " s with the stops, " << t_off << " s blended";
+  // the moves' feed decides, also above the job's own feed (the program's F runs as programmed)
+  job::JobConfig slow_job = cfg;
+  slow_job.limits.feed = 2;
+  EXPECT_LT(planned_time(fast, slow_job, true, stops_on), 0.9 * planned_time(fast, slow_job, false, stops_off));
+  EXPECT_EQ(stops_on, fast.moves.size() - 1);
   const input::Toolpath slow = spiral_pocket(2);
   const double s_on = planned_time(slow, cfg, true, stops_on);
   const double s_off = planned_time(slow, cfg, false, stops_off);
