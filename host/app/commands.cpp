@@ -191,13 +191,15 @@ input::GcodeOptions gcode_options(const std::string& tool_table, const job::JobC
 
 
 Loaded load(const std::string& file, const std::string& format, const std::string& tool_table,
-            const job::JobConfig& cfg) {
+            const job::JobConfig& cfg, bool blend_all) {
   const input::FileKind kind = input::file_kind(file, format);
   if (kind == input::FileKind::kJsonl) return {load_jsonl(file), cfg, {}};
   if (!input::is_toolpath(kind)) return {input::load_path(file), cfg, {}};
   const input::Toolpath tp = input::read_toolpath(file, kind, gcode_options(tool_table, cfg));
   for (const auto& n : tp.notes) std::fprintf(stderr, "trajcore: note: %s\n", n.c_str());
-  job::ToolpathPlan tpp = job::toolpath_plan(tp, cfg);
+  job::ToolpathOptions to;
+  to.faster_stops = !blend_all;
+  job::ToolpathPlan tpp = job::toolpath_plan(tp, cfg, to);
   char b[512];
   std::snprintf(b, sizeof b,
                 "Toolpath\n  moves                %zu programmed; %zu feed and %zu rapid curves after blending, %zu exact "
@@ -235,6 +237,7 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
     // G-code read a line at a time as the windows need curves, blended in chunks
     job::ToolpathOptions to;
     to.gcode = gcode_options(a.tool_table, a.cfg);
+    to.faster_stops = !a.blend_all;
     toolpath = std::make_unique<job::ToolpathStream>(a.input, input::file_kind(a.input, a.format), a.cfg, to);
     cfg = toolpath->config();
   } else {
@@ -288,7 +291,7 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
 
 int plan_whole(const PlanArgs& a) {
   if (a.input.empty()) throw PlanError("give a path file");
-  const Loaded in = load(a.input, a.format, a.tool_table, a.cfg);
+  const Loaded in = load(a.input, a.format, a.tool_table, a.cfg, a.blend_all);
   const plan::Path& path = in.path;
   const job::JobConfig& cfg = in.cfg;
   const auto res = job::run_job(path, cfg, progress);
@@ -376,7 +379,7 @@ int plan_command(const PlanArgs& a) {
 
 int run_command(const RunArgs& a) {
   if (a.input.empty()) throw PlanError("give a path file");
-  const Loaded in = load(a.input, a.format, a.tool_table, a.cfg);
+  const Loaded in = load(a.input, a.format, a.tool_table, a.cfg, a.blend_all);
   const plan::Path& path = in.path;
   const job::JobConfig& cfg = in.cfg;
   const auto res = job::run_job(path, cfg, progress);

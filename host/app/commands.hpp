@@ -15,6 +15,7 @@ struct PlanArgs {
   std::string input;                 // path file (empty with raster)
   std::string format;                // "json", "jsonl", "gcode", "svg", "dxf" or empty (by the file name)
   std::string tool_table;            // LinuxCNC tool table for G43 (empty: none; G43 is then refused)
+  bool blend_all = false;            // blend every corner, also where a stop is faster (job::ToolpathOptions::faster_stops off)
   std::string output = "out/plan.trj";
   size_t window = 0;                 // > 0: stream with this window
   bool window_given = false;         // --window was on the command line
@@ -30,6 +31,7 @@ struct RunArgs {
   std::string input;
   std::string format;                // as PlanArgs::format
   std::string tool_table;            // as PlanArgs::tool_table
+  bool blend_all = false;            // as PlanArgs::blend_all
   std::string out_dir = "out";
   TimeScaleArgs scale;               // as PlanArgs::scale
 };

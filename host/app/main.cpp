@@ -187,6 +187,10 @@ int main(int argc, char** argv) {
                  "tool's holder, the program's Z plus the length; without one G43 is refused")
       ->check(CLI::ExistingFile);
 
+  pl->add_flag("--blend-all", pa.blend_all,
+              "blend every corner within the tolerance, also a sharp one where stopping at it is faster at the limits "
+                 "(by default such a corner is an exact stop on the programmed vertex: host/corners/README.md)");
+
   pl->footer(
       "JSON Lines paths (*.jsonl or --format jsonl): one curve per line, each a curve object of the butterfly "
       "format (degree, knots, control_points, optional weights); blank lines and lines starting with # are "
@@ -229,6 +233,8 @@ int main(int argc, char** argv) {
                  "tool's holder, the program's Z plus the length; without one G43 is refused")
       ->check(CLI::ExistingFile);
 
+  rn->add_flag("--blend-all", ra.blend_all, "blend every corner within the tolerance, also a sharp one where stopping at it is faster at the limits "
+                 "(by default such a corner is an exact stop on the programmed vertex: host/corners/README.md)");
   rn->add_option("--out-dir", ra.out_dir, "where to write plan.trj, samples.csv, report.txt, *.svg")->capture_default_str();
   add_limits(rn, ra.cfg, axes);
   add_time_scale(rn, ra.scale);
