@@ -301,7 +301,7 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
       if (k < k1) {
         const double e = std::sqrt(e2);
         seg.max_dev = std::max(seg.max_dev, e);
-        if (e > std::max(o.feed_rel * ts[k].v * period, o.feed_abs) || e > o.fit_tol) return false;
+        if (e > std::max(o.feed_rel * ts[k].v * period - o.feed_quant / 2, o.feed_abs) || e > o.fit_tol) return false;
       }
       if (std::sqrt(c2) > chord_max) return false;
     }
@@ -505,8 +505,19 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
   // report's feed figures start there: the samples stay few near a stop,
   // and a corner passed slowly (where the plan's velocity turns within a
   // tick and the fit's over a fit tick) needs none.
+  // The budget of the velocity error between two samples dl apart, plan
+  // speeds va and vb there: with feed_bound the plan's speed between them is
+  // within dl^2/8 J_t of [min, max] of the two. The report checks the ticks
+  // whose chord is at least v_floor h: none where the fastest speed is below
+  // v_floor; elsewhere the chords are at least the slowest speed's or v_floor
+  // h, whichever is larger (the budget's v), and the output's rounding of the
+  // chord is left out of it (feed_quant).
   const double v_floor = 1e-2 * L.top_speed(d);
-  auto feed_budget = [&](double v) { return v < v_floor ? 1e300 : 2 * o.feed_rel * v; };
+  auto feed_budget = [&](double va, double vb, double dl) {
+    const double bulge = o.feed_bound ? dl * dl / 8 * plan.J_t : 0;
+    if (std::max(va, vb) + bulge < v_floor) return 1e300;
+    return 2 * o.feed_rel * std::max(std::min(va, vb) - bulge, v_floor) - o.feed_quant / h;
+  };
 
   std::vector<FineSample> W;  // the samples, in order
   W.reserve(ts.size() + 16);
@@ -596,8 +607,7 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
     }
     // where slow, the samples the feed bound needs
     if (o.feed_bound) {
-      const double v_lo = std::max(0.0, std::min(A.s->v, B.s->v) - n * n * h * h / 8 * plan.J_t);
-      const double dmax = std::sqrt(4 * feed_budget(v_lo) / (2 * Jp));
+      const double dmax = std::sqrt(4 * feed_budget(A.s->v, B.s->v, static_cast<double>(n) * h) / (2 * Jp));
       const long long m = std::min<long long>(n, static_cast<long long>(std::ceil(n * h / std::max(dmax, 1e-300))));
       for (long long k = 1; k < m; ++k) between.push_back({A.e + n * k / m, nullptr});
     }
@@ -720,8 +730,8 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
         // the allowances of the full check for the gap before the sample
         const double dl = static_cast<double>(W[j].e - W[j - 1].e) * h;
         const double fb = o.feed_bound ? dl * dl / 8 : 0;  // the feed check's allowance between samples
-        const double v_lo = std::max(0.0, std::min(W[j - 1].s->v, W[j].s->v) - fb * plan.J_t);
-        if (e.e + dl * dl / 8 * (e.e2 + dl / 2 * E3) > 0.9 * o.fit_tol || e.e1 + fb * E3 > 0.9 * feed_budget(v_lo) ||
+        if (e.e + dl * dl / 8 * (e.e2 + dl / 2 * E3) > 0.9 * o.fit_tol ||
+            e.e1 + fb * E3 > 0.9 * feed_budget(W[j - 1].s->v, W[j].s->v, dl) ||
             !screen_ok)
           return false;
       }
@@ -733,14 +743,11 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
       const FineSample& B = j < j1 ? W[j] : E;
       const Err eb = j < j1 ? err_at(B) : Err{};
       const long long gap = B.e - A->e;
-      double dev = std::max(ea.e, eb.e), fe = std::max(ea.e1, eb.e1), v_lo = std::min(A->s->v, B.s->v);
+      double dev = std::max(ea.e, eb.e), fe = std::max(ea.e1, eb.e1);
+      const double dl = static_cast<double>(gap) * h;
       if (gap > 1) {
-        const double dl = static_cast<double>(gap) * h;
         dev += dl * dl / 8 * (std::max(ea.e2, eb.e2) + dl / 2 * E3);
-        if (o.feed_bound) {
-          fe += dl * dl / 8 * E3;
-          v_lo = std::max(0.0, v_lo - dl * dl / 8 * plan.J_t);
-        }
+        if (o.feed_bound) fe += dl * dl / 8 * E3;
       }
       seg.max_dev = std::max(seg.max_dev, dev);
       if (dev > o.fit_tol) {
@@ -748,7 +755,7 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
         fail_tick = B.e - S.e;
         return false;
       }
-      if (fe > feed_budget(v_lo)) {
+      if (fe > feed_budget(A->s->v, B.s->v, dl)) {
         fail_why = "velocity error " + std::to_string(fe);
         fail_tick = B.e - S.e;
         return false;

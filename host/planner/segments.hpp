@@ -74,6 +74,11 @@ struct SegmentOptions {
   // the default, whose feed accuracy the report measures but no one asked to
   // bound; it needs no samples between fit ticks where the plan is slow).
   bool feed_bound = false;
+  // With feed_bound: the output's own error on the chord between two
+  // samples, units (their rounding and register error, Machine). The fit
+  // leaves it out of the budget, so that the samples' chords, not only the
+  // fitted polynomials', are within 2 feed_rel of the plan's.
+  double feed_quant = 0;
   // Fitted positions of the (up to 3) ticks before ts[0], oldest first,
   // relative to the fit's end there (a streaming window continuing a
   // committed one, or the part of a long fit after another): the sampled
