@@ -699,7 +699,7 @@ Plan plan_path(const Path& p, const Limits& limits, const PlanOptions& o) {
     plan.stations = stations_from(g, forced, L.feed, 0, n - 1, idx);
     const auto cap = caps_for(g, plan.stations, idx, L.feed);
     const auto acc = accels_for(g, idx);
-    plan.pieces = plan_blocks(plan.stations, cap, acc, plan.J_t, memo, changed);
+    plan.pieces = plan_blocks(plan.stations, cap, acc, plan.J_t, memo, changed, o.jerk_phase_ticks * o.period);
     // The profile must stay under v_lim at every grid point. Every local
     // maximum of the violation ratio becomes a station. A block identical to
     // one of the previous pass had no violation then (else it would have a
@@ -752,7 +752,7 @@ Plan plan_path(const Path& p, const Limits& limits, const PlanOptions& o) {
       loc.back().vmax = plan.stations[b + 1].v;
       for (int it = 0; it < 100000 && lo + 1 < ib; ++it) {
         loc.front().vmax = v_lo;
-        const auto lp = plan_blocks(loc, lcap, lacc, plan.J_t);
+        const auto lp = plan_blocks(loc, lcap, lacc, plan.J_t, o.jerk_phase_ticks * o.period);
         SpeedAtS lv{lp};
         const auto lm = mark_violations(g, forced, lv, lo + 1, ib - 1, L.feed, [](size_t) { return true; }, true);
         if (lm.empty()) break;

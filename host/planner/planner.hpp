@@ -94,6 +94,13 @@ struct PlanOptions {
   // limits at the samples (segments.hpp), so these only set how often a fit
   // must be split or the plan slowed.
   double tan_a_share = 0.95, tan_j_share = 0.6, cen_a_share = 0.95;
+  // Shortest jerk phase of a speed change, in ticks (profile.hpp: a smaller
+  // change uses a lower jerk). A change whose phases are shorter than a tick
+  // switches the jerk inside one tick, which no polynomial through the tick
+  // samples follows within the limits; the repairs' slow-downs only make
+  // such changes smaller and shorter (host/planner/README.md, "Short speed
+  // changes").
+  double jerk_phase_ticks = 2;
   // Shares of each per-axis acceleration and jerk (and of j_cen) that the
   // sums of speed_limit may fill: headroom for the grid and the fit.
   double axis_a_share = 0.95, axis_j_share = 0.95;

@@ -10,6 +10,13 @@
 //   duration T(dv) = 2 t_j + t_a,  distance = (v0 + v1)/2 * T(dv)
 // (the velocity is point-symmetric about the middle of the change, so the
 // distance is the mean velocity times the duration).
+// Shortest jerk phase tau (0: none): a change whose t_j at J would be
+// shorter (dv < J tau^2, or A / J < tau) uses the lower jerk
+// J' = min(dv / tau^2, A / tau), so that t_j = tau: it takes 2 tau
+// (dv / A + tau where dv > A tau), however small dv is. A change of almost
+// nothing then still takes 2 tau and 2 v tau of path, so a block shorter than
+// that keeps its speed: passes and peaks only ever lower speeds for it, and
+// the jerk stays within J.
 //
 // Stations along s carry a speed bound; between two stations a block
 // accelerates, cruises at v_peak and decelerates. Look-ahead: a backward pass
@@ -31,15 +38,16 @@ struct Piece {
 };
 
 // Duration of a zero-to-zero-acceleration velocity change of size dv >= 0.
-double change_time(double dv, double A, double J);
+double change_time(double dv, double A, double J, double tau = 0);
 // Distance covered by the change v0 -> v1.
-double change_distance(double v0, double v1, double A, double J);
+double change_distance(double v0, double v1, double A, double J, double tau = 0);
 // Largest v1 >= v0 (<= vmax) reachable from v0 within distance L.
-double reachable(double v0, double L, double A, double J, double vmax);
+double reachable(double v0, double L, double A, double J, double vmax, double tau = 0);
 
 // Appends the pieces of a velocity change v0 -> v1 (either direction) starting
 // at time t, position s. Returns the end time.
-double append_change(std::vector<Piece>& out, double t, double s, double v0, double v1, double A, double J);
+double append_change(std::vector<Piece>& out, double t, double s, double v0, double v1, double A, double J,
+                     double tau = 0);
 
 struct Station {
   double s = 0;
@@ -50,10 +58,11 @@ struct Station {
 // Plans speeds at the stations (look-ahead passes) and the pieces between
 // them. cap(i) is the cruise cap for block i (between station i and i+1).
 // Station speeds are lowered in place so that every block is feasible.
-std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<double>& cap, double A, double J);
+std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<double>& cap, double A, double J,
+                               double tau = 0);
 // The same with a tangential acceleration per block (A[i] for block i).
 std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<double>& cap, const std::vector<double>& A,
-                               double J);
+                               double J, double tau = 0);
 
 // The same with a memo of the previous call's blocks: a block whose ends,
 // end speeds, cap and acceleration are bitwise those of a remembered block reuses its peak
@@ -64,7 +73,7 @@ struct BlockMemo {
 };
 std::vector<Piece> plan_blocks(std::vector<Station>& st, const std::vector<double>& cap, const std::vector<double>& A,
                                double J,
-                               std::vector<BlockMemo>& memo, std::vector<char>& changed);
+                               std::vector<BlockMemo>& memo, std::vector<char>& changed, double tau = 0);
 
 // Evaluation of a profile: index of the piece active at time t (pieces sorted).
 int piece_at(const std::vector<Piece>& p, double t, int hint = 0);

@@ -316,3 +316,63 @@ TEST(ToolpathPlan, SharpCornersStopWhereThatIsFaster) {
   EXPECT_EQ(stops_on, 0u);
   EXPECT_EQ(s_on, s_off);
 }
+
+namespace {
+
+// The flowsnake curve of LinuxCNC's flowsnake.ngc, computed here: each level
+// replaces a segment s -> e by four through the thirds and a point off the
+// middle by |e - s| / sqrt(12). Level 5 from (0.25, 1) to (3.75, 1): 1024
+// segments of 3.4 um to 4.7 um, at the program's F10 (10 mm/min).
+void flowsnake(int level, Eigen::Vector2d s, Eigen::Vector2d e, input::Toolpath& tp) {
+  if (level == 0) {
+    input::Move m;
+    m.curve = geo::make_line(s, e);
+    m.feed = 10.0 / 60;
+    m.where = "flowsnake: G1 " + std::to_string(tp.moves.size() + 1);
+    tp.moves.push_back(m);
+    return;
+  }
+  const Eigen::Vector2d d = e - s, p1 = s + d / 3, p3 = s + 2 * d / 3;
+  const Eigen::Vector2d p2 = (s + e) / 2 + Eigen::Vector2d(d.y(), -d.x()) / std::sqrt(12.0);
+  flowsnake(level - 1, s, p1, tp);
+  flowsnake(level - 1, p1, p2, tp);
+  flowsnake(level - 1, p2, p3, tp);
+  flowsnake(level - 1, p3, e, tp);
+}
+
+}  // namespace
+
+// Short speed changes (PlanOptions::jerk_phase_ticks). With tangential
+// limits raised to a_tan 3000, j_tan 60000 the flowsnake's slow-downs between
+// its blends became S-curves shorter than a tick: no one-tick segment
+// followed them within j_axis, each repair's slow-down made the changes
+// shorter still, and the plan took 128 rounds, 22 618 caps and 491 s of
+// motion (82 s at the default limits). Now it plans in a few rounds, within
+// 10 % of its time at the default limits, every limit held on the core's
+// samples. (Not faster: the higher tangential jerk takes more of each axis's
+// jerk, and leaves less for turning through the blends.)
+TEST(ToolpathPlan, ShortSpeedChangesNeedNoRepairRounds) {
+  input::Toolpath tp;
+  tp.axes = 2;
+  flowsnake(5, {0.25, 1}, {3.75, 1}, tp);
+  ASSERT_EQ(tp.moves.size(), 1024u);
+  job::JobConfig base;
+  base.limits.tol = 0.05;
+  job::JobConfig high = base;
+  high.limits.a_tan = 3000;
+  high.limits.j_tan = 60000;
+  const job::ToolpathPlan bp = job::toolpath_plan(tp, base);
+  const job::JobResult br = job::run_job(bp.path, bp.cfg);
+  const job::ToolpathPlan hp = job::toolpath_plan(tp, high);
+  const job::JobResult hr = job::run_job(hp.path, hp.cfg);
+  std::printf("  default limits: %.3f s, %d rounds, %d caps; raised tangential limits: %.3f s, %d rounds, %d caps\n",
+              br.plan.duration(), br.rounds, br.repairs, hr.plan.duration(), hr.rounds, hr.repairs);
+  EXPECT_LE(hr.rounds, 3);
+  EXPECT_LT(hr.plan.duration(), 1.1 * br.plan.duration());
+  double q = 0;
+  const double lsb = std::ldexp(1.0, -32);
+  for (const auto& c : hr.compiled) q = std::max(q, (0.5 + c.bound_lsb) * lsb);
+  const auto v = test::check_output_limits(to_mm(report::predicted_samples(hr)), 3, hp.cfg.limits,
+                                           high.machine.period, q, true);
+  EXPECT_LE(v.worst, 1 + 1e-9) << v.what << " at tick " << v.tick;
+}

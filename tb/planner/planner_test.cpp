@@ -29,13 +29,17 @@ using namespace traj::report;
 #error "TRAJ_ASSETS must name host/assets"
 #endif
 
+// Every other case with a shortest jerk phase tau (PlanOptions::jerk_phase_ticks), a third of them
+// with changes small enough to need a lower jerk (dv < J tau^2).
 TEST(Profile, ChangeDistanceMatchesIntegratedPieces) {
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> U(0, 1);
-  for (int rep = 0; rep < 500; ++rep) {
-    const double A = 10 + 1000 * U(rng), J = 100 + 1e5 * U(rng), v0 = 100 * U(rng), v1 = 100 * U(rng);
+  for (int rep = 0; rep < 1500; ++rep) {
+    const double A = 10 + 1000 * U(rng), J = 100 + 1e5 * U(rng), v0 = 100 * U(rng);
+    const double tau = rep % 2 ? 0 : 1e-4 + 4e-3 * U(rng);
+    const double v1 = rep % 3 ? 100 * U(rng) : std::max(0.0, v0 + (2 * U(rng) - 1) * J * tau * tau);
     std::vector<Piece> p;
-    const double t_end = append_change(p, 0, 0, v0, v1, A, J);
+    const double t_end = append_change(p, 0, 0, v0, v1, A, J, tau);
     // continuity of s, v, a between pieces; limits respected; end state
     double s = 0, v = v0, a = 0;
     for (const auto& q : p) {
@@ -44,17 +48,23 @@ TEST(Profile, ChangeDistanceMatchesIntegratedPieces) {
       ASSERT_NEAR(q.a0, a, 1e-9 * A);
       ASSERT_LE(std::fabs(q.j), J * (1 + 1e-12));
       ASSERT_LE(std::max(std::fabs(q.a(0)), std::fabs(q.a(q.T))), A * (1 + 1e-9));
+      if (q.j != 0) ASSERT_GE(q.T, tau * (1 - 1e-9)) << "a jerk phase shorter than tau, rep " << rep;
       s = q.s(q.T);
       v = q.v(q.T);
       a = q.a(q.T);
     }
     EXPECT_NEAR(v, v1, 1e-9 * (1 + v1));
     EXPECT_NEAR(a, 0, 1e-6 * A);
-    EXPECT_NEAR(s, change_distance(v0, v1, A, J), 1e-9 * (1 + s));
-    EXPECT_NEAR(t_end, change_time(std::fabs(v1 - v0), A, J), 1e-12 * (1 + t_end));
-    // reachable is the inverse of change_distance
-    const double L = change_distance(v0, v0 + 50, A, J);
-    EXPECT_NEAR(reachable(v0, L, A, J, 1e9), v0 + 50, 1e-6 * (1 + v0));
+    EXPECT_NEAR(s, change_distance(v0, v1, A, J, tau), 1e-9 * (1 + s));
+    EXPECT_NEAR(t_end, change_time(std::fabs(v1 - v0), A, J, tau), 1e-12 * (1 + t_end));
+    // reachable is the inverse of change_distance, and never beyond it
+    for (const double dv : {50.0, 0.3 * J * tau * tau}) {
+      if (dv <= 0) continue;
+      const double L = change_distance(v0, v0 + dv, A, J, tau);
+      const double r = reachable(v0, L, A, J, 1e9, tau);
+      EXPECT_NEAR(r, v0 + dv, 1e-6 * (1 + v0)) << "rep " << rep << " dv " << dv;
+      EXPECT_LE(change_distance(v0, r, A, J, tau), L);
+    }
   }
 }
 
@@ -79,7 +89,8 @@ TEST(Profile, PerBlockAccelerationHoldsInEveryBlock) {
       A[i] = 10 + 2000 * U(rng) * U(rng);  // from 10 to 2010: blocks differ by up to 200x
     }
     const double J = 1000 + 50000 * U(rng);
-    const std::vector<Piece> p = plan_blocks(st, cap, A, J);
+    const double tau = rep % 2 ? 0 : 2e-3 * U(rng);  // a shortest jerk phase in every other case
+    const std::vector<Piece> p = plan_blocks(st, cap, A, J, tau);
     ASSERT_FALSE(p.empty());
     double se = 0, v = 0, a = 0;
     size_t blk = 0;
@@ -96,6 +107,7 @@ TEST(Profile, PerBlockAccelerationHoldsInEveryBlock) {
         ASSERT_GE(q.v(tau), -1e-9);
       }
       ASSERT_LE(std::fabs(q.j), J * (1 + 1e-12));
+      if (q.j != 0) ASSERT_GE(q.T, tau * (1 - 1e-9)) << "rep " << rep;
       se = q.s(q.T);
       v = q.v(q.T);
       a = q.a(q.T);
