@@ -511,10 +511,13 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
   // whose chord is at least v_floor h: none where the fastest speed is below
   // v_floor; elsewhere the chords are at least the slowest speed's or v_floor
   // h, whichever is larger (the budget's v), and the output's rounding of the
-  // chord is left out of it (feed_quant).
+  // chord is left out of it (feed_quant). Without feed_bound (no bound asked
+  // for) the check is at the samples, where the slower one is at v_floor or
+  // above: no samples added near stops.
   const double v_floor = 1e-2 * L.top_speed(d);
   auto feed_budget = [&](double va, double vb, double dl) {
-    const double bulge = o.feed_bound ? dl * dl / 8 * plan.J_t : 0;
+    if (!o.feed_bound) return std::min(va, vb) < v_floor ? 1e300 : 2 * o.feed_rel * std::min(va, vb);
+    const double bulge = dl * dl / 8 * plan.J_t;
     if (std::max(va, vb) + bulge < v_floor) return 1e300;
     return 2 * o.feed_rel * std::max(std::min(va, vb) - bulge, v_floor) - o.feed_quant / h;
   };
