@@ -50,7 +50,7 @@ plan::SegmentOptions JobConfig::segment_options() const {
     so.feed_quant = std::sqrt(static_cast<double>(d)) * (2 * Machine::sample_error_lsb(f) + Machine::joint_lsb(f)) *
                     machine.lsb();
     // the report's feed figures start at 1 % of the top speed (as the fit's checks): half the bound there at most
-    const double v_floor = 1e-2 * limits.top_speed(d), chord = v_floor * machine.period;
+    const double v_floor = limits.feed_floor(d), chord = v_floor * machine.period;
     if (so.feed_quant > 0.5 * machine.feed_accuracy * chord)
       throw PlanError("feed accuracy " + fmt("%g", machine.feed_accuracy) + ": the output's rounding (" +
                       fmt("%.3g", so.feed_quant) + " " + machine.units + " on a chord) is more than half of it on the " +

@@ -75,6 +75,9 @@ struct Limits {
   // of millions of mm/min). Scales that follow the speed (the repairs'
   // floor, the report's moving ticks, the plot's colours) take it.
   double top_speed(int dim) const;
+  // The slowest speed whose chords the feed figures cover (the report's feed
+  // error, the fit's feed check): 1 % of the top speed.
+  double feed_floor(int dim) const { return 1e-2 * top_speed(dim); }
   // Throws PlanError naming the field if any limit is non-positive or not finite.
   void validate() const;
 };

@@ -514,7 +514,7 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
   // chord is left out of it (feed_quant). Without feed_bound (no bound asked
   // for) the check is at the samples, where the slower one is at v_floor or
   // above: no samples added near stops.
-  const double v_floor = 1e-2 * L.top_speed(d);
+  const double v_floor = L.feed_floor(d);
   auto feed_budget = [&](double va, double vb, double dl) {
     if (!o.feed_bound) return std::min(va, vb) < v_floor ? 1e300 : 2 * o.feed_rel * std::min(va, vb);
     const double bulge = dl * dl / 8 * plan.J_t;

@@ -153,7 +153,7 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
   Spread fluct, err;
   for (size_t k = 0; k + 1 < n && k + 1 < r.ticks.size(); ++k) {
     const double ds = r.ticks[k + 1].s - r.ticks[k].s;
-    if (ds < 0.01 * cfg.limits.top_speed(d) * h) continue;
+    if (ds < cfg.limits.feed_floor(d) * h) continue;
     double c2 = 0, p2 = 0;
     for (int a = 0; a < d; ++a) {
       c2 += (x[k + 1][a] - x[k][a]) * (x[k + 1][a] - x[k][a]);

@@ -48,7 +48,9 @@ TEST(Profile, ChangeDistanceMatchesIntegratedPieces) {
       ASSERT_NEAR(q.a0, a, 1e-9 * A);
       ASSERT_LE(std::fabs(q.j), J * (1 + 1e-12));
       ASSERT_LE(std::max(std::fabs(q.a(0)), std::fabs(q.a(q.T))), A * (1 + 1e-9));
-      if (q.j != 0) ASSERT_GE(q.T, tau * (1 - 1e-9)) << "a jerk phase shorter than tau, rep " << rep;
+      if (q.j != 0) {
+        ASSERT_GE(q.T, tau * (1 - 1e-9)) << "a jerk phase shorter than tau, rep " << rep;
+      }
       s = q.s(q.T);
       v = q.v(q.T);
       a = q.a(q.T);
@@ -107,7 +109,9 @@ TEST(Profile, PerBlockAccelerationHoldsInEveryBlock) {
         ASSERT_GE(q.v(tau), -1e-9);
       }
       ASSERT_LE(std::fabs(q.j), J * (1 + 1e-12));
-      if (q.j != 0) ASSERT_GE(q.T, tau * (1 - 1e-9)) << "rep " << rep;
+      if (q.j != 0) {
+        ASSERT_GE(q.T, tau * (1 - 1e-9)) << "rep " << rep;
+      }
       se = q.s(q.T);
       v = q.v(q.T);
       a = q.a(q.T);
