@@ -47,8 +47,10 @@ plan::SegmentOptions JobConfig::segment_options() const {
     so.feed_bound = true;
     const fd::Format f = machine.format();
     const int d = f.axes;
-    so.feed_quant = std::sqrt(static_cast<double>(d)) * (2 * Machine::sample_error_lsb(f) + Machine::joint_lsb(f)) *
-                    machine.lsb();
+    // the samples' error on a chord: the allowance of the first differences (sample_allowance), over a tick
+    const double lsb = machine.lsb();
+    so.feed_quant = std::sqrt(static_cast<double>(d)) * machine.period *
+                    sample_allowance(Machine::sample_error_lsb(f) * lsb, Machine::joint_lsb(f) * lsb, machine.period).v;
     // the report's feed figures start at 1 % of the top speed (as the fit's checks): half the bound there at most
     const double v_floor = limits.feed_floor(d), chord = v_floor * machine.period;
     if (so.feed_quant > 0.5 * machine.feed_accuracy * chord)
