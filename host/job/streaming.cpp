@@ -229,6 +229,7 @@ WindowPlan plan_window(Window& win, const Carry& in, size_t commit_max, bool las
   req.limits = &cfg.limits;
   req.options = cfg.plan_options();
   req.options.v_start = in.v;
+  req.options.tick_offset = in.T0;  // tick k at plan time (k - k_org) h - T0
   win.add_caps(path, cfg.limits.feed, req.options);
   const size_t own_caps = req.options.caps.size();
   req.options.caps.insert(req.options.caps.end(), in.caps.begin(), in.caps.end());

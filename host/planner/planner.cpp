@@ -668,6 +668,169 @@ void insert_dwells(Plan& plan, std::vector<PlanOptions::Dwell> dwells) {
   }
 }
 
+// A rest-to-rest motion over a straight move of length len with every jerk
+// switch on the tick grid (period h): jerk +J for nj ticks, 0 for na, -J for
+// nj, a cruise of nc ticks, then the mirror image. For given counts the peak
+// speed is vp = len / (h (na + 2 nj + nc)) (each speed ramp is
+// point-symmetric, so it covers vp / 2 times its duration), the jerk
+// J = vp / (h^2 nj (nj + na)) and the peak acceleration J nj h. Of the counts
+// that keep vp <= V, J <= Jmax and J nj h <= Amax, the fewest ticks win.
+struct AlignedMove {
+  long long nj = 0, na = 0, nc = 0;
+  double vp = 0, J = 0;
+  long long ticks() const { return 2 * (na + 2 * nj) + nc; }
+};
+
+bool aligned_move(double len, double h, double V, double Amax, double Jmax, AlignedMove& best) {
+  if (!(len > 0 && h > 0 && V > 0 && Amax > 0 && Jmax > 0)) return false;
+  const long long nj_max = static_cast<long long>(std::ceil(Amax / Jmax / h)) + 2;
+  const long long na_max = static_cast<long long>(std::ceil(V / Amax / h)) + 2;
+  if (nj_max > 100000 || na_max > 100000) return false;  // ticks far finer than the motion: nothing to gain
+  bool found = false;
+  for (long long nj = 1; nj <= nj_max; ++nj)
+    for (long long na = 0; na <= na_max; ++na) {
+      const double N = static_cast<double>(na + 2 * nj);
+      // vp = len / (h (N + nc)) is at most each of V, Jmax h^2 nj (nj + na) and Amax h (nj + na)
+      const double vcap = std::min({V, Jmax * h * h * static_cast<double>(nj * (nj + na)),
+                                    Amax * h * static_cast<double>(nj + na)});
+      long long nc = std::max<long long>(0, static_cast<long long>(std::ceil(len / (h * vcap) - N - 1e-9)));
+      AlignedMove m{nj, na, nc, 0, 0};
+      for (;; ++m.nc) {
+        m.vp = len / (h * (N + static_cast<double>(m.nc)));
+        m.J = m.vp / (h * h * static_cast<double>(nj * (nj + na)));
+        if (m.vp <= V && m.J <= Jmax && m.J * static_cast<double>(nj) * h <= Amax) break;
+      }
+      if (!found || m.ticks() < best.ticks()) best = m;
+      found = true;
+    }
+  return found;
+}
+
+// Straight moves between two stops, re-timed on the tick grid
+// (PlanOptions::align_straight_moves). The profile of a block between two
+// stops switches its jerk anywhere within a tick; a polynomial fitted to the
+// tick's samples then overshoots the jerk (up to about 1.5x), which is why
+// the profile keeps its jerk at tan_j_share of the limits. On a straight
+// move each axis is x0 + T_a s(t): where the jerk switches only on ticks,
+// s(t) is one cubic per tick, which the quintic of each tick (and of each
+// run of ticks at one jerk) reproduces exactly, so the move may use the
+// per-axis jerk at axis_j_share (and j_tan at the same share). A move is
+// re-timed only where that is faster, including the rest (under a tick)
+// that puts its start on a tick; a move with a speed cap over a part of it
+// (a repair's) or a forced station inside (a window's commit) is left as
+// planned.
+void retime_straight_moves(const Path& p, const Limits& L, const PlanOptions& o, Plan& plan) {
+  const double h = o.period, tol = 1e-9 * std::max(1.0, plan.length);
+  const int d = p.dim();
+  auto at_rest = [](const Piece& q) { return q.v0 == 0 && q.a0 == 0; };
+  // the speed caps over the whole of [sa, sb] lower V; one over a part of it
+  // (a repair's), or a forced station inside (a window's commit), keeps the move as planned
+  auto caps_allow = [&](double sa, double sb, double& V) {
+    for (const auto& c : o.caps) {
+      if (!(c.v > 0 && c.s1 > sa + tol && c.s0 < sb - tol)) continue;
+      if (c.s0 > sa + tol || c.s1 < sb - tol) return false;
+      V = std::min(V, c.v);
+    }
+    for (double fs : o.force_stations)
+      if (fs > sa + tol && fs < sb - tol) return false;
+    return true;
+  };
+  // the unit tangent of the straight span holding [sa, sb], if one does
+  auto straight = [&](double sa, double sb, double* T) {
+    const size_t ci = p.curve_at(0.5 * (sa + sb));
+    if (p.curve_at(sa + tol) != ci || p.curve_at(sb - tol) != ci) return false;
+    const geo::Curve& c = p.curve(ci);
+    if (c.degree() != 1 || c.rational()) return false;
+    const ArcTable& tab = p.table(ci);
+    const double off = p.offset(ci);
+    const double ua = tab.u_at(sa - off + tol), ub = tab.u_at(sb - off - tol), um = tab.u_at(0.5 * (sa + sb) - off);
+    if (c.find_span(ua) != c.find_span(ub)) return false;
+    const Frame f = frame_at(p, ci, um, 0.5 * (sa + sb));
+    for (int a = 0; a < d; ++a) T[a] = f.T[a];
+    return true;
+  };
+  std::vector<Piece> out;
+  out.reserve(plan.pieces.size());
+  double shift = 0;  // time gained (negative) or lost so far
+  size_t i = 0;
+  while (i < plan.pieces.size()) {
+    const Piece& q0 = plan.pieces[i];
+    size_t i1 = i + 1;
+    if (!q0.dwell && at_rest(q0))
+      while (i1 < plan.pieces.size() && !plan.pieces[i1].dwell && !at_rest(plan.pieces[i1])) ++i1;
+    const double sa = q0.s0, sb = i1 < plan.pieces.size() ? plan.pieces[i1].s0 : plan.length;
+    const double t_start = q0.t0 + shift, old_T = plan.pieces[i1 - 1].t0 + plan.pieces[i1 - 1].T - q0.t0;
+    double T[kMaxAxes] = {};
+    AlignedMove m;
+    double V = L.feed;
+    bool use = !q0.dwell && at_rest(q0) && sb - sa > tol && caps_allow(sa, sb, V) && straight(sa, sb, T);
+    double rest = 0;
+    if (use) {
+      double A = o.tan_a_share * L.a_tan, J = o.axis_j_share * L.j_tan;
+      for (int a = 0; a < d; ++a) {
+        const double ta = std::fabs(T[a]);
+        if (ta == 0) continue;
+        V = std::min(V, o.axis_v_share * L.v_axis[a] / ta);
+        A = std::min(A, o.axis_a_share * L.a_axis[a] / ta);
+        J = std::min(J, o.axis_j_share * L.j_axis[a] / ta);
+      }
+      // the rest that puts the start on a tick (ticks at m h - tick_offset)
+      const double ph = (t_start + o.tick_offset) / h;
+      rest = std::max(0.0, (std::ceil(ph - 1e-9) - ph) * h);
+      use = aligned_move(sb - sa, h, V, A, J, m) && rest + static_cast<double>(m.ticks()) * h < old_T - 1e-12;
+    }
+    if (!use) {
+      for (size_t k = i; k < i1; ++k) {
+        out.push_back(plan.pieces[k]);
+        out.back().t0 += shift;
+      }
+      i = i1;
+      continue;
+    }
+    double t = t_start, sc = sa;
+    if (rest > 0) {
+      Piece r;
+      r.t0 = t;
+      r.T = rest;
+      r.s0 = sc;
+      out.push_back(r);
+      t += rest;
+    }
+    const long long N = m.na + 2 * m.nj;
+    const struct {
+      long long n;
+      double j;
+    } phases[7] = {{m.nj, m.J}, {m.na, 0}, {m.nj, -m.J}, {m.nc, 0}, {m.nj, -m.J}, {m.na, 0}, {m.nj, m.J}};
+    double v = 0, a = 0;
+    for (int k = 0; k < 7; ++k) {
+      if (phases[k].n == 0) continue;
+      Piece q;
+      q.t0 = t;
+      q.T = static_cast<double>(phases[k].n) * h;
+      q.s0 = sc;
+      q.v0 = v;
+      q.a0 = a;
+      q.j = phases[k].j;
+      q.on_tick = true;
+      out.push_back(q);
+      t += q.T;
+      sc = q.s(q.T);
+      v = q.v(q.T);
+      a = q.a(q.T);
+      // the ends of the ramps exactly: the cruise at vp, the stop at sb
+      if (k == 2) {
+        sc = sa + 0.5 * m.vp * static_cast<double>(N) * h;
+        v = m.vp;
+        a = 0;
+      }
+      if (k == 3) sc = sa + m.vp * (0.5 * static_cast<double>(N) + static_cast<double>(m.nc)) * h;
+    }
+    shift += (t - t_start) - old_T;
+    i = i1;
+  }
+  plan.pieces = std::move(out);
+}
+
 }  // namespace
 
 Plan plan_path(const Path& p, const Limits& limits, const PlanOptions& o) {
@@ -725,6 +888,7 @@ Plan plan_path(const Path& p, const Limits& limits, const PlanOptions& o) {
             dwells.push_back({g.s[i], o.corner_rest});
       }
       insert_dwells(plan, std::move(dwells));
+      if (o.align_straight_moves) retime_straight_moves(p, L, o, plan);
       return plan;
     }
     plan.refinements += static_cast<int>(marked.size());

@@ -104,6 +104,14 @@ struct PlanOptions {
   // such changes smaller and shorter (host/planner/README.md, "Short speed
   // changes").
   double jerk_phase_ticks = 2;
+  // Straight moves between two stops are re-timed on the tick grid
+  // (retime_straight_moves in planner.cpp): every jerk switch on a tick, so
+  // that the polynomial of each tick reproduces the profile exactly and the
+  // jerk may use axis_j_share of the limits instead of tan_j_share.
+  bool align_straight_moves = true;
+  // Plan time of the ticks: t = m period - tick_offset (m integer). A
+  // streaming window whose plan starts between two ticks sets it.
+  double tick_offset = 0;
   // Shares of each per-axis acceleration and jerk (and of j_cen) that the
   // sums of speed_limit may fill: headroom for the grid and the fit.
   double axis_a_share = 0.95, axis_j_share = 0.95;

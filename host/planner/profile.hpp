@@ -32,6 +32,9 @@ struct Piece {
   double t0 = 0, T = 0;              // start time, duration
   double s0 = 0, v0 = 0, a0 = 0, j = 0;
   bool dwell = false;                // at rest for T (a G4 dwell: PlanOptions::dwells)
+  // Starts on a tick (a straight move re-timed on the tick grid, planner.cpp):
+  // the fit ends a segment there, so that no segment spans its jerk switch.
+  bool on_tick = false;
   double s(double tau) const { return s0 + tau * (v0 + tau * (a0 / 2 + tau * j / 6)); }
   double v(double tau) const { return v0 + tau * (a0 + tau * j / 2); }
   double a(double tau) const { return a0 + tau * j; }

@@ -209,6 +209,20 @@ bool axes_within(const TimeSegment& seg, int d, double T, const Limits& L, doubl
   return true;
 }
 
+// The ticks of `ts` where a piece of the plan that starts on a tick
+// (Piece::on_tick: its jerk switches there) starts: segments end there, so
+// that each holds one jerk of the re-timed move and reproduces it exactly.
+std::vector<long long> switch_ticks(const Plan& plan, const std::vector<TickSample>& ts, double period) {
+  std::vector<long long> out;
+  for (const Piece& q : plan.pieces) {
+    if (!q.on_tick) continue;
+    const auto it = std::lower_bound(ts.begin(), ts.end(), q.t0 - 1e-6 * period,
+                                     [](const TickSample& x, double t) { return x.tp < t; });
+    if (it != ts.end() && std::fabs(it->tp - q.t0) <= 1e-6 * period) out.push_back(it - ts.begin());
+  }
+  return out;
+}
+
 // fit_segments where the fit tick is fine_ticks > 1 engine ticks (below).
 std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, const std::vector<TickSample>& ts,
                                            const Limits& L, const SegmentOptions& o, long long k_base);
@@ -229,9 +243,10 @@ std::vector<TimeSegment> fit_segments(const Path& p, const Plan& plan, const std
   // break candidates
   std::vector<long long> brk = {0, n};
   // Jerk switches of the profile are not forced breaks: a fit across one is
-  // kept only if its exact jerk maximum passes the check below (else split).
-  (void)plan;
+  // kept only if its exact jerk maximum passes the check below (else split);
+  // but those of a move re-timed on the tick grid are (switch_ticks).
   (void)t_offset;
+  for (long long k : switch_ticks(plan, ts, period)) brk.push_back(k);
   for (long long k = 0; k < n; ++k) {
     // a first sample carried from the previous window (just before the
     // path's start) is no break: the first segment may start there and cross
@@ -623,6 +638,10 @@ std::vector<TimeSegment> fit_segments_fine(const Path& p, const Plan& plan, cons
     }
   }
   brk.push_back(W.back().e);
+  for (long long k : switch_ticks(plan, ts, o.fine_period * static_cast<double>(n)))
+    brk.push_back((k_base + k) * n);
+  std::sort(brk.begin(), brk.end());
+  brk.erase(std::unique(brk.begin(), brk.end()), brk.end());
   // no end within w of a change crossed (FineSample::end_ok), but the path's ends and the breaks
   for (size_t j = 1, b = 0; j + 1 < W.size(); ++j) {
     while (b < cross.size() && cross[b] + w <= W[j].e) ++b;

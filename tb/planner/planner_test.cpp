@@ -423,6 +423,94 @@ TEST(PlannerCore, CornerStopsAndLimitsHold) {
   (void)v_corner;
 }
 
+// Rest-to-rest time of a straight move of length len at speed V, acceleration
+// A and jerk J (continuous time, the S-curve's closed form; the peak speed by
+// bisection where the move is too short for V): the least time any motion
+// within these limits takes.
+double rest_to_rest_time(double len, double V, double A, double J) {
+  auto ramp = [&](double v) { return v >= A * A / J ? v / A + A / J : 2 * std::sqrt(v / J); };
+  if (V * ramp(V) <= len) return ramp(V) + len / V;
+  double lo = 0, hi = V;
+  for (int it = 0; it < 200; ++it) ((0.5 * (lo + hi)) * ramp(0.5 * (lo + hi)) <= len ? lo : hi) = 0.5 * (lo + hi);
+  return 2 * ramp(lo);
+}
+
+// Straight moves between stops (corners) switch the jerk only on ticks and
+// use the jerk at axis_j_share of the limits (PlanOptions::align_straight_moves),
+// also under a speed cap over the whole move (a lower feed):
+// every moving piece starts on a tick, each move takes at least the
+// continuous least time at those limits and at most 5 ticks more, the path is
+// faster than with the moves left as planned, and every limit holds on the
+// Verilated core's samples. At 1 ms (the fit tick is the engine's) and at
+// 0.5 ms (fit ticks of two engine ticks, corners rest two engine ticks).
+TEST(PlannerCore, StraightMovesBetweenStopsSwitchJerkOnTicks) {
+  Path p;
+  std::vector<Eigen::VectorXd> pts(5, Eigen::VectorXd(2));
+  pts[0] << 0, 0;
+  pts[1] << 30, 0;   // long: reaches the feed
+  pts[2] << 30, 0.4;  // short: does not
+  pts[3] << 12, 14;   // diagonal: both axes
+  pts[4] << 12, 2;
+  for (size_t i = 0; i + 1 < pts.size(); ++i) p.add(geo::make_line(pts[i], pts[i + 1]), "line " + std::to_string(i));
+  for (double period : {1e-3, 5e-4}) {
+    SCOPED_TRACE("period " + std::to_string(period));
+    JobConfig cfg;
+    cfg.machine.period = period;
+    // the last move at a lower feed (a speed cap over the whole move, as a G-code F gives)
+    const double s_last = p.offset(p.size() - 1), v_last = 20;
+    cfg.plan.caps = {{s_last, p.length(), v_last}};
+    // exact stops at the corners (as G61 or a G-code exact stop gives; where
+    // the fit tick is coarser than the engine's, corners are stops anyway)
+    for (size_t i = 1; i < p.size(); ++i) cfg.plan.caps.push_back({p.offset(i) - 1e-9, p.offset(i) + 1e-9, 0.0});
+    const RunOut o = run_through_core(p, cfg);
+    expect_guarantees(p, cfg, o, "straight moves between stops");
+    const PlanOptions po = cfg.plan_options();
+    const double h = po.period;  // the fit tick
+    const Limits& L = cfg.limits;
+    double jmax = 0;
+    for (const Piece& q : o.job.plan.pieces) {
+      if (q.v0 == 0 && q.a0 == 0 && q.j == 0) continue;  // at rest (a corner's rest, a rest up to the next tick)
+      const double ph = q.t0 / h;
+      EXPECT_NEAR(ph, std::round(ph), 1e-6) << "a jerk switch between ticks at t = " << q.t0;
+      jmax = std::max(jmax, std::fabs(q.j));
+    }
+    // each move: from its first moving piece to its stop
+    double t_move0 = -1;
+    size_t move = 0;
+    for (size_t k = 0; k < o.job.plan.pieces.size(); ++k) {
+      const Piece& q = o.job.plan.pieces[k];
+      const bool rest = q.v0 == 0 && q.a0 == 0 && q.j == 0;
+      if (!rest && t_move0 < 0) t_move0 = q.t0;
+      const bool ends = k + 1 == o.job.plan.pieces.size() ||
+                        (o.job.plan.pieces[k + 1].v0 == 0 && o.job.plan.pieces[k + 1].a0 == 0);
+      if (rest || !ends) continue;
+      ASSERT_LT(move, pts.size() - 1);
+      const Eigen::VectorXd u = (pts[move + 1] - pts[move]).normalized();
+      double V = std::min(L.feed * po.feed_share, move + 2 == pts.size() ? v_last : 1e300);
+      double A = po.tan_a_share * L.a_tan, J = po.axis_j_share * L.j_tan;
+      for (int a = 0; a < 2; ++a)
+        if (u[a] != 0) {
+          V = std::min(V, po.axis_v_share * L.v_axis[a] / std::fabs(u[a]));
+          A = std::min(A, po.axis_a_share * L.a_axis[a] / std::fabs(u[a]));
+          J = std::min(J, po.axis_j_share * L.j_axis[a] / std::fabs(u[a]));
+        }
+      const double len = (pts[move + 1] - pts[move]).norm();
+      const double t = q.t0 + q.T - t_move0, t_min = rest_to_rest_time(len, V, A, J);
+      EXPECT_GE(t, t_min * (1 - 1e-9)) << "move " << move;
+      EXPECT_LE(t, t_min + 5 * h) << "move " << move;
+      ++move;
+      t_move0 = -1;
+    }
+    EXPECT_EQ(move, pts.size() - 1);
+    EXPECT_GT(jmax, 1.2 * po.tan_j_share * L.j_tan) << "the moves keep the lower jerk";
+    PlanOptions off = po;
+    off.align_straight_moves = false;
+    EXPECT_LT(o.job.plan.duration(), plan_path(p, L, off).duration());
+    std::printf("  period %g: %.4f s (%.4f s as planned), peak jerk %.0f\n", period, o.job.plan.duration(),
+                plan_path(p, L, off).duration(), jmax);
+  }
+}
+
 // A raster U-turn: a 0.5 mm half circle between two passes (curvature jumps
 // at both ends). With the whole tangential acceleration reserved for the
 // coupling terms 3 K v a_t, and a fifth of the axis jerk (half of j_cen) given
