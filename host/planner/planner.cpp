@@ -693,13 +693,17 @@ bool aligned_move(double len, double h, double V, double Amax, double Jmax, Alig
       // vp = len / (h (N + nc)) is at most each of V, Jmax h^2 nj (nj + na) and Amax h (nj + na)
       const double vcap = std::min({V, Jmax * h * h * static_cast<double>(nj * (nj + na)),
                                     Amax * h * static_cast<double>(nj + na)});
-      long long nc = std::max<long long>(0, static_cast<long long>(std::ceil(len / (h * vcap) - N - 1e-9)));
-      AlignedMove m{nj, na, nc, 0, 0};
-      for (;; ++m.nc) {
+      const double ticks_at_vcap = len / (h * vcap);
+      if (!(ticks_at_vcap < 1e12)) continue;  // a move of more than 1e12 ticks: left as planned
+      AlignedMove m{nj, na, std::max<long long>(0, static_cast<long long>(std::ceil(ticks_at_vcap - N - 1e-9))), 0, 0};
+      bool ok = false;
+      for (int more = 0; more < 4 && !ok; ++more, ++m.nc) {  // a tick more where rounding put vp above a bound
         m.vp = len / (h * (N + static_cast<double>(m.nc)));
         m.J = m.vp / (h * h * static_cast<double>(nj * (nj + na)));
-        if (m.vp <= V && m.J <= Jmax && m.J * static_cast<double>(nj) * h <= Amax) break;
+        ok = m.vp <= V && m.J <= Jmax && m.J * static_cast<double>(nj) * h <= Amax;
+        if (ok) break;
       }
+      if (!ok) continue;
       if (!found || m.ticks() < best.ticks()) best = m;
       found = true;
     }
