@@ -376,3 +376,74 @@ TEST(ToolpathPlan, ShortSpeedChangesNeedNoRepairRounds) {
                                            high.machine.period, q, true);
   EXPECT_LE(v.worst, 1 + 1e-9) << v.what << " at tick " << v.tick;
 }
+
+// Straight moves between exact stops (G61) are re-timed on the tick grid
+// (host/planner/README.md, step 5). Streamed, each window's plan starts
+// between two ticks (the commit falls inside a tick), so its moves must be
+// put on the global grid (PlanOptions::tick_offset): where they are not, the
+// fit does not break at their jerk switches and the repairs slow them down.
+// Streamed and whole plans need no repair, agree to within 2 % (a move cut
+// by a window's commit is planned as before), keep every limit on the hls
+// engine's samples, and are faster than the moves as first planned
+// (align_straight_moves off).
+TEST(ToolpathStream, ExactStopMovesOnTheTickGridStreamedAndWhole) {
+  const auto dir = std::filesystem::temp_directory_path() / ("toolpath_grid_test_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string file = (dir / "g61.ngc").string();
+  {
+    std::ofstream o(file);
+    o << "G21 G90 G61 G17\nG0 X0 Y0\n";
+    double x = 0, y = 0;
+    for (int i = 1; i <= 60; ++i) {
+      const double len = 0.3 + 29.7 * std::fmod(i * 0.6180339887, 1.0), ang = 2.4 * i;
+      x += len * std::cos(ang);
+      y += len * std::sin(ang);
+      char line[96];
+      std::snprintf(line, sizeof line, "%s X%.4f Y%.4f%s\n", i % 10 == 0 ? "G0" : "G1", x, y, i == 1 ? " F3000" : "");
+      o << line;
+    }
+    o << "M2\n";
+  }
+  job::JobConfig cfg;
+  const input::Toolpath tp = input::read_gcode(file);
+  const job::ToolpathPlan tpp = job::toolpath_plan(tp, cfg);
+  const job::JobResult wr = job::run_job(tpp.path, tpp.cfg);
+  job::JobConfig off = tpp.cfg;
+  off.plan.align_straight_moves = false;
+  const job::JobResult wo = job::run_job(tpp.path, off);
+
+  job::ToolpathStream src(file, input::FileKind::kGcode, cfg, {}, 16);
+  job::StreamOptions so;
+  so.window = 8;
+  so.commit = 6;
+  std::vector<fd::Compiled> comp;
+  const job::StreamStats st =
+      job::run_streaming(src, src.config(), so, [&](const fd::Compiled& c, const plan::TimeSegment&) { comp.push_back(c); });
+  using Eng = FdEngine<3, 5, 96, 16, 48>;
+  fd::Compiler compiler(job::Machine{}.format());
+  Eng e;
+  std::vector<P3> xs;
+  const double lsb = std::ldexp(1.0, -32);
+  test::run_segments(e, compiler, comp, Eng::kWords + Eng::kChunks + 2, [&](size_t, uint64_t, const Eng::Out& o) {
+    P3 v{};
+    for (int a = 0; a < 3; ++a) v[a] = static_cast<double>(sext(o.sample[a], Eng::kOutWidth)) * lsb;
+    xs.push_back(v);
+  });
+  double q = 0;
+  for (const auto& c : comp) q = std::max(q, (0.5 + c.bound_lsb) * lsb);
+  const auto vs = test::check_output_limits(xs, 3, src.config().limits, cfg.machine.period, q, true);
+  EXPECT_LE(vs.worst, 1 + 1e-9) << "streamed: " << vs.what << " at tick " << vs.tick;
+  const double h = cfg.machine.period;
+  std::printf("  60 moves with exact stops: whole %.4f s (%d caps), streamed %.4f s in %zu windows (%zu caps), "
+              "as first planned %.4f s\n",
+              wr.plan.duration(), wr.repairs, st.motion_time, st.windows, st.caps, wo.plan.duration());
+  EXPECT_EQ(wr.repairs, 0);
+  EXPECT_EQ(st.caps, 0u);
+  EXPECT_GT(st.windows, 5u);
+  // a window's commit cuts a move (every junction here is a stop): that move
+  // and its rest in the next window are planned as before
+  EXPECT_GE(st.motion_time, wr.plan.duration() - h);
+  EXPECT_LT(st.motion_time, 1.02 * wr.plan.duration());
+  EXPECT_LT(wr.plan.duration(), 0.97 * wo.plan.duration());
+  std::filesystem::remove_all(dir);
+}
