@@ -674,7 +674,8 @@ void insert_dwells(Plan& plan, std::vector<PlanOptions::Dwell> dwells) {
 // speed is vp = len / (h (na + 2 nj + nc)) (each speed ramp is
 // point-symmetric, so it covers vp / 2 times its duration), the jerk
 // J = vp / (h^2 nj (nj + na)) and the peak acceleration J nj h. Of the counts
-// that keep vp <= V, J <= Jmax and J nj h <= Amax, the fewest ticks win.
+// near the continuous optimum that keep vp <= V, J <= Jmax and J nj h <= Amax,
+// the fewest ticks win.
 struct AlignedMove {
   long long nj = 0, na = 0, nc = 0;
   double vp = 0, J = 0;
@@ -683,12 +684,21 @@ struct AlignedMove {
 
 bool aligned_move(double len, double h, double V, double Amax, double Jmax, AlignedMove& best) {
   if (!(len > 0 && h > 0 && V > 0 && Amax > 0 && Jmax > 0)) return false;
-  const long long nj_max = static_cast<long long>(std::ceil(Amax / Jmax / h)) + 2;
-  const long long na_max = static_cast<long long>(std::ceil(V / Amax / h)) + 2;
-  if (nj_max > 100000 || na_max > 100000) return false;  // ticks far finer than the motion: nothing to gain
+  // the continuous optimum (peak v, jerk phase tj, constant-acceleration
+  // phase ta); the counts searched are those next to it (rounding both up
+  // is among them: at most 4 ticks more than the continuous time)
+  double v = V;
+  if (v * (v >= Amax * Amax / Jmax ? v / Amax + Amax / Jmax : 2 * std::sqrt(v / Jmax)) > len) {
+    v = 0.5 * Amax * (std::sqrt(Amax * Amax / (Jmax * Jmax) + 4 * len / Amax) - Amax / Jmax);
+    if (v < Amax * Amax / Jmax) v = std::cbrt(0.25 * len * len * Jmax);
+  }
+  const double tj = std::min(Amax / Jmax, std::sqrt(v / Jmax)), ta = std::max(0.0, v / Amax - Amax / Jmax);
+  if (!(tj / h < 1e9 && ta / h < 1e9)) return false;  // ticks far finer than the motion: left as planned
+  const long long nj0 = std::max<long long>(1, static_cast<long long>(std::floor(tj / h)) - 1);
+  const long long na0 = std::max<long long>(0, static_cast<long long>(std::floor(ta / h)) - 1);
   bool found = false;
-  for (long long nj = 1; nj <= nj_max; ++nj)
-    for (long long na = 0; na <= na_max; ++na) {
+  for (long long nj = nj0; nj <= nj0 + 3; ++nj)
+    for (long long na = na0; na <= na0 + 3; ++na) {
       const double N = static_cast<double>(na + 2 * nj);
       // vp = len / (h (N + nc)) is at most each of V, Jmax h^2 nj (nj + na) and Amax h (nj + na)
       const double vcap = std::min({V, Jmax * h * h * static_cast<double>(nj * (nj + na)),
@@ -697,7 +707,7 @@ bool aligned_move(double len, double h, double V, double Amax, double Jmax, Alig
       if (!(ticks_at_vcap < 1e12)) continue;  // a move of more than 1e12 ticks: left as planned
       AlignedMove m{nj, na, std::max<long long>(0, static_cast<long long>(std::ceil(ticks_at_vcap - N - 1e-9))), 0, 0};
       bool ok = false;
-      for (int more = 0; more < 4 && !ok; ++more, ++m.nc) {  // a tick more where rounding put vp above a bound
+      for (int more = 0; more < 4; ++more, ++m.nc) {  // a tick more where rounding put vp above a bound
         m.vp = len / (h * (N + static_cast<double>(m.nc)));
         m.J = m.vp / (h * h * static_cast<double>(nj * (nj + na)));
         ok = m.vp <= V && m.J <= Jmax && m.J * static_cast<double>(nj) * h <= Amax;
