@@ -156,6 +156,21 @@ Compare compare(const std::vector<Prim>& prog, const std::vector<P3>& x) {
   return c;
 }
 
+// The samples (mm) of a compiled stream through the hls engine model (the board's format).
+std::vector<P3> hls_samples(const std::vector<fd::Compiled>& comp) {
+  using Eng = FdEngine<3, 5, 96, 16, 48>;
+  fd::Compiler compiler(job::Machine{}.format());
+  Eng e;
+  std::vector<P3> xs;
+  const double lsb = std::ldexp(1.0, -32);
+  test::run_segments(e, compiler, comp, Eng::kWords + Eng::kChunks + 2, [&](size_t, uint64_t, const Eng::Out& o) {
+    P3 v{};
+    for (int a = 0; a < 3; ++a) v[a] = static_cast<double>(sext(o.sample[a], Eng::kOutWidth)) * lsb;
+    xs.push_back(v);
+  });
+  return xs;
+}
+
 std::vector<P3> to_mm(const report::Samples& s) {
   const double lsb = std::ldexp(1.0, -32);
   std::vector<P3> x;
@@ -202,16 +217,8 @@ TEST(ToolpathStream, CamProgramStreamedAgreesWithWholePath) {
   EXPECT_GT(src.totals().chunks, 10u);
   EXPECT_LE(src.totals().max_pending, 2 * 64u);
   // through the hls engine model
-  using Eng = FdEngine<3, 5, 96, 16, 48>;
-  fd::Compiler compiler(job::Machine{}.format());
-  Eng e;
-  std::vector<P3> xs;
+  const std::vector<P3> xs = hls_samples(comp);
   const double lsb = std::ldexp(1.0, -32);
-  test::run_segments(e, compiler, comp, Eng::kWords + Eng::kChunks + 2, [&](size_t, uint64_t, const Eng::Out& o) {
-    P3 v{};
-    for (int a = 0; a < 3; ++a) v[a] = static_cast<double>(sext(o.sample[a], Eng::kOutWidth)) * lsb;
-    xs.push_back(v);
-  });
   EXPECT_EQ(static_cast<long long>(xs.size()), st.ticks);
 
   // limits at the samples (q: the largest stated sample error of the segments)
@@ -419,16 +426,8 @@ TEST(ToolpathStream, ExactStopMovesOnTheTickGridStreamedAndWhole) {
   std::vector<fd::Compiled> comp;
   const job::StreamStats st =
       job::run_streaming(src, src.config(), so, [&](const fd::Compiled& c, const plan::TimeSegment&) { comp.push_back(c); });
-  using Eng = FdEngine<3, 5, 96, 16, 48>;
-  fd::Compiler compiler(job::Machine{}.format());
-  Eng e;
-  std::vector<P3> xs;
+  const std::vector<P3> xs = hls_samples(comp);
   const double lsb = std::ldexp(1.0, -32);
-  test::run_segments(e, compiler, comp, Eng::kWords + Eng::kChunks + 2, [&](size_t, uint64_t, const Eng::Out& o) {
-    P3 v{};
-    for (int a = 0; a < 3; ++a) v[a] = static_cast<double>(sext(o.sample[a], Eng::kOutWidth)) * lsb;
-    xs.push_back(v);
-  });
   double q = 0;
   for (const auto& c : comp) q = std::max(q, (0.5 + c.bound_lsb) * lsb);
   const auto vs = test::check_output_limits(xs, 3, src.config().limits, cfg.machine.period, q, true);
