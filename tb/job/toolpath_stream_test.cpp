@@ -171,6 +171,34 @@ std::vector<P3> hls_samples(const std::vector<fd::Compiled>& comp) {
   return xs;
 }
 
+// A G-code file streamed (blending chunk, window, commit) and its samples
+// through the hls engine, with the limits they show (the stream's limits; the
+// largest stated sample error of its segments as the allowance).
+struct Streamed {
+  job::StreamStats st;
+  job::ToolpathStream::Totals totals;
+  std::vector<P3> xs;
+  test::OutputVerdict limits;
+};
+Streamed stream_through_hls(const std::string& file, const job::JobConfig& cfg, size_t chunk, size_t window,
+                            size_t commit) {
+  job::ToolpathStream src(file, input::FileKind::kGcode, cfg, {}, chunk);
+  job::StreamOptions so;
+  so.window = window;
+  so.commit = commit;
+  std::vector<fd::Compiled> comp;
+  Streamed r;
+  r.st = job::run_streaming(src, src.config(), so,
+                            [&](const fd::Compiled& c, const plan::TimeSegment&) { comp.push_back(c); });
+  r.totals = src.totals();
+  r.xs = hls_samples(comp);
+  const double lsb = std::ldexp(1.0, -32);
+  double q = 0;
+  for (const auto& c : comp) q = std::max(q, (0.5 + c.bound_lsb) * lsb);
+  r.limits = test::check_output_limits(r.xs, 3, src.config().limits, cfg.machine.period, q, true);
+  return r;
+}
+
 std::vector<P3> to_mm(const report::Samples& s) {
   const double lsb = std::ldexp(1.0, -32);
   std::vector<P3> x;
@@ -206,25 +234,17 @@ TEST(ToolpathStream, CamProgramStreamedAgreesWithWholePath) {
 
   // streamed: small windows and small blending chunks, so that the test
   // crosses many commits and chunk cuts
-  job::ToolpathStream src(file, input::FileKind::kGcode, cfg, {}, 64);
-  job::StreamOptions so;
-  so.window = 16;
-  so.commit = 12;
-  std::vector<fd::Compiled> comp;
-  const job::StreamStats st =
-      job::run_streaming(src, src.config(), so, [&](const fd::Compiled& c, const plan::TimeSegment&) { comp.push_back(c); });
+  const Streamed sm = stream_through_hls(file, cfg, 64, 16, 12);
+  const job::StreamStats& st = sm.st;
+  const std::vector<P3>& xs = sm.xs;
   EXPECT_GT(st.windows, 30u);  // runs of short segments are single curves: fewer curves than moves
-  EXPECT_GT(src.totals().chunks, 10u);
-  EXPECT_LE(src.totals().max_pending, 2 * 64u);
-  // through the hls engine model
-  const std::vector<P3> xs = hls_samples(comp);
+  EXPECT_GT(sm.totals.chunks, 10u);
+  EXPECT_LE(sm.totals.max_pending, 2 * 64u);
   const double lsb = std::ldexp(1.0, -32);
   EXPECT_EQ(static_cast<long long>(xs.size()), st.ticks);
 
   // limits at the samples (q: the largest stated sample error of the segments)
-  double q = 0;
-  for (const auto& c : comp) q = std::max(q, (0.5 + c.bound_lsb) * lsb);
-  const auto vs = test::check_output_limits(xs, 3, src.config().limits, cfg.machine.period, q, true);
+  const auto& vs = sm.limits;
   EXPECT_LE(vs.worst, 1 + 1e-9) << "streamed: " << vs.what << " at tick " << vs.tick;
   double qw = 0;
   for (const auto& c : wr.compiled) qw = std::max(qw, (0.5 + c.bound_lsb) * lsb);
@@ -248,7 +268,7 @@ TEST(ToolpathStream, CamProgramStreamedAgreesWithWholePath) {
   std::printf("  whole %.3f s, streamed %.3f s (%zu windows, %zu planned again, %zu chunks); deviation from the "
               "program: samples %.4g / %.4g mm, vertices %.4g / %.4g mm (streamed / whole), nearest points agree "
               "within %.4g mm; worst limit ratio %.4f / %.4f\n",
-              wr.plan.duration(), st.motion_time, st.windows, st.retries, src.totals().chunks, cs.sample_dev,
+              wr.plan.duration(), st.motion_time, st.windows, st.retries, sm.totals.chunks, cs.sample_dev,
               cw.sample_dev, cs.vertex_dev, cw.vertex_dev, agree, vs.worst, vw.worst);
   std::filesystem::remove_all(dir);
 }
@@ -419,18 +439,9 @@ TEST(ToolpathStream, ExactStopMovesOnTheTickGridStreamedAndWhole) {
   off.plan.align_straight_moves = false;
   const job::JobResult wo = job::run_job(tpp.path, off);
 
-  job::ToolpathStream src(file, input::FileKind::kGcode, cfg, {}, 16);
-  job::StreamOptions so;
-  so.window = 8;
-  so.commit = 6;
-  std::vector<fd::Compiled> comp;
-  const job::StreamStats st =
-      job::run_streaming(src, src.config(), so, [&](const fd::Compiled& c, const plan::TimeSegment&) { comp.push_back(c); });
-  const std::vector<P3> xs = hls_samples(comp);
-  const double lsb = std::ldexp(1.0, -32);
-  double q = 0;
-  for (const auto& c : comp) q = std::max(q, (0.5 + c.bound_lsb) * lsb);
-  const auto vs = test::check_output_limits(xs, 3, src.config().limits, cfg.machine.period, q, true);
+  const Streamed sm = stream_through_hls(file, cfg, 16, 8, 6);
+  const job::StreamStats& st = sm.st;
+  const auto& vs = sm.limits;
   EXPECT_LE(vs.worst, 1 + 1e-9) << "streamed: " << vs.what << " at tick " << vs.tick;
   const double h = cfg.machine.period;
   std::printf("  60 moves with exact stops: whole %.4f s (%d caps), streamed %.4f s in %zu windows (%zu caps), "
