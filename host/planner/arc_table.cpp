@@ -21,13 +21,39 @@ inline double clenshaw(const double* c, int n, double x) {
   return c[0] + x * b1 - b2;
 }
 
+// The same series at M points at once, each with the arithmetic of clenshaw:
+// the recurrences are independent, so their latencies overlap (one
+// recurrence alone waits on every step). Groups of 8 points keep the state in
+// registers.
+template <int M>
+inline void clenshaw_at(const double* c, int n, const double* x, double* out) {
+  static_assert(M % 8 == 0, "groups of 8 points");
+  for (int g = 0; g < M; g += 8) {
+    double b1[8], b2[8], x2[8];
+    for (int i = 0; i < 8; ++i) {
+      b1[i] = b2[i] = 0;
+      x2[i] = 2 * x[g + i];
+    }
+    for (int k = n; k >= 1; --k)
+      for (int i = 0; i < 8; ++i) {
+        const double b0 = c[k] + x2[i] * b1[i] - b2[i];
+        b2[i] = b1[i];
+        b1[i] = b0;
+      }
+    for (int i = 0; i < 8; ++i) out[g + i] = c[0] + x[g + i] * b1[i] - b2[i];
+  }
+}
+
 // cos(pi k / n), k = 0..2n (the DCT-I needs j k mod 2n), and the midpoints
 // cos(pi (k + 1/2) / n), k = 0..n-1, for n = kN.
+// dct[k][j] = c[(j k) mod 2n], the DCT-I's matrix.
 struct CosTable {
-  double c[2 * kN + 1], mid[kN];
+  double c[2 * kN + 1], mid[kN], dct[kN + 1][kN + 1];
   CosTable() {
     for (int k = 0; k <= 2 * kN; ++k) c[k] = std::cos(M_PI * k / kN);
     for (int k = 0; k < kN; ++k) mid[k] = std::cos(M_PI * (k + 0.5) / kN);
+    for (int k = 0; k <= kN; ++k)
+      for (int j = 0; j <= kN; ++j) dct[k][j] = c[(j * k) % (2 * kN)];
   }
 };
 const CosTable& cos_table() {
@@ -38,12 +64,13 @@ const CosTable& cos_table() {
 // Chebyshev coefficients (c[0] not halved) of the interpolant through f at the
 // points cos(pi k / n), k = 0..n (DCT-I).
 void dct1(const double* f, double* c) {
-  const double* ct = cos_table().c;
-  for (int j = 0; j <= kN; ++j) {
-    double acc = 0.5 * (f[0] + ((j & 1) ? -f[kN] : f[kN]));
-    for (int k = 1; k < kN; ++k) acc += f[k] * ct[(j * k) % (2 * kN)];
-    c[j] = acc * 2.0 / kN;
-  }
+  const auto& dct = cos_table().dct;
+  double acc[kN + 1];
+  for (int j = 0; j <= kN; ++j) acc[j] = 0.5 * (f[0] + ((j & 1) ? -f[kN] : f[kN]));
+  // each acc[j] sums its terms in the order k = 1..n-1; the j run side by side
+  for (int k = 1; k < kN; ++k)
+    for (int j = 0; j <= kN; ++j) acc[j] += f[k] * dct[k][j];
+  for (int j = 0; j <= kN; ++j) c[j] = acc[j] * 2.0 / kN;
   c[0] *= 0.5;
   c[kN] *= 0.5;
 }
@@ -121,38 +148,98 @@ bool ArcTable::try_piece(int span, double u0, double u1, double ref, Piece& p) {
   if (!(std::abs(L - ref) <= tol)) return false;
   if (!(std::abs(clenshaw(A, kN + 1, 0.0) - al_->span_length(span, u0, m)) <= tol)) return false;
   // 2. inverse: x(y) with S(x) = (y + 1) L / 2, interpolated at the Chebyshev
-  // points in y (each x by safeguarded Newton on S, derivative r sigma)
-  auto solve = [&](double T) {
-    double lo = -1, hi = 1, x = std::clamp(-1 + 2 * T / L, -1.0, 1.0);
-    for (int it = 0; it < 100; ++it) {
-      const double f = clenshaw(A, kN + 1, x) - T;
-      if (f == 0) break;
-      (f < 0 ? lo : hi) = x;
-      const double dS = r * clenshaw(a, kN, x);
-      double xn = dS > 0 ? x - f / dS : 0.5 * (lo + hi);
-      const bool newton = xn > lo && xn < hi;
-      if (!newton) xn = 0.5 * (lo + hi);
-      // Newton converges quadratically: after a Newton step below 1e-8 the
-      // error is of the order of its square, below the rounding of x (and
-      // the inverse is checked against S between its nodes below)
-      const bool done = (newton && std::abs(xn - x) <= 1e-8) || hi - lo <= 4e-16;
-      x = xn;
-      if (done) break;
+  // points in y (each x by safeguarded Newton on S, derivative r sigma; the
+  // inner nodes solved side by side, each with its own bracket and stop)
+  constexpr int kIn = kN - 1;  // inner nodes k = 1..n-1
+  constexpr int kLanes = (kIn + 7) / 8 * 8;
+  double T[kIn], x[kLanes] = {}, lo[kIn], hi[kIn], flo[kIn], fhi[kIn], f[kLanes], dS[kLanes];
+  bool active[kIn];
+  // First guesses: S and its slope r sigma are known at the x nodes ct[k]
+  // (S in decreasing order of k); a cubic Hermite through the two nodes
+  // around T, in S, is within about 1e-7 of x where sigma is smooth, so that
+  // Newton needs about two steps.
+  constexpr int kNodes = (kN + 1 + 7) / 8 * 8;
+  double Sx[kNodes];
+  {
+    double xn[kNodes] = {};
+    std::copy(ct, ct + kN + 1, xn);
+    clenshaw_at<kNodes>(A, kN + 1, xn, Sx);
+  }
+  for (int i = 0; i < kIn; ++i) {
+    T[i] = 0.5 * (ct[i + 1] + 1) * L;
+    lo[i] = -1;
+    hi[i] = 1;
+    flo[i] = -T[i];     // S(-1) = 0
+    fhi[i] = L - T[i];  // S(1) = L
+    int j = i;  // Sx[j + 1] <= T <= Sx[j]
+    while (j > 0 && Sx[j] < T[i]) --j;
+    while (j < kN - 1 && Sx[j + 1] > T[i]) ++j;
+    const double H = Sx[j] - Sx[j + 1];
+    double g = -1 + 2 * T[i] / L;
+    if (H > 0) {
+      const double t = (T[i] - Sx[j + 1]) / H, t2 = t * t, t3 = t2 * t;
+      g = (2 * t3 - 3 * t2 + 1) * ct[j + 1] + (t3 - 2 * t2 + t) * H / (r * sg[j + 1]) + (3 * t2 - 2 * t3) * ct[j] +
+          (t3 - t2) * H / (r * sg[j]);
     }
-    return x;
-  };
+    x[i] = std::clamp(g, -1.0, 1.0);
+    active[i] = true;
+  }
+  for (int it = 0, left = kIn; it < 100 && left > 0; ++it) {
+    clenshaw_at<kLanes>(A, kN + 1, x, f);
+    clenshaw_at<kLanes>(a, kN, x, dS);
+    for (int i = 0; i < kIn; ++i) {
+      if (!active[i]) continue;
+      const double fi = f[i] - T[i];
+      if (fi == 0) {
+        active[i] = false;
+        --left;
+        continue;
+      }
+      if (fi < 0) {
+        lo[i] = x[i];
+        flo[i] = fi;
+      } else {
+        hi[i] = x[i];
+        fhi[i] = fi;
+      }
+      // Newton converges quadratically: after a step below 1e-8 the error is
+      // of the order of its square, at the rounding of x (and the inverse is
+      // checked against S between its nodes below). Such a step is taken,
+      // within the bracket, even where rounding puts it on or past an end (a
+      // root at an end of the bracket, where bisection would take some 50
+      // halvings back). A larger step that leaves the bracket is replaced
+      // by the secant of the bracket, else by bisection.
+      const double d = r * dS[i];
+      double xn = d > 0 ? x[i] - fi / d : lo[i];
+      const bool done = (d > 0 && std::abs(xn - x[i]) <= 1e-8) || hi[i] - lo[i] <= 4e-16;
+      if (done) {
+        xn = std::clamp(xn, lo[i], hi[i]);
+      } else if (!(xn > lo[i] && xn < hi[i])) {
+        xn = lo[i] - flo[i] * (hi[i] - lo[i]) / (fhi[i] - flo[i]);
+        if (!(xn > lo[i] && xn < hi[i])) xn = 0.5 * (lo[i] + hi[i]);
+      }
+      x[i] = xn;
+      if (done) {
+        active[i] = false;
+        --left;
+      }
+    }
+  }
   double xs[kN + 1], b[kN + 1];
-  for (int k = 0; k <= kN; ++k) xs[k] = k == 0 ? 1.0 : k == kN ? -1.0 : solve(0.5 * (ct[k] + 1) * L);
+  xs[0] = 1.0;
+  xs[kN] = -1.0;
+  std::copy(x, x + kIn, xs + 1);
   dct1(xs, b);
   // the same for the inverse: an error dx moves S by up to r max(sigma) dx
   const double smax = *std::max_element(sg, sg + kN + 1);
   if (!(r * smax * tail(b) <= 0.1 * tol)) return false;
   // 3. check the inverse between its nodes: |S(x(y)) - T(y)| <= tol
-  for (int k = 0; k < kN; ++k) {
-    const double y = cos_table().mid[k];
-    const double x = clenshaw(b, kN, y);
-    if (!(std::abs(clenshaw(A, kN + 1, x) - 0.5 * (y + 1) * L) <= tol)) return false;
-  }
+  const double* mid = cos_table().mid;
+  double xm[kN], Sm[kN];
+  clenshaw_at<kN>(b, kN, mid, xm);
+  clenshaw_at<kN>(A, kN + 1, xm, Sm);
+  for (int k = 0; k < kN; ++k)
+    if (!(std::abs(Sm[k] - 0.5 * (mid[k] + 1) * L) <= tol)) return false;
   p.u0 = u0;
   p.u1 = u1;
   p.s0 = 0;
