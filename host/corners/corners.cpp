@@ -617,9 +617,12 @@ double fitted_run_deviation(const geo::BSpline& s, const std::vector<Vec>& poly,
     worst = std::max({worst, w, -golden_min([&](double u) { return -dist_poly(u); }, u0 + h * std::max(0, arg - 1),
                                             u0 + h * std::min(samples, arg + 1))});
   }
+  // A vertex's distance is a minimum: a sample can only overstate it (the
+  // safe side), and the golden section refines the best sample's basin, so
+  // a quarter of the curve's sampling density suffices to find it.
   auto dist_curve = [&](const Vec& p, double at) {
     const double ua = std::max(0.0, (at - window) / L), ub = std::min(1.0, (at + window) / L);
-    const int k = std::max(8, static_cast<int>(std::ceil(samples * spans * (ub - ua))));
+    const int k = std::max(8, static_cast<int>(std::ceil(std::max(4, samples / 4) * spans * (ub - ua))));
     double best = INFINITY, arg = ua;
     for (int i = 0; i <= k; ++i) {
       const double u = ua + (ub - ua) * i / k;
