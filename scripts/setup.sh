@@ -12,6 +12,7 @@ PKGS=(
   valgrind
   libtinyxml2-dev libdxflib-dev
   libserialport-dev  # serial ports of the upload tool (host/link)
+  libgoogle-perftools-dev  # tcmalloc, the allocator of trajcore and the benchmarks (CMakeLists.txt, TRAJ_TCMALLOC)
   socat  # a client of the upload tool's control socket (tb/simboard, README)
   linuxcnc-uspace  # rs274, LinuxCNC's interpreter: the oracle of the G-code cross-check (tb/input)
   clang libclang-rt-14-dev  # libFuzzer and the sanitizer runtimes of the fuzz targets (tb/fuzz, scripts/fuzz.sh)
