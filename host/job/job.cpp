@@ -198,9 +198,8 @@ JobResult run_job(const plan::Path& p, const JobConfig& cfg, const Progress& pro
   req.what = "the path";
   const double H = m.fit_period();
   const int n = m.fit_ticks();
-  req.sample = [&](const plan::Plan& plan, std::vector<plan::TickSample>& ts) {
-    ts = plan::sample_ticks(p, plan, H);
-  };
+  // every round samples into the same buffer (the samples are most of a whole path's memory)
+  req.sample = [&](const plan::Plan& plan, std::vector<plan::TickSample>& ts) { plan::sample_ticks(p, plan, H, ts); };
   req.progress = progress;
   r.fit_tol = req.segments.fit_tol;
   PlanFitResult fit = plan_and_fit(req, r.ticks);
@@ -213,7 +212,10 @@ JobResult run_job(const plan::Path& p, const JobConfig& cfg, const Progress& pro
   for (const plan::TimeSegment& s : fit.segments) engine_pieces(s, kmax, m.period, r.segments);
   r.segments.push_back(hold_segment(last, r.ticks.back().x, p.dim(), m.degree));
   r.engine_tick_count = static_cast<uint64_t>(last) + 1;
-  if (n > 1 && cfg.engine_ticks) r.ticks = plan::sample_ticks_range(p, r.plan, m.period, 0.0, 0, last);
+  if (n > 1 && cfg.engine_ticks) {
+    std::vector<plan::TickSample>().swap(r.ticks);  // the fit's samples go before the engine's come
+    plan::append_ticks_range(p, r.plan, m.period, 0.0, 0, last, r.ticks);
+  }
 
   const auto t3 = Clock::now();
   SegmentCompiler sc(m);

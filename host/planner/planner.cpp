@@ -972,8 +972,15 @@ PathState state_at(const Plan& plan, double t, int* hint) {
 }
 
 std::vector<TickSample> sample_ticks(const Path& p, const Plan& plan, double period) {
+  std::vector<TickSample> out;
+  sample_ticks(p, plan, period, out);
+  return out;
+}
+
+void sample_ticks(const Path& p, const Plan& plan, double period, std::vector<TickSample>& out) {
   const long long n = static_cast<long long>(std::ceil(plan.duration() / period - 1e-9));
-  return sample_ticks_range(p, plan, period, 0.0, 0, n);
+  out.clear();
+  append_ticks_range(p, plan, period, 0.0, 0, n, out);
 }
 
 std::vector<TickSample> sample_ticks_range(const Path& p, const Plan& plan, double period, double t_offset,
@@ -1019,7 +1026,8 @@ TickSample sample_plan(const Path& p, const Plan& plan, double tp, double t, Sam
 void append_ticks_range(const Path& p, const Plan& plan, double period, double t_offset, long long k_first,
                         long long k_last, std::vector<TickSample>& out, long long k_origin) {
   if (k_last < k_first) return;
-  out.reserve(out.size() + static_cast<size_t>(k_last - k_first + 1));
+  const size_t need = out.size() + static_cast<size_t>(k_last - k_first + 1);
+  if (out.capacity() < need) out.reserve(need + need / 8);
   SampleHints hints;
   for (long long k = k_first; k <= k_last; ++k)
     out.push_back(sample_plan(p, plan, static_cast<double>(k - k_origin) * period - t_offset, k * period, hints));

@@ -259,6 +259,9 @@ struct SampleHints {
 // The plan at its time tp (t: the sample's tick time, kept as given).
 TickSample sample_plan(const Path& p, const Plan& plan, double tp, double t, SampleHints& hints);
 std::vector<TickSample> sample_ticks(const Path& p, const Plan& plan, double period);
+// The same into `out` (cleared first; its storage is kept: a caller that
+// samples round after round holds one buffer, not two at a time).
+void sample_ticks(const Path& p, const Plan& plan, double period, std::vector<TickSample>& out);
 // Ticks k_first..k_last (global indices) of a plan that starts at global time
 // k_origin h + t_offset: tick k is at plan time (k - k_origin) h - t_offset
 // (clamped to the plan). A streaming caller keeps t_offset below a tick and
@@ -267,7 +270,9 @@ std::vector<TickSample> sample_ticks(const Path& p, const Plan& plan, double per
 std::vector<TickSample> sample_ticks_range(const Path& p, const Plan& plan, double period, double t_offset,
                                            long long k_first, long long k_last);
 // The same, appended to `out` (whose storage a caller can reuse window after
-// window: no allocation, no page faults once it has grown).
+// window: no allocation, no page faults once it has grown; it grows with an
+// eighth of room, untouched until used, so that a round a little longer than
+// the last does not move it).
 void append_ticks_range(const Path& p, const Plan& plan, double period, double t_offset, long long k_first,
                         long long k_last, std::vector<TickSample>& out, long long k_origin = 0);
 
