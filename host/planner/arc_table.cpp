@@ -78,6 +78,93 @@ void dct1(const double* f, double* c) {
 // Size of the last two coefficients: what truncating the series costs.
 double tail(const double* c) { return std::abs(c[kN - 1]) + std::abs(c[kN]); }
 
+// The inverse of S (the integral of the speed series a, S(1) = L, slope
+// r sigma with sigma = sg at the nodes ct[k]) at the Chebyshev points in y:
+// xs[k] with S(xs[k]) = (ct[k] + 1) L / 2, k = 0..n. Each inner node by
+// safeguarded Newton on S, all of them side by side, each with its own
+// bracket and stop.
+void inverse_at_nodes(const double* A, const double* a, const double* sg, double r, double L, double* xs) {
+  const double* ct = cos_table().c;
+  constexpr int kIn = kN - 1;  // inner nodes k = 1..n-1
+  constexpr int kLanes = (kIn + 7) / 8 * 8;
+  double T[kIn], x[kLanes] = {}, lo[kIn], hi[kIn], flo[kIn], fhi[kIn], f[kLanes], dS[kLanes];
+  bool active[kIn];
+  // First guesses: S and its slope r sigma are known at the x nodes ct[k]
+  // (S in decreasing order of k); a cubic Hermite through the two nodes
+  // around T, in S, is close enough where sigma is smooth that Newton
+  // mostly stops after a step or two.
+  constexpr int kNodes = (kN + 1 + 7) / 8 * 8;
+  double Sx[kNodes];
+  {
+    double xn[kNodes] = {};
+    std::copy(ct, ct + kN + 1, xn);
+    clenshaw_at<kNodes>(A, kN + 1, xn, Sx);
+  }
+  for (int i = 0; i < kIn; ++i) {
+    T[i] = 0.5 * (ct[i + 1] + 1) * L;
+    lo[i] = -1;
+    hi[i] = 1;
+    flo[i] = -T[i];     // S(-1) = 0
+    fhi[i] = L - T[i];  // S(1) = L
+    int j = i;  // Sx[j + 1] <= T <= Sx[j]
+    while (j > 0 && Sx[j] < T[i]) --j;
+    while (j < kN - 1 && Sx[j + 1] > T[i]) ++j;
+    const double H = Sx[j] - Sx[j + 1];
+    double g = -1 + 2 * T[i] / L;
+    if (H > 0) {
+      const double t = (T[i] - Sx[j + 1]) / H, t2 = t * t, t3 = t2 * t;
+      g = (2 * t3 - 3 * t2 + 1) * ct[j + 1] + (t3 - 2 * t2 + t) * H / (r * sg[j + 1]) + (3 * t2 - 2 * t3) * ct[j] +
+          (t3 - t2) * H / (r * sg[j]);
+    }
+    x[i] = std::clamp(g, -1.0, 1.0);
+    active[i] = true;
+  }
+  for (int it = 0, left = kIn; it < 100 && left > 0; ++it) {
+    clenshaw_at<kLanes>(A, kN + 1, x, f);
+    clenshaw_at<kLanes>(a, kN, x, dS);
+    for (int i = 0; i < kIn; ++i) {
+      if (!active[i]) continue;
+      const double fi = f[i] - T[i];
+      if (fi == 0) {
+        active[i] = false;
+        --left;
+        continue;
+      }
+      if (fi < 0) {
+        lo[i] = x[i];
+        flo[i] = fi;
+      } else {
+        hi[i] = x[i];
+        fhi[i] = fi;
+      }
+      // Newton converges quadratically: after a step below 1e-8 the error is
+      // of the order of its square, at the rounding of x (and the inverse is
+      // checked against S between its nodes below). Such a step is taken,
+      // within the bracket, even where rounding puts it on or past an end (a
+      // root at an end of the bracket, where bisection would take dozens of
+      // halvings back). A larger step that leaves the bracket is replaced
+      // by the secant of the bracket, else by bisection.
+      const double d = r * dS[i];
+      double xn = d > 0 ? x[i] - fi / d : lo[i];
+      const bool done = (d > 0 && std::abs(xn - x[i]) <= 1e-8) || hi[i] - lo[i] <= 4e-16;
+      if (done) {
+        xn = std::clamp(xn, lo[i], hi[i]);
+      } else if (!(xn > lo[i] && xn < hi[i])) {
+        xn = lo[i] - flo[i] * (hi[i] - lo[i]) / (fhi[i] - flo[i]);
+        if (!(xn > lo[i] && xn < hi[i])) xn = 0.5 * (lo[i] + hi[i]);
+      }
+      x[i] = xn;
+      if (done) {
+        active[i] = false;
+        --left;
+      }
+    }
+  }
+  xs[0] = 1.0;
+  xs[kN] = -1.0;
+  std::copy(x, x + kIn, xs + 1);
+}
+
 }  // namespace
 
 ArcTable::ArcTable(const geo::Curve& c, const geo::ArcLength& al) : c_(&c), al_(&al), total_(al.total()) {
@@ -148,87 +235,9 @@ bool ArcTable::try_piece(int span, double u0, double u1, double ref, Piece& p) {
   if (!(std::abs(L - ref) <= tol)) return false;
   if (!(std::abs(clenshaw(A, kN + 1, 0.0) - al_->span_length(span, u0, m)) <= tol)) return false;
   // 2. inverse: x(y) with S(x) = (y + 1) L / 2, interpolated at the Chebyshev
-  // points in y (each x by safeguarded Newton on S, derivative r sigma; the
-  // inner nodes solved side by side, each with its own bracket and stop)
-  constexpr int kIn = kN - 1;  // inner nodes k = 1..n-1
-  constexpr int kLanes = (kIn + 7) / 8 * 8;
-  double T[kIn], x[kLanes] = {}, lo[kIn], hi[kIn], flo[kIn], fhi[kIn], f[kLanes], dS[kLanes];
-  bool active[kIn];
-  // First guesses: S and its slope r sigma are known at the x nodes ct[k]
-  // (S in decreasing order of k); a cubic Hermite through the two nodes
-  // around T, in S, is within about 1e-7 of x where sigma is smooth, so that
-  // Newton needs about two steps.
-  constexpr int kNodes = (kN + 1 + 7) / 8 * 8;
-  double Sx[kNodes];
-  {
-    double xn[kNodes] = {};
-    std::copy(ct, ct + kN + 1, xn);
-    clenshaw_at<kNodes>(A, kN + 1, xn, Sx);
-  }
-  for (int i = 0; i < kIn; ++i) {
-    T[i] = 0.5 * (ct[i + 1] + 1) * L;
-    lo[i] = -1;
-    hi[i] = 1;
-    flo[i] = -T[i];     // S(-1) = 0
-    fhi[i] = L - T[i];  // S(1) = L
-    int j = i;  // Sx[j + 1] <= T <= Sx[j]
-    while (j > 0 && Sx[j] < T[i]) --j;
-    while (j < kN - 1 && Sx[j + 1] > T[i]) ++j;
-    const double H = Sx[j] - Sx[j + 1];
-    double g = -1 + 2 * T[i] / L;
-    if (H > 0) {
-      const double t = (T[i] - Sx[j + 1]) / H, t2 = t * t, t3 = t2 * t;
-      g = (2 * t3 - 3 * t2 + 1) * ct[j + 1] + (t3 - 2 * t2 + t) * H / (r * sg[j + 1]) + (3 * t2 - 2 * t3) * ct[j] +
-          (t3 - t2) * H / (r * sg[j]);
-    }
-    x[i] = std::clamp(g, -1.0, 1.0);
-    active[i] = true;
-  }
-  for (int it = 0, left = kIn; it < 100 && left > 0; ++it) {
-    clenshaw_at<kLanes>(A, kN + 1, x, f);
-    clenshaw_at<kLanes>(a, kN, x, dS);
-    for (int i = 0; i < kIn; ++i) {
-      if (!active[i]) continue;
-      const double fi = f[i] - T[i];
-      if (fi == 0) {
-        active[i] = false;
-        --left;
-        continue;
-      }
-      if (fi < 0) {
-        lo[i] = x[i];
-        flo[i] = fi;
-      } else {
-        hi[i] = x[i];
-        fhi[i] = fi;
-      }
-      // Newton converges quadratically: after a step below 1e-8 the error is
-      // of the order of its square, at the rounding of x (and the inverse is
-      // checked against S between its nodes below). Such a step is taken,
-      // within the bracket, even where rounding puts it on or past an end (a
-      // root at an end of the bracket, where bisection would take some 50
-      // halvings back). A larger step that leaves the bracket is replaced
-      // by the secant of the bracket, else by bisection.
-      const double d = r * dS[i];
-      double xn = d > 0 ? x[i] - fi / d : lo[i];
-      const bool done = (d > 0 && std::abs(xn - x[i]) <= 1e-8) || hi[i] - lo[i] <= 4e-16;
-      if (done) {
-        xn = std::clamp(xn, lo[i], hi[i]);
-      } else if (!(xn > lo[i] && xn < hi[i])) {
-        xn = lo[i] - flo[i] * (hi[i] - lo[i]) / (fhi[i] - flo[i]);
-        if (!(xn > lo[i] && xn < hi[i])) xn = 0.5 * (lo[i] + hi[i]);
-      }
-      x[i] = xn;
-      if (done) {
-        active[i] = false;
-        --left;
-      }
-    }
-  }
+  // points in y
   double xs[kN + 1], b[kN + 1];
-  xs[0] = 1.0;
-  xs[kN] = -1.0;
-  std::copy(x, x + kIn, xs + 1);
+  inverse_at_nodes(A, a, sg, r, L, xs);
   dct1(xs, b);
   // the same for the inverse: an error dx moves S by up to r max(sigma) dx
   const double smax = *std::max_element(sg, sg + kN + 1);

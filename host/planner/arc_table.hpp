@@ -15,8 +15,8 @@
 //   * the inverse x(y), y in [-1, 1] mapping S in [0, L], is interpolated the
 //     same way (its values at the nodes by safeguarded Newton on S, from a
 //     cubic Hermite guess through S and its slope at the x nodes, all nodes
-//     side by side: about 1.7 rounds per piece), and a query is one Clenshaw
-//     evaluation of it: no iteration, ~100 instructions;
+//     side by side), and a query is one Clenshaw evaluation of it: no
+//     iteration, ~100 instructions;
 //   * a piece is accepted only if (a) both series have converged to the
 //     accuracy asked for (the last two coefficients would move S by at most a
 //     tenth of the tolerance below), (b) S agrees with
