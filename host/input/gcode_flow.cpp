@@ -338,6 +338,7 @@ bool GcodeFlow::next(std::string& text, int& line) {
       if (!m.skipping.empty())
         m.fail(static_cast<int>(m.labels[m.skipping].index + 1), "O" + m.skipping,
                "its closing line (endif, endwhile, endrepeat, while) is missing before the end of the file");
+      line = static_cast<int>(m.lines_read);  // the end is after the file's last line, whatever ran last
       return false;
     }
     ++m.pc;

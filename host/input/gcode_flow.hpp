@@ -56,7 +56,7 @@ class GcodeFlow {
   GcodeFlow(std::istream& in, std::string file, Parameters& params);
   ~GcodeFlow();
   // The next line to run (not an O-word) and its line number in the file;
-  // false at the end of the file. Throws InputError "<file>:<line>: <word>:
+  // false at the end of the file (line: then the file's last line). Throws InputError "<file>:<line>: <word>:
   // <why>" for O-words that do not match or cannot run.
   // At the end of the file a construct still open, or a subroutine not
   // returned from, is refused (a program that ends with M2 inside one is

@@ -234,6 +234,8 @@ TEST(Gcode, Refusals) {
       {"F1\nG1 X1 A3\nM2\n", "t.ngc:2: A3: the machine has no A axis (its axes: XYZ; name them with trajcore --axes, e.g. --axes XYZA)"},
       {"E1\nM2\n", "t.ngc:1: E1: unknown word"},
       {"F1\nG1 X1\n", "t.ngc:2: end of file: the program has no M2, M30 or closing '%'"},
+      // a file of subroutine definitions only (LinuxCNC's increment.ngc): the end is its last line, not line 0
+      {"O<inc> sub\nG91 G0 X#1\nO<inc> endsub\n", "t.ngc:3: end of file: the program has no M2, M30 or closing '%'"},
       {"F1\nG0 X1 G1 Y2\nM2\n", "t.ngc:2: G1: two G codes from the same modal group (G0)"},
       {"F1\nG1 X1 R2\nM2\n", "t.ngc:2: R2: no G code in this block uses it"},
       {"F1\nG2 X0 Y0 I10 J0 P0\nM2\n", "t.ngc:2: P0: the number of turns must be 1 or more"},
