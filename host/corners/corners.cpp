@@ -480,10 +480,12 @@ std::vector<double> chord_lengths(const std::vector<Vec>& poly) {
 // at the first and last vertex and uniform between them (spans of at most `span` mm), fitted by least
 // squares to points along the polygon. The first three control points lie on the entry line and the
 // last three on the exit line, at the Greville abscissae of a straight line run at constant speed, so
-// the joins are G2 with curvature 0; the inner ones are free. A light second-difference penalty keeps
+// the joins are G2 with curvature 0; the inner ones are free. free_in (free_out): the run starts (ends)
+// at a stop, where the tangent and the curvature may step: only the end point is fixed there. A light second-difference penalty keeps
 // the system definite. The normal equations are banded (a point sees 4 control points): linear in the
 // run's length. Returns an empty spline where the run is too short for a free control point.
-geo::BSpline fit_run(const std::vector<Vec>& poly, const Vec& t_in, const Vec& t_out, double span) {
+geo::BSpline fit_run(const std::vector<Vec>& poly, const Vec& t_in, const Vec& t_out, double span, bool free_in,
+                     bool free_out) {
   geo::BSpline b;
   const std::vector<double> S = chord_lengths(poly);
   const double L = S.back();
@@ -507,10 +509,11 @@ geo::BSpline fit_run(const std::vector<Vec>& poly, const Vec& t_in, const Vec& t
   b.ctrl.row(0) = E.transpose();
   b.ctrl.row(1) = (E + greville(1) * t_in).transpose();
   b.ctrl.row(2) = (E + greville(2) * t_in).transpose();
+  const int f0 = free_in ? 1 : 3, f1 = free_out ? n - 2 : n - 4;  // the free control points
   b.ctrl.row(n - 3) = (X - (L - greville(n - 3)) * t_out).transpose();
   b.ctrl.row(n - 2) = (X - (L - greville(n - 2)) * t_out).transpose();
   b.ctrl.row(n - 1) = X.transpose();
-  const int F = n - 6;  // free control points 3 .. n-4
+  const int F = f1 - f0 + 1;
   // Data: the vertices and points along each edge at most span/8 apart.
   std::vector<double> us;
   std::vector<Vec> ps;
@@ -534,16 +537,16 @@ geo::BSpline fit_run(const std::vector<Vec>& poly, const Vec& t_in, const Vec& t
     Vec t = target;
     for (int a = 0; a < count; ++a) {
       const int i = first + a;
-      if (i < 3 || i > n - 4) t -= w[a] * b.ctrl.row(i).transpose();
+      if (i < f0 || i > f1) t -= w[a] * b.ctrl.row(i).transpose();
     }
     for (int a = 0; a < count; ++a) {
       const int i = first + a;
-      if (i < 3 || i > n - 4) continue;
-      rhs.row(i - 3) += w[a] * t.transpose();
+      if (i < f0 || i > f1) continue;
+      rhs.row(i - f0) += w[a] * t.transpose();
       for (int c = 0; c < count; ++c) {
         const int k = first + c;
-        if (k < 3 || k > n - 4) continue;
-        trips.emplace_back(i - 3, k - 3, w[a] * w[c]);
+        if (k < f0 || k > f1) continue;
+        trips.emplace_back(i - f0, k - f0, w[a] * w[c]);
       }
     }
   };
@@ -578,7 +581,7 @@ geo::BSpline fit_run(const std::vector<Vec>& poly, const Vec& t_in, const Vec& t
   if (ldlt.info() != Eigen::Success) return geo::BSpline{};
   const Eigen::MatrixXd x = ldlt.solve(rhs);
   if (ldlt.info() != Eigen::Success || !x.allFinite()) return geo::BSpline{};
-  b.ctrl.block(3, 0, F, dim) = x;
+  b.ctrl.block(f0, 0, F, dim) = x;
   b.name = "corner run";
   return b;
 }
@@ -1102,8 +1105,12 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
     while (k + m < joins.size() && between_blends(k + m) && smooth_enough(k + m - 1) && smooth_enough(k + m)) ++m;
     return m;
   };
+  // Whether the segment after the run of joins k .. k+m-1 ends at a stop (or the chain's end).
+  auto stop_after = [&](size_t k, size_t m) {
+    return k + m < el.size() && el[k + m].segment && (k + m == joins.size() || joins[k + m].kind == JoinKind::kStop);
+  };
   // Emit joins k .. k+m-1 as one curve, if it measures within tolerance.
-  auto emit_run = [&](size_t k, size_t m, bool smoothed) {
+  auto emit_run = [&](size_t k, size_t m, bool smoothed, bool free_in = false, bool free_out = false) {
     std::vector<Vec> v;
     double tol = INFINITY, feed = INFINITY;
     for (size_t i = 0; i < m; ++i) {
@@ -1112,7 +1119,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       feed = std::min(feed, tp.moves[el[k + i].move].feed);
     }
     feed = std::min(feed, tp.moves[el[k + m].move].feed);
-    const Vec exit = v[m - 1] + 2 * joins[k + m - 1].d * el[k + m].t_start;
+    const Vec exit = free_out ? el[k + m].b : Vec(v[m - 1] + 2 * joins[k + m - 1].d * el[k + m].t_start);
     // smoothed first (its spans longer than the chords, the CAM chords' curvature wobble averages out)
     geo::BSpline rs;
     double dev = INFINITY;
@@ -1120,7 +1127,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       std::vector<Vec> poly{last_end};
       poly.insert(poly.end(), v.begin(), v.end());
       poly.push_back(exit);
-      rs = fit_run(poly, el[k].t_end, el[k + m].t_start, o.run_shape.fit_span);
+      rs = fit_run(poly, el[k].t_end, el[k + m].t_start, o.run_shape.fit_span, free_in, free_out);
       if (rs.n_ctrl() > 0) {
         double longest = 0;
         for (size_t i = 1; i < poly.size(); ++i) longest = std::max(longest, (poly[i] - poly[i - 1]).norm());
@@ -1146,9 +1153,11 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       b.deviation = dev;
     }
     res.runs.push_back(run);
-    res.curves.push_back({rs, blend_where(tp.moves[el[k].move], tp.moves[el[k + m].move],
-                                          "run of " + std::to_string(m) + " corners"),
-                          feed, Kind::kFeed, false, true});
+    // a run to a stop ends there: the stop's exact stop and dwell are its own
+    const input::Move& last = tp.moves[el[k + m].move];
+    const bool stop_end = free_out && el[k + m].last_of_move && last.exact_stop;
+    res.curves.push_back({rs, blend_where(tp.moves[el[k].move], last, "run of " + std::to_string(m) + " corners"),
+                          feed, Kind::kFeed, stop_end, true, stop_end ? last.dwell : 0.0});
     last_end = rs.ctrl.row(rs.n_ctrl() - 1).transpose();
     return true;
   };
@@ -1201,6 +1210,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
     if (blend_after && o.merge_runs) {
       // the longest run from here that measures within the tolerance (halved until one does)
       size_t m = run_length(k);
+      bool to_stop = false;
       // smoothed where it fits (the longest prefix, shrinking by a quarter), else interpolated
       bool done = false;
       if (o.run_shape.fit_span > 0) {
@@ -1211,14 +1221,32 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
         size_t smooth = 0, leading_sharp = 0;
         while (smooth < m && joins[k + smooth].turn <= sharp) ++smooth;
         while (leading_sharp < m && joins[k + leading_sharp].turn > sharp) ++leading_sharp;
+        // At a stop on either side the run takes that side's segment whole, its end free (README.md,
+        // "Smoothed runs"); where that does not measure within the tolerance, the straight ends.
+        const bool stop_before = !blend_before && (k == 0 || joins[k - 1].kind == JoinKind::kStop);
+        auto emit_run_at_stops = [&](size_t mm) {
+          const bool fin = stop_before, fout = stop_after(k, mm);
+          if (!fin && !fout) return false;
+          std::optional<ChainCurve> line;
+          const Vec end = last_end;
+          if (fin) {
+            if (line_pushed) line = res.curves.back(), res.curves.pop_back();
+            last_end = a;
+          }
+          if (emit_run(k, mm, true, fin, fout)) return to_stop = fout, true;
+          if (line) res.curves.push_back(*line);
+          last_end = end;
+          return false;
+        };
         for (size_t mm = smooth; mm >= kMinSmoothedRun && !done; mm = mm * 3 / 4)
-          if (emit_run(k, mm, true)) done = true, m = mm;
+          if (emit_run_at_stops(mm) || emit_run(k, mm, true)) done = true, m = mm;
         if (!done && smooth < kMinSmoothedRun) m = std::min(m, std::max<size_t>(2, leading_sharp + 1));
       }
       if (!done)
         while (m >= 2 && !emit_run(k, m, false)) m /= 2;
       if (m >= 2) {
-        k += m - 1;  // segments k+1 .. k+m-1 are replaced; segment k+m starts at the run's end
+        // segments k+1 .. k+m-1 are replaced; segment k+m starts at the run's end (or is in the run)
+        k += to_stop ? m : m - 1;
         continue;
       }
     }

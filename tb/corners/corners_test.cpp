@@ -601,10 +601,17 @@ TEST(CornerBlend, Circle360Gon) {
   ASSERT_EQ(rm.runs.size(), 1u);
   EXPECT_EQ(rm.runs[0].corners, 359u);
   EXPECT_LE(rm.max_deviation, 0.05);
-  // The run's curvature, by the reference, between its second and its second-last vertex (its ends
-  // ramp from 0 at the joins with the first and last segment).
-  const ref::Spline s = to_ref(rm.curves[1].curve);
-  const int n = rm.curves[1].curve.n_ctrl();
+  // The path starts and ends at rest, so the run takes the first and the last segment too (no line
+  // before or after it: its tangent and curvature are free where the machine stands still).
+  ASSERT_EQ(rm.curves.size(), 1u);
+  const geo::BSpline& run = rm.curves[0].curve;
+  EXPECT_EQ((run.ctrl.row(0).transpose() - pts.front()).norm(), 0.0);
+  EXPECT_EQ((run.ctrl.row(run.n_ctrl() - 1).transpose() - pts.back()).norm(), 0.0);
+  // The run's curvature, by the reference, between its second and its second-last vertex, and at
+  // its ends: not 0 there, as where a run joins a segment (the fit's smoothing penalty flattens
+  // the free ends a little).
+  const ref::Spline s = to_ref(run);
+  const int n = run.n_ctrl();
   double lo = INFINITY, hi = 0, lo_all = INFINITY;
   for (int i = 0; i <= 40 * n; ++i) {
     const double u = double(i) / (40 * n);
@@ -613,10 +620,11 @@ TEST(CornerBlend, Circle360Gon) {
     if (u < 3.0 / (n - 3) || u > 1 - 3.0 / (n - 3)) continue;
     lo = std::min(lo, k), hi = std::max(hi, k);
   }
-  std::printf("360-gon, run merged: 1 curve of %d control points, deviation %.3e mm (measured); curvature %.5f .. %.5f "
-              "inside, %.5f at the ends\n", n, rm.max_deviation, lo, hi, lo_all);
+  std::printf("360-gon, run merged: 1 curve of %d control points from the start to the end, deviation %.3e mm "
+              "(measured); curvature %.5f .. %.5f inside, %.5f at the ends\n", n, rm.max_deviation, lo, hi, lo_all);
   EXPECT_GE(lo, 0.8 / 20);
   EXPECT_LE(hi, 1.2 / 20);
+  EXPECT_GE(lo_all, 0.25 / 20);
 
   BlendOptions none;
   none.max_turn = 0;  // every corner a stop: the raw polyline
@@ -628,6 +636,34 @@ TEST(CornerBlend, Circle360Gon) {
               "ideal %.3f s (a straight line as long: %.3f s)\n", t_raw, t_sep, t_run, 2 * kPi * 20 / 100, t_line);
   EXPECT_LT(t_sep, t_raw);
   EXPECT_LT(t_run, t_sep);
+}
+
+// A run that reaches an exact stop (G61 on its last move, with a dwell) ends at the stop's vertex and
+// carries the stop and the dwell; the run after it starts there. The segment on each side of the stop
+// is taken into the runs (their tangent and curvature are free where the machine stands still); every
+// curve stays within the tolerance of the polyline (reference evaluation).
+TEST(CornerBlend, RunsMeetAtAnExactStop) {
+  const std::vector<Vec> pts = ngon(120, 20, 0.5);  // 61 vertices, a half circle of 1 mm chords
+  Toolpath tp = polyline(pts);
+  const size_t stop_move = 29;  // ends at vertex 30, the middle
+  tp.moves[stop_move].exact_stop = true;
+  tp.moves[stop_move].dwell = 0.25;
+  const double tol = 0.05;
+  const BlendResult r = traj::corners::blend_corners(tp, tol);
+  ASSERT_EQ(r.curves.size(), 2u);
+  for (const auto& c : r.curves) {
+    EXPECT_TRUE(c.blend);
+    EXPECT_LE(max_dist_curve_to_polyline(to_ref(c.curve), pts, 40 * (c.curve.n_ctrl() - 1)), tol * (1 + 1e-9));
+  }
+  const geo::BSpline& a = r.curves[0].curve;
+  const geo::BSpline& b = r.curves[1].curve;
+  EXPECT_EQ((a.ctrl.row(0).transpose() - pts.front()).norm(), 0.0);
+  EXPECT_EQ((a.ctrl.row(a.n_ctrl() - 1).transpose() - pts[stop_move + 1]).norm(), 0.0);
+  EXPECT_EQ((b.ctrl.row(0).transpose() - pts[stop_move + 1]).norm(), 0.0);
+  EXPECT_EQ((b.ctrl.row(b.n_ctrl() - 1).transpose() - pts.back()).norm(), 0.0);
+  EXPECT_TRUE(r.curves[0].exact_stop);
+  EXPECT_EQ(r.curves[0].dwell, 0.25);
+  EXPECT_FALSE(r.curves[1].exact_stop);
 }
 
 // Largest |dkappa/ds| of a curve between parameters u0 and u1 (reference curvature, finite
