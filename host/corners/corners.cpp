@@ -1107,7 +1107,8 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
   };
   // Whether the segment after the run of joins k .. k+m-1 ends at a stop (or the chain's end).
   auto stop_after = [&](size_t k, size_t m) {
-    return k + m < el.size() && el[k + m].segment && (k + m == joins.size() || joins[k + m].kind == JoinKind::kStop);
+    return k + m < el.size() && el[k + m].segment &&
+           (k + m == joins.size() ? o.ends_at_rest : joins[k + m].kind == JoinKind::kStop);
   };
   // Emit joins k .. k+m-1 as one curve, if it measures within tolerance.
   auto emit_run = [&](size_t k, size_t m, bool smoothed, bool free_in = false, bool free_out = false) {
@@ -1223,7 +1224,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
         while (leading_sharp < m && joins[k + leading_sharp].turn > sharp) ++leading_sharp;
         // At a stop on either side the run takes that side's segment whole, its end free (README.md,
         // "Smoothed runs"); where that does not measure within the tolerance, the straight ends.
-        const bool stop_before = !blend_before && (k == 0 || joins[k - 1].kind == JoinKind::kStop);
+        const bool stop_before = !blend_before && (k == 0 ? o.starts_at_rest : joins[k - 1].kind == JoinKind::kStop);
         auto emit_run_at_stops = [&](size_t mm) {
           const bool fin = stop_before, fout = stop_after(k, mm);
           if (!fin && !fout) return false;

@@ -83,6 +83,10 @@ struct BlendOptions {
   // the limits (job/toolpath_job plans both locally). Unset: every such corner is blended.
   std::function<bool(const CornerCandidate&)> stop_if_faster;
   double stop_turn = 0.35;  // rad (20 degrees)
+  // Whether the machine is at rest where the toolpath starts (ends): a whole program, or a part of
+  // one cut at a rest. A run at a rest takes the segment there whole (README.md, "Smoothed runs"); a
+  // part cut inside a move (job/toolpath_stream) continues at speed there and keeps a straight end.
+  bool starts_at_rest = true, ends_at_rest = true;
 };
 
 // One curve of the output chain, with what it inherits from its move.

@@ -49,7 +49,7 @@ bool stop_is_faster(const corners::CornerCandidate& c, const JobConfig& cfg) {
 }  // namespace
 
 input::Toolpath blend_toolpath(const input::Toolpath& tp, const JobConfig& cfg, const ToolpathOptions& o,
-                               ToolpathPlan& r) {
+                               ToolpathPlan& r, bool starts_at_rest, bool ends_at_rest) {
   const double tol = cfg.limits.tol;
   const double share = o.blend_share;
   if (!(share > 0 && share < 1)) throw PlanError("blend share must be in (0, 1)");
@@ -58,6 +58,8 @@ input::Toolpath blend_toolpath(const input::Toolpath& tp, const JobConfig& cfg, 
     if (m.tolerance >= 0) m.tolerance *= share;
   corners::BlendOptions bo;
   bo.wide = o.wide_blends;
+  bo.starts_at_rest = starts_at_rest;
+  bo.ends_at_rest = ends_at_rest;
   if (o.faster_stops) bo.stop_if_faster = [&cfg](const corners::CornerCandidate& c) { return stop_is_faster(c, cfg); };
   const corners::BlendResult b = corners::blend_corners(part, tol * share, bo);
   r.corners_blended = b.corners_blended;

@@ -61,9 +61,11 @@ ToolpathPlan toolpath_plan(const input::Toolpath& tp, const JobConfig& cfg, cons
 // Parts of toolpath_plan, for a toolpath streamed in chunks (job/toolpath_stream.hpp):
 // the corners blended within o.blend_share of each move's tolerance (default:
 // of cfg.limits.tol; cfg's limits also decide the faster stops), with r's corner
-// counts and largest deviation set; and the rapid speed.
+// counts and largest deviation set; and the rapid speed. starts_at_rest
+// (ends_at_rest): whether the machine rests where tp starts (ends), false
+// where a chunk was cut inside a move (corners::BlendOptions).
 input::Toolpath blend_toolpath(const input::Toolpath& tp, const JobConfig& cfg, const ToolpathOptions& o,
-                               ToolpathPlan& r);
+                               ToolpathPlan& r, bool starts_at_rest = true, bool ends_at_rest = true);
 double rapid_speed(const JobConfig& cfg, int axes, const ToolpathOptions& o);
 
 }  // namespace traj::job

@@ -81,6 +81,8 @@ void ToolpathStream::blend_next_chunk() {
   }
   input::Toolpath part;
   part.axes = axes_;
+  const bool starts_at_rest = !cut_inside_;
+  cut_inside_ = false;
   if (cut == 0 && !ended_) {
     // no free junction: cut the last feed move read at its parameter middle
     size_t j = pending_.size() - 1;
@@ -99,6 +101,7 @@ void ToolpathStream::blend_next_chunk() {
       part.moves.push_back(std::move(first));
       pending_.erase(pending_.begin(), pending_.begin() + static_cast<long>(j));
       ++totals_.split_moves;
+      cut_inside_ = true;
     }
   }
   if (part.moves.empty()) {
@@ -110,7 +113,7 @@ void ToolpathStream::blend_next_chunk() {
   if (part.moves.empty()) return;
   ++totals_.chunks;
   ToolpathPlan stats;
-  const input::Toolpath b = opt_.blend ? blend_toolpath(part, job_cfg_, opt_, stats) : part;
+  const input::Toolpath b = opt_.blend ? blend_toolpath(part, job_cfg_, opt_, stats, starts_at_rest, !cut_inside_) : part;
   totals_.corners_blended += stats.corners_blended;
   totals_.wide_blends += stats.wide_blends;
   totals_.blend_deviation = std::max(totals_.blend_deviation, stats.blend_deviation);

@@ -70,6 +70,7 @@ class ToolpathStream : public StreamSource {
   double rapid_ = 0;
   size_t chunk_;
   bool ended_ = false;
+  bool cut_inside_ = false;  // the last chunk ended inside a move: the next one starts at speed
   std::deque<input::Move> pending_;  // read, not yet blended
   size_t scanned_ = 1;               // junctions of pending_ below this were not free
   std::deque<StreamCurve> ready_;    // blended, not yet taken

@@ -664,6 +664,22 @@ TEST(CornerBlend, RunsMeetAtAnExactStop) {
   EXPECT_TRUE(r.curves[0].exact_stop);
   EXPECT_EQ(r.curves[0].dwell, 0.25);
   EXPECT_FALSE(r.curves[1].exact_stop);
+
+  // A part of a program cut inside a move (streaming) is not at rest at that end: the chain starts and
+  // ends along the first and the last segment there (its first and last three control points on them).
+  BlendOptions moving;
+  moving.starts_at_rest = moving.ends_at_rest = false;
+  const BlendResult m = traj::corners::blend_corners(tp, tol, moving);
+  auto on_line = [](const geo::BSpline& c, int row, const Vec& p, const Vec& q) {
+    const Vec x = c.ctrl.row(row).transpose();
+    const Vec u = (q - p).normalized();
+    return (x - p - (x - p).dot(u) * u).norm();
+  };
+  const geo::BSpline& first = m.curves.front().curve;
+  const geo::BSpline& last = m.curves.back().curve;
+  for (int i = 0; i < std::min(3, first.n_ctrl()); ++i) EXPECT_LT(on_line(first, i, pts[0], pts[1]), 1e-12) << i;
+  for (int i = std::max(0, last.n_ctrl() - 3); i < last.n_ctrl(); ++i)
+    EXPECT_LT(on_line(last, i, pts[pts.size() - 2], pts.back()), 1e-12) << i;
 }
 
 // Largest |dkappa/ds| of a curve between parameters u0 and u1 (reference curvature, finite
