@@ -544,12 +544,29 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
 constexpr double kAStationRatio = 3;
 
 // Stations of the grid points lo..hi (both always stations): corners, forced
-// points, and local minima of v_lim; idx receives their grid indices.
+// points, and local minima of v_lim that the profile could reach; idx
+// receives their grid indices. A_t, J_t, tau: the profile's largest
+// tangential acceleration, its jerk and shortest jerk phase (profile.hpp).
 std::vector<Station> stations_from(const Grid& g, const std::vector<char>& forced, double feed, size_t lo, size_t hi,
-                                   std::vector<size_t>& idx) {
+                                   double A_t, double J_t, double tau, std::vector<size_t>& idx) {
   std::vector<Station> st;
   idx.clear();
   double A_ref = 0;
+  // the next corner after each point (hi + 1: none)
+  std::vector<size_t> next_corner(hi - lo + 2, hi + 1);
+  for (size_t i = hi; i-- > lo;) next_corner[i - lo] = g.corner[i + 1] ? i + 1 : next_corner[i + 1 - lo];
+  // Whether the profile could reach v at grid point i: every block starts and
+  // ends at a station with acceleration 0, so its speed at i is at most what
+  // the last station (at its speed bound) reaches within the distance, and
+  // at most the speed from which the next corner's is reached (at A_t, the
+  // largest acceleration of any block). A local minimum of v_lim above that
+  // cannot bind: as a station it would only split a speed change in two
+  // (before a stop, a plateau at the station's speed).
+  auto reachable_at = [&](size_t i, double v) {
+    if (!st.empty() && reachable(st.back().vmax, g.s[i] - st.back().s, A_t, J_t, feed, tau) < v) return false;
+    const size_t c = next_corner[i - lo];
+    return c > hi || reachable(g.vlim[c], g.s[c] - g.s[i], A_t, J_t, feed, tau) >= v;
+  };
   for (size_t i = lo; i <= hi; ++i) {
     bool take = i == lo || i == hi || g.corner[i] || forced[i];
     // where the local tangential acceleration has changed by more than
@@ -561,7 +578,7 @@ std::vector<Station> stations_from(const Grid& g, const std::vector<char>& force
     // a plateau (constant curvature, straight line) makes no stations
     if (!take && g.vlim[i] < feed * (1 - 1e-9) && g.vlim[i] < g.vlim[i - 1] * (1 - 1e-9) &&
         g.vlim[i] <= g.vlim[i + 1] * (1 + 1e-9))
-      take = true;
+      take = reachable_at(i, g.vlim[i]);
     if (take) {
       st.push_back({g.s[i], g.vlim[i], 0});
       idx.push_back(i);
@@ -873,7 +890,7 @@ Plan plan_path(const Path& p, const Limits& limits, const PlanOptions& o) {
   std::vector<char> changed;
   std::vector<size_t> idx, lidx;
   for (int iter = 0; iter < 10000; ++iter) {
-    plan.stations = stations_from(g, forced, L.feed, 0, n - 1, idx);
+    plan.stations = stations_from(g, forced, L.feed, 0, n - 1, plan.A_t, plan.J_t, o.jerk_phase_ticks * o.period, idx);
     const auto cap = caps_for(g, plan.stations, idx, L.feed);
     const auto acc = accels_for(g, idx);
     plan.pieces = plan_blocks(plan.stations, cap, acc, plan.J_t, memo, changed, o.jerk_phase_ticks * o.period);
@@ -924,7 +941,7 @@ Plan plan_path(const Path& p, const Limits& limits, const PlanOptions& o) {
       const size_t ib = idx[b + 1];
       // the local stations, their grid indices and block caps are kept up to
       // date incrementally (the same lists stations_from / caps_for would build)
-      auto loc = stations_from(g, forced, L.feed, lo, ib, lidx);
+      auto loc = stations_from(g, forced, L.feed, lo, ib, plan.A_t, plan.J_t, o.jerk_phase_ticks * o.period, lidx);
       auto lcap = caps_for(g, loc, lidx, L.feed);
       auto lacc = accels_for(g, lidx);
       loc.back().vmax = plan.stations[b + 1].v;

@@ -546,6 +546,39 @@ TEST(PlannerCore, TightUTurnRunsFastAndLimitsHold) {
   EXPECT_GT(v_arc, 4 * v_reserved);
 }
 
+// A local minimum of the speed bound (a bump of one cubic B-spline, v_lim 47.5 mm/s at feed 50,
+// 1.33 mm before a corner stop): the profile cannot reach it (braking for the stop passes there at
+// about 28 mm/s), so it is no station. As one (acceleration 0 there) it split the braking into two
+// speed changes with a plateau between them (0.931 s of motion against 0.914 s). Every limit still
+// holds on the core.
+TEST(PlannerCore, SpeedBoundMinimumTheProfileCannotReachIsNoStation) {
+  geo::BSpline sp;
+  sp.degree = 3;
+  sp.ctrl.resize(8, 2);
+  sp.ctrl << -20, 0, -12, 0, -4, 0, 0, 0, 0.5, 0.015, 1, 0, 1.5, 0, 2, 0;
+  sp.knots.resize(12);
+  sp.knots << 0, 0, 0, 0, 0.2, 0.4, 0.6, 0.8, 1, 1, 1, 1;
+  Path p;
+  p.add(sp, "bump");
+  Eigen::VectorXd d(2), e(2);
+  d << 2, 0;
+  e << 2, 10;
+  p.add(geo::make_line(d, e), "line out");  // a 90 degree corner: a stop
+  JobConfig cfg;
+  cfg.limits.feed = 50;
+  const RunOut o = run_through_core(p, cfg);
+  expect_guarantees(p, cfg, o, "bump before a corner");
+  const Plan& plan = o.job.plan;
+  int inside = 0;
+  for (const auto& st : plan.stations) inside += st.s > 1e-9 && st.s < p.offset(1) - 1e-9;
+  double v_bump = 0;
+  for (const auto& t : o.job.ticks)
+    if (t.curve == 0 && t.s > 15 && t.s < 21) v_bump = std::max(v_bump, t.v);
+  std::printf("  bump before a corner: %d stations inside the curve, peak %.2f mm/s near the bump, motion %.3f s\n",
+              inside, v_bump, o.rep.motion_time);
+  EXPECT_EQ(inside, 0);
+}
+
 // A hairpin (one quadratic B-spline): nearly straight legs into a tip of
 // high curvature, no junction between them. The local tangential acceleration
 // is small only near the tip; a block from the start to the tip would take
