@@ -470,7 +470,7 @@ class Interpreter {
   std::string polar_word() const { return text(has('@') ? '@' : '^'); }
   // polar coordinates in a block whose motion does not take them
   [[noreturn]] void refuse_polar() const {
-    fail(polar_word(), "polar coordinates (@ ^) are supported with G0 and G1 only");
+    fail(polar_word(), "polar coordinates (@ ^) are supported with G0, G1 and the canned cycles only");
   }
   bool any_axis() const {
     if (has('X') || has('Y') || has('Z') || polar()) return true;
@@ -513,8 +513,9 @@ class Interpreter {
   // origin of the program's coordinates: @ the distance, ^ the angle in
   // degrees from +X. G90: the word given sets its coordinate, the other is
   // the current point's; G91: @ adds to the current distance, then ^ to the
-  // current angle. G0 and G1 only (rs274 takes them with arcs and cycles
-  // too; those are refused here, with the other moves, in motion()).
+  // current angle. G0, G1 and the canned cycles (each repeat of a cycle
+  // from where the last one drilled: G91 ^60 L6 drills a bolt circle); rs274
+  // takes them with arcs too, which are refused here in motion().
   void polar_end_point(Vector3d& e) {
     const std::string word = polar_word();
     if (has('X') || has('Y')) fail(word, "X or Y words with polar coordinates (@ ^)");
@@ -611,7 +612,8 @@ class Interpreter {
       nurbs_point(explicit_g);
       return;
     }
-    if (polar() && !(motion_ == Motion::kRapid || motion_ == Motion::kLine) && motion_ != Motion::kNone)
+    if (polar() && !(motion_ == Motion::kRapid || motion_ == Motion::kLine || is_cycle(motion_)) &&
+        motion_ != Motion::kNone)
       refuse_polar();
     if (is_cycle(motion_)) {
       if (any_axis()) canned_cycle(word);  // a block with an axis word runs it (with R alone rs274 refuses R)
@@ -719,6 +721,7 @@ class Interpreter {
       Vector3d hole(pos_[0], pos_[1], pos_[2] <= r ? clear : pos_[2]);
       if (has('X')) hole[0] = absolute_ ? x : pos_[0] + x;
       if (has('Y')) hole[1] = absolute_ ? y : pos_[1] + y;
+      if (polar()) polar_end_point(hole);  // about the origin, from the last hole
       rapid_to(hole);
       rapid_to({hole[0], hole[1], r});
       drill(r, bottom, f);

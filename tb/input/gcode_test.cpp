@@ -285,8 +285,8 @@ TEST(Gcode, Refusals) {
       {"F1 G91 G1 ^5\nM2\n", "t.ngc:1: ^5: incremental polar coordinates (G91 @ ^) at the origin have no direction"},
       {"F1 G0 X1\nG91 G1 @-1 ^5\nM2\n",
        "t.ngc:2: @-1: incremental polar coordinates (G91 @ ^) at the origin have no direction"},
-      {"F1 G0 X1\nG2 @2 ^90 R2\nM2\n", "t.ngc:2: @2: polar coordinates (@ ^) are supported with G0 and G1 only"},
-      {"G0 X1\nG28 ^90\nM2\n", "t.ngc:2: ^90: polar coordinates (@ ^) are supported with G0 and G1 only"},
+      {"F1 G0 X1\nG2 @2 ^90 R2\nM2\n", "t.ngc:2: @2: polar coordinates (@ ^) are supported with G0, G1 and the canned cycles only"},
+      {"G0 X1\nG28 ^90\nM2\n", "t.ngc:2: ^90: polar coordinates (@ ^) are supported with G0, G1 and the canned cycles only"},
       {"G0 X1\nG53 G0 ^90\nM2\n", "t.ngc:2: ^90: polar coordinates (@ ^) with G53 are not supported"},
       {"G0 X1\nG80\n^90\nM2\n", "t.ngc:3: ^90: axis word with no motion mode (G0, G1, G2, G3, G5, ...) in effect"},
   };
@@ -323,6 +323,22 @@ TEST(Gcode, PolarCoordinates) {
   for (size_t i = 0; i < ends.size(); ++i)
     EXPECT_LT((end_of(tp.moves[i]) - ends[i]).norm(), 1e-12) << "move " << i << " ends at " << end_of(tp.moves[i]).transpose();
   EXPECT_EQ(tp.moves.back().kind, Move::Kind::kRapid);
+}
+
+// Polar coordinates in a canned cycle (LinuxCNC's hole-circle.ngc): G91 ^60 L6 drills six holes on the
+// circle through the current point about the origin, each 60 degrees on from the last; G90 @ ^ drills
+// at that point. The feeds down are the holes (rs274 agrees move for move: input.crosscheck).
+TEST(Gcode, PolarCoordinatesInCannedCycles) {
+  const Toolpath tp = read("G21 G90 G0 X10 Y0 Z1\nG91 G81 R.1 Z-.5 ^60 L6 F10\nG90 G81 @4 ^-90 R1 Z0\nM2\n");
+  std::vector<Eigen::Vector3d> holes;
+  for (const auto& m : tp.moves)
+    if (m.kind == Move::Kind::kFeed) holes.push_back(end_of(m));
+  ASSERT_EQ(holes.size(), 7u);
+  for (int k = 0; k < 6; ++k) {
+    const double th = (k + 1) * kPi / 3;
+    EXPECT_LT((holes[k] - Eigen::Vector3d(10 * std::cos(th), 10 * std::sin(th), 0.6)).norm(), 1e-12) << k;
+  }
+  EXPECT_LT((holes[6] - Eigen::Vector3d(0, -4, 0)).norm(), 1e-12);
 }
 
 TEST(Gcode, ReferenceMoves) {
