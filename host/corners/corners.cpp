@@ -481,9 +481,10 @@ std::vector<double> chord_lengths(const std::vector<Vec>& poly) {
 // squares to points along the polygon. The first three control points lie on the entry line and the
 // last three on the exit line, at the Greville abscissae of a straight line run at constant speed, so
 // the joins are G2 with curvature 0; the inner ones are free. free_in (free_out): the run starts (ends)
-// at a stop, where the tangent and the curvature may step: only the end point is fixed there. A light second-difference penalty keeps
-// the system definite. The normal equations are banded (a point sees 4 control points): linear in the
-// run's length. Returns an empty spline where the run is too short for a free control point.
+// at a stop, where the tangent and the curvature may step: only the end point is fixed there. A light
+// second-difference penalty keeps the system definite. The normal equations are banded (a point sees 4
+// control points): linear in the run's length. Returns an empty spline where the run is too short for a
+// free control point.
 geo::BSpline fit_run(const std::vector<Vec>& poly, const Vec& t_in, const Vec& t_out, double span, bool free_in,
                      bool free_out) {
   geo::BSpline b;
