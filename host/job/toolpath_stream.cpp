@@ -113,7 +113,8 @@ void ToolpathStream::blend_next_chunk() {
   if (part.moves.empty()) return;
   ++totals_.chunks;
   ToolpathPlan stats;
-  const input::Toolpath b = opt_.blend ? blend_toolpath(part, job_cfg_, opt_, stats, starts_at_rest, !cut_inside_) : part;
+  const input::Toolpath b =
+      opt_.blend ? blend_toolpath(part, job_cfg_, opt_, stats, starts_at_rest, !cut_inside_) : part;
   totals_.corners_blended += stats.corners_blended;
   totals_.wide_blends += stats.wide_blends;
   totals_.blend_deviation = std::max(totals_.blend_deviation, stats.blend_deviation);

@@ -889,11 +889,12 @@ Plan plan_path(const Path& p, const Limits& limits, const PlanOptions& o) {
   std::vector<BlockMemo> memo;  // blocks of the previous pass (most are unchanged by new stations)
   std::vector<char> changed;
   std::vector<size_t> idx, lidx;
+  const double tau = o.jerk_phase_ticks * o.period;
   for (int iter = 0; iter < 10000; ++iter) {
-    plan.stations = stations_from(g, forced, L.feed, 0, n - 1, plan.A_t, plan.J_t, o.jerk_phase_ticks * o.period, idx);
+    plan.stations = stations_from(g, forced, L.feed, 0, n - 1, plan.A_t, plan.J_t, tau, idx);
     const auto cap = caps_for(g, plan.stations, idx, L.feed);
     const auto acc = accels_for(g, idx);
-    plan.pieces = plan_blocks(plan.stations, cap, acc, plan.J_t, memo, changed, o.jerk_phase_ticks * o.period);
+    plan.pieces = plan_blocks(plan.stations, cap, acc, plan.J_t, memo, changed, tau);
     // The profile must stay under v_lim at every grid point. Every local
     // maximum of the violation ratio becomes a station. A block identical to
     // one of the previous pass had no violation then (else it would have a
@@ -941,13 +942,13 @@ Plan plan_path(const Path& p, const Limits& limits, const PlanOptions& o) {
       const size_t ib = idx[b + 1];
       // the local stations, their grid indices and block caps are kept up to
       // date incrementally (the same lists stations_from / caps_for would build)
-      auto loc = stations_from(g, forced, L.feed, lo, ib, plan.A_t, plan.J_t, o.jerk_phase_ticks * o.period, lidx);
+      auto loc = stations_from(g, forced, L.feed, lo, ib, plan.A_t, plan.J_t, tau, lidx);
       auto lcap = caps_for(g, loc, lidx, L.feed);
       auto lacc = accels_for(g, lidx);
       loc.back().vmax = plan.stations[b + 1].v;
       for (int it = 0; it < 100000 && lo + 1 < ib; ++it) {
         loc.front().vmax = v_lo;
-        const auto lp = plan_blocks(loc, lcap, lacc, plan.J_t, o.jerk_phase_ticks * o.period);
+        const auto lp = plan_blocks(loc, lcap, lacc, plan.J_t, tau);
         SpeedAtS lv{lp};
         const auto lm = mark_violations(g, forced, lv, lo + 1, ib - 1, L.feed, [](size_t) { return true; }, true);
         if (lm.empty()) break;
