@@ -2,8 +2,10 @@
 #include "planner/planner.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include "util/format.hpp"
@@ -385,14 +387,41 @@ double knot_speed_bound(const Path& p, size_t ci, int sp, const Limits& L, const
   return v;
 }
 
+// Fractions of v_lim(s) at which the grid also keeps what the sums leave for
+// the tangential acceleration (Grid::A_below): a block whose top speed is
+// below one of them at a point may accelerate at that level's A there.
+constexpr std::array<double, 4> kALevels = {0.2, 0.4, 0.6, 0.8};
+using ALevels = std::array<float, kALevels.size()>;
+
+ALevels min_levels(const ALevels& a, const ALevels& b) {
+  ALevels m{};
+  for (size_t k = 0; k < m.size(); ++k) m[k] = std::min(a[k], b[k]);
+  return m;
+}
+
 struct Grid {
   std::vector<double> s, vlim;
-  std::vector<double> A;     // local tangential acceleration bound (speed_limit)
-  std::vector<char> corner;  // forced stop
+  std::vector<double> A;        // local tangential acceleration bound (speed_limit)
+  std::vector<ALevels> A_below;  // the bound at speed kALevels[k] v_lim (rounded down to float)
+  std::vector<double> A_first;   // A as first taken, once raise_accels has raised it: stations stay
+  std::vector<char> corner;     // forced stop
 };
 
+// What the sums leave at the speeds kALevels[k] v (at most A_t), rounded down.
+ALevels accels_below(const Frame& f, const Limits& L, const PlanOptions& o, double v, double A_t, double J_t,
+                     int dim) {
+  ALevels out{};
+  for (size_t k = 0; k < kALevels.size(); ++k) {
+    const double A = std::min(A_t, accel_at(f, L, o, kALevels[k] * v, A_t, J_t, dim));
+    float a = static_cast<float>(std::max(A, 0.0));
+    if (static_cast<double>(a) > A) a = std::nextafter(a, 0.0f);
+    out[k] = a;
+  }
+  return out;
+}
+
 // The grid of one plan is held in memory: beyond kMaxGridPoints points
-// (about 1 GB) the path is refused naming the curve where the count passes it,
+// (about 1.7 GB) the path is refused naming the curve where the count passes it,
 // before the points are built.
 void check_grid_size(double points, const std::string& where, double len, double ds_max) {
   if (points <= kMaxGridPoints) return;
@@ -411,6 +440,11 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
   std::sort(caps_by_start.begin(), caps_by_start.end(),
             [](const SpeedCap& a, const SpeedCap& b) { return a.s0 < b.s0; });
   size_t next_cap = 0, next_cap_here = 0;
+  // the levels of a point (of both frames where two curves meet tangentially)
+  auto levels_at = [&](const Frame& f, const std::optional<Frame>& e, double v) {
+    const ALevels l = accels_below(f, L, o, v, A_t, J_t, d);
+    return e ? min_levels(l, accels_below(*e, L, o, v, A_t, J_t, d)) : l;
+  };
   auto cap_at = [&](double s_abs, double vl) {
     while (next_cap_here < caps_by_start.size() && caps_by_start[next_cap_here].s0 <= s_abs)
       caps_here.push_back(caps_by_start[next_cap_here++]);
@@ -470,6 +504,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
       double A_here = A_t;
       double vl = speed_limit(f, L, o, A_t, J_t, d, &A_here);
       bool corner = false;
+      std::optional<Frame> e_join;  // the previous curve's end, where the two meet tangentially
       if (s == 0) {
         if (ci == 0) {
           vl = o.v_start;
@@ -487,6 +522,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
             double A_e = A_t;
             vl = std::min(vl, speed_limit(e, L, o, A_t, J_t, d, &A_e));
             A_here = std::min(A_here, A_e);
+            e_join = e;
             // curvature jump at the junction (G1, not G2): same bound as at a C1 knot
             double kscale = 0;
             for (int a = 0; a < d; ++a) kscale = std::max({kscale, std::fabs(e.K[a]), std::fabs(f.K[a])});
@@ -501,6 +537,8 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
           if (!g.s.empty() && std::fabs(g.s.back() - (s_off + s)) < 1e-12) {
             g.vlim.back() = std::min(g.vlim.back(), vl);
             g.A.back() = std::min(g.A.back(), A_here);
+            // the point's levels were taken at fractions of its old, higher v_lim: valid below the new one
+            g.A_below.back() = min_levels(g.A_below.back(), levels_at(f, e_join, g.vlim.back()));
             g.corner.back() = g.corner.back() || corner;
             goto advance;
           }
@@ -522,6 +560,7 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
       g.s.push_back(s_off + s);
       g.vlim.push_back(vl);
       g.A.push_back(A_here);
+      g.A_below.push_back(levels_at(f, e_join, vl));
       g.corner.push_back(corner);
     advance:
       if (s >= len) break;
@@ -552,6 +591,8 @@ std::vector<Station> stations_from(const Grid& g, const std::vector<char>& force
   std::vector<Station> st;
   idx.clear();
   double A_ref = 0;
+  // where A(s) changed since: the first A (raising it inside a ramp must not split the ramp)
+  const std::vector<double>& A_st = g.A_first.empty() ? g.A : g.A_first;
   // the next corner after each point (hi + 1: none)
   std::vector<size_t> next_corner(hi - lo + 2, hi + 1);
   for (size_t i = hi; i-- > lo;) next_corner[i - lo] = g.corner[i + 1] ? i + 1 : next_corner[i + 1 - lo];
@@ -573,7 +614,7 @@ std::vector<Station> stations_from(const Grid& g, const std::vector<char>& force
     // kAStationRatio since the last station: a block then does not slow all of its ramp to
     // the smallest A at its far end (with hysteresis: a slowly varying A
     // makes no stations)
-    if (!take && (g.A[i] < A_ref / kAStationRatio || g.A[i] > kAStationRatio * A_ref)) take = true;
+    if (!take && (A_st[i] < A_ref / kAStationRatio || A_st[i] > kAStationRatio * A_ref)) take = true;
     // a local minimum of v_lim, by more than rounding noise (1e-9 relative):
     // a plateau (constant curvature, straight line) makes no stations
     if (!take && g.vlim[i] < feed * (1 - 1e-9) && g.vlim[i] < g.vlim[i - 1] * (1 - 1e-9) &&
@@ -582,7 +623,7 @@ std::vector<Station> stations_from(const Grid& g, const std::vector<char>& force
     if (take) {
       st.push_back({g.s[i], g.vlim[i], 0});
       idx.push_back(i);
-      A_ref = g.A[std::min(i + 1, hi)];  // the next block's first inner point (a station's own A is both sides')
+      A_ref = A_st[std::min(i + 1, hi)];  // the next block's first inner point (a station's own A is both sides')
     }
   }
   return st;
@@ -614,6 +655,76 @@ std::vector<double> accels_for(const Grid& g, const std::vector<size_t>& idx) {
   std::vector<double> A(idx.empty() ? 0 : idx.size() - 1, 0.0);
   for (size_t b = 0; b + 1 < idx.size(); ++b) A[b] = block_A(g, idx[b], idx[b + 1]);
   return A;
+}
+
+// Highest speed any motion from speed v0 at acceleration 0 has after
+// distance d with |a| <= A and |j| <= J: jerk J until A, then A (not back to
+// acceleration 0, unlike reachable()). Backwards in time it bounds the speed
+// d before a point passed at v0 with acceleration 0.
+double speed_after(double v0, double d, double A, double J) {
+  const double t1 = A / J, d1 = v0 * t1 + J * t1 * t1 * t1 / 6, v1 = v0 + 0.5 * J * t1 * t1;
+  if (d >= d1) return std::sqrt(v1 * v1 + 2 * A * (d - d1));
+  // v0 t + J t^3 / 6 = d on [0, t1]: bisection (the left side is increasing)
+  double lo = 0, hi = t1;
+  for (int it = 0; it < 60; ++it) {
+    const double t = 0.5 * (lo + hi);
+    (v0 * t + J * t * t * t / 6 < d ? lo : hi) = t;
+  }
+  return v0 + 0.5 * J * hi * hi;
+}
+
+// Smallest rise of a block's acceleration that raise_accels takes.
+constexpr double kRaiseFactor = 1.5;
+
+// A(s) is taken at v_lim(s), but a block that starts or ends at rest runs far
+// below v_lim for much of its length (the braking for a stop after a curve),
+// and its ramp takes the smallest A inside it. After the first profile, at an
+// inner point of such a block the speed is at most w = the block's top speed,
+// and at most what its end stations (at their bounds) reach within the
+// distance at A_t and J_t. Where w is below a stored level of v_lim, the
+// point takes that level's A (Grid::A_below: the sums hold with it up to the
+// level's speed) and v_lim there is capped at w, so that any later profile
+// keeps within the level's speed (the check against v_lim at every grid point
+// enforces it); the first profile keeps within the new bounds. Only blocks
+// whose A rises by kRaiseFactor at least are changed: elsewhere the stations
+// placed anew cost more than the ramps gain (bench_toolpaths, set (ii)).
+// memo: the first profile's blocks (plan_blocks), one per block of idx.
+// Returns whether any A rose.
+bool raise_accels(Grid& g, const std::vector<size_t>& idx, const std::vector<Station>& st,
+                  const std::vector<BlockMemo>& memo, double A_t, double J_t) {
+  bool any = false;
+  std::vector<double> w, A_new;
+  for (size_t b = 0; b + 1 < idx.size() && b < memo.size(); ++b) {
+    const BlockMemo& m = memo[b];
+    const size_t i0 = idx[b], i1 = idx[b + 1];
+    if ((m.va > 0 && m.vb > 0) || i1 <= i0 + 1) continue;
+    const double V = std::max({m.va, m.vb, m.vp});
+    w.assign(i1 - i0, 0.0);
+    A_new.assign(i1 - i0, 0.0);
+    double A_old_min = std::numeric_limits<double>::infinity(), A_new_min = A_old_min;
+    for (size_t i = i0 + 1; i < i1; ++i) {
+      const double wi = (1 + 1e-9) * std::min({V, speed_after(st[b].vmax, g.s[i] - g.s[i0], A_t, J_t),
+                                               speed_after(st[b + 1].vmax, g.s[i1] - g.s[i], A_t, J_t)});
+      double Ai = g.A[i];
+      for (size_t k = 0; k < kALevels.size(); ++k)
+        if (kALevels[k] * g.vlim[i] >= wi) {
+          Ai = std::max(Ai, static_cast<double>(g.A_below[i][k]));
+          break;
+        }
+      w[i - i0] = wi;
+      A_new[i - i0] = Ai;
+      A_old_min = std::min(A_old_min, g.A[i]);
+      A_new_min = std::min(A_new_min, Ai);
+    }
+    if (!(A_new_min >= kRaiseFactor * A_old_min)) continue;
+    if (!any) g.A_first = g.A;
+    any = true;
+    for (size_t i = i0 + 1; i < i1; ++i) {
+      g.A[i] = A_new[i - i0];
+      g.vlim[i] = std::min(g.vlim[i], w[i - i0]);
+    }
+  }
+  return any;
 }
 
 // Marks as forced stations the local maxima, over the grid points lo..hi, of
@@ -890,6 +1001,9 @@ Plan plan_path(const Path& p, const Limits& limits, const PlanOptions& o) {
   std::vector<char> changed;
   std::vector<size_t> idx, lidx;
   const double tau = o.jerk_phase_ticks * o.period;
+  bool raise_tried = false;
+  std::vector<Piece> first_pieces;  // the profile before raise_accels, while the raised one is planned
+  std::vector<Station> first_stations;
   for (int iter = 0; iter < 10000; ++iter) {
     plan.stations = stations_from(g, forced, L.feed, 0, n - 1, plan.A_t, plan.J_t, tau, idx);
     const auto cap = caps_for(g, plan.stations, idx, L.feed);
@@ -905,7 +1019,22 @@ Plan plan_path(const Path& p, const Limits& limits, const PlanOptions& o) {
       while (blk + 1 < changed.size() && idx[blk + 1] <= i) ++blk;
       return changed.empty() || changed[blk] != 0;
     });
+    if (marked.empty() && o.accel_at_profile_speed && !raise_tried) {
+      raise_tried = true;
+      if (raise_accels(g, idx, plan.stations, memo, plan.A_t, plan.J_t)) {
+        first_pieces = std::move(plan.pieces);
+        first_stations = std::move(plan.stations);
+        continue;
+      }
+    }
     if (marked.empty()) {
+      // the profile with the raised accelerations is kept only if it is
+      // faster as a whole (both keep every bound; its stations, placed
+      // anew, may cost more than its ramps gain)
+      if (!first_pieces.empty() && first_pieces.back().t0 + first_pieces.back().T <= plan.duration()) {
+        plan.pieces = std::move(first_pieces);
+        plan.stations = std::move(first_stations);
+      }
       std::vector<PlanOptions::Dwell> dwells = o.dwells;
       if (o.corner_stops && o.corner_rest > 0) {
         // one rest per stop (a G4 dwell there already is one)

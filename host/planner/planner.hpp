@@ -54,7 +54,7 @@ class PlanError : public std::runtime_error {
 // (input::AxisSet); the core takes up to 8.
 constexpr int kMaxAxes = 8;
 // Arc-length grid points one plan may hold (PlanOptions::max_grid_ds apart at
-// most, closer where the curve turns): about 1 GB; a path needing more is
+// most, closer where the curve turns): about 1.7 GB; a path needing more is
 // refused naming the curve (split it: plan --window).
 constexpr double kMaxGridPoints = 4e7;
 
@@ -144,6 +144,11 @@ struct PlanOptions {
   // Smallest local tangential acceleration, as a share of A_t (see the
   // header comment): below it the coupling lowers the speed instead.
   double a_local_floor = 0.05;
+  // A(s) is first taken at v_lim(s); then a block that starts or ends at
+  // rest takes what the sums leave at the speeds it can run at (A stored at
+  // fractions of v_lim, v_lim capped there), and the faster of the two
+  // profiles is kept (raise_accels in planner.cpp).
+  bool accel_at_profile_speed = true;
   double max_grid_ds = 0.25;  // arc-length grid step, units
   double grid_turn = 0.02;    // grid step <= grid_turn / kappa (radians of turning per step)
   std::vector<SpeedCap> caps;

@@ -579,6 +579,48 @@ TEST(PlannerCore, SpeedBoundMinimumTheProfileCannotReachIsNoStation) {
   EXPECT_EQ(inside, 0);
 }
 
+// A tight arc (R 1 mm) and then a wider one (R 5 mm, a quarter) into a stop,
+// at the limits of a fast machine (feed 100, 3000 mm/s^2, 60 000 mm/s^3). On
+// the wide arc the jerk sums leave little tangential acceleration at the
+// speed bound, and the block from the tight arc to the stop took that for
+// all of its ramp (about 350 mm/s^2), although it runs far below the bound.
+// With A taken at the speeds the block can run at (raise_accels) it brakes
+// about twice as hard; every limit still holds on the core.
+TEST(PlannerCore, BrakingForAStopTakesTheAccelerationOfItsOwnSpeeds) {
+  Path p;
+  Eigen::VectorXd a(2);
+  a << -30, -1;
+  Eigen::VectorXd b(2);
+  b << 0, -1;
+  p.add(geo::make_line(a, b), "line in");
+  p.add(geo::make_arc(Eigen::Vector2d(0, 0), 1, -M_PI / 2, 0), "tight arc");
+  p.add(geo::make_arc(Eigen::Vector2d(-4, 0), 5, 0, M_PI / 2), "wide arc");
+  JobConfig cfg;
+  auto& L = cfg.limits;
+  L.feed = 100;
+  for (int ax = 0; ax < 2; ++ax) L.v_axis[ax] = 100, L.a_axis[ax] = 3000, L.j_axis[ax] = 60000;
+  L.a_tan = L.a_cen = 3000;
+  L.j_tan = L.j_cen = 60000;
+  cfg.machine.period = 0.5e-3;
+  const RunOut o = run_through_core(p, cfg);
+  expect_guarantees(p, cfg, o, "two arcs into a stop");
+  PlanOptions off = cfg.plan_options();
+  off.accel_at_profile_speed = false;
+  const double t_off = plan_path(p, L, off).duration(), t_on = o.job.plan.duration();
+  // the largest deceleration on the wide arc, planned
+  auto peak_braking = [&](const Plan& plan) {
+    double a_min = 0;
+    for (const auto& q : plan.pieces)
+      if (q.s0 > p.offset(2)) a_min = std::min({a_min, q.a(0), q.a(q.T)});
+    return -a_min;
+  };
+  const double brake_on = peak_braking(o.job.plan), brake_off = peak_braking(plan_path(p, L, off));
+  std::printf("  two arcs into a stop: %.4f s (A at v_lim: %.4f s), braking on the wide arc %.0f mm/s^2 (%.0f)\n", t_on,
+              t_off, brake_on, brake_off);
+  EXPECT_GT(brake_on, 1.5 * brake_off);
+  EXPECT_LT(t_on, t_off - 0.01);
+}
+
 // A hairpin (one quadratic B-spline): nearly straight legs into a tip of
 // high curvature, no junction between them. The local tangential acceleration
 // is small only near the tip; a block from the start to the tip would take
