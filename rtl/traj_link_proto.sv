@@ -46,6 +46,7 @@ module traj_link_proto #(
   parameter int MinTickPeriod = 256,  // smallest CONFIG tick period in clocks (0 = external is allowed)
   parameter int ClkHz         = 48_000_000,  // clk_i in Hz, reported in STATUS (the host's clocks -> seconds)
   parameter int ScaleWidth    = 0,    // SW of the board's time-scale unit (0: none, time scaling and FEED refused)
+  parameter int SnapRam       = 0,    // 1: the STATUS snapshot of the samples in block RAM (traj_hold_ram), not flops
   // derived, do not override
   parameter int OutWidth      = Width - GuardBits
 ) (
@@ -127,6 +128,7 @@ module traj_link_proto #(
                     "traj_link_proto: OutWidth (Width - GuardBits) must be 2..64")
   `TRAJ_PARAM_CHECK(g_bad_rec, RecBytes <= 2048, "traj_link_proto: the record exceeds 2048 bytes")
   `TRAJ_PARAM_CHECK(g_bad_clk, ClkHz >= 1, "traj_link_proto: ClkHz must be positive")
+  `TRAJ_PARAM_CHECK(g_bad_snap, SnapRam == 0 || SnapRam == 1, "traj_link_proto: SnapRam must be 0 or 1")
   `TRAJ_PARAM_CHECK(g_bad_scale, ScaleWidth == 0 || (ScaleWidth >= 4 && ScaleWidth <= 24),
                     "traj_link_proto: ScaleWidth must be 0 or 4..24")
   `TRAJ_PARAM_CHECK(g_bad_derived, OutWidth == Width - GuardBits,
@@ -602,7 +604,7 @@ module traj_link_proto #(
   logic [7:0]  tx_idx_q;    // body byte
   logic        tx_esc_q;    // the escape byte 0x7D was sent; the XORed byte follows
   logic [31:0] tx_crc_q, tx_word_q;
-  logic [Axes*OutWidth-1:0] snap_q;
+  logic [Axes*OutWidth-1:0] snap_q;  // the samples as the frame started (STATUS words 14..)
 
   logic [5:0]  tx_w_q;      // the body word loaded next
   logic        tx_crcld_q;  // the CRC word is loaded this cycle (from tx_crc_q, off the byte path)
@@ -685,6 +687,19 @@ module traj_link_proto #(
     end
   end
 
+  // The snapshot of the samples, taken while no frame is sent. In block RAM
+  // it reads the last idle clock's samples one clock after the frame starts
+  // (traj_hold_ram), long before the first sample word (word 14) is loaded.
+  if (SnapRam != 0) begin : g_snap_ram
+    traj_hold_ram #(.Width(Axes * OutWidth)) u_snap (
+      .clk_i, .we_i(tx_state_q == SIdle), .data_i(sample_i), .data_o(snap_q)
+    );
+  end else begin : g_snap_flops
+    always_ff @(posedge clk_i) begin
+      if (tx_state_q == SIdle) snap_q <= sample_i;
+    end
+  end
+
   // Frame datapath: loaded when a frame starts, so not reset.
   always_ff @(posedge clk_i) begin
     if (tx_state_q == SIdle) begin
@@ -694,7 +709,6 @@ module traj_link_proto #(
       tx_esc_q  <= 1'b0;
       tx_crc_q  <= 32'hFFFFFFFF;
       tx_w_q    <= '0;
-      snap_q    <= sample_i;
     end
     if (tx_load && !tx_crc_next) tx_word_q <= word_next;
     if (tx_load) tx_w_q <= tx_w_q + 1'b1;
