@@ -125,6 +125,7 @@ module traj_board #(
   logic                     tick, underrun, seg_done, tick_err;
   logic                     sample_valid /* verilator public_flat_rd */;  // the engine's (the simulated board times it)
   logic [Axes*OutWidth-1:0] sample, status_sample;
+  logic [Axes*OutWidth-1:0] eng_we, eng_wd;  // traj_fd_tm's sample write port (the shared output register)
   logic [TsAddrW-1:0]       ts_word_addr;  // the unit's word of the engine's sample RAM
   logic [ChunkWidth-1:0]    ts_word;
   logic                     seg_start, new_seg_q;
@@ -178,7 +179,7 @@ module traj_board #(
       .clk_i, .rst_ni,
       .s_axis_tdata(seg_tdata), .s_axis_tvalid(seg_tvalid), .s_axis_tready(seg_tready),
       .tick_i(eng_tick),
-      .sample_valid_o(sample_valid), .sample_o(sample),
+      .sample_valid_o(sample_valid), .sample_o(sample), .sample_we_o(eng_we), .sample_wd_o(eng_wd),
       .sample_addr_i(sample_addr), .sample_word_o(sample_word),
       .underrun_o(underrun), .seg_done_o(seg_done), .tick_err_o(tick_err)
     );
@@ -208,6 +209,8 @@ module traj_board #(
     );
     assign status_sample = sample;
     assign ts_word       = '0;  // (TimeScale needs FdTimeMux)
+    assign eng_we        = '0;
+    assign eng_wd        = '0;
   end
 
   // -------------------------------------------------------------------
@@ -262,6 +265,8 @@ module traj_board #(
     /* verilator lint_on UNUSEDSIGNAL */
     logic [ScaleWidth-1:0] s_now;
     logic [Axes*OutWidth-1:0] ts_sample;
+    logic                     ts_shift, ts_bit;
+    logic [Axes*OutWidth-1:0] out_q;
     // CONFIG (m != 0 turns the unit on) is taken only while not playing: a
     // flop, off the paths of the ticks and the output multiplexer
     always_ff @(posedge clk_i) begin
@@ -277,7 +282,8 @@ module traj_board #(
       .shift_i(sc_shift), .hold_i(ts_held), .auto_resume_i(sc_auto || resume_q), .end_i(link_end),
       .avail_i(ahead),
       .eng_tick_o(ts_eng_tick), .eng_valid_i(sample_valid), .eng_addr_o(ts_word_addr), .eng_word_i(ts_word),
-      .sample_valid_o(ts_valid), .sample_o(ts_sample), .s_o(s_now), .starved_o(ts_starved_q),
+      .sample_valid_o(ts_valid), .sample_o(ts_sample), .out_shift_o(ts_shift), .out_bit_o(ts_bit),
+      .s_o(s_now), .starved_o(ts_starved_q),
       .starved_count_o(ts_count), .busy_o(ts_busy), .err_o(ts_err)
     );
 
@@ -303,9 +309,28 @@ module traj_board #(
       if (!rst_ni) under_q <= 1'b0;
       else under_q <= (under_q && !ts_valid) || (underrun && scale_on);
     end
+    // One output register for both: the engine's write port fills it while
+    // the unit is off, the unit's shift while it is on, the same writes as
+    // their own sample_o flops (left to synthesis to drop). scale_on changes
+    // only while not playing, and either side writes every bit between two
+    // of its valid strobes, so at each out_valid out_q is what that side's
+    // sample_o holds (what a multiplexer of the two would give), with no
+    // second copy of the samples and no multiplexer.
+    always_ff @(posedge clk_i) begin
+      if (scale_on) begin
+        if (ts_shift) out_q <= {ts_bit, out_q[Axes*OutWidth-1:1]};
+      end else begin
+        for (int i = 0; i < Axes * OutWidth; i++)
+          if (eng_we[i]) out_q[i] <= eng_wd[i];
+      end
+    end
+    /* verilator lint_off UNUSEDSIGNAL */
+    logic unused_own;  // the engine's and the unit's own sample flops: out_q instead
+    assign unused_own = ^{sample, ts_sample};
+    /* verilator lint_on UNUSEDSIGNAL */
     assign eng_tick      = scale_on ? ts_eng_tick : tick;
     assign out_valid     = scale_on ? ts_valid : sample_valid;
-    assign out_sample    = scale_on ? ts_sample : sample;
+    assign out_sample    = out_q;
     assign link_underrun = scale_on ? ((ts_valid && under_q) || done_q) : underrun;
     assign ts_s          = 32'(s_now);
     assign ts_starved    = ts_starved_q;
@@ -313,7 +338,8 @@ module traj_board #(
     /* verilator lint_off UNUSEDSIGNAL */
     logic unused_scale;
     assign unused_scale = ^{sc_m, sc_smax, sc_ovr, sc_shift, sc_auto, link_hold, link_stop, link_end,
-                            link_resume, hold_i, stored, stored_k, cleared, ts_word, ts_word_addr};
+                            link_resume, hold_i, stored, stored_k, cleared, ts_word, ts_word_addr,
+                            eng_we, eng_wd};
     /* verilator lint_on UNUSEDSIGNAL */
     assign eng_tick      = tick;
     assign out_valid     = sample_valid;

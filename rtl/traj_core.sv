@@ -255,6 +255,7 @@ module traj_core #(
     logic [SampleAW-1:0] sample_addr;
     /* verilator lint_off UNUSEDSIGNAL */
     logic [ChunkWidth-1:0] sample_word;  // the core outputs sample_o whole
+    logic [Axes*OutWidth-1:0] sample_we, sample_wd;  // (the engine's own sample flops)
     /* verilator lint_on UNUSEDSIGNAL */
     assign sample_addr = '0;
     traj_fd_tm #(
@@ -264,7 +265,7 @@ module traj_core #(
       .clk_i, .rst_ni,
       .s_axis_tdata(fd_tdata), .s_axis_tvalid(fd_tvalid), .s_axis_tready(fd_tready),
       .tick_i(fd_tick),
-      .sample_valid_o(fd_valid), .sample_o(fd_sample),
+      .sample_valid_o(fd_valid), .sample_o(fd_sample), .sample_we_o(sample_we), .sample_wd_o(sample_wd),
       .sample_addr_i(sample_addr), .sample_word_o(sample_word),
       .underrun_o(fd_underrun), .seg_done_o(fd_done), .tick_err_o(fd_err)
     );

@@ -24,6 +24,10 @@
 //     the word at the sample_addr_i of the clock before. A consumer that
 //     takes the samples a word at a time reads them there and leaves
 //     sample_o open: synthesis then drops the Axes*OutWidth sample flops;
+//     sample_we_o / sample_wd_o are those flops' write port (bit i of
+//     sample_o takes bit i of sample_wd_o in a clock where bit i of
+//     sample_we_o is high): a register outside built from them follows
+//     sample_o exactly (traj_board shares one with the time-scale unit);
 //   * segment words are written to the RAM as they arrive (stream order:
 //     axis, register, chunk): the same field counters walk the RAM in the
 //     load order and in the pass order;
@@ -70,6 +74,8 @@ module traj_fd_tm #(
   // samples: axis a in sample_o[a*OutWidth +: OutWidth], two's complement
   output logic                     sample_valid_o,
   output logic [Axes*OutWidth-1:0] sample_o,
+  output logic [Axes*OutWidth-1:0] sample_we_o,   // sample_o's write port (above)
+  output logic [Axes*OutWidth-1:0] sample_wd_o,
   // sample RAM read port: word (axis << ChB) | chunk, one clock latency
   input  logic [SampleAddrWidth-1:0] sample_addr_i,
   output logic [ChunkWidth-1:0]    sample_word_o,
@@ -87,7 +93,6 @@ module traj_fd_tm #(
   localparam int AddrW      = AxB + ChB + RgB;      // >= 1 (Degree >= 1)
   localparam int AxW        = (AxB > 0) ? AxB : 1;  // counter widths
   localparam int ChW        = (ChB > 0) ? ChB : 1;
-  localparam int FirstOut   = GuardBits / ChunkWidth;  // lowest chunk holding sample bits
 
   // ---------------------------------------------------------------------
   // Elaboration-time parameter checks.
@@ -288,18 +293,22 @@ module traj_fd_tm #(
   // ---------------------------------------------------------------------
   // Sample capture: the old r[0] chunks, bits GuardBits and above.
   // ---------------------------------------------------------------------
+  // The write port: bit p of axis a's sample is register bit GuardBits + p,
+  // in chunk (GuardBits + p) / ChunkWidth; it takes rd_q's bit of that
+  // position when the pass reads that chunk of that axis.
   logic cap;
+  logic [Axes*OutWidth-1:0] sample_we, sample_wd;
   assign cap = busy_q && (ri_q == '0);
   for (genvar a = 0; a < Axes; a++) begin : g_out_axis
-    for (genvar c = FirstOut; c < Chunks; c++) begin : g_out_chunk
-      localparam int Lo = (c * ChunkWidth > GuardBits) ? c * ChunkWidth : GuardBits;  // register bit
-      localparam int Bits = (c + 1) * ChunkWidth - Lo;
-      always_ff @(posedge clk_i) begin
-        if (cap && 32'(ra_q) == a && 32'(rc_q) == c) begin
-          sample_q[a*OutWidth + Lo - GuardBits +: Bits] <= rd_q[Lo - c*ChunkWidth +: Bits];
-        end
-      end
+    for (genvar p = 0; p < OutWidth; p++) begin : g_out_bit
+      localparam int Bit = GuardBits + p;  // register bit
+      assign sample_we[a*OutWidth + p] = cap && 32'(ra_q) == a && 32'(rc_q) == Bit / ChunkWidth;
+      assign sample_wd[a*OutWidth + p] = rd_q[Bit % ChunkWidth];
     end
+  end
+  always_ff @(posedge clk_i) begin
+    for (int i = 0; i < Axes * OutWidth; i++)
+      if (sample_we[i]) sample_q[i] <= sample_wd[i];
   end
 
   // Sample RAM: every r[0] chunk the pass reads (its own RAM, so that a
@@ -509,6 +518,8 @@ module traj_fd_tm #(
   assign s_axis_tready  = ready;
   assign sample_valid_o = sample_valid_q;
   assign sample_o       = sample_q;
+  assign sample_we_o    = sample_we;
+  assign sample_wd_o    = sample_wd;
   assign sample_word_o  = sample_word_q;
   assign underrun_o     = underrun_q;
   assign seg_done_o     = seg_done_q;

@@ -42,6 +42,10 @@
 //   * The output is presented at the next servo tick: rout shifted into
 //     sample_o a bit per clock (Axes*OutWidth + 1 clocks), then
 //     sample_valid_o (one strobe; none for the first servo tick taken).
+//     out_shift_o / out_bit_o are that shift (sample_o takes
+//     {out_bit_o, sample_o[N-1:1]} in a clock with out_shift_o high): a
+//     register outside built from them follows sample_o exactly (traj_board
+//     shares one with the engine's output).
 // Contract: m_i, s_max_i and shift_i are held while running; override_i,
 // hold_i, auto_resume_i, end_i and avail_i (engine samples available beyond
 // those ticked) are sampled when a servo tick is taken (after the window is
@@ -83,6 +87,8 @@ module traj_time_scale #(
   // output
   output logic                     sample_valid_o,
   output logic [Axes*OutWidth-1:0] sample_o,
+  output logic                     out_shift_o,    // sample_o's shift (above)
+  output logic                     out_bit_o,
   output logic [SW-1:0]            s_o,
   output logic                     starved_o,
   output logic [15:0]              starved_count_o,
@@ -158,12 +164,14 @@ module traj_time_scale #(
   logic            bor_q, oc_q, dq_q, sg_q, dv_q;
   logic [6:0]      jd_q;
   logic [N-1:0]    out_q;
+  logic            out_shift;  // out_q takes rout_q from the top
   // RAMs (1 bit wide, {axis, bit}) and their registered read ports
   logic            y0a_q, y0b_q, rout_q;
 
   // ---------------------------------------------------------------------
   // Combinational helpers.
   // ---------------------------------------------------------------------
+  assign out_shift = st_q == StReadout && pv_q;
   // the sample bit of this clock's walk or product index, clamped to the
   // top bit (sign extension)
   logic [BB-1:0]   cbit;
@@ -378,7 +386,7 @@ module traj_time_scale #(
         end
       end
       StCopy, StReadout: begin
-        if (st_q == StReadout && pv_q) out_q <= {rout_q, out_q[N-1:1]};
+        if (out_shift) out_q <= {rout_q, out_q[N-1:1]};
         if (fin_q) begin
           pv_q <= 1'b0;
         end else begin
@@ -723,6 +731,8 @@ module traj_time_scale #(
   assign eng_tick_o      = eng_tick_q;
   assign sample_valid_o  = valid_q;
   assign sample_o        = out_q;
+  assign out_shift_o     = out_shift;
+  assign out_bit_o       = rout_q;
   assign s_o             = cs_q;
   assign starved_o       = starved_q;
   assign starved_count_o = cnt_q;

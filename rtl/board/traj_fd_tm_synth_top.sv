@@ -57,6 +57,7 @@ module traj_fd_tm_synth_top #(
   logic                     sample_valid, underrun, seg_done, tick_err;
   /* verilator lint_off UNUSEDSIGNAL */
   logic [Axes*OutWidth-1:0] sample;
+  logic [Axes*OutWidth-1:0] sample_we, sample_wd;  // (the engine's own sample flops)
   /* verilator lint_on UNUSEDSIGNAL */
   /* verilator lint_off UNUSEDSIGNAL */
   logic                     word_user;  // the engine's stream has no side band
@@ -82,7 +83,7 @@ module traj_fd_tm_synth_top #(
     .clk_i, .rst_ni(rst_nq),
     .s_axis_tdata(word), .s_axis_tvalid(word_valid), .s_axis_tready(word_ready),
     .tick_i(tick_q),
-    .sample_valid_o(sample_valid), .sample_o(sample),
+    .sample_valid_o(sample_valid), .sample_o(sample), .sample_we_o(sample_we), .sample_wd_o(sample_wd),
     .sample_addr_i(sample_addr_q), .sample_word_o(sample_word),
     .underrun_o(underrun), .seg_done_o(seg_done), .tick_err_o(tick_err)
   );

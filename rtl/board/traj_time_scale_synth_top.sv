@@ -54,6 +54,8 @@ module traj_time_scale_synth_top #(
   /* verilator lint_off UNUSEDSIGNAL */
   logic                     word_user;
   logic [Axes*OutWidth-1:0] eng_sample;  // read through the sample RAM port instead
+  logic [Axes*OutWidth-1:0] eng_we, eng_wd;
+  logic                     out_shift, out_bit;  // (the unit's own sample flops)
   logic [SW-1:0]            s;
   logic                     starved, busy;
   logic [15:0]              starved_count;
@@ -85,7 +87,7 @@ module traj_time_scale_synth_top #(
     .clk_i, .rst_ni(rst_nq),
     .s_axis_tdata(word), .s_axis_tvalid(word_valid), .s_axis_tready(word_ready),
     .tick_i(eng_tick),
-    .sample_valid_o(eng_valid), .sample_o(eng_sample),
+    .sample_valid_o(eng_valid), .sample_o(eng_sample), .sample_we_o(eng_we), .sample_wd_o(eng_wd),
     .sample_addr_i(sample_addr), .sample_word_o(sample_word),
     .underrun_o(underrun), .seg_done_o(seg_done), .tick_err_o(eng_err)
   );
@@ -96,7 +98,8 @@ module traj_time_scale_synth_top #(
     .shift_i(cfg_q[3*SW +: 6]), .hold_i(cfg_q[3*SW+6]), .auto_resume_i(cfg_q[3*SW+7]),
     .end_i(cfg_q[3*SW+8]), .avail_i(cfg_q[3*SW+9 +: 32]),
     .eng_tick_o(eng_tick), .eng_valid_i(eng_valid), .eng_addr_o(ts_addr), .eng_word_i(sample_word),
-    .sample_valid_o(sample_valid), .sample_o(sample), .s_o(s), .starved_o(starved),
+    .sample_valid_o(sample_valid), .sample_o(sample), .out_shift_o(out_shift), .out_bit_o(out_bit),
+    .s_o(s), .starved_o(starved),
     .starved_count_o(starved_count), .busy_o(busy), .err_o(ts_err)
   );
 
