@@ -268,7 +268,7 @@ module traj_board #(
     logic                     ts_shift, ts_bit;
     logic [Axes*OutWidth-1:0] out_q;
     // CONFIG (m != 0 turns the unit on) is taken only while not playing: a
-    // flop, off the paths of the ticks and the output multiplexer
+    // flop, off the paths of the ticks and of the output register's writes
     always_ff @(posedge clk_i) begin
       if (!rst_ni) scale_on <= 1'b0;
       else scale_on <= sc_m != '0;
