@@ -111,25 +111,44 @@ class LinkProto {
     const Dec c = decode(in);
     const uint8_t d = c.d;
 
-    // CONFIG shadow registers (datapath).
+    // CONFIG's and FEED's payload bytes into the shadow RAM, the per-field flags
+    // (the RTL's comment), a SEGMENT's K (datapath).
+    const int p = (idx_q_ - 8) & 0xFFF, pb = p & 3;
+    const bool first = pb == 0, d_nz = d != 0;
+    const uint8_t min_byte = static_cast<uint8_t>(uint32_t(MinTickPeriod) >> (8 * pb));
+    uint8_t wide_mask = 0;
+    for (int b = 0; b < 8; ++b)
+      if (8 * pb + b >= ScaleWidth) wide_mask = static_cast<uint8_t>(wide_mask | (1u << b));
+    const bool wide = (d & wide_mask) != 0;
+    if (c.dv && c.in_pay && ((is_cfg() && pd_.cfg) || (is_feed() && (pd_.ctick || pd_.p4))))
+      sh_mem_[is_feed() ? 40 + (p & 7) : (p & 63)] = d;
+    if (cp_act_q_) cp_rd_q_ = q.sh_mem_[cp_ra_q_];
     if (c.dv && c.in_pay && is_cfg()) {
-      if (pd_.ctick) sh_tick_q_ = (sh_tick_q_ >> 8) | (uint32_t{d} << 24);
-      else if (pd_.k) sh_stat_q_ = (sh_stat_q_ >> 8) | (uint32_t{d} << 24);
-      else if (pd_.cpulse) sh_pulse_q_ = static_cast<uint16_t>((sh_pulse_q_ >> 8) | (d << 8));
-      else if (pd_.csetup) sh_setup_q_ = static_cast<uint16_t>((sh_setup_q_ >> 8) | (d << 8));
-      else if (pd_.cen) sh_en_q_ = d & 1;
-      for (int a = 0; a < Axes; ++a)
-        if (pd_.cshift && (idx_q_ & 7) == a) sh_shift_q_[a] = d & 63;
-      if (pd_.cm) sh_m_q_ = (sh_m_q_ >> 8) | (uint32_t{d} << 24);
-      else if (pd_.csmax) sh_smax_q_ = (sh_smax_q_ >> 8) | (uint32_t{d} << 24);
-      else if (pd_.cshl) sh_shl_q_ = d & 63;
-      else if (pd_.cfl) sh_auto_q_ = d & 1;
+      if (pd_.ctick) {
+        tick_nz_q_ = d_nz || (!first && tick_nz_q_);
+        tick_lt_q_ = d < min_byte || (d == min_byte && !first && tick_lt_q_);
+      }
+      if (pd_.cpulse) pulse_nz_q_ = d_nz || ((p & 1) && pulse_nz_q_);
+      if (pd_.cm) {
+        m_nz_q_ = d_nz || (!first && m_nz_q_);
+        m_wide_q_ = wide || (!first && m_wide_q_);
+      }
+      if (pd_.csmax) {
+        smax_nz_q_ = d_nz || (!first && smax_nz_q_);
+        smax_wide_q_ = wide || (!first && smax_wide_q_);
+      }
+      if (pd_.cshl) shl_nz_q_ = d_nz;
+      if (pd_.cfl) auto_q_ = d & 1;
     }
-    // the override: CONFIG's and FEED's; FEED's hold; a SEGMENT's K
-    if (c.dv && c.in_pay && ((is_cfg() && pd_.covr) || (is_feed() && pd_.ctick)))
-      sh_ovr_q_ = (sh_ovr_q_ >> 8) | (uint32_t{d} << 24);
-    if (c.dv && c.in_pay && is_feed() && pd_.p4) sh_hold_q_ = d & 1;
+    // the override: CONFIG's and FEED's; a SEGMENT's K
+    if (c.dv && c.in_pay && ((is_cfg() && pd_.covr) || (is_feed() && pd_.ctick))) {
+      ovr_nz_q_ = d_nz || (!first && ovr_nz_q_);
+      ovr_wide_q_ = wide || (!first && ovr_wide_q_);
+    }
     if (c.dv && c.in_pay && is_seg() && pd_.k) sh_k_q_ = (sh_k_q_ >> 8) | (uint32_t{d} << 24);
+    // the copy's datapath
+    cp_wa_q_ = q.cp_ra_q_;
+    if (q.cp_vld_q_) stg_q_ = (q.stg_q_ >> 8) | (uint32_t{q.cp_rd_q_} << 24);
 
 
     // Per-body flags and fields (datapath: set at the opening flag).
@@ -243,22 +262,39 @@ class LinkProto {
       next_seq_q_ = q.seq_q_;
       halt_q_ = stop_q_ = end_q_ = ended_q_ = false;
     }
-    if (v.do_config) {
-      cfg_tick_q_ = q.sh_tick_q_;
-      cfg_stat_q_ = q.sh_stat_q_;
-      for (int a = 0; a < Axes; ++a) cfg_shift_q_[a] = q.sh_shift_q_[a];
-      cfg_pulse_q_ = q.sh_pulse_q_;
-      cfg_setup_q_ = q.sh_setup_q_;
-      cfg_en_q_ = q.sh_en_q_;
-      cfg_m_q_ = q.sh_m_q_;
-      cfg_smax_q_ = q.sh_smax_q_;
-      cfg_ovr_q_ = q.sh_ovr_q_;
-      cfg_shl_q_ = q.sh_shl_q_;
-      cfg_auto_q_ = q.sh_auto_q_;
+    // the copy of a good CONFIG's or FEED's bytes into the live registers
+    if (v.do_config || v.do_feed) {
+      cp_act_q_ = true;
+      cp_ra_q_ = v.do_feed ? 40 : 0;
+    } else if (q.cp_act_q_) {
+      cp_ra_q_ = (q.cp_ra_q_ + 1) & 63;
+      if (q.cp_ra_q_ == 37 || q.cp_ra_q_ == 44) cp_act_q_ = false;
     }
-    if (v.do_feed) {
-      cfg_ovr_q_ = q.sh_ovr_q_;
-      hold_q_ = q.sh_hold_q_;
+    cp_vld_q_ = q.cp_act_q_;
+    const uint32_t cp_word = (q.stg_q_ >> 8) | (uint32_t{q.cp_rd_q_} << 24);
+    if (q.cp_vld_q_) {
+      const int wa = q.cp_wa_q_;
+      const uint8_t b = q.cp_rd_q_;
+      if (wa == 3) cfg_tick_q_ = cp_word;
+      if (wa == 7) cfg_stat_q_ = cp_word;
+      for (int a = 0; a < Axes; ++a)
+        if (wa == 8 + a) cfg_shift_q_[a] = b & 63;
+      if (wa == 17) cfg_pulse_q_ = static_cast<uint16_t>(cp_word >> 16);
+      if (wa == 19) cfg_setup_q_ = static_cast<uint16_t>(cp_word >> 16);
+      if (wa == 20) cfg_en_q_ = b & 1;
+      if (ScaleWidth != 0) {  // without a unit they stay 0 (the RTL's constants)
+        if (wa == 27) cfg_m_q_ = cp_word;
+        if (wa == 31) cfg_smax_q_ = cp_word;
+        if (wa == 36) {
+          cfg_ovr_q_ = q.stg_q_;
+          cfg_shl_q_ = b & 63;
+        }
+        if (wa == 37) cfg_auto_q_ = b & 1;
+        if (wa == 44) {
+          cfg_ovr_q_ = q.stg_q_;
+          hold_q_ = b & 1;
+        }
+      }
     }
     if (v.do_start && !halt) {
       playing_q_ = true;
@@ -287,7 +323,7 @@ class LinkProto {
     if (v.fend && !v.good) ++n_bad_q_;
     if (v.ooo) ++n_ooo_q_;
     if (q.rxv_q_) ++n_bytes_q_;
-    if (v.do_config) stat_cnt_q_ = q.sh_stat_q_ - 1;
+    if (q.cp_vld_q_ && q.cp_wa_q_ == 7) stat_cnt_q_ = cp_word - 1;
     else if (in.tick && q.cfg_stat_q_ != 0) stat_cnt_q_ = stat_due ? q.cfg_stat_q_ - 1 : stat_cnt_q_ - 1;
     ans_pend_q_ = v.answer || (ans_pend_q_ && !tx_take_ans);
     if (v.answer) ans_code_q_ = v.code;
@@ -325,8 +361,8 @@ class LinkProto {
 
   // Registered decodes of the position in the body (the RTL's pd_*_q).
   struct Position {
-    bool pay, over, k, reg, p0, p13, pseq, p7, ctick, cshift, cpulse, csetup, cen, cres;
-    bool cm, csmax, covr, cshl, cfl, p4, fres, cscale;
+    bool pay, over, k, reg, p0, p13, pseq, p7, ctick, cshift, cpulse, cen, cres;
+    bool cm, csmax, covr, cshl, cfl, p4, fres, cscale, cfg;
   };
   static Position position(uint16_t idx, uint16_t len) {
     const int p = (idx - 8) & 0xFFF;
@@ -342,7 +378,6 @@ class LinkProto {
     r.ctick = p < 4;
     r.cshift = p >= 8 && p < 8 + Axes;
     r.cpulse = p == 16 || p == 17;
-    r.csetup = p == 18 || p == 19;
     r.cen = p == 20;
     r.cres = (p > 20 && p < 24) || p == 38 || p == 39;
     r.cm = p >= 24 && p < 28;
@@ -353,6 +388,7 @@ class LinkProto {
     r.p4 = p == 4;
     r.fres = p >= 5 && p < 8;
     r.cscale = p >= 24 && p < 40;
+    r.cfg = p < 40;
     return r;
   }
 
@@ -378,7 +414,7 @@ class LinkProto {
   bool is_cfg() const { return type_q_ == kConfig; }
   bool is_feed() const { return type_q_ == kFeed; }
   // a time-scaling value the unit cannot hold (bits at or above ScaleWidth)
-  static bool too_wide(uint32_t v) { return ScaleWidth == 0 || (ScaleWidth < 32 && (v >> ScaleWidth) != 0); }
+  static bool too_wide(bool wide) { return ScaleWidth == 0 || wide; }
   static constexpr uint64_t out_mask() { return kOutWidth >= 64 ? ~uint64_t{0} : (uint64_t{1} << kOutWidth) - 1; }
   static constexpr uint64_t chunk_mask() {
     return ChunkWidth >= 64 ? ~uint64_t{0} : (uint64_t{1} << ChunkWidth) - 1;
@@ -430,13 +466,13 @@ class LinkProto {
         cbad_end = len_q_ != kRecBytes || kz_q_;
         break;
       case kConfig:
-        cbad_end = len_q_ != kCfgLen || sh_pulse_q_ == 0 || (sh_tick_q_ != 0 && sh_tick_q_ < uint32_t(MinTickPeriod)) ||
+        cbad_end = len_q_ != kCfgLen || !pulse_nz_q_ || (tick_nz_q_ && tick_lt_q_) ||
                    (ScaleWidth != 0 &&
-                    (sh_m_q_ == 0 ? (sh_smax_q_ != 0 || sh_ovr_q_ != 0 || sh_shl_q_ != 0 || sh_auto_q_)
-                                  : (too_wide(sh_m_q_) || too_wide(sh_smax_q_) || too_wide(sh_ovr_q_))));
+                    (!m_nz_q_ ? (smax_nz_q_ || ovr_nz_q_ || shl_nz_q_ || auto_q_)
+                              : (too_wide(m_wide_q_) || too_wide(smax_wide_q_) || too_wide(ovr_wide_q_))));
         break;
       case kFeed:
-        cbad_end = len_q_ != kFeedLen || too_wide(sh_ovr_q_);
+        cbad_end = len_q_ != kFeedLen || too_wide(ovr_wide_q_);
         break;
       default:
         cbad_end = len_q_ != 0;
@@ -547,6 +583,7 @@ class LinkProto {
     cfg_m_q_ = cfg_smax_q_ = cfg_ovr_q_ = 0;
     cfg_shl_q_ = 0;
     cfg_auto_q_ = hold_q_ = false;
+    cp_act_q_ = cp_vld_q_ = false;
     stat_cnt_q_ = 0;
     n_played_q_ = n_ticks_q_ = n_under_q_ = n_bad_q_ = n_ooo_q_ = n_bytes_q_ = 0;
     ans_pend_q_ = false;
@@ -571,13 +608,16 @@ class LinkProto {
   uint32_t seq_q_ = 0, crc_q_ = 0;
   uint64_t asm_q_ = 0;
   int wb_q_ = 0;
-  uint32_t sh_tick_q_ = 0, sh_stat_q_ = 0;
-  uint8_t sh_shift_q_[Axes] = {};
-  uint16_t sh_pulse_q_ = 0, sh_setup_q_ = 0;
-  bool sh_en_q_ = false;
-  uint32_t sh_m_q_ = 0, sh_smax_q_ = 0, sh_ovr_q_ = 0, sh_k_q_ = 0;
-  uint8_t sh_shl_q_ = 0;
-  bool sh_auto_q_ = false, sh_hold_q_ = false;
+  // CONFIG's and FEED's bytes (block RAM), the per-field flags, the copy, a SEGMENT's K
+  uint8_t sh_mem_[64] = {};
+  bool tick_nz_q_ = false, tick_lt_q_ = false, pulse_nz_q_ = false, m_nz_q_ = false, smax_nz_q_ = false;
+  bool ovr_nz_q_ = false, shl_nz_q_ = false, auto_q_ = false, m_wide_q_ = false, smax_wide_q_ = false;
+  bool ovr_wide_q_ = false;
+  bool cp_act_q_ = false, cp_vld_q_ = false;
+  int cp_ra_q_ = 0, cp_wa_q_ = 0;
+  uint8_t cp_rd_q_ = 0;
+  uint32_t stg_q_ = 0;
+  uint32_t sh_k_q_ = 0;
   // link, playback, configuration, counters
   uint32_t next_seq_q_ = 0;
   bool playing_q_ = false, halt_q_ = false, stop_q_ = false, end_q_ = false, ended_q_ = false;

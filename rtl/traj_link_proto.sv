@@ -13,6 +13,9 @@
 //     (decided at its first payload byte) writes K and the registers as engine
 //     words into traj_seg_fifo as they arrive (tentative); the verdict commits
 //     them (stored, next_seq + 1, ACK) or rolls them back (every other outcome).
+//   * CONFIG and FEED payload bytes go to a shadow RAM (block RAM) as they
+//     arrive; a good verdict copies them into the applied registers, a byte
+//     per clock, each field whole at its last byte (below).
 // Answer side: ACK/NAK (the latest verdict; one pending answer, a newer one
 // replaces it: ACKs are cumulative) before STATUS (on STATUS_REQ or every
 // status period in ticks), each a stuffed frame with its CRC, byte by byte to
@@ -184,8 +187,8 @@ module traj_link_proto #(
   logic        in_pay;    // a payload byte
   logic        overlong;  // past the CRC
   logic        pd_pay_q, pd_over_q, pd_k_q, pd_reg_q, pd_p0_q, pd_p13_q, pd_pseq_q;
-  logic        pd_ctick_q, pd_cshift_q, pd_cpulse_q, pd_csetup_q, pd_cen_q, pd_cres_q;
-  logic        pd_cm_q, pd_csmax_q, pd_covr_q, pd_cshl_q, pd_cfl_q, pd_p4_q, pd_fres_q, pd_cscale_q;
+  logic        pd_ctick_q, pd_cshift_q, pd_cpulse_q, pd_cen_q, pd_cres_q;
+  logic        pd_cm_q, pd_csmax_q, pd_covr_q, pd_cshl_q, pd_cfl_q, pd_p4_q, pd_fres_q, pd_cscale_q, pd_cfg_q;
   assign p        = idx_q - 12'd8;
   assign in_pay   = pd_pay_q;
   assign overlong = pd_over_q;
@@ -200,7 +203,6 @@ module traj_link_proto #(
     pd_ctick_q  <= (p < 12'd4);
     pd_cshift_q <= (p >= 12'd8) && (p < 12'(8 + Axes));
     pd_cpulse_q <= (p == 12'd16) || (p == 12'd17);
-    pd_csetup_q <= (p == 12'd18) || (p == 12'd19);
     pd_cen_q    <= (p == 12'd20);
     pd_cres_q   <= ((p > 12'd20) && (p < 12'd24)) || (p == 12'd38) || (p == 12'd39);
     pd_cm_q     <= (p >= 12'd24) && (p < 12'd28);
@@ -211,6 +213,7 @@ module traj_link_proto #(
     pd_p4_q     <= (p == 12'd4);
     pd_fres_q   <= (p >= 12'd5) && (p < 12'd8);
     pd_cscale_q <= (p >= 12'd24) && (p < 12'd40);
+    pd_cfg_q    <= (p < 12'd40);
   end
 
   logic known;
@@ -264,43 +267,61 @@ module traj_link_proto #(
                 (is_feed && ((pd_p4_q && d_gt1) || (pd_fres_q && !d_zero)));
   end
 
-  // CONFIG shadow registers (applied by a good CONFIG frame)
-  logic [31:0]       sh_tick_q, sh_stat_q;
-  logic [Axes*6-1:0] sh_shift_q;
-  logic [15:0]       sh_pulse_q, sh_setup_q;
-  logic              sh_en_q;
-  logic [31:0]       sh_m_q, sh_smax_q, sh_ovr_q, sh_k_q;
-  logic [5:0]        sh_shl_q;
-  logic              sh_auto_q, sh_hold_q;
+  // CONFIG's and FEED's payload bytes go to a shadow RAM as they arrive (CONFIG
+  // byte p at address p, p < 40; FEED byte p at 40 + p, p < 5); a good frame's
+  // verdict copies them into the live registers, a byte per clock (the copy,
+  // below). The checks a CONFIG or FEED verdict needs are flags kept per field
+  // while the bytes arrive: every byte of a field comes in the same frame
+  // (a good frame has the length of its type), so each field's first byte
+  // sets them afresh and the later ones add to them.
+  logic       sh_we;
+  logic [5:0] sh_wa;
+  assign sh_we = dv && in_pay && ((is_cfg && pd_cfg_q) || (is_feed && (pd_ctick_q || pd_p4_q)));
+  assign sh_wa = is_feed ? 6'd40 + 6'(p[2:0]) : p[5:0];
 
+  // per-field flags: nonzero (nz), below MinTickPeriod (tick_lt), a bit at or
+  // above ScaleWidth (wide); the byte's index in its field is p[1:0]
+  logic pulse_nz_q, tick_nz_q, tick_lt_q, m_nz_q, smax_nz_q, ovr_nz_q, shl_nz_q, auto_q;
+  logic m_wide_q, smax_wide_q, ovr_wide_q;
+  logic [31:0] sh_k_q;
+  logic [7:0] min_byte, wide_mask;
+  logic       first;  // the field's first byte
+  logic       d_nz;
+  assign min_byte = 8'(32'(MinTickPeriod) >> (8 * p[1:0]));
+  assign first    = (p[1:0] == 2'd0);
+  assign d_nz     = (d != 8'd0);
+  localparam logic [31:0] WideBits = ~((32'd1 << ScaleWidth) - 1);  // bits at or above ScaleWidth
+  assign wide_mask = WideBits[8*p[1:0] +: 8];
   always_ff @(posedge clk_i) begin
     if (dv && in_pay && is_cfg) begin
-      if (pd_ctick_q) sh_tick_q <= {d, sh_tick_q[31:8]};
-      else if (pd_k_q) sh_stat_q <= {d, sh_stat_q[31:8]};
-      else if (pd_cpulse_q) sh_pulse_q <= {d, sh_pulse_q[15:8]};
-      else if (pd_csetup_q) sh_setup_q <= {d, sh_setup_q[15:8]};
-      else if (pd_cen_q) sh_en_q <= d[0];
-      if (pd_cm_q) sh_m_q <= {d, sh_m_q[31:8]};
-      else if (pd_csmax_q) sh_smax_q <= {d, sh_smax_q[31:8]};
-      else if (pd_cshl_q) sh_shl_q <= d[5:0];
-      else if (pd_cfl_q) sh_auto_q <= d[0];
+      if (pd_ctick_q) begin
+        tick_nz_q <= d_nz || (!first && tick_nz_q);
+        tick_lt_q <= (d < min_byte) || ((d == min_byte) && !first && tick_lt_q);
+      end
+      if (pd_cpulse_q) pulse_nz_q <= d_nz || (p[0] && pulse_nz_q);
+      if (pd_cm_q) begin
+        m_nz_q   <= d_nz || (!first && m_nz_q);
+        m_wide_q <= ((d & wide_mask) != '0) || (!first && m_wide_q);
+      end
+      if (pd_csmax_q) begin
+        smax_nz_q   <= d_nz || (!first && smax_nz_q);
+        smax_wide_q <= ((d & wide_mask) != '0) || (!first && smax_wide_q);
+      end
+      if (pd_cshl_q) shl_nz_q <= d_nz;
+      if (pd_cfl_q) auto_q <= d[0];
     end
-    // the override: CONFIG's and FEED's; FEED's hold; a SEGMENT's K
-    if (dv && in_pay && ((is_cfg && pd_covr_q) || (is_feed && pd_ctick_q))) sh_ovr_q <= {d, sh_ovr_q[31:8]};
-    if (dv && in_pay && is_feed && pd_p4_q) sh_hold_q <= d[0];
+    // the override: CONFIG's and FEED's; a SEGMENT's K
+    if (dv && in_pay && ((is_cfg && pd_covr_q) || (is_feed && pd_ctick_q))) begin
+      ovr_nz_q   <= d_nz || (!first && ovr_nz_q);
+      ovr_wide_q <= ((d & wide_mask) != '0) || (!first && ovr_wide_q);
+    end
     if (dv && in_pay && is_seg && pd_k_q) sh_k_q <= {d, sh_k_q[31:8]};
   end
 
   // a time-scaling value the unit cannot hold (bits at or above ScaleWidth)
-  function automatic logic too_wide(input logic [31:0] v);
-    if (ScaleWidth == 0) too_wide = 1'b1;
-    else too_wide = (v >> ScaleWidth) != '0;
+  function automatic logic too_wide(input logic wide);
+    too_wide = (ScaleWidth == 0) || wide;
   endfunction
-  for (genvar a = 0; a < Axes; a++) begin : g_sh_shift
-    always_ff @(posedge clk_i) begin
-      if (dv && in_pay && is_cfg && pd_cshift_q && idx_q[2:0] == 3'(a)) sh_shift_q[a*6 +: 6] <= d[5:0];
-    end
-  end
 
   // -------------------------------------------------------------------
   // Verdict at the closing flag.
@@ -328,12 +349,11 @@ module traj_link_proto #(
   always_comb begin
     case (type_q)
       TSegment: cbad_end = (len_q != 12'(RecBytes)) || kz_q;
-      TConfig:  cbad_end = (len_q != 12'(CfgLen)) || (sh_pulse_q == '0)
-                        || (sh_tick_q != '0 && sh_tick_q < 32'(MinTickPeriod))
+      TConfig:  cbad_end = (len_q != 12'(CfgLen)) || !pulse_nz_q || (tick_nz_q && tick_lt_q)
                         || (ScaleWidth != 0
-                            && ((sh_m_q == '0) ? (sh_smax_q != '0 || sh_ovr_q != '0 || sh_shl_q != '0 || sh_auto_q)
-                                               : (too_wide(sh_m_q) || too_wide(sh_smax_q) || too_wide(sh_ovr_q))));
-      TFeed:    cbad_end = (len_q != 12'(FeedLen)) || too_wide(sh_ovr_q);
+                            && (!m_nz_q ? (smax_nz_q || ovr_nz_q || shl_nz_q || auto_q)
+                                        : (too_wide(m_wide_q) || too_wide(smax_wide_q) || too_wide(ovr_wide_q))));
+      TFeed:    cbad_end = (len_q != 12'(FeedLen)) || too_wide(ovr_wide_q);
       default:  cbad_end = (len_q != '0);
     endcase
   end
@@ -369,7 +389,7 @@ module traj_link_proto #(
   end
 
   // The verdict acts one cycle after the flag (timing), from registers: the
-  // body's registers it reads (seq, the CONFIG shadow) hold, since the next
+  // body's registers it reads (seq, the CONFIG flags) hold, since the next
   // byte comes two cycles after the flag at the earliest.
   logic       v_answer_q, v_store_q, v_want_stat_q, v_ooo_q, v_bad_q, v_fend_q;
   logic       v_reset_q, v_config_q, v_start_q, v_stop_q, v_resume_q, v_end_q, v_feed_q;
@@ -465,10 +485,49 @@ module traj_link_proto #(
   logic [2:0]        ans_code_q;
   logic              tx_take_ans, tx_take_stat, stat_due;
 
+  // The shadow RAM (block RAM) and the copy. A good CONFIG's verdict copies
+  // addresses 0..37, a good FEED's 40..44: each byte is read in one clock
+  // (cp_rd_q) and applied in the next, shifted into stg_q; a field is written
+  // whole at its last byte ({byte, stg_q} or, for the override, from stg_q at
+  // the byte after it, with the shift or the hold). The copy reads address
+  // a (or 40 + a) a + 2 clocks after the closing flag; the next frame's byte
+  // for that address is at least its ninth after the flag, 2 (9 + a) clocks
+  // at the earliest (bytes at most every other clock): no address is read
+  // and written in the same clock. A copy (39 clocks at most) ends before the
+  // next one starts: a FEED, the shortest frame that starts one, is 21 bytes.
+  (* ram_style = "block", no_rw_check *) logic [7:0] sh_mem [0:63];
+  logic        cp_act_q, cp_vld_q;
+  logic [5:0]  cp_ra_q, cp_wa_q;  // the address read; the address of cp_rd_q
+  logic [7:0]  cp_rd_q;
+  logic [31:0] stg_q;
+  logic [31:0] cp_word;           // the field ending with this byte
+  always_ff @(posedge clk_i) begin
+    if (sh_we) sh_mem[sh_wa] <= d;
+    if (cp_act_q) cp_rd_q <= sh_mem[cp_ra_q];
+  end
+  always_ff @(posedge clk_i) begin
+    if (!rst_ni) begin
+      cp_act_q <= 1'b0;
+      cp_vld_q <= 1'b0;
+    end else begin
+      if (v_config_q || v_feed_q) begin
+        cp_act_q <= 1'b1;
+        cp_ra_q  <= v_feed_q ? 6'd40 : 6'd0;
+      end else if (cp_act_q) begin
+        cp_ra_q <= cp_ra_q + 1'b1;
+        if (cp_ra_q == 6'd37 || cp_ra_q == 6'd44) cp_act_q <= 1'b0;
+      end
+      cp_vld_q <= cp_act_q;
+    end
+    cp_wa_q <= cp_ra_q;
+    if (cp_vld_q) stg_q <= {cp_rd_q, stg_q[31:8]};
+  end
+  assign cp_word = {cp_rd_q, stg_q[31:8]};
+
   // Time scaling's configuration (CONFIG's and FEED's fields, FEED's hold).
   // Without a unit (ScaleWidth = 0) CONFIG refuses any nonzero time-scaling
-  // byte and FEED is refused, so they stay 0: constants, and the shadows
-  // that would feed them go unused.
+  // byte and FEED is refused, so they stay 0: constants, and the flags that
+  // would check them go unused.
   if (ScaleWidth != 0) begin : g_scale_cfg
     always_ff @(posedge clk_i) begin
       if (!rst_ni) begin
@@ -478,18 +537,15 @@ module traj_link_proto #(
         cfg_shl_q  <= '0;
         cfg_auto_q <= 1'b0;
         hold_q     <= 1'b0;
-      end else begin
-        if (v_config_q) begin
-          cfg_m_q    <= sh_m_q;
-          cfg_smax_q <= sh_smax_q;
-          cfg_ovr_q  <= sh_ovr_q;
-          cfg_shl_q  <= sh_shl_q;
-          cfg_auto_q <= sh_auto_q;
-        end
-        if (v_feed_q) begin
-          cfg_ovr_q <= sh_ovr_q;
-          hold_q    <= sh_hold_q;
-        end
+      end else if (cp_vld_q) begin
+        case (cp_wa_q)
+          6'd27: cfg_m_q    <= cp_word;
+          6'd31: cfg_smax_q <= cp_word;
+          6'd36: begin cfg_ovr_q <= stg_q; cfg_shl_q <= cp_rd_q[5:0]; end
+          6'd37: cfg_auto_q <= cp_rd_q[0];
+          6'd44: begin cfg_ovr_q <= stg_q; hold_q <= cp_rd_q[0]; end
+          default: ;
+        endcase
       end
     end
   end else begin : g_no_scale_cfg
@@ -501,7 +557,8 @@ module traj_link_proto #(
     assign hold_q     = 1'b0;
     /* verilator lint_off UNUSEDSIGNAL */
     logic unused_sh;
-    assign unused_sh = ^{sh_m_q, sh_smax_q, sh_ovr_q, sh_shl_q, sh_auto_q, sh_hold_q, v_feed_q};
+    assign unused_sh = ^{m_nz_q, smax_nz_q, ovr_nz_q, shl_nz_q, auto_q, m_wide_q, smax_wide_q, ovr_wide_q,
+                         stg_q[7:0]};
     /* verilator lint_on UNUSEDSIGNAL */
   end
 
@@ -546,13 +603,15 @@ module traj_link_proto #(
         end_q      <= 1'b0;
         ended_q    <= 1'b0;
       end
-      if (v_config_q) begin
-        cfg_tick_q  <= sh_tick_q;
-        cfg_stat_q  <= sh_stat_q;
-        cfg_shift_q <= sh_shift_q;
-        cfg_pulse_q <= sh_pulse_q;
-        cfg_setup_q <= sh_setup_q;
-        cfg_en_q    <= sh_en_q;
+      // CONFIG's fields, from the copy
+      if (cp_vld_q) begin
+        if (cp_wa_q == 6'd3) cfg_tick_q <= cp_word;
+        if (cp_wa_q == 6'd7) cfg_stat_q <= cp_word;
+        for (int a = 0; a < Axes; a++)
+          if (cp_wa_q == 6'(8 + a)) cfg_shift_q[a*6 +: 6] <= cp_rd_q[5:0];
+        if (cp_wa_q == 6'd17) cfg_pulse_q <= cp_word[31:16];
+        if (cp_wa_q == 6'd19) cfg_setup_q <= cp_word[31:16];
+        if (cp_wa_q == 6'd20) cfg_en_q <= cp_rd_q[0];
       end
       if (v_start_q && !halt_q) begin
         playing_q <= 1'b1;
@@ -585,7 +644,7 @@ module traj_link_proto #(
       if (v_ooo_q) n_ooo_q <= n_ooo_q + 1'b1;
       if (rxv_q) n_bytes_q <= n_bytes_q + 1'b1;
       // status period in ticks
-      if (v_config_q) stat_cnt_q <= sh_stat_q - 1'b1;
+      if (cp_vld_q && cp_wa_q == 6'd7) stat_cnt_q <= cp_word - 1'b1;
       else if (tick_i && cfg_stat_q != '0) stat_cnt_q <= stat_due ? cfg_stat_q - 1'b1 : stat_cnt_q - 1'b1;
       // answers
       ans_pend_q  <= v_answer_q || (ans_pend_q && !tx_take_ans);
