@@ -251,7 +251,7 @@ class LinkProto {
     }
 
     // Link, playback, configuration, counters.
-    const bool stat_due = in.tick && cfg_stat_q_ != 0 && stat_cnt_q_ == 0;
+    const bool stat_due = in.tick && cfg_stat_q_ != 0 && stat_cnt_q_ == 1;
     const bool tx_take_ans = tx_state_q_ == kSIdle && ans_pend_q_;
     const bool tx_take_stat = tx_state_q_ == kSIdle && !ans_pend_q_ && stat_pend_q_;
     const bool playing = playing_q_, halt = halt_q_, stop = stop_q_;
@@ -323,8 +323,8 @@ class LinkProto {
     if (v.fend && !v.good) ++n_bad_q_;
     if (v.ooo) ++n_ooo_q_;
     if (q.rxv_q_) ++n_bytes_q_;
-    if (q.cp_vld_q_ && q.cp_wa_q_ == 7) stat_cnt_q_ = cp_word - 1;
-    else if (in.tick && q.cfg_stat_q_ != 0) stat_cnt_q_ = stat_due ? q.cfg_stat_q_ - 1 : stat_cnt_q_ - 1;
+    if (q.cp_vld_q_ && q.cp_wa_q_ == 7) stat_cnt_q_ = cp_word;
+    else if (in.tick && q.cfg_stat_q_ != 0) stat_cnt_q_ = stat_due ? q.cfg_stat_q_ : stat_cnt_q_ - 1;
     ans_pend_q_ = v.answer || (ans_pend_q_ && !tx_take_ans);
     if (v.answer) ans_code_q_ = v.code;
     stat_pend_q_ = v.want_stat || stat_due || (stat_pend_q_ && !tx_take_stat);

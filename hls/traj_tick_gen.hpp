@@ -40,10 +40,10 @@ class TickGen {
     const uint32_t period = in.period & kMask;
     const bool internal = period != 0;
     const bool ext_rise = ext_sync_q_ && !ext_prev_q_;
-    const bool int_tick = in.run && internal && cnt_q_ == 0;
+    const bool int_tick = in.run && internal && cnt_q_ == 1;
     const bool ext_tick = in.run && !internal && ext_rise;
 
-    const uint32_t cnt_d = (!in.run || cnt_q_ == 0) ? ((period - 1) & kMask) : cnt_q_ - 1;
+    const uint32_t cnt_d = (!in.run || cnt_q_ == 1) ? period : (cnt_q_ - 1) & kMask;
     uint32_t ext_cnt_d = ext_cnt_q_, ext_per_d = ext_per_q_;
     bool ext_seen_d = ext_seen_q_;
     if (ext_rise) {
@@ -67,7 +67,7 @@ class TickGen {
 
  private:
   bool ext_meta_q_ = false, ext_sync_q_ = false, ext_prev_q_ = false;  // synchroniser, edge detector
-  uint32_t cnt_q_ = 0, ext_cnt_q_ = 0, ext_per_q_ = 0;
+  uint32_t cnt_q_ = 1, ext_cnt_q_ = 0, ext_per_q_ = 0;  // cnt_q_: clocks to the next tick
   bool ext_seen_q_ = false;
   bool tick_q_ = false;
 };

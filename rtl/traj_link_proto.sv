@@ -562,8 +562,9 @@ module traj_link_proto #(
     /* verilator lint_on UNUSEDSIGNAL */
   end
 
-  // stat_cnt_q: ticks left to the next STATUS, minus one
-  assign stat_due = tick_i && (cfg_stat_q != '0) && (stat_cnt_q == '0);
+  // stat_cnt_q: ticks left to the next STATUS (0 while the period is 0):
+  // loaded with the period itself, so that one decrementer is all it needs
+  assign stat_due = tick_i && (cfg_stat_q != '0) && (stat_cnt_q == 32'd1);
 
   always_ff @(posedge clk_i) begin
     if (!rst_ni) begin
@@ -644,8 +645,8 @@ module traj_link_proto #(
       if (v_ooo_q) n_ooo_q <= n_ooo_q + 1'b1;
       if (rxv_q) n_bytes_q <= n_bytes_q + 1'b1;
       // status period in ticks
-      if (cp_vld_q && cp_wa_q == 6'd7) stat_cnt_q <= cp_word - 1'b1;
-      else if (tick_i && cfg_stat_q != '0) stat_cnt_q <= stat_due ? cfg_stat_q - 1'b1 : stat_cnt_q - 1'b1;
+      if (cp_vld_q && cp_wa_q == 6'd7) stat_cnt_q <= cp_word;
+      else if (tick_i && cfg_stat_q != '0) stat_cnt_q <= stat_due ? cfg_stat_q : stat_cnt_q - 1'b1;
       // answers
       ans_pend_q  <= v_answer_q || (ans_pend_q && !tx_take_ans);
       if (v_answer_q) ans_code_q <= v_code_q;

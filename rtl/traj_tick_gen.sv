@@ -35,7 +35,7 @@ module traj_tick_gen #(
                     "traj_tick_gen: PeriodWidth must be 2..32")
 
   logic                   ext_meta_q, ext_sync_q, ext_prev_q;  // synchroniser, edge detector
-  logic [PeriodWidth-1:0] cnt_q;       // internal: clocks to the next tick, minus 1
+  logic [PeriodWidth-1:0] cnt_q;       // internal: clocks to the next tick (reloaded with period_i: one decrementer)
   logic [PeriodWidth-1:0] ext_cnt_q;   // external: clocks since the last edge
   logic [PeriodWidth-1:0] ext_per_q;   // external: clocks between the last two edges
   logic                   ext_seen_q;  // an external edge has been seen since reset
@@ -44,7 +44,7 @@ module traj_tick_gen #(
   logic internal, ext_rise, int_tick, ext_tick;
   assign internal = (period_i != '0);
   assign ext_rise = ext_sync_q && !ext_prev_q;
-  assign int_tick = run_i && internal && (cnt_q == '0);
+  assign int_tick = run_i && internal && (cnt_q == PeriodWidth'(1));
   assign ext_tick = run_i && !internal && ext_rise;
 
   always_ff @(posedge clk_i) begin
@@ -52,7 +52,7 @@ module traj_tick_gen #(
       ext_meta_q <= 1'b0;
       ext_sync_q <= 1'b0;
       ext_prev_q <= 1'b0;
-      cnt_q      <= '0;
+      cnt_q      <= PeriodWidth'(1);
       ext_cnt_q  <= '0;
       ext_per_q  <= '0;
       ext_seen_q <= 1'b0;
@@ -61,7 +61,7 @@ module traj_tick_gen #(
       ext_meta_q <= tick_ext_i;
       ext_sync_q <= ext_meta_q;
       ext_prev_q <= ext_sync_q;
-      if (!run_i || cnt_q == '0) cnt_q <= period_i - 1'b1;
+      if (!run_i || cnt_q == PeriodWidth'(1)) cnt_q <= period_i;
       else                       cnt_q <= cnt_q - 1'b1;
       if (ext_rise) begin
         ext_cnt_q  <= PeriodWidth'(1);
