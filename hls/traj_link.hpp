@@ -12,7 +12,7 @@
 namespace traj {
 
 template <int ClkHz, int Baud, int Axes, int Degree, int Width, int ChunkWidth, int GuardBits, int FifoDepth,
-          int MinTickPeriod, int ScaleWidth = 0>
+          int MinTickPeriod, int ScaleWidth = 0, int CountRam = 0>
 class Link {
  public:
   static constexpr int kOutWidth = Width - GuardBits;
@@ -20,7 +20,7 @@ class Link {
   static constexpr int kSegWords = kHdrWords + Axes * (Degree + 1) * Width / ChunkWidth;
   using Rx = UartRx<ClkHz, Baud>;
   using Tx = UartTx<ClkHz, Baud>;
-  using Proto = LinkProto<Axes, Degree, Width, ChunkWidth, GuardBits, MinTickPeriod, ClkHz, ScaleWidth>;
+  using Proto = LinkProto<Axes, Degree, Width, ChunkWidth, GuardBits, MinTickPeriod, ClkHz, ScaleWidth, CountRam>;
   using Fifo = SegFifo<ChunkWidth, kSegWords, FifoDepth>;
   static constexpr int kDiv = Rx::kDiv;
   static constexpr int kCap = Fifo::kCap;

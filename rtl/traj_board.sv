@@ -30,7 +30,8 @@
 //   snapshot of a frame, 1; also the board's copy above, 2) in block RAM
 //   (traj_hold_ram, Axes*OutWidth/16 blocks each) instead of flops, for a
 //   device short of logic cells (the UP5K). With 2 a STATUS frame reports
-//   the samples of two clocks before it starts, not one.
+//   the samples of two clocks before it starts, not one. 3 also keeps the
+//   link's six STATUS counters in block RAM (traj_link_proto CountRam).
 // * enable_o is high when CONFIG enables the outputs (drivers with an
 //   active-low enable need an inverter or the top's inversion).
 // * TimeScale = 1: the time-scale unit (traj_time_scale: feed override, feed
@@ -67,7 +68,7 @@ module traj_board #(
   parameter bit FdTimeMux     = 1'b1,
   parameter int TimeScale     = 0,     // 1: the time-scale unit (below)
   parameter int ScaleWidth    = 20,    // SW of the time-scale unit (S, m, s_max)
-  parameter int StatusRam     = 0,     // the STATUS copies of the samples in block RAM: 1 the link's, 2 also the board's
+  parameter int StatusRam     = 0,     // STATUS in block RAM: 1 the link's copy of the samples, 2 also the board's, 3 also the link's counters
   // derived, do not override
   parameter int OutWidth      = Width - GuardBits
 ) (
@@ -97,8 +98,8 @@ module traj_board #(
                     "traj_board: TimeScale must be 0 or 1, ScaleWidth 4..24")
   `TRAJ_PARAM_CHECK(g_bad_scale_engine, TimeScale == 0 || (FdTimeMux && GuardBits % ChunkWidth == 0),
                     "traj_board: TimeScale = 1 reads the samples through traj_fd_tm's sample RAM port: it needs FdTimeMux = 1 and GuardBits a multiple of ChunkWidth")
-  `TRAJ_PARAM_CHECK(g_bad_status_ram, StatusRam >= 0 && StatusRam <= 2,
-                    "traj_board: StatusRam must be 0, 1 or 2")
+  `TRAJ_PARAM_CHECK(g_bad_status_ram, StatusRam >= 0 && StatusRam <= 3,
+                    "traj_board: StatusRam must be 0, 1, 2 or 3")
   `TRAJ_PARAM_CHECK(g_bad_min_tick, MinTickPeriod >= Axes * (StepPeriodWidth + StepFracBits + StepSubBits + 3) + 3,
                     "traj_board: MinTickPeriod must cover the step generator's preparation")
 
@@ -138,7 +139,8 @@ module traj_board #(
   traj_link #(
     .ClkHz(ClkHz), .Baud(Baud), .Axes(Axes), .Degree(Degree), .Width(Width),
     .ChunkWidth(ChunkWidth), .GuardBits(GuardBits), .FifoDepth(FifoDepth),
-    .MinTickPeriod(MinTickPeriod), .ScaleWidth((TimeScale != 0) ? ScaleWidth : 0), .SnapRam((StatusRam >= 1) ? 1 : 0)
+    .MinTickPeriod(MinTickPeriod), .ScaleWidth((TimeScale != 0) ? ScaleWidth : 0), .SnapRam((StatusRam >= 1) ? 1 : 0),
+    .CountRam((StatusRam >= 3) ? 1 : 0)
   ) u_link (
     .clk_i, .rst_ni, .rx_i, .tx_o,
     .m_axis_tdata(seg_tdata), .m_axis_tvalid(seg_tvalid), .m_axis_tready(seg_tready),
@@ -185,8 +187,8 @@ module traj_board #(
     );
 
     // datapath, not reset (as the engines' sample_o); in block RAM
-    // (StatusRam 2) the copy follows a clock later (traj_hold_ram)
-    if (StatusRam == 2) begin : g_hold_ram
+    // (StatusRam >= 2) the copy follows a clock later (traj_hold_ram)
+    if (StatusRam >= 2) begin : g_hold_ram
       traj_hold_ram #(.Width(Axes * OutWidth)) u_hold (
         .clk_i, .we_i(out_valid), .data_i(out_sample), .data_o(sample_hold_q)
       );

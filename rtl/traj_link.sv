@@ -43,6 +43,7 @@ module traj_link #(
   parameter int MinTickPeriod = 256,         // smallest CONFIG tick period in clocks
   parameter int ScaleWidth    = 0,           // SW of the board's time-scale unit (0: none)
   parameter int SnapRam       = 0,           // 1: the STATUS snapshot of the samples in block RAM (traj_link_proto)
+  parameter int CountRam      = 0,           // 1: the STATUS counters in block RAM (traj_link_proto)
   // derived, do not override
   parameter int OutWidth      = Width - GuardBits
 ) (
@@ -104,7 +105,7 @@ module traj_link #(
 
   traj_link_proto #(
     .Axes(Axes), .Degree(Degree), .Width(Width), .ChunkWidth(ChunkWidth), .GuardBits(GuardBits),
-    .MinTickPeriod(MinTickPeriod), .ClkHz(ClkHz), .ScaleWidth(ScaleWidth), .SnapRam(SnapRam)
+    .MinTickPeriod(MinTickPeriod), .ClkHz(ClkHz), .ScaleWidth(ScaleWidth), .SnapRam(SnapRam), .CountRam(CountRam)
   ) u_proto (
     .clk_i, .rst_ni,
     .rx_data_i(rx_data), .rx_valid_i(rx_valid), .rx_err_i(rx_err),

@@ -21,7 +21,9 @@
 // status period in ticks), each a stuffed frame with its CRC, byte by byte to
 // traj_uart_tx. Every u32 of a frame is read from the live state when its
 // first byte is sent (no torn values); the samples are taken once, when the
-// frame starts.
+// frame starts. With CountRam = 1 a counter's word is the count when the
+// counter is next written back (below), at most 6 clocks after its first
+// byte was due; the stream holds tvalid low until then.
 // Playback: START sets playing; underrun_i while playing ends a STOP, or
 // reaches the end (END received, FIFO empty and idle), or is an underrun
 // (counted, halt until RESUME). release_o lets the FIFO start a segment:
@@ -50,6 +52,7 @@ module traj_link_proto #(
   parameter int ClkHz         = 48_000_000,  // clk_i in Hz, reported in STATUS (the host's clocks -> seconds)
   parameter int ScaleWidth    = 0,    // SW of the board's time-scale unit (0: none, time scaling and FEED refused)
   parameter int SnapRam       = 0,    // 1: the STATUS snapshot of the samples in block RAM (traj_hold_ram), not flops
+  parameter int CountRam      = 0,    // 1: the six STATUS counters in block RAM, one adder for all (below)
   // derived, do not override
   parameter int OutWidth      = Width - GuardBits
 ) (
@@ -132,6 +135,7 @@ module traj_link_proto #(
   `TRAJ_PARAM_CHECK(g_bad_rec, RecBytes <= 2048, "traj_link_proto: the record exceeds 2048 bytes")
   `TRAJ_PARAM_CHECK(g_bad_clk, ClkHz >= 1, "traj_link_proto: ClkHz must be positive")
   `TRAJ_PARAM_CHECK(g_bad_snap, SnapRam == 0 || SnapRam == 1, "traj_link_proto: SnapRam must be 0 or 1")
+  `TRAJ_PARAM_CHECK(g_bad_count, CountRam == 0 || CountRam == 1, "traj_link_proto: CountRam must be 0 or 1")
   `TRAJ_PARAM_CHECK(g_bad_scale, ScaleWidth == 0 || (ScaleWidth >= 4 && ScaleWidth <= 24),
                     "traj_link_proto: ScaleWidth must be 0 or 4..24")
   `TRAJ_PARAM_CHECK(g_bad_derived, OutWidth == Width - GuardBits,
@@ -480,7 +484,11 @@ module traj_link_proto #(
   logic [31:0]       cfg_m_q, cfg_smax_q, cfg_ovr_q;
   logic [5:0]        cfg_shl_q;
   logic              cfg_auto_q, hold_q;
-  logic [31:0]       n_played_q, n_ticks_q, n_under_q, n_bad_q, n_ooo_q, n_bytes_q;
+  logic [5:0]        cnt_ev;    // this clock's counter events: {bytes, ooo, bad, under, ticks, played}
+  logic [31:0]       cnt_word;  // the counter word tx_w_q asks for (CountRam = 0)
+  logic              cnt_wait;  // the answer side waits for a counter word (CountRam = 1)
+  logic              cnt_ld;    // cnt_sum is that word: load it
+  logic [31:0]       cnt_sum;
   logic              ans_pend_q, stat_pend_q, tick_d1_q, tick_d2_q;
   logic [2:0]        ans_code_q;
   logic              tx_take_ans, tx_take_stat, stat_due;
@@ -581,12 +589,6 @@ module traj_link_proto #(
       cfg_setup_q <= '0;
       cfg_en_q    <= 1'b0;
       stat_cnt_q  <= '0;
-      n_played_q  <= '0;
-      n_ticks_q   <= '0;
-      n_under_q   <= '0;
-      n_bad_q     <= '0;
-      n_ooo_q     <= '0;
-      n_bytes_q   <= '0;
       ans_pend_q  <= 1'b0;
       ans_code_q  <= '0;
       stat_pend_q <= 1'b0;
@@ -634,16 +636,9 @@ module traj_link_proto #(
         end else if (end_q && fifo_level_i == '0 && !fifo_busy_i) begin
           ended_q <= 1'b1;
         end else begin
-          halt_q    <= 1'b1;
-          n_under_q <= n_under_q + 1'b1;
+          halt_q    <= 1'b1;  // an underrun: counted (cnt_ev)
         end
       end
-      // counters
-      if (seg_start_i) n_played_q <= n_played_q + 1'b1;
-      if (tick_i && playing_q && !halt_q) n_ticks_q <= n_ticks_q + 1'b1;
-      if (v_bad_q) n_bad_q <= n_bad_q + 1'b1;
-      if (v_ooo_q) n_ooo_q <= n_ooo_q + 1'b1;
-      if (rxv_q) n_bytes_q <= n_bytes_q + 1'b1;
       // status period in ticks
       if (cp_vld_q && cp_wa_q == 6'd7) stat_cnt_q <= cp_word;
       else if (tick_i && cfg_stat_q != '0) stat_cnt_q <= stat_due ? cfg_stat_q : stat_cnt_q - 1'b1;
@@ -711,12 +706,7 @@ module traj_link_proto #(
     end else begin
       case (tx_w_q)
         6'd2:  word_next = {fifo_level_i, flags, 8'(Axes)};
-        6'd3:  word_next = n_played_q;
-        6'd4:  word_next = n_ticks_q;
-        6'd5:  word_next = n_under_q;
-        6'd6:  word_next = n_bad_q;
-        6'd7:  word_next = n_ooo_q;
-        6'd8:  word_next = n_bytes_q;
+        6'd3, 6'd4, 6'd5, 6'd6, 6'd7, 6'd8: word_next = cnt_word;
         6'd9:  word_next = {16'h0, fifo_credits_i};
         6'd10: word_next = 32'(ClkHz);
         6'd11: word_next = scale_s_i;
@@ -771,6 +761,7 @@ module traj_link_proto #(
       tx_w_q    <= '0;
     end
     if (tx_load && !tx_crc_next) tx_word_q <= word_next;
+    if (cnt_ld) tx_word_q <= cnt_sum;
     if (tx_load) tx_w_q <= tx_w_q + 1'b1;
     if (tx_crcld_q) tx_word_q <= ~tx_crc_q;
     if (tx_hs && tx_state_q == SBody) begin
@@ -784,13 +775,127 @@ module traj_link_proto #(
     end
   end
 
+  // -------------------------------------------------------------------
+  // STATUS counters (words 3..8): played, ticks, underruns, bad frames,
+  // out-of-order frames, bytes.
+  // -------------------------------------------------------------------
+  assign cnt_ev = {rxv_q, v_ooo_q, v_bad_q,
+                   underrun_i && playing_q && !stop_q && !(end_q && fifo_level_i == '0 && !fifo_busy_i),
+                   tick_i && playing_q && !halt_q, seg_start_i};
+  if (CountRam == 0) begin : g_cnt_flops
+    logic [31:0] n_played_q, n_ticks_q, n_under_q, n_bad_q, n_ooo_q, n_bytes_q;
+    always_ff @(posedge clk_i) begin
+      if (!rst_ni) begin
+        n_played_q <= '0;
+        n_ticks_q  <= '0;
+        n_under_q  <= '0;
+        n_bad_q    <= '0;
+        n_ooo_q    <= '0;
+        n_bytes_q  <= '0;
+      end else begin
+        if (cnt_ev[0]) n_played_q <= n_played_q + 1'b1;
+        if (cnt_ev[1]) n_ticks_q  <= n_ticks_q + 1'b1;
+        if (cnt_ev[2]) n_under_q  <= n_under_q + 1'b1;
+        if (cnt_ev[3]) n_bad_q    <= n_bad_q + 1'b1;
+        if (cnt_ev[4]) n_ooo_q    <= n_ooo_q + 1'b1;
+        if (cnt_ev[5]) n_bytes_q  <= n_bytes_q + 1'b1;
+      end
+    end
+    always_comb begin
+      case (tx_w_q)
+        6'd4:    cnt_word = n_ticks_q;
+        6'd5:    cnt_word = n_under_q;
+        6'd6:    cnt_word = n_bad_q;
+        6'd7:    cnt_word = n_ooo_q;
+        6'd8:    cnt_word = n_bytes_q;
+        default: cnt_word = n_played_q;
+      endcase
+    end
+    assign cnt_wait = 1'b0;
+    assign cnt_ld   = 1'b0;
+    assign cnt_sum  = '0;
+  end else begin : g_cnt_ram
+    // Counter k at address k of a block RAM, one adder for all: read at
+    // clock t (cr_q), written back at t + 1 (cw_q) plus the events counted
+    // since its last write (pend_q), so each is written every 6 clocks. The
+    // busiest, bytes, comes at most every other clock: 3 events a round at
+    // most, so 2 bits of pend_q hold them. The first round after reset
+    // writes the events alone (clr_q). A counter's STATUS word waits
+    // (cnt_wait: tvalid low) for its next write and takes the value written.
+    (* ram_style = "block", no_rw_check *) logic [31:0] cn_mem [0:7];
+    logic [2:0]  cr_q, cw_q, ck_q;
+    logic        cwv_q, clr_q, wait_q;
+    logic [15:0] pend_q;  // 2 bits per counter (6 and 7 unused)
+    logic [1:0]  pw_q;    // pend_q of cw_q, taken a clock early (off the adder's path)
+    logic [31:0] cn_rd;
+    always_ff @(posedge clk_i) begin
+      cn_rd <= cn_mem[cr_q];
+      if (cwv_q) cn_mem[cw_q] <= cnt_sum;
+    end
+    assign cnt_sum  = (clr_q ? 32'h0 : cn_rd) + {30'h0, pw_q};
+    assign cnt_ld   = wait_q && cwv_q && (cw_q == ck_q);
+    assign cnt_wait = wait_q;
+    assign cnt_word = '0;
+    always_ff @(posedge clk_i) begin
+      if (tx_load) ck_q <= 3'(tx_w_q - 6'd3);
+      // what pend_q of cr_q becomes (cr_q is not the word written back now)
+      pw_q <= pend_q[{cr_q, 1'b0} +: 2] + {1'b0, cnt_ev[cr_q]};
+    end
+    always_ff @(posedge clk_i) begin
+      if (!rst_ni) begin
+        cr_q   <= '0;
+        cw_q   <= '0;
+        cwv_q  <= 1'b0;
+        clr_q  <= 1'b1;
+        wait_q <= 1'b0;
+        pend_q <= '0;
+      end else begin
+        for (int k = 0; k < 6; k++)
+          pend_q[2*k +: 2] <= ((cwv_q && cw_q == 3'(k)) ? 2'd0 : pend_q[2*k +: 2]) + {1'b0, cnt_ev[k]};
+        if (cwv_q && cw_q == 3'd5) clr_q <= 1'b0;
+        cwv_q <= 1'b1;
+        cw_q  <= cr_q;
+        cr_q  <= (cr_q == 3'd5) ? 3'd0 : cr_q + 1'b1;
+        if (tx_load && tx_stat_q && tx_w_q >= 6'd3 && tx_w_q <= 6'd8) wait_q <= 1'b1;
+        else if (cnt_ld) wait_q <= 1'b0;
+      end
+    end
+`ifdef FORMAL
+    // Every value written back (and so every STATUS word) is the count of
+    // the events before it, as flops would hold it (f_n); no count is lost
+    // in pend_q, given the strobes' contract: none high two clocks in a row.
+    logic            f_cv = 1'b0;
+    logic [2:0]      f_st_q;  // tick_i, seg_start_i, underrun_i in the previous clock
+    logic [6*32-1:0] f_n;
+    always_ff @(posedge clk_i) begin
+      f_cv   <= 1'b1;
+      f_st_q <= {tick_i, seg_start_i, underrun_i};
+      for (int k = 0; k < 6; k++) begin
+        if (!rst_ni) f_n[k*32 +: 32] <= '0;
+        else if (cnt_ev[k]) f_n[k*32 +: 32] <= f_n[k*32 +: 32] + 1'b1;
+      end
+    end
+    always_comb begin
+      if (f_cv) assume (({tick_i, seg_start_i, underrun_i} & f_st_q) == '0);
+      if (f_cv && rst_ni) begin
+        if (cwv_q) assert (cnt_sum == f_n[32*cw_q +: 32]);
+        if (cwv_q) assert (pw_q == pend_q[{cw_q, 1'b0} +: 2]);
+        for (int k = 0; k < 6; k++)
+          if (cnt_ev[k] && !(cwv_q && cw_q == 3'(k))) assert (pend_q[2*k +: 2] != 2'd3);
+        assert (cr_q <= 3'd5 && cw_q <= 3'd5);
+        if (cwv_q) assert (cr_q == ((cw_q == 3'd5) ? 3'd0 : cw_q + 3'd1));
+      end
+    end
+`endif
+  end
+
   always_comb begin
     case (tx_state_q)
       SBody:   tx_tdata_o = tx_esc_q ? (tx_cur ^ 8'h20) : (tx_need_esc ? 8'h7D : tx_cur);
       default: tx_tdata_o = 8'h7E;
     endcase
   end
-  assign tx_tvalid_o = (tx_state_q != SIdle) && !tx_crcld_q;
+  assign tx_tvalid_o = (tx_state_q != SIdle) && !tx_crcld_q && !cnt_wait;
 
 `ifdef FORMAL
   // ---------------------------------------------------------------------

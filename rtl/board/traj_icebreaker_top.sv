@@ -90,7 +90,7 @@ module traj_icebreaker_top #(
 
   traj_board #(
     .ClkHz(ClkHz), .Baud(Baud), .Axes(3), .Degree(5), .Width(96), .ChunkWidth(16), .GuardBits(48),
-    .FifoDepth(16384), .FdTimeMux(1'b1), .TimeScale(TimeScale), .ScaleWidth(20), .StatusRam(2)
+    .FifoDepth(16384), .FdTimeMux(1'b1), .TimeScale(TimeScale), .ScaleWidth(20), .StatusRam(3)
   ) u_board (
     .clk_i(clk), .rst_ni(rst_n), .rx_i(rx_q[1]), .tx_o,
     .tick_ext_i(tick_pin),

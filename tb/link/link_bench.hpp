@@ -29,8 +29,8 @@ namespace linktest {
 constexpr int kAxes = LINK_AXES, kDegree = LINK_DEGREE, kWidth = LINK_WIDTH, kChunk = LINK_CHUNK;
 constexpr int kGuard = LINK_GUARD, kOutWidth = kWidth - kGuard;
 constexpr int kScaleWidth = LINK_SCALE;
-using Model =
-    traj::Link<LINK_CLK, LINK_BAUD, kAxes, kDegree, kWidth, kChunk, kGuard, LINK_FIFO, LINK_MINTICK, kScaleWidth>;
+using Model = traj::Link<LINK_CLK, LINK_BAUD, kAxes, kDegree, kWidth, kChunk, kGuard, LINK_FIFO, LINK_MINTICK,
+                         kScaleWidth, LINK_COUNTRAM>;
 constexpr int kDiv = Model::kDiv;
 constexpr int kSegWords = Model::kSegWords;
 constexpr int kCap = Model::kCap;
