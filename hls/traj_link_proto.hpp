@@ -3,6 +3,8 @@
 #pragma once
 #include <cstdint>
 
+#include "traj_status_count.hpp"
+
 namespace traj {
 
 // CRC-32 (zlib, reflected polynomial 0xEDB88320) of one byte, no final XOR.
@@ -81,7 +83,7 @@ class LinkProto {
     const Dec c = decode(in);
     Out o{};
     o.tx_tdata = c.tx_tdata;
-    o.tx_tvalid = tx_state_q_ != kSIdle && !tx_crcld_q_ && !cn_wait_q_;
+    o.tx_tvalid = tx_state_q_ != kSIdle && !tx_crcld_q_ && !cnt_wait();
     o.fifo_wr = c.wbyte && c.wdone && wen_q_;
     o.fifo_wr_data = c.wword;
     o.fifo_commit = v_.store;
@@ -219,14 +221,16 @@ class LinkProto {
     if (c.tx_load && !tx_crc_next) tx_word_q_ = word_next;
     if (c.tx_load) tx_w_q_ = (tx_w_q_ + 1) & 63;
     if (tx_crcld_q_) tx_word_q_ = ~tx_crc_q_;
-    // the counters in block RAM: the word written back, read, loaded if waited for
-    const uint32_t cn_sum = (cn_clr_q_ ? 0u : cn_rd_) + cn_pend_q_[cn_cw_q_];
-    const bool cn_ld = CountRam != 0 && cn_wait_q_ && cn_cwv_q_ && cn_cw_q_ == cn_ck_q_;
+    // the STATUS counters in block RAM: a counter's word when it is written back
     if (CountRam != 0) {
-      if (cn_ld) tx_word_q_ = cn_sum;
-      if (c.tx_load) cn_ck_q_ = (q.tx_w_q_ - 3) & 7;
-      if (cn_cwv_q_) cn_mem_[cn_cw_q_] = cn_sum;
-      cn_rd_ = q.cn_mem_[cn_cr_q_];
+      const auto cn = cnt_.outputs();
+      if (cn.ld) tx_word_q_ = cn.sum;
+      typename StatusCount<6>::In ci;
+      ci.rst_n = in.rst_n;
+      ci.ev = count_events(in, q);
+      ci.want = c.tx_load && q.tx_stat_q_ && q.tx_w_q_ >= 3 && q.tx_w_q_ <= 8;
+      ci.k = (q.tx_w_q_ - 3) & 7;
+      cnt_.clock(ci);
     }
     if (c.tx_hs && tx_state_q_ == kSBody) {
       if (c.tx_adv) {
@@ -334,20 +338,6 @@ class LinkProto {
     if (v.fend && !v.good) ++n_bad_q_;
     if (v.ooo) ++n_ooo_q_;
     if (q.rxv_q_) ++n_bytes_q_;
-    if (CountRam != 0) {
-      const bool ev[6] = {in.seg_start, in.tick && playing && !halt,
-                          in.underrun && playing && !stop && !(q.end_q_ && in.fifo_level == 0 && !in.fifo_busy),
-                          v.fend && !v.good, v.ooo, q.rxv_q_};
-      for (int k = 0; k < 6; ++k)
-        cn_pend_q_[k] = static_cast<uint8_t>((((cn_cwv_q_ && cn_cw_q_ == k) ? 0 : cn_pend_q_[k]) + (ev[k] ? 1 : 0)) & 3);
-      if (cn_cwv_q_ && cn_cw_q_ == 5) cn_clr_q_ = false;
-      cn_cwv_q_ = true;
-      cn_cw_q_ = cn_cr_q_;
-      cn_cr_q_ = cn_cr_q_ == 5 ? 0 : cn_cr_q_ + 1;
-      const bool want = c.tx_load && q.tx_stat_q_ && q.tx_w_q_ >= 3 && q.tx_w_q_ <= 8;
-      if (want) cn_wait_q_ = true;
-      else if (cn_ld) cn_wait_q_ = false;
-    }
     if (q.cp_vld_q_ && q.cp_wa_q_ == 7) stat_cnt_q_ = cp_word;
     else if (in.tick && q.cfg_stat_q_ != 0) stat_cnt_q_ = stat_due ? q.cfg_stat_q_ : stat_cnt_q_ - 1;
     ans_pend_q_ = v.answer || (ans_pend_q_ && !tx_take_ans);
@@ -543,7 +533,7 @@ class LinkProto {
     }
 
     // answer side
-    c.tx_hs = tx_state_q_ != kSIdle && !tx_crcld_q_ && !cn_wait_q_ && in.tx_tready;
+    c.tx_hs = tx_state_q_ != kSIdle && !tx_crcld_q_ && !cnt_wait() && in.tx_tready;
     c.tx_cur = static_cast<uint8_t>(tx_word_q_ >> (8 * (tx_idx_q_ & 3)));
     const bool need_esc = c.tx_cur == 0x7E || c.tx_cur == 0x7D;
     c.tx_adv = c.tx_hs && tx_state_q_ == kSBody && (tx_esc_q_ || !need_esc);
@@ -554,6 +544,16 @@ class LinkProto {
                                                     : (need_esc ? uint8_t{0x7D} : c.tx_cur))
                                        : uint8_t{0x7E};
     return c;
+  }
+
+  bool cnt_wait() const { return CountRam != 0 && cnt_.outputs().wait; }
+  // the counters' events of this cycle, from the registers at its start (q):
+  // played, ticks, underruns, bad frames, out-of-order frames, bytes
+  static uint8_t count_events(const In& in, const LinkProto& q) {
+    const bool under = in.underrun && q.playing_q_ && !q.stop_q_ && !(q.end_q_ && in.fifo_level == 0 && !in.fifo_busy);
+    return static_cast<uint8_t>((in.seg_start ? 1 : 0) | ((in.tick && q.playing_q_ && !q.halt_q_) ? 2 : 0) |
+                                (under ? 4 : 0) | ((q.v_.fend && !q.v_.good) ? 8 : 0) | (q.v_.ooo ? 16 : 0) |
+                                (q.rxv_q_ ? 32 : 0));
   }
 
   uint32_t next_word(const In& in, int w) const {
@@ -611,10 +611,6 @@ class LinkProto {
     cp_act_q_ = cp_vld_q_ = false;
     stat_cnt_q_ = 0;
     n_played_q_ = n_ticks_q_ = n_under_q_ = n_bad_q_ = n_ooo_q_ = n_bytes_q_ = 0;
-    cn_cr_q_ = cn_cw_q_ = 0;
-    cn_cwv_q_ = cn_wait_q_ = false;
-    cn_clr_q_ = true;
-    for (auto& x : cn_pend_q_) x = 0;
     ans_pend_q_ = false;
     ans_code_q_ = 0;
     stat_pend_q_ = false;
@@ -657,17 +653,9 @@ class LinkProto {
   uint32_t cfg_m_q_ = 0, cfg_smax_q_ = 0, cfg_ovr_q_ = 0;
   uint8_t cfg_shl_q_ = 0;
   bool cfg_auto_q_ = false, hold_q_ = false;
-  // the counters (with CountRam = 1 the RTL's are in cn_mem_; these stay as the model's views)
+  // the counters (with CountRam = 1 the RTL keeps them in block RAM, cnt_; these stay as the model's views)
   uint32_t n_played_q_ = 0, n_ticks_q_ = 0, n_under_q_ = 0, n_bad_q_ = 0, n_ooo_q_ = 0, n_bytes_q_ = 0;
-  // CountRam = 1: counter k at address k, read (cn_cr_q_) into cn_rd_, written
-  // back the clock after (cn_cw_q_, cn_cwv_q_) with the events meanwhile
-  // (cn_pend_q_); the first round after reset writes the events alone
-  // (cn_clr_q_); the answer side waits (cn_wait_q_) for counter cn_ck_q_
-  uint32_t cn_mem_[8] = {};
-  uint32_t cn_rd_ = 0;
-  int cn_cr_q_ = 0, cn_cw_q_ = 0, cn_ck_q_ = 0;
-  bool cn_cwv_q_ = false, cn_clr_q_ = true, cn_wait_q_ = false;
-  uint8_t cn_pend_q_[8] = {};
+  StatusCount<6> cnt_;  // CountRam = 1: the counters in block RAM (the RTL's u_count)
   bool ans_pend_q_ = false, stat_pend_q_ = false, tick_d1_q_ = false, tick_d2_q_ = false;
   uint8_t ans_code_q_ = 0;
   // answer side

@@ -43,7 +43,7 @@ class StepGen {
   struct In {
     bool rst_n = true;
     uint8_t shift[Axes] = {};
-    uint32_t period = 1;
+    uint32_t period = 1;  // held in the clock before sample_valid too
     uint32_t pulse = 1;
     uint32_t setup = 0;
     bool enable = false;
@@ -217,7 +217,7 @@ class StepGen {
       fbit_d = 0;
       reinit_d = period != cur_per_q_;
       tickp_d = true;
-      nm_d = sub_bits(period);
+      nm_d = pm_q_;
       subs_d = first_q_ ? 0 : (1 << nm_d) - 1;
     } else if (subgo) {
       fetch_d = true;
@@ -311,6 +311,7 @@ class StepGen {
     tickp_q_ = tickp_d;
     subs_q_ = subs_d;
     nm_q_ = nm_d;
+    pm_q_ = sub_bits(period);
     first_q_ = first_d;
     reinit_q_ = reinit_d;
     alt_q_st_ = alt_st_d;
@@ -384,6 +385,7 @@ class StepGen {
   uint8_t pram_[Axes << kBW] = {};
   uint8_t prd_q_ = 0;
   int subs_q_ = 0, nm_q_ = 0;       // sub-chords left to prepare; m of the tick
+  int pm_q_ = 0;                    // m of the period in the clock before (the RTL's pm_q)
   uint32_t nper_q_ = 0, cur_per_q_ = 0, nlen_q_ = 0;
   u128 ntq_q_ = 0, ntn_q_ = 0;  // kNtW bits: T / 2^F and -T / 2^F of the next interval
   bool active_q_ = false, loaded_q_ = false, last_q_ = false;

@@ -815,78 +815,14 @@ module traj_link_proto #(
     assign cnt_ld   = 1'b0;
     assign cnt_sum  = '0;
   end else begin : g_cnt_ram
-    // Counter k at address k of a block RAM, one adder for all: read at
-    // clock t (cr_q), written back at t + 1 (cw_q) plus the events counted
-    // since its last write (pend_q), so each is written every 6 clocks. The
-    // busiest, bytes, comes at most every other clock: 3 events a round at
-    // most, so 2 bits of pend_q hold them. The first round after reset
-    // writes the events alone (clr_q). A counter's STATUS word waits
-    // (cnt_wait: tvalid low) for its next write and takes the value written.
-    (* ram_style = "block", no_rw_check *) logic [31:0] cn_mem [0:7];
-    logic [2:0]  cr_q, cw_q, ck_q;
-    logic        cwv_q, clr_q, wait_q;
-    logic [15:0] pend_q;  // 2 bits per counter (6 and 7 unused)
-    logic [1:0]  pw_q;    // pend_q of cw_q, taken a clock early (off the adder's path)
-    logic [31:0] cn_rd;
-    always_ff @(posedge clk_i) begin
-      cn_rd <= cn_mem[cr_q];
-      if (cwv_q) cn_mem[cw_q] <= cnt_sum;
-    end
-    assign cnt_sum  = (clr_q ? 32'h0 : cn_rd) + {30'h0, pw_q};
-    assign cnt_ld   = wait_q && cwv_q && (cw_q == ck_q);
-    assign cnt_wait = wait_q;
+    // in block RAM, one adder for all (traj_status_count): a counter's word
+    // waits (tvalid low) for the counter's next write, 1 to 6 clocks
+    traj_status_count #(.N(6)) u_count (
+      .clk_i, .rst_ni, .ev_i(cnt_ev),
+      .want_i(tx_load && tx_stat_q && tx_w_q >= 6'd3 && tx_w_q <= 6'd8), .k_i(3'(tx_w_q - 6'd3)),
+      .wait_o(cnt_wait), .ld_o(cnt_ld), .sum_o(cnt_sum)
+    );
     assign cnt_word = '0;
-    always_ff @(posedge clk_i) begin
-      if (tx_load) ck_q <= 3'(tx_w_q - 6'd3);
-      // what pend_q of cr_q becomes (cr_q is not the word written back now)
-      pw_q <= pend_q[{cr_q, 1'b0} +: 2] + {1'b0, cnt_ev[cr_q]};
-    end
-    always_ff @(posedge clk_i) begin
-      if (!rst_ni) begin
-        cr_q   <= '0;
-        cw_q   <= '0;
-        cwv_q  <= 1'b0;
-        clr_q  <= 1'b1;
-        wait_q <= 1'b0;
-        pend_q <= '0;
-      end else begin
-        for (int k = 0; k < 6; k++)
-          pend_q[2*k +: 2] <= ((cwv_q && cw_q == 3'(k)) ? 2'd0 : pend_q[2*k +: 2]) + {1'b0, cnt_ev[k]};
-        if (cwv_q && cw_q == 3'd5) clr_q <= 1'b0;
-        cwv_q <= 1'b1;
-        cw_q  <= cr_q;
-        cr_q  <= (cr_q == 3'd5) ? 3'd0 : cr_q + 1'b1;
-        if (tx_load && tx_stat_q && tx_w_q >= 6'd3 && tx_w_q <= 6'd8) wait_q <= 1'b1;
-        else if (cnt_ld) wait_q <= 1'b0;
-      end
-    end
-`ifdef FORMAL
-    // Every value written back (and so every STATUS word) is the count of
-    // the events before it, as flops would hold it (f_n); no count is lost
-    // in pend_q, given the strobes' contract: none high two clocks in a row.
-    logic            f_cv = 1'b0;
-    logic [2:0]      f_st_q;  // tick_i, seg_start_i, underrun_i in the previous clock
-    logic [6*32-1:0] f_n;
-    always_ff @(posedge clk_i) begin
-      f_cv   <= 1'b1;
-      f_st_q <= {tick_i, seg_start_i, underrun_i};
-      for (int k = 0; k < 6; k++) begin
-        if (!rst_ni) f_n[k*32 +: 32] <= '0;
-        else if (cnt_ev[k]) f_n[k*32 +: 32] <= f_n[k*32 +: 32] + 1'b1;
-      end
-    end
-    always_comb begin
-      if (f_cv) assume (({tick_i, seg_start_i, underrun_i} & f_st_q) == '0);
-      if (f_cv && rst_ni) begin
-        if (cwv_q) assert (cnt_sum == f_n[32*cw_q +: 32]);
-        if (cwv_q) assert (pw_q == pend_q[{cw_q, 1'b0} +: 2]);
-        for (int k = 0; k < 6; k++)
-          if (cnt_ev[k] && !(cwv_q && cw_q == 3'(k))) assert (pend_q[2*k +: 2] != 2'd3);
-        assert (cr_q <= 3'd5 && cw_q <= 3'd5);
-        if (cwv_q) assert (cr_q == ((cw_q == 3'd5) ? 3'd0 : cw_q + 3'd1));
-      end
-    end
-`endif
   end
 
   always_comb begin

@@ -83,7 +83,8 @@ module traj_step_gen #(
   input  logic                     rst_ni,
   // configuration (constant while samples come)
   input  logic [Axes*6-1:0]        shift_i,    // axis a: one step = 2^shift LSB
-  input  logic [PeriodWidth-1:0]   period_i,   // tick period in clocks (>= 1, latched per sample)
+  input  logic [PeriodWidth-1:0]   period_i,   // tick period in clocks (>= 1, latched per sample; held
+                                               // in the clock before sample_valid_i too: pm_q)
   input  logic [TimeWidth-1:0]     pulse_i,    // step high and low time, clocks, >= 1
   input  logic [TimeWidth-1:0]     setup_i,    // direction setup and hold, clocks
   input  logic                     enable_i,
@@ -134,6 +135,7 @@ module traj_step_gen #(
   logic                   reinit_q;   // this tick restarts from the step boundary
   logic                   tickp_q;    // the pass (or the last one) is a tick pass, else a sub pass
   logic [MW-1:0]          nm_q;       // m of the tick: 2^m sub-chords
+  logic [MW-1:0]          pm_q;       // m of period_i in the clock before (the count's compares off the take's path)
   logic [SubBits:0]       subs_q;     // sub-chords of the tick still to prepare
   logic                   alt_q_st;   // the pass has ended: one clock to nready_q
   logic                   nready_q;   // the next interval's D is ready
@@ -231,7 +233,7 @@ module traj_step_gen #(
         // last interval's (0 after reset: the first interval)
         reinit_q <= (period_i != cur_per_q);
         tickp_q  <= 1'b1;
-        subs_q   <= first_q ? '0 : (SubBits+1)'((1 << sub_bits(period_i)) - 1);
+        subs_q   <= first_q ? '0 : (SubBits+1)'((1 << pm_q) - 1);
       end else if (subgo) begin
         fetch_q  <= 1'b1;
         fax_q    <= '0;
@@ -276,13 +278,14 @@ module traj_step_gen #(
   // datapath of the pass (not reset)
   always_ff @(posedge clk_i) begin
     hold_q <= (setup_i > pulse_i) ? setup_i - pulse_i : '0;
+    pm_q   <= sub_bits(period_i);
     ntq_q  <= NW'({nper_q, 1'b0}) << nm_q;
     ntn_q  <= -(NW'({nper_q, 1'b0}) << nm_q);
     nlen_q <= nper_q >> nm_q;
     sbit_q <= sbit;
     if (take) begin
       nper_q <= period_i;
-      nm_q   <= sub_bits(period_i);
+      nm_q   <= pm_q;
       j_q    <= jst_q[0 +: JW];
     end else if (fetch_q) begin
       j_q    <= f_last_bit ? jst_q[32'(fax_inc)*JW +: JW] : j_q + 1'b1;

@@ -27,6 +27,8 @@ case $unit in
   traj_fd_tm) blast="memory_map; opt -fast; techmap; opt -fast; abc -g AND; opt_clean;"; DEPTH=${DEPTH:-16} ;;
   # traj_time_scale: the S-curve's comparisons and the product's datapath
   traj_time_scale) blast="memory_map; opt -fast; techmap; opt -fast; abc -g AND; opt_clean;"; DEPTH=${DEPTH:-12} ;;
+  # traj_status_count: its RAM as flops, so the properties can name its words
+  traj_status_count) blast="memory_map; opt -fast; techmap; opt -fast; abc -g AND; opt_clean;" ;;
   traj_link_proto) blast="memory_map; opt -fast; techmap; opt -fast; abc -g AND; opt_clean;"; DEPTH=${DEPTH:-80}
                    bounded=1 ;;
 esac

@@ -169,7 +169,7 @@ void run_seed(uint64_t seed, int ticks) {
   std::normal_distribution<double> N(0, 1);
   int checks = 0, pause = 0;
   for (int k = 0; k < ticks; ++k) {
-    if (k == ticks / 2) in.period = period2;
+    const uint32_t tick_clocks = in.period;
     // motion: pauses of 4 ticks every now and then, else a smooth velocity walk
     if (pause == 0 && uni(0, 60) == 0) pause = 6;
     for (int a = 0; a < kAxes; ++a) {
@@ -181,8 +181,11 @@ void run_seed(uint64_t seed, int ticks) {
       if (k == 0) s0[a] = s[a];
       in.sample[a] = static_cast<traj::u128>(s[a]) & traj::mask(kOut);
     }
-    for (uint32_t c = 0; c < in.period; ++c) {
+    for (uint32_t c = 0; c < tick_clocks; ++c) {
       in.sample_valid = (c == 0);
+      // the new period from the last clock of the tick before (the contract:
+      // it holds in the clock before a sample too)
+      if (k + 1 == ticks / 2 && c + 1 == tick_clocks) in.period = period2;
       ASSERT_TRUE(b.cycle(in, &why)) << "seed " << seed << " tick " << k << ": " << why;
       for (int a = 0; a < kAxes; ++a) {
         dec[a].clock(b.step(a), b.dir(a), static_cast<int>(in.pulse), static_cast<int>(in.setup));
