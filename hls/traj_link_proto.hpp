@@ -329,15 +329,13 @@ class LinkProto {
       } else if (q.end_q_ && in.fifo_level == 0 && !in.fifo_busy) {
         ended_q_ = true;
       } else {
-        halt_q_ = true;
-        ++n_under_q_;
+        halt_q_ = true;  // an underrun: counted (count_events)
       }
     }
-    if (in.seg_start) ++n_played_q_;
-    if (in.tick && playing && !halt) ++n_ticks_q_;
-    if (v.fend && !v.good) ++n_bad_q_;
-    if (v.ooo) ++n_ooo_q_;
-    if (q.rxv_q_) ++n_bytes_q_;
+    const uint8_t ev = count_events(in, q);
+    uint32_t* const counters[6] = {&n_played_q_, &n_ticks_q_, &n_under_q_, &n_bad_q_, &n_ooo_q_, &n_bytes_q_};
+    for (int k = 0; k < 6; ++k)
+      if ((ev >> k) & 1) ++*counters[k];
     if (q.cp_vld_q_ && q.cp_wa_q_ == 7) stat_cnt_q_ = cp_word;
     else if (in.tick && q.cfg_stat_q_ != 0) stat_cnt_q_ = stat_due ? q.cfg_stat_q_ : stat_cnt_q_ - 1;
     ans_pend_q_ = v.answer || (ans_pend_q_ && !tx_take_ans);
