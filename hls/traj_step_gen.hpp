@@ -81,7 +81,6 @@ class StepGen {
     const bool f_last_bit = fbit_q_ == RW - 1;
     const bool f_last_axis = fax_q_ == Axes - 1;
     const int fax_inc = f_last_axis ? 0 : fax_q_ + 1;
-    const u128 nt = ntq_q_ << F;
     const bool pulse_one = pulse == 1, setup_zero = setup == 0, hold_zero = hold_q_ == 0;
 
     // the sample bit of q's bit fbit_q of axis fax_q (0 below bit 0, sign above)
@@ -115,20 +114,27 @@ class StepGen {
       const Axis& q = ax_[a];
       Axis& n = nx[a];
       n = q;
-      if (prep_q_ && ax_q_ == a) n.nd_q = (q.nd_q >> 1) | (static_cast<u128>(ndbit) << (RW - 1));
+      if (prep_q_ && ax_q_ == a) {
+        n.nd_q = (q.nd_q >> 1) | (static_cast<u128>(ndbit) << (RW - 1));
+        n.nnz_q = ndbit || (q.nnz_q && bit_q_ != 0);  // nd_q != 0, formed with it in the pass
+      }
       // DDA
-      const u128 sum_d = wrap(q.r_q + q.d_q, RW), sum_alt = wrap(q.r_q + q.alt_q, RW);
+      // alt_q holds D -/+ T above bit F (T's low bits are 0: below, D's)
+      const u128 sum_d = wrap(q.r_q + q.d_q, RW);
+      const u128 sum_alt = wrap(q.r_q + ((q.alt_q << F) | (q.d_q & ((u128{1} << F) - 1))), RW);
       const bool up = active_q_ && q.dpos_q && !neg(sum_alt);
       const bool down = active_q_ && !q.dpos_q && neg(sum_d);
       const u128 r_next = !active_q_ ? q.r_q : ((up || down) ? sum_alt : sum_d);
-      const u128 alt_d = neg(q.nd_q) ? wrap(q.nd_q + nt, RW) : wrap(q.nd_q + (ntn_q_ << F), RW);
+      // D + T for D < 0, else D - T = D + ~T + 1, above bit F
+      const u128 alt_d = neg(q.nd_q) ? wrap((q.nd_q >> F) + ntq_q_, kNtW)
+                                     : wrap((q.nd_q >> F) + wrap(~ntq_q_, kNtW) + 1, kNtW);
       const bool restart = reinit_q_ && tickp_q_;  // a tick's first sub-chord after a period change
       if (load) {
         n.d_q = q.nd_q;
         n.alt_q = alt_d;
         n.r_q = restart ? 0 : r_next;
         n.dpos_q = !neg(q.nd_q);
-        n.dnz_q = q.nd_q != 0;
+        n.dnz_q = q.nnz_q;
       } else {
         n.r_q = r_next;
       }
@@ -192,7 +198,8 @@ class StepGen {
             break;
         }
       }
-      const bool too_fast = loaded_q_ && (neg(q.d_q) ? neg(q.alt_q) : (!neg(q.alt_q) && q.alt_q != 0));
+      const bool alt_neg = ((q.alt_q >> (kNtW - 1)) & 1) != 0;
+      const bool too_fast = loaded_q_ && (neg(q.d_q) ? alt_neg : (!alt_neg && (q.alt_q != 0 || (q.d_q & ((u128{1} << F) - 1)) != 0)));
       const bool due_ovf = ((q.due_q >> (DueWidth - 1)) & 1) != ((q.due_q >> (DueWidth - 2)) & 1);
       err_in = err_in || too_fast || due_ovf;
       if (!in.rst_n) {
@@ -324,7 +331,6 @@ class StepGen {
     cnt_q_ = cnt_d;
     hold_q_ = hold_d;
     ntq_q_ = ntq_d;
-    ntn_q_ = wrap(-ntq_d, kNtW);
     nlen_q_ = nlen_d;
     en_q_ = in.enable;
     err_q_ = err_q_ || err_in;
@@ -359,8 +365,9 @@ class StepGen {
 
   struct Axis {
     u128 nd_q = 0;  // RW bits
-    u128 d_q = 0, alt_q = 0, r_q = 0;  // RW bits, two's complement
-    bool dpos_q = false, dnz_q = false;
+    u128 d_q = 0, r_q = 0;  // RW bits, two's complement
+    u128 alt_q = 0;          // kNtW bits: D -/+ T above bit F (below, D's)
+    bool dpos_q = false, dnz_q = false, nnz_q = false;
     bool up_q = false, down_q = false;   // the DDA's steps, one clock later
     uint64_t due_q = 0;                  // DueWidth bits, two's complement
     int pg_q = kPgIdle;
@@ -387,7 +394,7 @@ class StepGen {
   int subs_q_ = 0, nm_q_ = 0;       // sub-chords left to prepare; m of the tick
   int pm_q_ = 0;                    // m of the period in the clock before (the RTL's pm_q)
   uint32_t nper_q_ = 0, cur_per_q_ = 0, nlen_q_ = 0;
-  u128 ntq_q_ = 0, ntn_q_ = 0;  // kNtW bits: T / 2^F and -T / 2^F of the next interval
+  u128 ntq_q_ = 0;  // kNtW bits: T / 2^F of the next interval
   bool active_q_ = false, loaded_q_ = false, last_q_ = false;
   uint32_t cnt_q_ = 0;
   uint32_t hold_q_ = 0;

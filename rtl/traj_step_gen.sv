@@ -144,8 +144,8 @@ module traj_step_gen #(
   // DDA (shared interval counter)
   logic                   active_q, last_q;  // last_q == (cnt_q == 1)
   logic [PeriodWidth-1:0] cnt_q;
-  logic [NW-1:0]          ntq_q, ntn_q;  // T / 2^F, -T / 2^F of the next interval (nper_q and nm_q
-                                         // hold from take to the loads)
+  logic [NW-1:0]          ntq_q;      // T / 2^F of the next interval (nper_q and nm_q hold
+                                      // from take to the loads)
   logic [PeriodWidth-1:0] nlen_q;     // its length, clocks: P / 2^m
   logic                   loaded_q;   // an interval started in the last clock (its step-rate check)
   logic [TimeWidth-1:0]   hold_q;     // setup_i - pulse_i, at least 0
@@ -155,7 +155,6 @@ module traj_step_gen #(
   logic take, load, subgo, last_bit, last_axis, f_last_bit, f_last_axis, sbit;
   logic pbit, dbit, borrow_d, ppbit, ddbit_t, borrow2_d, ddbit, add_a, add_c, sub_b, s1, c1_d, ndbit, b2_d;
   logic [Axes-1:0] err_axis;
-  logic [RW-1:0]   nt, nt_neg;        // T of the next interval, -T
   logic [AW-1:0]   fax_inc;           // the axis the read goes to after fax_q
   logic [Axes*JW-1:0] jst_q;          // axis a: its first sample bit, shift - F (a flop of shift_i)
 
@@ -167,8 +166,6 @@ module traj_step_gen #(
   assign f_last_bit  = (fbit_q == BW'(RW - 1));
   assign f_last_axis = (fax_q == AW'(Axes - 1));
   assign fax_inc     = f_last_axis ? '0 : fax_q + 1'b1;
-  assign nt          = {ntq_q, {F{1'b0}}};
-  assign nt_neg      = {ntn_q, {F{1'b0}}};
   assign pulse_one   = (pulse_i == TimeWidth'(1));
   assign setup_zero  = (setup_i == '0);
   assign hold_zero   = (hold_q == '0);
@@ -280,7 +277,6 @@ module traj_step_gen #(
     hold_q <= (setup_i > pulse_i) ? setup_i - pulse_i : '0;
     pm_q   <= sub_bits(period_i);
     ntq_q  <= NW'({nper_q, 1'b0}) << nm_q;
-    ntn_q  <= -(NW'({nper_q, 1'b0}) << nm_q);
     nlen_q <= nper_q >> nm_q;
     sbit_q <= sbit;
     if (take) begin
@@ -358,9 +354,11 @@ module traj_step_gen #(
 
   for (genvar a = 0; a < Axes; a++) begin : g_axis
     logic [RW-1:0]        nd_q;      // next interval's D (rotates during the pass)
-    logic [RW-1:0]        d_q, alt_q, r_q;  // running interval: D, D -/+ T, remainder
+    logic [RW-1:0]        d_q, r_q;  // running interval: D, remainder
+    logic [RW-1:F]        alt_q;     // its D -/+ T above bit F (T's low F bits are 0: below, D's)
     logic                 dpos_q;    // running interval's D >= 0
     logic                 dnz_q;     // running interval's D != 0
+    logic                 nnz_q;     // nd_q != 0, formed with it in the pass (no wide OR)
     logic                 up_q, down_q;  // the DDA's steps, one clock later (timing)
     logic [DueWidth-1:0]  due_q;
     pg_e                  pg_q;
@@ -373,29 +371,41 @@ module traj_step_gen #(
     assign nd_lsb[a]     = nd_q[0];
 
     always_ff @(posedge clk_i) begin
-      if (mine) nd_q <= {ndbit, nd_q[RW-1:1]};
+      if (mine) begin
+        nd_q  <= {ndbit, nd_q[RW-1:1]};
+        nnz_q <= ndbit || (nnz_q && bit_q != '0);
+      end
     end
 
     // DDA: at most one step per clock
     // (r_q's update is written as enable / clear / a 2:1 multiplexer so the
     // flop's enable and reset take the control, not the remainder's path)
-    logic [RW-1:0] sum_d, sum_alt, alt_d, r_step;
+    logic [RW-1:0] sum_d, sum_alt, r_step;
+    // (each sum one whole carry chain: split at bit F with the carry passed
+    // to the upper half, Yosys maps that carry-in as a LUT per bit)
+    /* verilator lint_off UNUSEDSIGNAL */
+    logic [NW:0]   alt_c;  // bit 0: the carry-in's place ({x, 1} + {y, c}: bit 0 carries c)
+    /* verilator lint_on UNUSEDSIGNAL */
+    logic [RW-1:F] alt_d;
     logic          up, down, steps_now;
     assign sum_d   = r_q + d_q;
-    assign sum_alt = r_q + alt_q;
+    assign sum_alt = r_q + {alt_q, d_q[F-1:0]};
     assign steps_now = active_q && (dpos_q ? !sum_alt[RW-1] : sum_d[RW-1]);  // a step this clock
     assign up      = steps_now && dpos_q;
     assign down    = steps_now && !dpos_q;
     assign r_step  = steps_now ? sum_alt : sum_d;
-    // the next interval's D + T for D < 0, D - T otherwise (-T is shared)
-    assign alt_d   = nd_q + (nd_q[RW-1] ? nt : nt_neg);
+    // the next interval's D + T for D < 0, D - T otherwise, above bit F (T's
+    // low bits are 0); -T = ~T + 1: the sign picks T or its complement and the
+    // carry-in
+    assign alt_c   = {nd_q[RW-1:F], 1'b1} + {ntq_q ^ {NW{!nd_q[RW-1]}}, !nd_q[RW-1]};
+    assign alt_d   = alt_c[NW:1];
 
     always_ff @(posedge clk_i) begin
       if (load) begin
         d_q    <= nd_q;
         alt_q  <= alt_d;
         dpos_q <= !nd_q[RW-1];
-        dnz_q  <= (nd_q != '0);
+        dnz_q  <= nnz_q;
       end
       if (load && reinit_q && tickp_q) r_q <= '0;  // a tick's first sub-chord after a period change
       else if (active_q)    r_q <= r_step;
@@ -479,7 +489,7 @@ module traj_step_gen #(
     // interval starts), due overflow (flagged at
     // |due| >= 2^(DueWidth-2), before it can wrap: it moves by <= 2 per clock)
     logic too_fast;
-    assign too_fast    = loaded_q && (d_q[RW-1] ? alt_q[RW-1] : (!alt_q[RW-1] && alt_q != '0));
+    assign too_fast    = loaded_q && (d_q[RW-1] ? alt_q[RW-1] : (!alt_q[RW-1] && {alt_q, d_q[F-1:0]} != '0));
     assign err_axis[a] = too_fast || (due_q[DueWidth-1] != due_q[DueWidth-2]);
 
     assign step_o[a] = step_q;
