@@ -266,7 +266,7 @@ class LinkProto {
     }
 
     // Link, playback, configuration, counters.
-    const bool stat_due = in.tick && cfg_stat_q_ != 0 && stat_cnt_q_ == 1;
+    const bool stat_due = in.tick && cfg_stat_q_ != 0 && stat_cnt_q_ == cfg_stat_q_;
     const bool tx_take_ans = tx_state_q_ == kSIdle && ans_pend_q_;
     const bool tx_take_stat = tx_state_q_ == kSIdle && !ans_pend_q_ && stat_pend_q_;
     const bool playing = playing_q_, halt = halt_q_, stop = stop_q_;
@@ -336,8 +336,8 @@ class LinkProto {
     uint32_t* const counters[6] = {&n_played_q_, &n_ticks_q_, &n_under_q_, &n_bad_q_, &n_ooo_q_, &n_bytes_q_};
     for (int k = 0; k < 6; ++k)
       if ((ev >> k) & 1) ++*counters[k];
-    if (q.cp_vld_q_ && q.cp_wa_q_ == 7) stat_cnt_q_ = cp_word;
-    else if (in.tick && q.cfg_stat_q_ != 0) stat_cnt_q_ = stat_due ? q.cfg_stat_q_ : stat_cnt_q_ - 1;
+    if ((q.cp_vld_q_ && q.cp_wa_q_ == 7) || stat_due) stat_cnt_q_ = 1;
+    else if (in.tick && q.cfg_stat_q_ != 0) ++stat_cnt_q_;
     ans_pend_q_ = v.answer || (ans_pend_q_ && !tx_take_ans);
     if (v.answer) ans_code_q_ = v.code;
     stat_pend_q_ = v.want_stat || stat_due || (stat_pend_q_ && !tx_take_stat);

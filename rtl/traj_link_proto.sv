@@ -570,9 +570,12 @@ module traj_link_proto #(
     /* verilator lint_on UNUSEDSIGNAL */
   end
 
-  // stat_cnt_q: ticks left to the next STATUS (0 while the period is 0):
-  // loaded with the period itself, so that one decrementer is all it needs
-  assign stat_due = tick_i && (cfg_stat_q != '0) && (stat_cnt_q == 32'd1);
+  // stat_cnt_q: the tick of the period this one is (1 after CONFIG and after
+  // each periodic STATUS; counted only while the period is not 0); the
+  // STATUS is due at the tick that reaches the period: an incrementer and a
+  // compare of two registers, with the loads of 1 a flop's set/reset (a
+  // countdown needs a multiplexer per bit to load the period)
+  assign stat_due = tick_i && (cfg_stat_q != '0) && (stat_cnt_q == cfg_stat_q);
 
   always_ff @(posedge clk_i) begin
     if (!rst_ni) begin
@@ -640,8 +643,8 @@ module traj_link_proto #(
         end
       end
       // status period in ticks
-      if (cp_vld_q && cp_wa_q == 6'd7) stat_cnt_q <= cp_word;
-      else if (tick_i && cfg_stat_q != '0) stat_cnt_q <= stat_due ? cfg_stat_q : stat_cnt_q - 1'b1;
+      if ((cp_vld_q && cp_wa_q == 6'd7) || stat_due) stat_cnt_q <= 32'd1;
+      else if (tick_i && cfg_stat_q != '0) stat_cnt_q <= stat_cnt_q + 1'b1;
       // answers
       ans_pend_q  <= v_answer_q || (ans_pend_q && !tx_take_ans);
       if (v_answer_q) ans_code_q <= v_code_q;
