@@ -5,7 +5,8 @@
 // `period` clocks while `run` is high (the first one `period` clocks after run
 // rises), or, with period == 0, one strobe per rising edge of the external
 // tick after a 2-flop synchroniser. period_o: the period in use (for the
-// external tick, the clocks between its last two rising edges).
+// external tick, the clocks between its last two rising edges, ExtWidth bits,
+// saturating).
 #pragma once
 #include <cstdint>
 
@@ -13,11 +14,13 @@
 
 namespace traj {
 
-template <int PeriodWidth = 32>
+template <int PeriodWidth = 32, int ExtWidth = PeriodWidth>
 class TickGen {
  public:
   static_assert(PeriodWidth >= 2 && PeriodWidth <= 32, "PeriodWidth must be 2..32");
+  static_assert(ExtWidth >= 2 && ExtWidth <= PeriodWidth, "ExtWidth must be 2..PeriodWidth");
   static constexpr uint32_t kMask = static_cast<uint32_t>(mask(PeriodWidth));
+  static constexpr uint32_t kExtMask = static_cast<uint32_t>(mask(ExtWidth));
 
   struct In {
     bool rst_n = true;
@@ -50,7 +53,7 @@ class TickGen {
       ext_cnt_d = 1;
       ext_seen_d = true;
       if (ext_seen_q_) ext_per_d = ext_cnt_q_;
-    } else if (ext_cnt_q_ != kMask) {
+    } else if (ext_cnt_q_ != kExtMask) {
       ext_cnt_d = ext_cnt_q_ + 1;
     }
 

@@ -356,7 +356,9 @@ module traj_board #(
     assign ts_word_addr  = '0;
   end
 
-  traj_tick_gen #(.PeriodWidth(32)) u_tick (
+  // the step generator takes the period clamped to 2^StepPeriodWidth - 1: an
+  // external period measured to one bit more (saturating) clamps the same
+  traj_tick_gen #(.PeriodWidth(32), .ExtWidth(StepPeriodWidth + 1)) u_tick (
     .clk_i, .rst_ni, .run_i(run), .period_i(tick_period), .tick_ext_i,
     .tick_o(tick), .period_o(period_used)
   );

@@ -12,7 +12,9 @@
 //     edge while run_i is high, whatever the pulse width.
 //   * period_o is the tick period in clocks: period_i, or for the external
 //     tick the clocks between its last two rising edges (0 until two edges
-//     have been seen since reset), for the step generator.
+//     have been seen since reset; ExtWidth bits, at most 2^ExtWidth - 1: a
+//     longer or stopped external tick reads as that), for the step
+//     generator.
 // Latency: tick_ext_i high before clock edge c -> tick_o high in the cycle
 // after edge c+2 (2 synchroniser flops, the output flop; the edge detector's
 // flop runs beside them).
@@ -20,7 +22,8 @@
 `include "traj_check.svh"
 
 module traj_tick_gen #(
-  parameter int PeriodWidth = 32  // width of the period input and counters, 2..32
+  parameter int PeriodWidth = 32,          // width of the period input and counter, 2..32
+  parameter int ExtWidth    = PeriodWidth  // width of the external period's measurement, 2..PeriodWidth
 ) (
   input  logic                   clk_i,
   input  logic                   rst_ni,
@@ -33,11 +36,13 @@ module traj_tick_gen #(
 
   `TRAJ_PARAM_CHECK(g_bad_width, PeriodWidth >= 2 && PeriodWidth <= 32,
                     "traj_tick_gen: PeriodWidth must be 2..32")
+  `TRAJ_PARAM_CHECK(g_bad_ext, ExtWidth >= 2 && ExtWidth <= PeriodWidth,
+                    "traj_tick_gen: ExtWidth must be 2..PeriodWidth")
 
   logic                   ext_meta_q, ext_sync_q, ext_prev_q;  // synchroniser, edge detector
   logic [PeriodWidth-1:0] cnt_q;       // internal: clocks to the next tick (reloaded with period_i: one decrementer)
-  logic [PeriodWidth-1:0] ext_cnt_q;   // external: clocks since the last edge
-  logic [PeriodWidth-1:0] ext_per_q;   // external: clocks between the last two edges
+  logic [ExtWidth-1:0]    ext_cnt_q;   // external: clocks since the last edge (saturating)
+  logic [ExtWidth-1:0]    ext_per_q;   // external: clocks between the last two edges
   logic                   ext_seen_q;  // an external edge has been seen since reset
   logic                   tick_q;
 
@@ -64,7 +69,7 @@ module traj_tick_gen #(
       if (!run_i || cnt_q == PeriodWidth'(1)) cnt_q <= period_i;
       else                       cnt_q <= cnt_q - 1'b1;
       if (ext_rise) begin
-        ext_cnt_q  <= PeriodWidth'(1);
+        ext_cnt_q  <= ExtWidth'(1);
         ext_seen_q <= 1'b1;
         if (ext_seen_q) ext_per_q <= ext_cnt_q;
       end else if (ext_cnt_q != '1) begin
@@ -96,7 +101,7 @@ module traj_tick_gen #(
 `endif
 
   assign tick_o   = tick_q;
-  assign period_o = internal ? period_i : ext_per_q;
+  assign period_o = internal ? period_i : PeriodWidth'(ext_per_q);
 
 endmodule
 
