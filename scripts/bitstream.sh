@@ -36,13 +36,8 @@ mkdir -p "$out" "$dist"
 # last "<cell>: used/avail" figure of a nextpnr log, "used" only
 cell_count() { { grep -E "$1:" "$2" || true; } | tail -1 | sed -E "s/.*$1: *([0-9]+)\/.*/\1/"; }
 
-# "Name=Value ..." -> "chparam -set Name Value ... top;"
-chparam=""
-for p in ${PARAMS:-}; do
-  [[ $p == *=* ]] || { echo "bitstream.sh: parameter '$p' is not Name=Value" >&2; exit 1; }
-  chparam+=" -set ${p%%=*} ${p#*=}"
-done
-[ -z "$chparam" ] || chparam="chparam$chparam $top;"
+# shellcheck disable=SC2086  # PARAMS is a list of Name=Value words
+chparam=$("$root/scripts/chparam.sh" "$top" ${PARAMS:-})
 
 files=$("$root/scripts/unit_files.sh" "$top")
 json=$out/$top.json

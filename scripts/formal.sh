@@ -34,14 +34,12 @@ case $unit in
 esac
 DEPTH=${DEPTH:-24}
 files=$("$root/scripts/unit_files.sh" "$unit")
-sets="" tag=""
-for p in "$@"; do
-  [[ $p == *=* ]] || { echo "formal.sh: parameter '$p' is not Name=Value" >&2; exit 1; }
-  sets+=" -set ${p%%=*} ${p#*=}"; tag+="_${p#*=}"
-done
+chparam=$("$root/scripts/chparam.sh" "$unit" "$@")
+tag=""
+for p in "$@"; do tag+="_${p#*=}"; done
 mkdir -p "$work"
 smt="$work/$unit$tag.smt2"
-yosys -q -p "read_verilog -sv -formal -I$root/rtl $files; ${sets:+chparam$sets $unit;} \
+yosys -q -p "read_verilog -sv -formal -I$root/rtl $files; $chparam \
   prep -top $unit; $blast async2sync; dffunmap; write_smt2 -wires $smt" 2>&1 | grep -v "Replacing memory" || true
 test -s "$smt"
 echo "bounded model check, $DEPTH steps from reset:"

@@ -46,26 +46,15 @@ board_pcf() {
   esac
 }
 
-# "Name=Value ..." -> "chparam -set Name Value ... top;"
-chparam_cmd() {
-  local top=$1; shift
-  [ $# -gt 0 ] || return 0
-  local sets="" p
-  for p in "$@"; do
-    [[ $p == *=* ]] || { echo "synth.sh: parameter '$p' is not Name=Value" >&2; exit 1; }
-    sets+=" -set ${p%%=*} ${p#*=}"
-  done
-  echo "chparam$sets $top;"
-}
-
 # last "<cell>: used/avail" figure of a nextpnr log, "used" only
 cell_count() { grep -E "$1: *[0-9]+/" "$2" | tail -1 | sed -E "s/.*$1: *([0-9]+)\/.*/\1/"; }
 
 files=$("$root/scripts/unit_files.sh" "$unit")
+chparam=$("$root/scripts/chparam.sh" "$unit" "$@")
 pcf=$(board_pcf "$unit" "$device")
 mkdir -p "$out"
 json="$out/$unit.json"
-if ! yosys -q -l "$out/yosys.log" -p "read_verilog -sv -I$root/rtl $files; $(chparam_cmd "$unit" "$@") synth_ice40 -top $unit -json $json" \
+if ! yosys -q -l "$out/yosys.log" -p "read_verilog -sv -I$root/rtl $files; $chparam synth_ice40 -top $unit -json $json" \
      >/dev/null 2>&1; then
   echo "synth.sh: yosys failed, see $out/yosys.log" >&2; exit 1
 fi

@@ -19,12 +19,8 @@ case $1 in
   hx8k)       top=traj_hx8k_top       opts="" ;;
   *) echo "unit_stats.sh: unknown board '$1' (icebreaker or hx8k)" >&2; exit 1 ;;
 esac
-chparam=""
-for p in ${PARAMS:-}; do
-  [[ $p == *=* ]] || { echo "unit_stats.sh: parameter '$p' is not Name=Value" >&2; exit 1; }
-  chparam+=" -set ${p%%=*} ${p#*=}"
-done
-[ -z "$chparam" ] || chparam="chparam$chparam $top;"
+# shellcheck disable=SC2086  # PARAMS is a list of Name=Value words
+chparam=$("$root/scripts/chparam.sh" "$top" ${PARAMS:-})
 files=$("$root/scripts/unit_files.sh" "$top")
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
