@@ -52,6 +52,9 @@
 //   that follows); the board tells the link the end of a STOP (S at 0, at a
 //   servo tick) by the same underrun input.
 //   TimeScale = 0: no unit, hold_i unused, the link refuses time scaling.
+// * UseDsp = 1 (a device with SB_MAC16 blocks: the UP5K): the step
+//   generator's DDA sums in 2 Axes of them and two of the time-scale unit's
+//   adders in two more (traj_add): the same sums in fewer logic cells.
 `default_nettype none
 `include "traj_check.svh"
 
@@ -69,6 +72,7 @@ module traj_board #(
   parameter int TimeScale     = 0,     // 1: the time-scale unit (below)
   parameter int ScaleWidth    = 20,    // SW of the time-scale unit (S, m, s_max)
   parameter int StatusRam     = 0,     // STATUS in block RAM: 1 the link's copy of the samples, 2 also the board's, 3 also the link's counters
+  parameter int UseDsp        = 0,     // 1: adders in SB_MAC16 blocks (iCE40 UP5K: traj_step_gen, traj_time_scale)
   // derived, do not override
   parameter int OutWidth      = Width - GuardBits
 ) (
@@ -100,6 +104,7 @@ module traj_board #(
                     "traj_board: TimeScale = 1 reads the samples through traj_fd_tm's sample RAM port: it needs FdTimeMux = 1 and GuardBits a multiple of ChunkWidth")
   `TRAJ_PARAM_CHECK(g_bad_status_ram, StatusRam >= 0 && StatusRam <= 3,
                     "traj_board: StatusRam must be 0, 1, 2 or 3")
+  `TRAJ_PARAM_CHECK(g_bad_dsp, UseDsp == 0 || UseDsp == 1, "traj_board: UseDsp must be 0 or 1")
   `TRAJ_PARAM_CHECK(g_bad_min_tick, MinTickPeriod >= Axes * (StepPeriodWidth + StepFracBits + StepSubBits + 3) + 3,
                     "traj_board: MinTickPeriod must cover the step generator's preparation")
 
@@ -278,7 +283,7 @@ module traj_board #(
     assign ts_tick  = tick && scale_on;
     assign ts_held  = scale_on && (link_hold || hold_i || link_stop);
 
-    traj_time_scale #(.Axes(Axes), .OutWidth(OutWidth), .SW(ScaleWidth), .WordWidth(ChunkWidth)) u_scale (
+    traj_time_scale #(.Axes(Axes), .OutWidth(OutWidth), .SW(ScaleWidth), .WordWidth(ChunkWidth), .UseDsp(UseDsp)) u_scale (
       .clk_i, .rst_ni, .tick_i(ts_tick),
       .m_i(sc_m[ScaleWidth-1:0]), .s_max_i(sc_smax[ScaleWidth-1:0]), .override_i(sc_ovr[ScaleWidth-1:0]),
       .shift_i(sc_shift), .hold_i(ts_held), .auto_resume_i(sc_auto || resume_q), .end_i(link_end),
@@ -372,7 +377,7 @@ module traj_board #(
 
   traj_step_gen #(
     .Axes(Axes), .OutWidth(OutWidth), .FracBits(StepFracBits), .PeriodWidth(StepPeriodWidth),
-    .DueWidth(8), .TimeWidth(16), .SubBits(StepSubBits)
+    .DueWidth(8), .TimeWidth(16), .SubBits(StepSubBits), .UseDsp(UseDsp)
   ) u_step (
     .clk_i, .rst_ni,
     .shift_i(step_shift), .period_i(step_period_q), .pulse_i(pulse), .setup_i(setup),

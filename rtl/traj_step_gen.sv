@@ -67,6 +67,10 @@
 // step per clock (|dY| > T);
 // |due| reached 2^(DueWidth-2) (the pulses cannot keep up with the samples:
 // lower pulse_i or the speed).
+//
+// UseDsp = 1 computes the DDA's two sums of each axis (r + D, r + D -/+ T)
+// in iCE40 SB_MAC16 blocks (traj_add): the same sums on every clock, with
+// their low 32 bits off the logic cells; 2 Axes blocks (the UP5K has 8).
 `default_nettype none
 `include "traj_check.svh"
 
@@ -77,7 +81,8 @@ module traj_step_gen #(
   parameter int PeriodWidth = 18,  // tick period width (clocks), 8..32
   parameter int DueWidth    = 8,   // steps waiting for their pulse, 4..32
   parameter int TimeWidth   = 16,  // pulse width and setup counters, 2..16
-  parameter int SubBits     = 3    // up to 2^SubBits quadratic sub-chords per tick, 0..4
+  parameter int SubBits     = 3,   // up to 2^SubBits quadratic sub-chords per tick, 0..4
+  parameter int UseDsp      = 0    // 1: the DDA's two sums of each axis in SB_MAC16 blocks (iCE40 UP5K: 2 Axes of its 8)
 ) (
   input  logic                     clk_i,
   input  logic                     rst_ni,
@@ -116,6 +121,7 @@ module traj_step_gen #(
   `TRAJ_PARAM_CHECK(g_bad_due, DueWidth >= 4 && DueWidth <= 32, "traj_step_gen: DueWidth must be 4..32")
   `TRAJ_PARAM_CHECK(g_bad_time, TimeWidth >= 2 && TimeWidth <= 16, "traj_step_gen: TimeWidth must be 2..16")
   `TRAJ_PARAM_CHECK(g_bad_sub, SubBits >= 0 && SubBits <= 4, "traj_step_gen: SubBits must be 0..4")
+  `TRAJ_PARAM_CHECK(g_bad_dsp, UseDsp == 0 || UseDsp == 1, "traj_step_gen: UseDsp must be 0 or 1")
 
   // ---------------------------------------------------------------------
   // Serial preparation (shared by all axes).
@@ -388,9 +394,11 @@ module traj_step_gen #(
     logic          up, down, steps_now;
     // each sum one whole carry chain (split at bit F, the low half's carry-out
     // into the upper halves, Yosys mapped those upper halves' carries as a LUT
-    // per bit: 25 MHz on the HX8K)
-    assign sum_d   = r_q + d_q;
-    assign sum_alt = r_q + {alt_q, d_q[F-1:0]};
+    // per bit: 25 MHz on the HX8K); in DSP blocks (UseDsp) their low 32 bits
+    // take no logic cells (traj_add)
+    traj_add #(.Width(RW), .UseDsp(UseDsp)) u_sum_d (.a_i(r_q), .b_i(d_q), .ci_i(1'b0), .sum_o(sum_d));
+    traj_add #(.Width(RW), .UseDsp(UseDsp)) u_sum_alt (.a_i(r_q), .b_i({alt_q, d_q[F-1:0]}), .ci_i(1'b0),
+                                             .sum_o(sum_alt));
     assign steps_now = active_q && (dpos_q ? !sum_alt[RW-1] : sum_d[RW-1]);  // a step this clock
     assign up      = steps_now && dpos_q;
     assign down    = steps_now && !dpos_q;

@@ -64,6 +64,7 @@ module traj_time_scale #(
   parameter int OutWidth  = 48,  // sample width, 8..64
   parameter int SW        = 16,  // width of S (s = S 2^-sb), 4..24
   parameter int WordWidth = 16,  // the engine's sample RAM word: 8, 16 or 32, divides OutWidth
+  parameter int UseDsp    = 0,   // 1: two adders (sum + S, the product's) in SB_MAC16 blocks (iCE40 UP5K; traj_add)
   // derived, do not override
   parameter int EngAddrWidth = ($clog2(Axes) + $clog2(OutWidth / WordWidth) > 0) ?
                                $clog2(Axes) + $clog2(OutWidth / WordWidth) : 1
@@ -98,6 +99,7 @@ module traj_time_scale #(
   `TRAJ_PARAM_CHECK(g_bad_axes, Axes >= 1 && Axes <= 8, "traj_time_scale: Axes must be 1..8")
   `TRAJ_PARAM_CHECK(g_bad_out, OutWidth >= 8 && OutWidth <= 64, "traj_time_scale: OutWidth must be 8..64")
   `TRAJ_PARAM_CHECK(g_bad_sw, SW >= 4 && SW <= 24, "traj_time_scale: SW must be 4..24")
+  `TRAJ_PARAM_CHECK(g_bad_dsp, UseDsp == 0 || UseDsp == 1, "traj_time_scale: UseDsp must be 0 or 1")
   `TRAJ_PARAM_CHECK(g_bad_word, (WordWidth == 8 || WordWidth == 16 || WordWidth == 32) && OutWidth % WordWidth == 0,
                     "traj_time_scale: WordWidth must be 8, 16 or 32 and divide OutWidth")
   `TRAJ_PARAM_CHECK(g_bad_eaddr, EngAddrWidth == (($clog2(Axes) + $clog2(OutWidth / WordWidth) > 0) ?
@@ -214,7 +216,7 @@ module traj_time_scale #(
   // the stop's travel + S (S1), or S alone (the move's X: the commit, the
   // apply pass; sum is 0 there, after the plan or a pass)
   logic [SumW-1:0] sadd;
-  assign sadd = sum_q + SumW'(ws_q);
+  traj_add #(.Width(SumW), .UseDsp(UseDsp)) u_sadd (.a_i(sum_q), .b_i(SumW'(ws_q)), .ci_i(1'b0), .sum_o(sadd));
 
   // serial pass: the bits of X 2^sh + frac (l) and (av + cin) 2^32 (r)
   logic            xb, in_f, in_a, fb, ab, pl, pr, apply, na;
@@ -245,7 +247,9 @@ module traj_time_scale #(
   // carry in (one adder)
   logic            msub;
   assign msub = dq_q && sg_q;
-  assign mt   = {acc_q[32], acc_q} + ({2'b00, dq_q ? frac_q : 32'd0} ^ {34{msub}}) + 34'(msub);
+  traj_add #(.Width(34), .CarryIn(1), .UseDsp(UseDsp)) u_mt (
+    .a_i({acc_q[32], acc_q}), .b_i({2'b00, dq_q ? frac_q : 32'd0} ^ {34{msub}}), .ci_i(msub), .sum_o(mt)
+  );
   assign pb   = mt[0];
   logic            ob;
   assign ob = y0b_q ^ pb ^ oc_q;

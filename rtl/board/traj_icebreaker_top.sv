@@ -14,7 +14,8 @@
 // or tie the pin low).
 // The portable logic is traj_board (host link, segment FIFO in SPRAM, the
 // time-multiplexed FD engine traj_fd_tm in the main job's format, tick and
-// step generators). TimeScale = 1 adds the time-scale unit (feed override,
+// step generators; the step generator's DDA sums in 6 of the UP5K's 8 DSP
+// blocks, with TimeScale = 1 two of the unit's adders in the other 2). TimeScale = 1 adds the time-scale unit (feed override,
 // feed hold, a stop on the path when data runs out); that build needs more
 // logic cells than the UP5K has (rtl/README.md, "Boards and bitstreams"),
 // so the default is 0: no time scaling (the link refuses it), BTN1 unused.
@@ -90,7 +91,8 @@ module traj_icebreaker_top #(
 
   traj_board #(
     .ClkHz(ClkHz), .Baud(Baud), .Axes(3), .Degree(5), .Width(96), .ChunkWidth(16), .GuardBits(48),
-    .FifoDepth(16384), .FdTimeMux(1'b1), .TimeScale(TimeScale), .ScaleWidth(20), .StatusRam(3)
+    .FifoDepth(16384), .FdTimeMux(1'b1), .TimeScale(TimeScale), .ScaleWidth(20), .StatusRam(3),
+    .UseDsp(1)
   ) u_board (
     .clk_i(clk), .rst_ni(rst_n), .rx_i(rx_q[1]), .tx_o,
     .tick_ext_i(tick_pin),

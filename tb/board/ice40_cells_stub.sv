@@ -57,6 +57,29 @@ module SB_IO #(
   output wire D_IN_0
 );
 endmodule
+
+// (rtl/traj_add.sv, UseDsp = 1: the iCEBreaker's step generator)
+module SB_MAC16 #(
+  parameter [1:0] TOPOUTPUT_SELECT = 2'd0,
+  parameter [1:0] TOPADDSUB_LOWERINPUT = 2'd0,
+  parameter [0:0] TOPADDSUB_UPPERINPUT = 1'b0,
+  parameter [1:0] TOPADDSUB_CARRYSELECT = 2'd0,
+  parameter [1:0] BOTOUTPUT_SELECT = 2'd0,
+  parameter [1:0] BOTADDSUB_LOWERINPUT = 2'd0,
+  parameter [0:0] BOTADDSUB_UPPERINPUT = 1'b0,
+  parameter [1:0] BOTADDSUB_CARRYSELECT = 2'd0
+) (
+  input  wire        CLK, CE,
+  input  wire [15:0] C, A, B, D,
+  input  wire        AHOLD, BHOLD, CHOLD, DHOLD,
+  input  wire        IRSTTOP, IRSTBOT, ORSTTOP, ORSTBOT,
+  input  wire        OLOADTOP, OLOADBOT, ADDSUBTOP, ADDSUBBOT,
+  input  wire        OHOLDTOP, OHOLDBOT,
+  input  wire        CI, ACCUMCI, SIGNEXTIN,
+  output wire [31:0] O,
+  output wire        CO, ACCUMCO, SIGNEXTOUT
+);
+endmodule
 /* verilator lint_on MULTITOP */
 /* verilator lint_on DECLFILENAME */
 /* verilator lint_on UNDRIVEN */

@@ -24,6 +24,25 @@ find_program(YOSYS_BIN yosys REQUIRED)
 find_program(SMTBMC_BIN yosys-smtbmc REQUIRED)
 
 set(TRAJ_RTL_UNITS_FILE ${TRAJ_RTL_DIR}/units.txt)
+# Yosys' simulation model of the iCE40 SB_MAC16, cut from its cell library at
+# configure time, for the co-simulations of traj_add's DSP form (UseDsp = 1)
+find_file(TRAJ_ICE40_CELLS_SIM cells_sim.v PATHS /usr/share/yosys/ice40 /usr/local/share/yosys/ice40
+  NO_DEFAULT_PATH REQUIRED)
+file(READ ${TRAJ_ICE40_CELLS_SIM} cells_sim)
+string(FIND "${cells_sim}" "module SB_MAC16" mac_at)
+if(mac_at LESS 0)
+  message(FATAL_ERROR "no SB_MAC16 in ${TRAJ_ICE40_CELLS_SIM}")
+endif()
+string(SUBSTRING "${cells_sim}" ${mac_at} -1 mac_model)
+string(FIND "${mac_model}" "endmodule" mac_end)
+math(EXPR mac_end "${mac_end} + 9")
+string(SUBSTRING "${mac_model}" 0 ${mac_end} mac_model)
+set(TRAJ_SB_MAC16_SIM ${CMAKE_CURRENT_BINARY_DIR}/sb_mac16_sim.v)
+file(WRITE ${TRAJ_SB_MAC16_SIM} "// SB_MAC16 from ${TRAJ_ICE40_CELLS_SIM} (Yosys, ISC licence)\n"
+  "/* verilator lint_off WIDTH */\n/* verilator lint_off DECLFILENAME */\n/* verilator lint_off UNUSEDSIGNAL */\n"
+  "/* verilator lint_off UNUSEDPARAM */\n${mac_model}\n")
+unset(cells_sim)
+unset(mac_model)
 set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${TRAJ_RTL_UNITS_FILE})
 
 # files of <unit> from rtl/units.txt, relative to rtl/
