@@ -42,9 +42,10 @@
 //   multiple of ChunkWidth), and the step generator and STATUS take its
 //   interpolated output, which it presents at the next servo tick (a fixed
 //   latency of one servo tick and Axes*OutWidth + 2 clocks). Its count of
-//   engine ticks ahead (avail) is kept here: + K of each record stored, moved
-//   from the FIFO's share to the engine's as a segment's header leaves the
-//   FIFO, - 1 per real engine sample; RESET clears the FIFO's share. hold_i
+//   engine ticks ahead (avail) is kept here (traj_ahead): + K of each record
+//   stored (within 2 clocks), moved from the FIFO's share to the engine's as
+//   a segment's header leaves the FIFO, - 1 per real engine sample; RESET
+//   clears the FIFO's share. hold_i
 //   (a button, synchronised by the top), FEED's hold and STOP hold; RESUME
 //   lets a starved hold resume as auto-resume does. With the unit on, the
 //   engine underruns only at the job's end (the unit ticks it once past the
@@ -230,8 +231,6 @@ module traj_board #(
     localparam int WordBits = $clog2(SegWords + 1);
     logic [WordBits-1:0] word_q;      // words of the segment leaving the FIFO so far
     logic [31:0]         hdr_k;       // its K, as its header words pass
-    logic [31:0]         fifo_k_q;    // K of the segments stored, not yet left the FIFO
-    logic [31:0]         ahead_q;     // fifo_k_q + the samples of the segments in the engine not yet played
     logic                hdr_done, real_sample;
     if (ChunkWidth >= 32) begin : g_hdr1
       assign hdr_k = seg_tdata[31:0];
@@ -244,21 +243,16 @@ module traj_board #(
     end
     assign hdr_done    = seg_tvalid && seg_tready && word_q == WordBits'(HdrWords - 1);
     assign real_sample = sample_valid && !underrun;
-    // ahead_q is kept whole (a flop on the unit's avail_i, no adder after
-    // it): a header moving K from the FIFO's share to the engine's leaves the
-    // sum as it is
     always_ff @(posedge clk_i) begin
-      if (!rst_ni) begin
-        word_q   <= '0;
-        fifo_k_q <= '0;
-        ahead_q  <= '0;
-      end else begin
-        if (seg_tvalid && seg_tready) word_q <= (word_q == WordBits'(SegWords - 1)) ? '0 : word_q + 1'b1;
-        fifo_k_q <= (cleared ? 32'h0 : fifo_k_q) + (stored ? stored_k : 32'h0) - (hdr_done ? hdr_k : 32'h0);
-        ahead_q  <= ahead_q - (cleared ? fifo_k_q : 32'h0) + (stored ? stored_k : 32'h0) - {31'h0, real_sample};
-      end
+      if (!rst_ni) word_q <= '0;
+      else if (seg_tvalid && seg_tready) word_q <= (word_q == WordBits'(SegWords - 1)) ? '0 : word_q + 1'b1;
     end
-    assign ahead = ahead_q;
+    // kept whole (a flop on the unit's avail_i, no adder after it); a store
+    // is counted within 2 clocks (traj_ahead)
+    traj_ahead #(.Width(32)) u_ahead (
+      .clk_i, .rst_ni, .stored_i(stored), .stored_k_i(stored_k), .cleared_i(cleared),
+      .hdr_done_i(hdr_done), .hdr_k_i(hdr_k), .real_i(real_sample), .ahead_o(ahead)
+    );
 
     logic             scale_on, done_q, resume_q, ts_valid, ts_tick, ts_starved_q;
     // the unit's busy and engine strobe: the simulated board measures the
