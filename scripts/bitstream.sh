@@ -47,7 +47,7 @@ if ! yosys -q -l "$out/yosys.log" -p "read_verilog -sv -I$root/rtl $files; $chpa
 fi
 
 echo "$board: $top on $device-$package, core clock $mhz MHz, pins $(basename "$pcf")${PARAMS:+, $PARAMS}"
-printf '%-5s %6s %5s %6s %10s\n' seed LCs BRAM SPRAM Fmax_MHz
+printf '%-5s %6s %5s %6s %4s %10s\n' seed LCs BRAM SPRAM DSP Fmax_MHz
 status=0 shipped=""
 for seed in $SEEDS; do
   log=$out/nextpnr_s$seed.log
@@ -59,9 +59,10 @@ for seed in $SEEDS; do
     status=1; continue
   fi
   lcs=$(cell_count ICESTORM_LC "$log"); bram=$(cell_count ICESTORM_RAM "$log"); spram=$(cell_count ICESTORM_SPRAM "$log")
+  dsp=$(cell_count ICESTORM_DSP "$log")
   # the core clock is the PLL output (the 12 MHz pin only feeds the PLL)
   fmax=$({ grep -E "Max frequency for clock 'clk'" "$log" || true; } | tail -1 | sed -E 's/.*: ([0-9.]+) MHz.*/\1/')
-  printf '%-5s %6s %5s %6s %10s\n' "$seed" "$lcs" "${bram:-0}" "${spram:-0}" "${fmax:-?}"
+  printf '%-5s %6s %5s %6s %4s %10s\n' "$seed" "$lcs" "${bram:-0}" "${spram:-0}" "${dsp:-0}" "${fmax:-?}"
   if [ -z "$fmax" ] || awk -v f="$fmax" -v t=$mhz 'BEGIN { exit !(f < t) }'; then
     echo "  seed $seed: Fmax ${fmax:-?} MHz below the core clock $mhz MHz" >&2
     [ $status -ne 0 ] || status=2

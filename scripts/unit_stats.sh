@@ -7,9 +7,10 @@
 #   env:   PARAMS  parameters of the top, "Name=Value ..." (e.g. "TimeScale=1")
 #
 # Prints, per module of `synth_ice40 -noflatten` (the options bitstream.sh
-# uses for the board), SB_LUT4 / SB_CARRY / flip-flops / SB_RAM40_4K, then the
-# same for the flattened design (what placement starts from: fewer, since
-# flattening drops what a unit computes that nothing reads). A logic cell is
+# uses for the board), SB_LUT4 / SB_CARRY / flip-flops / SB_RAM40_4K /
+# SB_MAC16, then the same for the flattened design (what placement starts
+# from: fewer, since flattening drops what a unit computes that nothing
+# reads). A logic cell is
 # a LUT and a flip-flop; scripts/bitstream.sh gives the placed count.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -25,12 +26,13 @@ files=$("$root/scripts/unit_files.sh" "$top")
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
-# per module of a Yosys `stat` report: name, LUTs, carries, flip-flops, block RAMs
+# per module of a Yosys `stat` report: name, LUTs, carries, flip-flops, block RAMs, DSPs
 table() {
   awk '/^=== /{m=$2; sub(/^\$paramod[$\\]*[0-9a-f]*\\*/, "", m); sub(/\\.*/, "", m); mods[m]=1}
        /^ +SB_LUT4 /{l[m]+=$2} /^ +SB_CARRY /{c[m]+=$2} /^ +SB_DFF/{f[m]+=$2} /^ +SB_RAM40_4K /{r[m]+=$2}
-       END{printf "%-24s %7s %7s %7s %5s\n", "module", "LUT4", "CARRY", "FF", "BRAM"
-           for (k in mods) printf "%-24s %7d %7d %7d %5d\n", k, l[k], c[k], f[k], r[k]}' "$1"
+       /^ +SB_MAC16 /{d[m]+=$2}
+       END{printf "%-24s %7s %7s %7s %5s %4s\n", "module", "LUT4", "CARRY", "FF", "BRAM", "DSP"
+           for (k in mods) printf "%-24s %7d %7d %7d %5d %4d\n", k, l[k], c[k], f[k], r[k], d[k]}' "$1"
 }
 
 for mode in noflatten flat; do
@@ -43,5 +45,5 @@ done
 echo "$top${PARAMS:+ ($PARAMS)}, synth_ice40 $opts -noflatten, per module (a unit used twice is counted once):"
 table "$work/noflatten.txt" | { read -r h; echo "$h"; sort; }
 echo "flattened (what placement starts from):"
-awk '/^ +SB_LUT4 /{l=$2} /^ +SB_CARRY /{c=$2} /^ +SB_DFF/{f+=$2} /^ +SB_RAM40_4K /{r=$2}
-     END{printf "%-24s %7d %7d %7d %5d\n", "design", l, c, f, r}' "$work/flat.txt"
+awk '/^ +SB_LUT4 /{l=$2} /^ +SB_CARRY /{c=$2} /^ +SB_DFF/{f+=$2} /^ +SB_RAM40_4K /{r=$2} /^ +SB_MAC16 /{d=$2}
+     END{printf "%-24s %7d %7d %7d %5d %4d\n", "design", l, c, f, r, d}' "$work/flat.txt"
