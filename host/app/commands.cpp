@@ -165,6 +165,7 @@ struct Loaded {
   job::JobConfig cfg;
   std::string toolpath_text;  // a toolpath's moves and corners, for the report
   double fastest_feed_move = 0;  // a toolpath's: the top of the path plot's colour scale (0: the feed limit)
+  std::vector<char> rapid_curve;  // a toolpath's: its curves that are rapid moves
 };
 
 // A JSON Lines path read whole (run plans and reports the whole path; `plan`
@@ -193,8 +194,8 @@ input::GcodeOptions gcode_options(const std::string& tool_table, const job::JobC
 Loaded load(const std::string& file, const std::string& format, const std::string& tool_table,
             const job::JobConfig& cfg, bool blend_all) {
   const input::FileKind kind = input::file_kind(file, format);
-  if (kind == input::FileKind::kJsonl) return {load_jsonl(file), cfg, {}};
-  if (!input::is_toolpath(kind)) return {input::load_path(file), cfg, {}};
+  if (kind == input::FileKind::kJsonl) return {load_jsonl(file), cfg, {}, 0, {}};
+  if (!input::is_toolpath(kind)) return {input::load_path(file), cfg, {}, 0, {}};
   const input::Toolpath tp = input::read_toolpath(file, kind, gcode_options(tool_table, cfg));
   for (const auto& n : tp.notes) std::fprintf(stderr, "trajcore: note: %s\n", n.c_str());
   job::ToolpathOptions to;
@@ -211,7 +212,7 @@ Loaded load(const std::string& file, const std::string& format, const std::strin
   double fastest = 0;
   for (const auto& m : tp.moves)
     if (m.kind == input::Move::Kind::kFeed) fastest = std::max(fastest, m.feed > 0 ? m.feed : cfg.limits.feed);
-  return {std::move(tpp.path), std::move(tpp.cfg), b, fastest};
+  return {std::move(tpp.path), std::move(tpp.cfg), b, fastest, std::move(tpp.rapid_curve)};
 }
 
 // Every check of the report; the output's limit check where the allowance is
@@ -402,7 +403,7 @@ int run_command(const RunArgs& a) {
   write_csv(stage.dir + "/samples.csv", res.header, sr.samples,
             cfg.limits.axis_names.substr(0, static_cast<size_t>(std::max(cfg.machine.axes, path.dim()))));
   const auto rep = report::make_report(path, cfg, res, sr.samples);
-  report::write_plots(stage.dir, path, cfg, res, sr.samples, in.fastest_feed_move);
+  report::write_plots(stage.dir, path, cfg, res, sr.samples, in.fastest_feed_move, in.rapid_curve);
   std::string scale_text;
   if (a.scale.on()) {  // the stream again, with the time-scaling fields in its header
     stream::Header header = res.header;

@@ -29,7 +29,12 @@ Toolpath toolpath_from_cuts(const std::vector<Cut>& cuts, int axes) {
   for (const Cut& cut : cuts) {
     if (cut.empty()) continue;
     const Eigen::VectorXd start = start_point(cut.front().curve);
-    if (start != at) {
+    // a cut that starts where the last one ended, up to rounding (a subpath
+    // after a closed one's Z, drawn with relative moves that come back to
+    // its start: 4e-16 mm off in simple-icons' createreactapp.svg) needs no
+    // rapid: a line that short is refused as a zero-length curve
+    const bool joined = (start - at).norm() <= kNegligibleMm;
+    if (!joined) {
       Move rapid;
       rapid.kind = Move::Kind::kRapid;
       rapid.curve = geo::make_line(at, start);
@@ -37,7 +42,7 @@ Toolpath toolpath_from_cuts(const std::vector<Cut>& cuts, int axes) {
       rapid.where = cut.front().where;
       tp.moves.push_back(std::move(rapid));
     }
-    Eigen::VectorXd end = start;
+    Eigen::VectorXd end = joined ? at : start;
     for (const CutPiece& piece : cut) {
       if (negligible(piece.curve)) continue;
       Move m;

@@ -89,10 +89,12 @@ ToolpathPlan toolpath_plan(const input::Toolpath& original, const JobConfig& cfg
   const double rapid = rapid_speed(cfg, tp.axes, o);
   double fastest = 0;
   std::vector<double> speed(tp.moves.size());
+  r.rapid_curve.assign(tp.moves.size(), 0);
   for (size_t i = 0; i < tp.moves.size(); ++i) {
     const input::Move& m = tp.moves[i];
     r.path.add(m.curve, m.where);
     const bool is_rapid = m.kind == input::Move::Kind::kRapid;
+    r.rapid_curve[i] = is_rapid;
     speed[i] = is_rapid ? rapid : (m.feed > 0 ? m.feed : cfg.limits.feed);
     if (!(speed[i] > 0) || !std::isfinite(speed[i]))
       throw PlanError(m.where + ": feed " + util::num(speed[i]) + " mm/s must be positive");

@@ -47,6 +47,7 @@ struct ToolpathPlan {
   plan::Path path;
   JobConfig cfg;     // the job's configuration with the caps and the feed limit of the toolpath
   size_t feed_moves = 0, rapids = 0, stops = 0;
+  std::vector<char> rapid_curve;  // per curve of path: a rapid move (the plots draw it so)
   int corners_blended = 0;     // corners replaced by a G2 transition
   int wide_blends = 0;         // of them, line-line corners with a wide blend (host/corners, "Wide blends")
   double blend_deviation = 0;  // largest distance of a transition from its corner, mm

@@ -3,8 +3,10 @@
 // samples at equal scale, axes in units, coloured by the output feed (chord
 // speed of consecutive samples) on a labelled colour bar from 0 to the
 // commanded feed, or for a toolpath to its fastest feed move (so that the
-// rapid speed does not squeeze the feed moves into a few colours); steps
-// faster than that within the feed limit (rapids) in grey, steps above the
+// rapid speed does not squeeze the feed moves into a few colours); a
+// toolpath's rapid moves (by the plan: at any speed, so that a connecting
+// move never looks like a cut) or, without a plan, steps faster than the
+// scale's top within the feed limit in grey, steps above the
 // feed limit in a colour of their own; start, end and direction of travel
 // marked. A feed move's output runs above its planned feed by the fit's feed
 // error (about 0.2 %, or --feed-accuracy): steps up to kFeedSlack (or that
@@ -49,8 +51,11 @@ struct Feed {
   double scale;           // top of the colour scale (<= feed)
   double rapid_above;     // steps faster than this (and within the feed) are "rapid": scale plus its slack
   std::string scale_what; // what the scale's top is, when below the feed
+  // step k -> k+1 is in a rapid move (a toolpath's plan); empty: not known,
+  // a rapid is a step above rapid_above
+  const std::function<bool(size_t)>& rapid_step;
   size_t over = 0;        // steps above feed + allow_v
-  size_t rapid = 0;       // steps above rapid_above, within feed + allow_v
+  size_t rapid = 0;       // rapid steps (by the plan, or above rapid_above), within feed + allow_v
   double smin = 0, smax = 0;  // range of the chord speed
 };
 
@@ -95,6 +100,10 @@ void simplify(const std::vector<std::array<double, 2>>& pts, double tol, std::ve
   }
 }
 
+// A step (within the feed) drawn as a rapid: by the plan's move kind where
+// the plan is known, else by its speed s.
+bool is_rapid(const Feed& F, size_t k, double s) { return F.rapid_step ? F.rapid_step(k) : s > F.rapid_above; }
+
 // Range of the chord speed and the steps above the feed.
 void measure_feed(Feed& F) {
   for (size_t k = 0; k + 1 < F.n; ++k) {
@@ -103,7 +112,7 @@ void measure_feed(Feed& F) {
     F.smin = k ? std::min(F.smin, s) : s;
     F.smax = std::max(F.smax, s);
     if (s > F.feed + F.allow_v) ++F.over;
-    else if (s > F.rapid_above) ++F.rapid;
+    else if (is_rapid(F, k, s)) ++F.rapid;
   }
 }
 
@@ -148,20 +157,23 @@ std::vector<std::string> feed_bands(const Feed& F, const View& v, size_t max_poi
     double len = 0;                                // its length (units) and steps
     size_t steps = 0;
     bool stroke_over = false;
+    bool stroke_rapid = false;  // by the plan: a stroke ends where the move kind changes
     for (size_t k = 0; k + 1 < n; ++k) {
       const auto next = F.pos(k + 1);
       const double s = plan::chord_speed(prev.data(), next.data(), F.d, h);
       len += s * h;
       ++steps;
       stroke_over = stroke_over || s > feed + F.allow_v;
+      stroke_rapid = F.rapid_step && F.rapid_step(k);
       prev = next;
       const auto q = v.px(next);
       const double px = std::hypot(q[0] - start_px[0], q[1] - start_px[1]);
-      if (px < spacing && k + 2 < n) continue;  // the stroke goes on
+      const bool kind_changes = F.rapid_step && k + 2 < n && F.rapid_step(k + 1) != stroke_rapid;
+      if (px < spacing && k + 2 < n && !kind_changes) continue;  // the stroke goes on
       int b;
       if (stroke_over) {
         b = kBands;
-      } else if (len / (steps * h) > F.rapid_above) {
+      } else if (F.rapid_step ? stroke_rapid : len / (steps * h) > F.rapid_above) {
         b = kRapid;
       } else {
         const double f = std::clamp(len / (steps * h) / scale * kBands, 0.0, kBands - 1e-9);
@@ -423,7 +435,8 @@ bool needs_three_views(const Feed& F) {
 }  // namespace
 
 std::string path_svg(size_t n, const std::function<std::array<double, 3>(size_t)>& pos, int d,
-                     const job::JobConfig& cfg, double h, double allow_v, double scale_feed) {
+                     const job::JobConfig& cfg, double h, double allow_v, double scale_feed,
+                     const std::function<bool(size_t)>& rapid_step) {
   // no feed limit (<= 0: sim of a stream without --feed): nothing is "above the feed"
   const double feed = cfg.limits.feed > 0 ? cfg.limits.feed : std::numeric_limits<double>::infinity();
   double scale = scale_feed > 0 ? std::min(scale_feed, feed) : feed;
@@ -433,7 +446,7 @@ std::string path_svg(size_t n, const std::function<std::array<double, 3>(size_t)
     scale_what = "the axes' top speed";
   }
   const double rapid_above = scale * (1 + std::max(kFeedSlack, cfg.machine.feed_accuracy)) + allow_v;
-  Feed F{n, pos, d, h, feed, allow_v, scale, rapid_above, scale_what};
+  Feed F{n, pos, d, h, feed, allow_v, scale, rapid_above, scale_what, rapid_step};
   measure_feed(F);
   return needs_three_views(F) ? drawing_svg(F, cfg.machine.units) : flat_svg(F, cfg.machine.units);
 }

@@ -20,7 +20,7 @@ constexpr const char* kLimitColour = "#c0392b";
 constexpr const char* kPlanColour = "#f28e2b";
 constexpr const char* kOutColour = "#1f4e99";
 constexpr const char* kOverColour = "#e7298a";
-constexpr const char* kRapidColour = "#9e9e9e";  // faster than the colour scale, within the feed limit
+constexpr const char* kRapidColour = "#9e9e9e";  // a rapid move (by the plan, or faster than the colour scale)
 
 // Fixed-point text with `dec` decimals, trailing zeros dropped, "-0" -> "0".
 inline std::string num(double v, int dec = 1) {
@@ -169,11 +169,13 @@ class PathData {
 // path_feed.svg (plot_path.cpp): the path of the n samples pos(k) (d axes, tick
 // h), coloured by the output feed; allow_v: the quantisation allowance on the
 // chord speed. The colour scale runs from 0 to scale_feed (a toolpath's
-// fastest feed move; 0: the feed limit); steps faster than it and within the
-// feed limit (rapids) are drawn in a colour of their own, steps above the
-// limit in another. A feed limit <= 0: none given (sim of a stream), the
-// colour scale up to scale_feed.
+// fastest feed move; 0: the feed limit); rapids are drawn in a colour of
+// their own (rapid_step(k): step k -> k+1 is in a rapid move, by the plan;
+// without it, steps faster than the scale's top within the feed limit),
+// steps above the limit in another. A feed limit <= 0: none given (sim of a
+// stream), the colour scale up to scale_feed.
 std::string path_svg(size_t n, const std::function<std::array<double, 3>(size_t)>& pos, int d,
-                     const job::JobConfig& cfg, double h, double allow_v, double scale_feed = 0);
+                     const job::JobConfig& cfg, double h, double allow_v, double scale_feed = 0,
+                     const std::function<bool(size_t)>& rapid_step = {});
 
 }  // namespace traj::report::svg

@@ -461,12 +461,12 @@ void write_plot_pages(const std::string& dir, const PlotSource& src, const JobCo
     const auto q = X(k);
     return std::array<double, 3>{q[0], q[1], q[2]};
   };
-  const std::string path = path_svg(n, xyz, std::min(d, 3), cfg, h, sd * allow_v, src.scale_feed);
+  const std::string path = path_svg(n, xyz, std::min(d, 3), cfg, h, sd * allow_v, src.scale_feed, src.rapid_step);
   write_all({{dir + "/path_feed.svg", path}, {dir + "/profile.svg", prof}});
 }
 
 void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, const JobResult& r, const Samples& s,
-                 double scale_feed) {
+                 double scale_feed, const std::vector<char>& rapid_curve) {
   // quantisation allowance on sample differences, as in make_report
   double bound = 0;
   double offset = 0;
@@ -483,6 +483,14 @@ void write_plots(const std::string& dir, const Path& p, const JobConfig& cfg, co
   src.allowance = job::sample_allowance((0.5 + bound) * src.lsb, offset * src.lsb, cfg.machine.period);
   src.plan = &r.ticks;
   src.scale_feed = scale_feed;
+  if (!rapid_curve.empty()) {
+    // output sample k is tick k's: the step to k + 1 is in the curve of tick k + 1
+    src.rapid_step = [&r, &rapid_curve](size_t k) {
+      const size_t t = std::min(k + 1, r.ticks.size() - 1);
+      const size_t c = r.ticks[t].curve;
+      return c < rapid_curve.size() && rapid_curve[c];
+    };
+  }
   write_plot_pages(dir, src, cfg);
 }
 

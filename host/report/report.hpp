@@ -59,9 +59,11 @@ Samples predicted_samples(const job::JobResult& r);
 Report make_report(const plan::Path& p, const job::JobConfig& cfg, const job::JobResult& r, const Samples& s);
 std::string report_text(const job::JobConfig& cfg, const Report& rep, const job::JobResult& r);
 // SVG plots: path coloured by feed; feed, acceleration and jerk against time.
-// scale_feed: the top of the path's colour scale (svg::path_svg).
+// scale_feed: the top of the path's colour scale (svg::path_svg);
+// rapid_curve: a toolpath's curves that are rapid moves (by index in p;
+// empty: none known), drawn as rapids.
 void write_plots(const std::string& dir, const plan::Path& p, const job::JobConfig& cfg, const job::JobResult& r,
-                 const Samples& s, double scale_feed = 0);
+                 const Samples& s, double scale_feed = 0, const std::vector<char>& rapid_curve = {});
 
 // What the plots are drawn from: the output samples, read on demand (a
 // stream's samples from a mapped file: `trajcore sim --plots`), and the plan
@@ -76,6 +78,7 @@ struct PlotSource {
   const std::vector<plan::TickSample>* plan = nullptr;
   double scale_feed = 0;  // the top of the path's colour scale (0: the feed limit)
   bool feed_limited = true;  // false: the path speed has no limit line (sim without --feed)
+  std::function<bool(size_t)> rapid_step;  // step k -> k+1 in a rapid move (empty: not known)
 };
 // path_feed.svg and profile.svg in `dir` (cfg: the tick period, units and limits).
 void write_plot_pages(const std::string& dir, const PlotSource& src, const job::JobConfig& cfg);

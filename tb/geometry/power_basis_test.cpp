@@ -265,3 +265,26 @@ TEST(GeometrySplit, HalvesTraceTheOriginal) {
   EXPECT_THROW(traj::geo::split_at(rs.lib, rs.lib.u_begin()), traj::geo::GeometryError);
   EXPECT_THROW(traj::geo::split_at(rs.lib, rs.lib.u_end() + 1), traj::geo::GeometryError);
 }
+
+// Coincident control points (a retracted Bezier handle, P0 = P1 or P2 = P3)
+// stay exactly coincident in both halves: a split that moved one by an ulp
+// gave the curve an end speed of 1e-16 instead of 0 (a cusp the planner
+// treats as one), which planned as 1e13 s (tb/job, RetractedHandle...).
+TEST(GeometrySplit, CoincidentControlPointsStayExact) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> U(-30.0, 30.0), U01(0.01, 0.99);
+  for (int rep = 0; rep < 2000; ++rep) {
+    Eigen::MatrixXd P(4, 2);
+    for (int i = 0; i < 4; ++i) P.row(i) << U(rng), U(rng);
+    P.row(2) = P.row(3);
+    P.row(1) = P.row(0);
+    BSpline c;
+    c.degree = 3;
+    c.ctrl = P;
+    c.knots.resize(8);
+    c.knots << 0, 0, 0, 0, 1, 1, 1, 1;
+    const auto halves = traj::geo::split_at(c, U01(rng));
+    ASSERT_EQ(halves.second.ctrl.row(3), halves.second.ctrl.row(2)) << "rep " << rep;
+    ASSERT_EQ(halves.first.ctrl.row(0), halves.first.ctrl.row(1)) << "rep " << rep;
+  }
+}

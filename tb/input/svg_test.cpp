@@ -270,6 +270,25 @@ TEST(SvgDocument, NearlyClosedPathHasNoNegligiblePiece) {
   EXPECT_EQ(t2.moves[1].where, "b");
 }
 
+// A cut that starts where the last one ended, up to rounding: no rapid of
+// 1e-15 mm between them (simple-icons' createreactapp.svg: an arc subpath
+// after a 'Z', its start computed through other relative steps than the
+// closed one's end, 4e-16 mm apart after the transform, refused as a
+// zero-length curve). The second cut starts exactly where the first ends.
+TEST(SvgDocument, CutStartingWithinRoundingOfTheLastEndNeedsNoRapid) {
+  BSpline a = svg::parse_path_data("M0 0 L5 0").front().segments.front();
+  BSpline b = svg::parse_path_data("M5 4e-16 L5 5").front().segments.front();
+  const Toolpath tp = traj::input::toolpath_from_cuts({{{a, "a"}}, {{b, "b"}}}, 2);
+  ASSERT_EQ(tp.moves.size(), 2u);
+  EXPECT_EQ(tp.moves[1].kind, Move::Kind::kFeed);
+  EXPECT_EQ(last(tp.moves[0].curve), first(tp.moves[1].curve));
+  // 1 um apart: a rapid between them, as before
+  BSpline c = svg::parse_path_data("M5 0.001 L5 5").front().segments.front();
+  const Toolpath t2 = traj::input::toolpath_from_cuts({{{a, "a"}}, {{c, "c"}}}, 2);
+  ASSERT_EQ(t2.moves.size(), 3u);
+  EXPECT_EQ(t2.moves[1].kind, Move::Kind::kRapid);
+}
+
 TEST(SvgDocument, RoundedRectCornersAreQuarterEllipses) {
   const Toolpath tp = traj::input::parse_svg(doc(R"~(<rect x="10" y="10" width="40" height="20" rx="5" ry="3"/>)~"), "t.svg");
   const auto f = feeds(tp);

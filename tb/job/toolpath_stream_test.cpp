@@ -24,6 +24,7 @@
 #include "cam_program.hpp"
 #include "fd_drive.hpp"
 #include "input/gcode.hpp"
+#include "input/toolpath_file.hpp"
 #include "job/job.hpp"
 #include "job/streaming.hpp"
 #include "job/toolpath_job.hpp"
@@ -342,6 +343,31 @@ TEST(ToolpathPlan, SharpCornersStopWhereThatIsFaster) {
   const double s_off = planned_time(slow, cfg, false, stops_off);
   EXPECT_EQ(stops_on, 0u);
   EXPECT_EQ(s_on, s_off);
+}
+
+// simple-icons' apachecassandra.svg (and audiomack.svg): a cubic whose end
+// handle is retracted (P2 = P3, an SVG cusp) after a corner the blend cuts
+// the curve at. The knot insertion of that cut once moved P2 by an ulp,
+// leaving the curve an end speed of about 1e-16: the speed bound there made
+// the plan cruise its last 1e-15 mm at 1e-28 mm/s, 4.3e13 s in all ("more
+// than one plan holds"). The cut keeps P2 = P3 exactly; the path (a rapid
+// from the origin, 1.4 mm of cut) plans in well under a second.
+TEST(ToolpathPlan, RetractedHandleSplitByABlendStaysRetracted) {
+  const std::string file = (std::filesystem::temp_directory_path() / "traj_retracted_handle.svg").string();
+  {
+    std::ofstream f(file);
+    f << "<svg viewBox=\"0 0 24 24\" xmlns=\"http://www.w3.org/2000/svg\"><path d=\""
+         "M18.497 14.348c0 0-1.06-1.16-1.35-.959c-.29.202 1.514 3.218 1.514 3.218\"/></svg>";
+  }
+  const input::Toolpath tp = input::read_toolpath(file, input::FileKind::kSvg);
+  std::filesystem::remove(file);
+  const job::JobConfig cfg;
+  const job::ToolpathPlan r = job::toolpath_plan(tp, cfg);
+  const geo::BSpline& last = r.path.curve(r.path.size() - 1).spline();
+  const int n = last.n_ctrl();
+  EXPECT_EQ(last.ctrl.row(n - 1), last.ctrl.row(n - 2)) << "the retracted handle moved";
+  const double T = plan::plan_path(r.path, r.cfg.limits, r.cfg.plan_options()).duration();
+  EXPECT_LT(T, 1.0);
 }
 
 namespace {

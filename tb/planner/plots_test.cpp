@@ -650,3 +650,23 @@ TEST(Plots, FeedJustAboveTheScaleIsNoRapid) {
   EXPECT_EQ(near.find(">rapid<"), std::string::npos);
   EXPECT_NE(fast.find(">rapid<"), std::string::npos);
 }
+
+// A toolpath's rapid moves are drawn as rapids by the plan's move kind, at
+// any speed: a connecting move slower than the fastest cut must not look
+// like a cut (simple-icons' SVGs: their short rapids between subpaths never
+// reach the feed). A line at half the scale: its second half a rapid by the
+// plan, drawn grey with the legend; without the plan's kinds, none is.
+TEST(Plots, RapidByThePlanAtAnySpeed) {
+  JobConfig cfg;
+  cfg.limits.feed = 100;
+  const double h = 1e-3, scale = 10, v = 5;
+  const auto pos = [&](size_t k) { return std::array<double, 3>{v * h * double(k), 0, 0}; };
+  const std::function<bool(size_t)> second_half = [](size_t k) { return k >= 1000; };
+  const std::string by_kind = svg::path_svg(2000, pos, 2, cfg, h, 1e-9, scale, second_half);
+  const std::string by_speed = svg::path_svg(2000, pos, 2, cfg, h, 1e-9, scale);
+  EXPECT_EQ(xml_problem(by_kind), "");
+  EXPECT_NE(by_kind.find(">rapid<"), std::string::npos);
+  EXPECT_EQ(by_speed.find(">rapid<"), std::string::npos);
+  EXPECT_NE(by_kind.find("stroke=\"" + std::string(svg::kRapidColour) + "\""), std::string::npos);
+  EXPECT_EQ(by_speed.find("stroke=\"" + std::string(svg::kRapidColour) + "\""), std::string::npos);
+}
