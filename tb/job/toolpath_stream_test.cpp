@@ -370,6 +370,22 @@ TEST(ToolpathPlan, RetractedHandleSplitByABlendStaysRetracted) {
   EXPECT_LT(T, 1.0);
 }
 
+// Two simple-icons logos (tb/job/assets/simple-icons, CC0) that planned as
+// 1.4e15 s and 1.3e15 s (ulp-sized blocks at cusps cruising at 1e-29 mm/s):
+// each plans within ten times the time of its path at the feed (the motion
+// stops at its many cusps; about 7 and 6 s now).
+TEST(ToolpathPlan, SimpleIconsLogosPlan) {
+  for (const char* name : {"gitea.svg", "audiomack.svg"}) {
+    const std::string file = std::string(TRAJ_JOB_ASSETS) + "/simple-icons/" + name;
+    const input::Toolpath tp = input::read_toolpath(file, input::FileKind::kSvg);
+    const job::JobConfig cfg;
+    const job::ToolpathPlan r = job::toolpath_plan(tp, cfg);
+    const double T = plan::plan_path(r.path, r.cfg.limits, r.cfg.plan_options()).duration();
+    EXPECT_LT(T, 10 * r.path.length() / cfg.limits.feed) << name;
+    EXPECT_GT(T, r.path.length() / cfg.limits.feed) << name;
+  }
+}
+
 namespace {
 
 // The flowsnake curve of LinuxCNC's flowsnake.ngc, computed here: each level
