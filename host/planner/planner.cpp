@@ -336,11 +336,6 @@ double corner_speed(const double* T1, const double* T2, int d, const Limits& L, 
     if (dt > 0) v = std::min({v, L.j_axis[a] * h * h / (10 * dt), L.a_axis[a] * h / (1.9 * dt)});
   }
   const double dn = std::sqrt(dn2);
-  // a reversal (a turn of 179 degrees or more, |dT| >= 2 cos(0.5 deg)) is a
-  // stop: no tick can turn the velocity back (simple-icons' furrynetwork.svg
-  // turns 179.8 degrees; passed at the 3e-4 mm/s below, no fit met the
-  // limits there, whatever the repairs tried)
-  if (dn >= 2 * std::cos(0.5 * 3.14159265358979323846 / 180)) return 0;
   // the speed's own second derivative through the turn (the sampled
   // tangential jerk): the polynomial that turns the velocity within the tick
   // slows down and speeds up again, |x'''.u| up to 10 v |dT| / h^2 plus

@@ -546,28 +546,6 @@ TEST(PlannerCore, TightUTurnRunsFastAndLimitsHold) {
   EXPECT_GT(v_arc, 4 * v_reserved);
 }
 
-// A reversal: two lines meeting at 179.8 degrees (simple-icons'
-// ferrari.svg, pubg.svg and furrynetwork.svg have such spikes). The corner
-// speed formula gave 3e-4 mm/s there, and no tick can turn the velocity
-// back: "the limits cannot be met" after 200 rounds of repairs. It is a
-// stop now: the plan rests at the tip, and every limit holds on the core.
-TEST(PlannerCore, ReversalIsAStop) {
-  Path p;
-  Eigen::VectorXd a(2), b(2), c(2);
-  a << 0, 0;
-  b << 10, 0;
-  c << 0, 0.035;  // 179.8 degrees
-  p.add(geo::make_line(a, b), "out");
-  p.add(geo::make_line(b, c), "back");
-  JobConfig cfg;
-  const RunOut o = run_through_core(p, cfg);
-  expect_guarantees(p, cfg, o, "179.8 degree reversal");
-  bool rest_at_tip = false;
-  for (const auto& st : o.job.plan.stations)
-    if (std::fabs(st.s - 10) < 1e-9) rest_at_tip = st.v == 0;
-  EXPECT_TRUE(rest_at_tip);
-}
-
 // A local minimum of the speed bound (a bump of one cubic B-spline, v_lim 47.5 mm/s at feed 50,
 // 1.33 mm before a corner stop): the profile cannot reach it (braking for the stop passes there at
 // about 28 mm/s), so it is no station. As one (acceleration 0 there) it split the braking into two
