@@ -146,7 +146,10 @@ BSpline insert_knot(const BSpline& c, double u, int times) {
       // P3, split by a corner blend: a P[i] + (1 - a) P[i-1] moved the new
       // point by an ulp, leaving an end speed of 1e-16 whose speed bound made
       // the planner cruise the last 1e-15 mm at 1e-28 mm/s for 1e13 s)
-      Q.row(i) = P.row(i) == P.row(i - 1) ? Eigen::RowVectorXd(P.row(i)) : Eigen::RowVectorXd(a * P.row(i) + (1.0 - a) * P.row(i - 1));
+      if (P.row(i) == P.row(i - 1))
+        Q.row(i) = P.row(i);
+      else
+        Q.row(i) = a * P.row(i) + (1.0 - a) * P.row(i - 1);
     }
     for (int i = k - s + 1; i <= n; ++i) Q.row(i) = P.row(i - 1);
     Eigen::VectorXd V(U.size() + 1);

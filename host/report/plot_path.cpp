@@ -157,23 +157,22 @@ std::vector<std::string> feed_bands(const Feed& F, const View& v, size_t max_poi
     double len = 0;                                // its length (units) and steps
     size_t steps = 0;
     bool stroke_over = false;
-    bool stroke_rapid = false;  // by the plan: a stroke ends where the move kind changes
     for (size_t k = 0; k + 1 < n; ++k) {
       const auto next = F.pos(k + 1);
       const double s = plan::chord_speed(prev.data(), next.data(), F.d, h);
       len += s * h;
       ++steps;
       stroke_over = stroke_over || s > feed + F.allow_v;
-      stroke_rapid = F.rapid_step && F.rapid_step(k);
       prev = next;
       const auto q = v.px(next);
       const double px = std::hypot(q[0] - start_px[0], q[1] - start_px[1]);
-      const bool kind_changes = F.rapid_step && k + 2 < n && F.rapid_step(k + 1) != stroke_rapid;
+      // by the plan, a stroke ends where the move kind changes (so each is one kind)
+      const bool kind_changes = F.rapid_step && k + 2 < n && F.rapid_step(k + 1) != F.rapid_step(k);
       if (px < spacing && k + 2 < n && !kind_changes) continue;  // the stroke goes on
       int b;
       if (stroke_over) {
         b = kBands;
-      } else if (F.rapid_step ? stroke_rapid : len / (steps * h) > F.rapid_above) {
+      } else if (is_rapid(F, k, len / (steps * h))) {
         b = kRapid;
       } else {
         const double f = std::clamp(len / (steps * h) / scale * kBands, 0.0, kBands - 1e-9);
