@@ -7,6 +7,8 @@
 #include <cstring>
 #include <limits>
 
+#include <unsupported/Eigen/Polynomials>
+
 #include "geometry/error.hpp"
 #include "util/format.hpp"
 
@@ -62,19 +64,82 @@ double speed_noise(const Curve& c, int span) {
 }
 }  // namespace
 
+namespace {
+constexpr double kDeepDip = 1e-2;
+constexpr int kDipSamples = 32;
+
+// Local minima of the speed inside a polynomial span where it falls below kDeepDip of the span's
+// largest sampled speed: the real roots of d/dtau |r'(tau)|^2, ascending (see the header).
+std::vector<double> speed_dips(const Curve& c, int span) {
+  std::vector<double> out;
+  if (c.rational()) return out;
+  const PowerSpan& sp = c.spans()[static_cast<size_t>(span)];
+  const int p = sp.degree, cols = sp.cols;
+  if (p < 2) return out;
+  // g = |r'|^2: r' has p coefficients per axis (tau^0..tau^{p-1}), g 2p - 1
+  std::vector<double> g(static_cast<size_t>(2 * p - 1), 0.0);
+  for (int a = 0; a < cols; ++a)
+    for (int i = 0; i < p; ++i)
+      for (int j = 0; j < p; ++j)
+        g[static_cast<size_t>(i + j)] += sp.coef[sp.offset(1) + i * cols + a] * sp.coef[sp.offset(1) + j * cols + a];
+  Eigen::VectorXd dg(2 * p - 2);
+  for (int k = 1; k < 2 * p - 1; ++k) dg[k - 1] = k * g[static_cast<size_t>(k)];
+  int top = static_cast<int>(dg.size()) - 1;
+  while (top > 0 && dg[top] == 0) --top;
+  if (top < 1) return out;
+  auto speed2 = [&](double tau) {
+    double v = 0;
+    for (int k = static_cast<int>(g.size()) - 1; k >= 0; --k) v = v * tau + g[static_cast<size_t>(k)];
+    return v;
+  };
+  const double t0 = sp.u0 - sp.uc, t1 = sp.u1 - sp.uc;
+  double vmax2 = 0;
+  for (int j = 0; j <= kDipSamples; ++j) vmax2 = std::max(vmax2, speed2(t0 + (t1 - t0) * j / kDipSamples));
+  Eigen::PolynomialSolver<double, Eigen::Dynamic> solver;
+  solver.compute(dg.head(top + 1));
+  for (const auto& z : solver.roots()) {
+    const double tau = z.real();
+    // a root of a real polynomial is real to rounding: its imaginary part far below the span
+    if (!(std::abs(z.imag()) <= 1e-6 * (t1 - t0)) || !(tau > t0 && tau < t1)) continue;
+    if (speed2(tau) <= kDeepDip * kDeepDip * vmax2) out.push_back(sp.uc + tau);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+}  // namespace
+
 ArcLength::ArcLength(const Curve& c, double rel_tol) : c_(&c), rel_tol_(rel_tol) {
   if (!(rel_tol > 0)) throw GeometryError("ArcLength: rel_tol must be positive");
   const auto& spans = c.spans();
   cum_.assign(spans.size() + 1, 0.0);
   span_tol_.assign(spans.size(), 0.0);
   noise_.assign(spans.size(), 0.0);
-  for (size_t i = 0; i < spans.size(); ++i) noise_[i] = speed_noise(c, static_cast<int>(i));
+  dips_.resize(spans.size());
+  for (size_t i = 0; i < spans.size(); ++i) {
+    noise_[i] = speed_noise(c, static_cast<int>(i));
+    dips_[i] = speed_dips(c, static_cast<int>(i));
+  }
   for (size_t i = 0; i < spans.size(); ++i) {
     const double est = gl6(static_cast<int>(i), spans[i].u0, spans[i].u1);
     span_tol_[i] = 1e-3 * rel_tol * std::abs(est);  // absolute floor for sub-interval tolerances
-    cum_[i + 1] = cum_[i] + adapt(static_cast<int>(i), spans[i].u0, spans[i].u1, est,
-                                  std::max(rel_tol * std::abs(est), std::numeric_limits<double>::min()));
+    cum_[i + 1] = cum_[i] + split_length(static_cast<int>(i), spans[i].u0, spans[i].u1,
+                                         std::max(rel_tol * std::abs(est), std::numeric_limits<double>::min()));
   }
+}
+
+// Length of [a, b] (a < b, inside the span) by the adaptive rule on each piece between the span's
+// deep speed minima; whole_tol is shared out by the pieces' parameter widths.
+double ArcLength::split_length(int span, double a, double b, double whole_tol) const {
+  double sum = 0, from = a;
+  auto piece = [&](double to) {
+    if (!(to > from)) return;
+    sum += adapt(span, from, to, gl6(span, from, to), whole_tol * (to - from) / (b - a));
+    from = to;
+  };
+  for (double u : dips_[static_cast<size_t>(span)])
+    if (u > a && u < b) piece(u);
+  piece(b);
+  return sum;
 }
 
 namespace {
@@ -208,7 +273,7 @@ double ArcLength::span_length(int span, double a, double b) const {
   if (a == sp.u0 && b == sp.u1) return cum_[span + 1] - cum_[span];
   const double whole = gl6(span, a, b);
   const double tol = std::max(rel_tol_ * std::abs(whole), span_tol_[span]);
-  return adapt(span, a, b, whole, std::max(tol, std::numeric_limits<double>::min()));
+  return split_length(span, a, b, std::max(tol, std::numeric_limits<double>::min()));
 }
 
 double ArcLength::s(double u) const {
@@ -324,6 +389,31 @@ bool ArcLength::gk_adapt(int span, double a, double b, double tol, int depth, do
   return true;
 }
 
+bool ArcLength::dip_inside(int span, double a, double b) const {
+  for (double u : dips_[static_cast<size_t>(span)])
+    if (u > a && u < b) return true;
+  return false;
+}
+
+// gk_adapt on each piece of [a, b] (a < b) between the span's deep speed minima, the budget shared
+// by the pieces' widths.
+bool ArcLength::gk_split(int span, double a, double b, double tol, double& val, double& err) const {
+  val = err = 0;
+  double from = a;
+  auto piece = [&](double to) {
+    if (!(to > from)) return true;
+    double v, e;
+    if (!gk_adapt(span, from, to, tol * (to - from) / (b - a), 0, v, e)) return false;
+    val += v;
+    err += e;
+    from = to;
+    return true;
+  };
+  for (double u : dips_[static_cast<size_t>(span)])
+    if (u > a && u < b && !piece(u)) return false;
+  return piece(b);
+}
+
 bool ArcLength::fast_advance(int si, double ua, double ds, double s_tol, double& u_out, const double* d_from) const {
   const auto& spans = c_->spans();
   const int ns = static_cast<int>(spans.size());
@@ -353,7 +443,7 @@ bool ArcLength::fast_advance(int si, double ua, double ds, double s_tol, double&
     bool hi_known = false, crossed = false;
     double I, e;
     if (!(uk < ub)) {  // the guess leaves the span: length of the rest of it first
-      if (!gk_adapt(si, ua, ub, budget, 0, I, e)) return false;
+      if (!gk_split(si, ua, ub, budget, I, e)) return false;
       err += e;
       if (std::abs(I - rem) + err <= s_tol) {
         u_out = ub;
@@ -376,11 +466,11 @@ bool ArcLength::fast_advance(int si, double ua, double ds, double s_tol, double&
     // short step (the speed varies by < ~1% over it): try the cheap 3/7 pair first
     const double du = uk - ua, va = std::abs(d[1] / d[0]) * du + std::sqrt(std::abs(d[2] / d[0])) * du;
     bool done = false;
-    if (va < 1e-2) {
+    if (va < 1e-2 && !dip_inside(si, ua, uk)) {
       gk7(si, ua, uk, I, e);
       done = std::isfinite(I) && e <= budget;
     }
-    if (!done && !gk_adapt(si, ua, uk, budget, 0, I, e)) return false;
+    if (!done && !gk_split(si, ua, uk, budget, I, e)) return false;
     err += e;
     double f = I - rem;  // f(u) = length(ua, u) - rem at u = uk
     bool force_bisect = false;
@@ -408,7 +498,7 @@ bool ArcLength::fast_advance(int si, double ua, double ds, double s_tol, double&
       const bool last = !bisect && std::abs(u2 - uk) <= 4 * ulp_of(uk) && u2 >= ua && u2 <= ub;
       if (!bisect && !last && !(u2 > lo && u2 < hi)) {
         if (!hi_known) {  // is the target inside this span at all?
-          if (!gk_adapt(si, uk, ub, cbudget, 0, I, e)) return false;
+          if (!gk_split(si, uk, ub, cbudget, I, e)) return false;
           err += e;
           const double fhi = f + I;
           if (std::abs(fhi) + err <= s_tol) {
@@ -436,7 +526,10 @@ bool ArcLength::fast_advance(int si, double ua, double ds, double s_tol, double&
       // length of [uk, u2]: 2-point Gauss, checked against the cubic Taylor integral at uk
       const double dl = u2 - uk, h = 0.5 * dl, m = uk + h;
       double C = 0, ec = 0;
-      if (dl != 0) {
+      if (dl != 0 && dip_inside(si, std::min(uk, u2), std::max(uk, u2))) {  // the Taylor check fails there
+        if (!gk_split(si, std::min(uk, u2), std::max(uk, u2), cbudget, C, ec)) return false;
+        if (dl < 0) C = -C;
+      } else if (dl != 0) {
         const double x[2] = {m - h * 0.577350269189625764509148780501958, m + h * 0.577350269189625764509148780501958};
         double v[2];
         speeds_span(si, x, 2, v);

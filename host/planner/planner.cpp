@@ -47,6 +47,29 @@ PathCurve::PathCurve(const geo::BSpline& spline, const std::string& w) : where(w
   al = std::make_unique<geo::ArcLength>(*curve, 1e-12);
   if (!(al->total() > 1e-9)) throw PlanError(where + ": zero-length curve (arc length " + num(al->total()) + ")");
   table = std::make_unique<ArcTable>(*curve, *al);
+  cusp_start_ = end_is_cusp(true);
+  cusp_end_ = end_is_cusp(false);
+}
+
+namespace {
+constexpr int kCuspSamples = 32;
+constexpr double kCusp = 1e-7;  // a speed this far below the span's largest is zero
+}  // namespace
+
+double PathCurve::speed_at(double u) const {
+  const int d = curve->dim();
+  double buf[2 * kMaxAxes];
+  curve->eval(u, 1, buf);
+  double ss = 0;
+  for (int a = 0; a < d; ++a) ss += buf[d + a] * buf[d + a];
+  return std::sqrt(ss);
+}
+
+bool PathCurve::end_is_cusp(bool start) const {
+  const auto& sp = start ? curve->spans().front() : curve->spans().back();
+  double vmax = 0;
+  for (int j = 0; j <= kCuspSamples; ++j) vmax = std::max(vmax, speed_at(sp.u0 + (sp.u1 - sp.u0) * j / kCuspSamples));
+  return speed_at(start ? curve->u_begin() : curve->u_end()) <= kCusp * vmax;
 }
 
 const std::vector<double>& PathCurve::split_s() const {
@@ -61,42 +84,42 @@ const std::vector<double>& PathCurve::split_s() const {
 // Interior points where the curve's speed |C'(u)| falls to zero (to 1e-7 of
 // the span's largest sampled speed): the tangent turns back there, so the
 // machine must stop. Each span's speed is sampled at kSamples + 1 points and
-// each interior local minimum below a quarter of the largest sample refined
-// by golden-section search (|C'| is V-shaped at a cusp).
+// each local minimum below a quarter of the largest sample refined by
+// golden-section search (|C'| is V-shaped at a cusp), also at a span's ends:
+// a cusp a few nm after a line's end (simple-icons' furrynetwork.svg: a
+// handle pointing 5 um back) lies inside the span's first sample interval.
+// The curve's own ends are not interior: a zero speed there is
+// cusp_at_start / cusp_at_end.
 const std::vector<double>& PathCurve::cusp_s() const {
-  constexpr int kSamples = 32;
   if (cusp_done_) return cusp_s_;
   cusp_done_ = true;
-  const int d = curve->dim();
   const double u_lo = curve->u_begin(), u_hi = curve->u_end(), margin = 1e-9 * (u_hi - u_lo);
-  auto speed = [&](double u) {
-    double buf[2 * kMaxAxes];
-    curve->eval(u, 1, buf);
-    double ss = 0;
-    for (int a = 0; a < d; ++a) ss += buf[d + a] * buf[d + a];
-    return std::sqrt(ss);
-  };
   for (const auto& sp : curve->spans()) {
-    std::array<double, kSamples + 1> v{};
+    auto u_of = [&](int j) { return sp.u0 + (sp.u1 - sp.u0) * j / kCuspSamples; };
+    std::array<double, kCuspSamples + 1> v{};
     double vmax = 0;
-    for (int j = 0; j <= kSamples; ++j) vmax = std::max(vmax, v[j] = speed(sp.u0 + (sp.u1 - sp.u0) * j / kSamples));
-    for (int j = 1; j < kSamples; ++j) {
+    for (int j = 0; j <= kCuspSamples; ++j) vmax = std::max(vmax, v[j] = speed_at(u_of(j)));
+    for (int j = 0; j <= kCuspSamples; ++j) {
       // a cusp's V leaves a sample within 1/32 of the span's speed range;
       // a flat speed (a line) is no minimum to refine
-      if (!(v[j] <= v[j - 1] && v[j] <= v[j + 1] && v[j] < 0.25 * vmax)) continue;
-      double a = sp.u0 + (sp.u1 - sp.u0) * (j - 1) / kSamples, b = sp.u0 + (sp.u1 - sp.u0) * (j + 1) / kSamples;
-      double best = sp.u0 + (sp.u1 - sp.u0) * j / kSamples, vbest = v[j];
+      const bool left = j == 0 || v[j] <= v[j - 1], right = j == kCuspSamples || v[j] <= v[j + 1];
+      if (!(left && right && v[j] < 0.25 * vmax)) continue;
+      double a = u_of(std::max(j - 1, 0)), b = u_of(std::min(j + 1, kCuspSamples));
+      double best = u_of(j), vbest = v[j];
       for (int it = 0; it < 100 && b - a > 1e-15 * (1 + std::fabs(a)); ++it) {
         const double m1 = b - 0.618033988749895 * (b - a), m2 = a + 0.618033988749895 * (b - a);
-        const double v1 = speed(m1), v2 = speed(m2);
+        const double v1 = speed_at(m1), v2 = speed_at(m2);
         if (v1 < vbest) vbest = v1, best = m1;
         if (v2 < vbest) vbest = v2, best = m2;
         (v1 < v2 ? b : a) = v1 < v2 ? m2 : m1;
       }
-      if (vbest <= 1e-7 * vmax && best > u_lo + margin && best < u_hi - margin) cusp_s_.push_back(al->s(best));
+      if (vbest <= kCusp * vmax && best > u_lo + margin && best < u_hi - margin) cusp_s_.push_back(al->s(best));
     }
   }
   std::sort(cusp_s_.begin(), cusp_s_.end());
+  // a cusp at a knot is found from both of its spans
+  cusp_s_.erase(std::unique(cusp_s_.begin(), cusp_s_.end(), [](double x, double y) { return y - x <= 1e-12; }),
+                cusp_s_.end());
   return cusp_s_;
 }
 
@@ -148,14 +171,19 @@ Frame frame_at(const Path& p, size_t ci, double u, double s, int span) {
     s13 += C1[a] * C3[a];
   }
   const double sig = std::sqrt(s11);
-  if (!(sig > 0)) {
+  const bool at_start = u <= c.u_begin(), at_end = u >= c.u_end();
+  if (!(sig > 0) || (at_start && p.entry(ci).cusp_at_start()) || (at_end && p.entry(ci).cusp_at_end())) {
     // A curve may start or end with zero parametric speed (a repeated end
-    // control point): its tangent there is the limit from inside, so the
-    // frame is taken a hair inside. Inside a curve, zero speed is a cusp.
+    // control point), or one rounding leaves a hair above zero (relative
+    // coordinates): its tangent there is the limit from inside, so the
+    // frame is taken a hair inside (at the end itself the curvature of such
+    // a curve is without bound, 1e33 mm^-1 in simple-icons' endeavouros.svg,
+    // and a tick there at 5e-12 mm/s read 1e28 times a limit; the planner
+    // stops there). Inside a curve, zero speed is a cusp.
     const geo::PowerSpan& sp = c.spans()[span];
     const double du = 1e-9 * (sp.u1 - sp.u0);
-    if (u <= c.u_begin() && du > 0) return frame_at(p, ci, u + du, s, span);
-    if (u >= c.u_end() && du > 0) return frame_at(p, ci, u - du, s, span);
+    if (at_start && du > 0) return frame_at(p, ci, u + du, s, span);
+    if (at_end && du > 0) return frame_at(p, ci, u - du, s, span);
     // Inside, a cusp (PathCurve::cusp_s): the planner stops there, and the
     // frame is the incoming one.
     if (du > 0 && u - du > c.u_begin()) return frame_at(p, ci, u - du, s, span);
@@ -430,6 +458,7 @@ void check_grid_size(double points, const std::string& where, double len, double
                   " units and shorter where the curve turns); split the path (plan --window plans it in parts)");
 }
 
+constexpr double kReversalCos = -0.99984770;  // cos 179 deg: a turn this sharp is a reversal, a stop
 Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t, double J_t) {
   Grid g;
   const int d = p.dim();
@@ -515,7 +544,10 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
           double dot = 0;
           for (int a = 0; a < d; ++a) dot += e.T[a] * f.T[a];
           const double ang = std::acos(std::clamp(dot, -1.0, 1.0));
-          if (ang > o.corner_tol) {
+          if (p.entry(ci - 1).cusp_at_end() || p.entry(ci).cusp_at_start() || dot < kReversalCos) {
+            vl = 0;  // a cusp at the junction (PathCurve::cusp_at_start) or a reversal: a stop
+            corner = true;
+          } else if (ang > o.corner_tol) {
             vl = corner_speed(e.T, f.T, d, L, o);
             corner = true;
           } else {
@@ -569,7 +601,14 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
       ds = std::max(ds, len * 1e-9);
       while (mi < must.size() && must[mi] <= s + 1e-12) ++mi;
       double s_next = s + ds;
-      if (mi < must.size() && must[mi] <= s_next) s_next = must[mi];
+      if (mi < must.size() && must[mi] <= s_next) {
+        s_next = must[mi];
+        // from a stop to a point it must hold within one step (simple-icons'
+        // furrynetwork.svg: a cusp 2e-5 mm after a reversal), a point between
+        // them: the block between two stops takes its speed bound from its
+        // inner points, and with none it had none and was skipped
+        if (g.vlim.back() == 0 && s_next - s > 2 * len * 1e-9) s_next = 0.5 * (s + s_next);
+      }
       // a point within rounding of the curve's end is its end: a cap's end
       // computed from other sums (7e-15 before it in simple-icons' gitea.svg)
       // made a second grid point there, a station 7e-15 from the end's, and

@@ -176,9 +176,17 @@ struct PathCurve {
   // s of the interior cusps (zero speed: the tangent turns back), ascending (computed once);
   // the planner stops there.
   const std::vector<double>& cusp_s() const;
+  // Whether the curve starts (ends) with zero speed, to the cusps' 1e-7 (a
+  // retracted handle): its curvature grows without bound there, so the
+  // planner stops at that end.
+  bool cusp_at_start() const { return cusp_start_; }
+  bool cusp_at_end() const { return cusp_end_; }
  private:
+  double speed_at(double u) const;  // |C'(u)|
+  bool end_is_cusp(bool start) const;
   mutable std::vector<double> split_s_, cusp_s_;
   mutable bool split_done_ = false, cusp_done_ = false;
+  bool cusp_start_ = false, cusp_end_ = false;
 };
 
 // The join check of Path::add (so of load_path and of every streaming window):

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "arclength_ref.hpp"
+#include "cusp_cubic.hpp"
 #include "geometry/geometry.hpp"
 #include "test_util.hpp"
 
@@ -146,6 +147,25 @@ TEST(GeometryArcLength, CircleArcExactAndInverse) {
     while (sgn * d < 0) d += sgn * 2 * M_PI;
     EXPECT_NEAR(al.length(u0, u1), r * d, 1e-11 * r);
   }
+}
+
+// A cusp just inside a cubic (cusp_cubic.hpp, lengths in closed form). With uc = 0.002 the cusp lies
+// before the first Gauss node of every interval down to 1/64 of the span: the quadrature saw only the
+// smooth branch and came out twice the way back (4e-5 mm) short (simple-icons' furrynetwork.svg,
+// host/geometry/arclength.hpp "Deep speed minima").
+TEST(GeometryArcLength, CuspJustInsideTheSpan) {
+  const geotest::CuspCubic cc{10, 20, 0.002};
+  const Curve c(make_bezier(cc.bezier()));
+  const ArcLength al(c);
+  const double L = cc.s(1);
+  std::printf("  length %.15f mm (closed form %.15f), the way back %.3e mm\n", al.total(), L, cc.back());
+  EXPECT_NEAR(al.total(), L, 1e-13 * L);
+  for (const double u : {1e-4, 1e-3, 0.0019, 0.0021, 0.003, 0.01, 0.3, 0.9}) {
+    EXPECT_NEAR(al.s(u), cc.s(u), 1e-13 * L) << "u = " << u;
+    EXPECT_NEAR(al.u_at(cc.s(u)), u, 1e-9) << "u = " << u;
+  }
+  // the fast path (advance from a point before the cusp across it) agrees
+  EXPECT_NEAR(al.advance(1e-4, cc.s(0.5) - cc.s(1e-4)), 0.5, 1e-9);
 }
 
 TEST(GeometryArcLength, LineLength) {

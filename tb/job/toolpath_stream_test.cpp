@@ -386,6 +386,32 @@ TEST(ToolpathPlan, SimpleIconsLogosPlan) {
   }
 }
 
+// Four simple-icons logos (tb/job/assets/simple-icons, CC0) that failed after
+// 200 rounds of repairs ("the limits cannot be met"): handles retracted to
+// within rounding of their end points (ferrari, endeavouros), a cusp 8.6 nm
+// inside a cubic (furrynetwork), a turn of 179.8 degrees (pubg). Each now
+// plans and fits, and every limit holds on the hls engine's samples
+// (output_check.hpp, apart from the planner).
+TEST(ToolpathPlan, SimpleIconsCuspsAndReversalsPlan) {
+  for (const char* name : {"ferrari.svg", "endeavouros.svg", "furrynetwork.svg", "pubg.svg"}) {
+    SCOPED_TRACE(name);
+    const std::string file = std::string(TRAJ_JOB_ASSETS) + "/simple-icons/" + name;
+    const input::Toolpath tp = input::read_toolpath(file, input::FileKind::kSvg);
+    const job::JobConfig cfg;
+    const job::ToolpathPlan r = job::toolpath_plan(tp, cfg);
+    const job::JobResult jr = job::run_job(r.path, r.cfg);
+    ASSERT_EQ(jr.header.frac_bits, 32) << "to_mm's scale";
+    double q = 0;
+    const double lsb = std::ldexp(1.0, -32);
+    for (const auto& c : jr.compiled) q = std::max(q, (0.5 + c.bound_lsb) * lsb);
+    const auto v = test::check_output_limits(to_mm(report::predicted_samples(jr)), r.path.dim(), r.cfg.limits,
+                                             cfg.machine.period, q, true);
+    std::printf("  %s: %zu curves, %.2f s of motion, %d rounds, %d caps, worst %.4f (%s)\n", name, r.path.size(),
+                jr.plan.duration(), jr.rounds, jr.repairs, v.worst, v.what.c_str());
+    EXPECT_LE(v.worst, 1 + 1e-9) << v.what << " at tick " << v.tick;
+  }
+}
+
 namespace {
 
 // The flowsnake curve of LinuxCNC's flowsnake.ngc, computed here: each level

@@ -12,6 +12,7 @@
 #include <random>
 
 #include "test_seed.hpp"
+#include "cusp_cubic.hpp"
 #include "input/path_json.hpp"
 #include "report/report.hpp"
 #include "planner/profile.hpp"
@@ -544,6 +545,61 @@ TEST(PlannerCore, TightUTurnRunsFastAndLimitsHold) {
   std::printf("  u-turn: peak speed on the arc %.3f mm/s (bound with A_t reserved: %.3f), motion %.3f s\n", v_arc,
               v_reserved, o.rep.motion_time);
   EXPECT_GT(v_arc, 4 * v_reserved);
+}
+
+// A line ending where a cubic starts backwards (a turn of 179.8 degrees) and
+// turns forward again at a cusp 2e-5 mm later: simple-icons' furrynetwork.svg
+// (a Bezier handle pointing 5 um back). The cubic is tb/geometry/cusp_cubic.hpp's
+// with the cusp at u = 0.002: the cusp lies inside
+// the first of the 32 intervals at which PathCurve::cusp_s samples the span's
+// speed, and the arc length missed twice the way back, so the samples jumped
+// 4e-5 mm at the curve's end and no repair could fit them ("the limits cannot
+// be met"); with the cusp found, the block between the two stops had no inner
+// grid point, so no speed bound, and was skipped (the samples jumped 2e-5 mm).
+// Now both are stops at the closed-form arc lengths, the block between them
+// is run, and every limit holds on the Verilated core's samples.
+TEST(PlannerCore, ReversalIntoACuspJustInsideACurveStopsAtBoth) {
+  const geotest::CuspCubic cc{10, 20, 0.002};
+  const Eigen::MatrixXd P = cc.bezier();
+  const Eigen::Vector2d c0 = P.row(0).transpose();
+  Path p;
+  p.add(geo::make_line(Eigen::Vector2d(c0 - Eigen::Vector2d(10, 0)), c0), "line");
+  p.add(geo::make_bezier(P), "cubic");
+  const double back = cc.back();
+  ASSERT_EQ(p.entry(1).cusp_s().size(), 1u);
+  EXPECT_NEAR(p.entry(1).cusp_s()[0], back, 1e-12);
+  EXPECT_NEAR(p.length(), 10 + cc.s(1), 1e-12);
+  JobConfig cfg;
+  const RunOut o = run_through_core(p, cfg);
+  expect_guarantees(p, cfg, o, "reversal into a cusp");
+  int stops = 0;
+  for (const Station& st : o.job.plan.stations)
+    if ((std::fabs(st.s - 10) < 1e-12 || std::fabs(st.s - 10 - back) < 1e-12) && st.v == 0) ++stops;
+  EXPECT_EQ(stops, 2) << "a stop at the reversal and at the cusp";
+}
+
+// A cubic that starts with its first handle retracted to within 1e-12 mm of
+// its end point, in line with the line before it: the tangent is continuous,
+// but the curvature grows as 1/u towards the start (without bound), so the
+// only way through is a stop (PathCurve::cusp_at_start). As a tangent join
+// the speed bound there came from a curvature of order 1e10 and the profile
+// crawled through at a speed no repair could fit (simple-icons' ferrari.svg,
+// whose near-retracted handles gave 5e28 times a limit).
+TEST(PlannerCore, RetractedHandleAtAJunctionIsAStop) {
+  Path p;
+  Eigen::MatrixXd P(4, 2);
+  P << 0, 0, 1e-12, 0, 3, 0.5, 6, 2;
+  p.add(geo::make_line(Eigen::Vector2d(-10, 0), Eigen::Vector2d(0, 0)), "line");
+  p.add(geo::make_bezier(P), "cubic");
+  EXPECT_TRUE(p.entry(1).cusp_at_start());
+  EXPECT_FALSE(p.entry(1).cusp_at_end());
+  EXPECT_FALSE(p.entry(0).cusp_at_end());
+  JobConfig cfg;
+  const RunOut o = run_through_core(p, cfg);
+  expect_guarantees(p, cfg, o, "retracted handle at a junction");
+  bool stop = false;
+  for (const Station& st : o.job.plan.stations) stop = stop || (std::fabs(st.s - 10) < 1e-12 && st.v == 0);
+  EXPECT_TRUE(stop);
 }
 
 // A local minimum of the speed bound (a bump of one cubic B-spline, v_lim 47.5 mm/s at feed 50,
