@@ -199,6 +199,29 @@ const std::set<std::string> kNotDrawn = {"defs", "symbol", "clipPath", "mask", "
                                          "linearGradient", "radialGradient", "style", "title", "desc",
                                          "metadata", "script", "filter", "font", "font-face", "cursor", "view"};
 
+// The inherited painting properties that decide whether a shape is seen:
+// fill (initially black), stroke (initially none), visibility. A shape with
+// neither fill nor stroke, or hidden, draws nothing (icon sets frame every
+// icon with such a path: tabler-icons' <path stroke="none" d="M0 0h24v24H0z"
+// fill="none"/>), so it is not cut.
+struct Paint {
+  bool fill = true, stroke = false, visible = true;
+  // `e`'s own values over the inherited ones ("inherit" and absent keep them)
+  Paint under(const tinyxml2::XMLElement* e) const {
+    Paint p = *this;
+    auto paint = [&](const char* name, bool& on) {
+      const std::string v = property(e, name);
+      if (!v.empty() && v != "inherit") on = v != "none";
+    };
+    paint("fill", p.fill);
+    paint("stroke", p.stroke);
+    const std::string vis = property(e, "visibility");
+    if (vis == "hidden" || vis == "collapse") p.visible = false;
+    if (vis == "visible") p.visible = true;
+    return p;
+  }
+};
+
 // Walks the element tree, collecting one cut per subpath.
 class Walker {
  public:
@@ -207,9 +230,10 @@ class Walker {
     index_ids(root);
   }
 
-  void children(const tinyxml2::XMLElement* parent, const Affine& ctm, int depth) {
+  // `paint`: the properties the children inherit (the parent's own applied)
+  void children(const tinyxml2::XMLElement* parent, const Affine& ctm, const Paint& paint, int depth) {
     for (const tinyxml2::XMLElement* e = parent->FirstChildElement(); e; e = e->NextSiblingElement())
-      element(e, ctm, depth + 1);
+      element(e, ctm, paint, depth + 1);
   }
 
   std::vector<Cut> cuts;
@@ -235,7 +259,8 @@ class Walker {
   }
 
   // `used`: drawn through a <use> (the element may be in <defs>).
-  void element(const tinyxml2::XMLElement* e, const Affine& parent_ctm, int depth, bool used = false) {
+  void element(const tinyxml2::XMLElement* e, const Affine& parent_ctm, const Paint& inherited, int depth,
+               bool used = false) {
     if (foreign_namespace(e->Name())) return;
     const std::string tag = local_name(e->Name());
     if (kNotDrawn.count(tag) && !used) return;
@@ -250,8 +275,9 @@ class Walker {
       note_once("hidden", "elements with display:none (hidden layers) skipped, first " + where);
       return;
     }
+    const Paint paint = inherited.under(e);
     if (tag == "use") {
-      use(e, where, parent_ctm, depth);
+      use(e, where, parent_ctm, paint, depth);
       return;
     }
     if (tag == "svg") fail(where, "nested <svg> elements are not supported");
@@ -261,7 +287,16 @@ class Walker {
     }
     const Affine ctm = transformed(e, parent_ctm, where);
     if (!shape) {
-      children(e, ctm, depth);
+      children(e, ctm, paint, depth);
+      return;
+    }
+    // a <style> sheet (not read) may paint or hide by class: then every shape is cut
+    if (!stylesheet_ && !paint.visible) {
+      note_once("invisible", "elements with visibility:hidden skipped, first " + where);
+      return;
+    }
+    if (!stylesheet_ && !paint.fill && !paint.stroke) {
+      note_once("unpainted", "shapes with neither fill nor stroke (not drawn) skipped, first " + where);
       return;
     }
     std::vector<Subpath> subpaths;
@@ -291,6 +326,7 @@ class Walker {
   void index_ids(const tinyxml2::XMLElement* parent) {
     for (const tinyxml2::XMLElement* e = parent->FirstChildElement(); e; e = e->NextSiblingElement()) {
       if (const char* id = e->Attribute("id")) ids_.emplace(id, e);  // the first of a repeated id, as browsers
+      if (local_name(e->Name()) == "style") stylesheet_ = true;
       index_ids(e);
     }
   }
@@ -299,7 +335,8 @@ class Walker {
   // coordinates: its transform, then a translation by (x, y) (SVG 1.1, 5.6).
   // A <symbol> is drawn as a group (width, height and a viewBox of its own
   // are refused); other files (href to another document) are refused.
-  void use(const tinyxml2::XMLElement* e, const std::string& where, const Affine& parent_ctm, int depth) {
+  void use(const tinyxml2::XMLElement* e, const std::string& where, const Affine& parent_ctm, const Paint& paint,
+           int depth) {
     const char* h = e->Attribute("href");
     if (!h) h = e->Attribute("xlink:href");
     if (!h) fail(where, "<use> without href");
@@ -325,9 +362,9 @@ class Walker {
     if (local_name(ref->Name()) == "symbol") {
       if (ref->Attribute("viewBox") || ref->Attribute("width") || ref->Attribute("height"))
         fail(where, "<use> of a <symbol> with its own viewBox or size is not supported");
-      children(ref, ctm, depth);
+      children(ref, ctm, paint.under(ref), depth);
     } else {
-      element(ref, ctm, depth + 1, true);
+      element(ref, ctm, paint, depth + 1, true);
     }
     cloning_ = was_cloning;
     active_.erase(ref);
@@ -340,6 +377,7 @@ class Walker {
   std::map<std::string, const tinyxml2::XMLElement*> ids_;
   std::set<const tinyxml2::XMLElement*> active_;  // the elements being drawn through <use>, for cycles
   bool cloning_ = false;                          // drawing through a <use>
+  bool stylesheet_ = false;                       // the file has a <style> element
   long drawn_ = 0;                                // shapes drawn, clones included
 };
 
@@ -439,7 +477,7 @@ Toolpath read_document(tinyxml2::XMLDocument& doc, const std::string& name) {
   } catch (const PathDataError& err) {
     throw InputError(name + ": svg: transform: " + err.what());
   }
-  walker.children(root, ctm, 0);
+  walker.children(root, ctm, Paint().under(root), 0);
   std::size_t segments = 0;
   for (const Cut& c : walker.cuts) segments += c.size();
   if (segments == 0) {

@@ -394,6 +394,35 @@ TEST(SvgDocument, SkippedElementsAndNotes) {
   EXPECT_NE(tp.notes[1].find("<text>"), std::string::npos);
 }
 
+// Shapes that draw nothing are not cut: neither fill nor stroke (fill is
+// black, stroke none unless set; both inherited, also through <use>), or
+// visibility:hidden (inherited, a child may set visible). tabler-icons frames
+// each of its 5491 outline icons with <path stroke="none" d="M0 0h24v24H0z"
+// fill="none"/> under a root of fill="none" stroke="currentColor": that frame
+// was cut around every icon. A file with a <style> sheet (not read: it may
+// paint or hide by class) has every shape cut.
+TEST(SvgDocument, ShapesThatDrawNothingAreNotCut) {
+  const std::string body =
+      R"~(<path stroke="none" d="M0 0h24v24H0z" fill="none"/><path d="M1 1 L5 1"/>)~"
+      R"~(<g visibility="hidden"><path d="M1 2 L5 2"/><path visibility="visible" d="M1 3 L5 3"/></g>)~"
+      R"~(<g fill="red"><path stroke="none" d="M1 4 L5 4"/></g>)~"
+      R"~(<defs><path id="f" d="M1 5 L5 5" stroke="none"/></defs><use href="#f" fill="none"/><use href="#f" fill="blue" y="1"/>)~";
+  const std::string root = R"~(width="100mm" height="100mm" viewBox="0 0 100 100" fill="none" stroke="currentColor")~";
+  const Toolpath tp = traj::input::parse_svg(doc(body, root), "t.svg");
+  const auto f = feeds(tp);
+  ASSERT_EQ(f.size(), 4u);
+  // y_mm = 100 - y: the cuts at y = 1, 3, 4 and the clone moved to 6
+  const double ys[4] = {99, 97, 96, 94};
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(first(f[i]->curve), Eigen::Vector2d(1, ys[i])) << "cut " << i;
+  ASSERT_EQ(tp.notes.size(), 2u);
+  EXPECT_NE(tp.notes[0].find("neither fill nor stroke (not drawn) skipped, first path #1"), std::string::npos)
+      << tp.notes[0];
+  EXPECT_NE(tp.notes[1].find("visibility:hidden skipped, first path #3"), std::string::npos) << tp.notes[1];
+  const Toolpath styled = traj::input::parse_svg(doc("<style>.a{stroke:red}</style>" + body, root), "t.svg");
+  EXPECT_EQ(feeds(styled).size(), 10u);  // the frame's 4 sides and the 6 other shapes
+  EXPECT_TRUE(styled.notes.empty());
+}
+
 TEST(SvgDocument, Errors) {
   // malformed path data: element named by id, character offset given
   std::string e = error_of(doc(R"~(<path id="bad" d="M 0 0 L 1 x"/>)~"));
