@@ -80,6 +80,43 @@ struct PendingSpline {
   std::size_t fit_points = 0;
 };
 
+// A spline written as a chain of Bezier pieces: every interior knot of
+// multiplicity degree + 1, each piece starting at the point the last one
+// ended on (the dxf library's issue50.dxf: 7 cubic pieces, knots 0 0 0 0
+// 0.125 0.125 0.125 0.125 ...). The pieces are independent, so where the two
+// points at a break coincide (to 1e-9 of the drawing's size) one knot and one
+// of the two points go: the same curve, C0 there. A rational piece keeps its
+// shape when all its weights are scaled, so the pieces after the break are
+// scaled to carry the first piece's end weight on. A break whose points
+// differ is left to geo::validate, which refuses it.
+void join_bezier_pieces(geo::BSpline& c) {
+  const int p = c.degree;
+  const bool rational = c.weights.size() > 0;
+  double scale = 1;
+  for (Eigen::Index i = 0; i < c.ctrl.rows(); ++i) scale = std::max(scale, c.ctrl.row(i).cwiseAbs().maxCoeff());
+  for (Eigen::Index i = c.knots.size() - p - 2; i > p; --i) {
+    // a run of p + 1 equal knots U_i .. U_{i+p} strictly inside the knot vector
+    Eigen::Index j = i;
+    while (j + 1 < c.knots.size() && c.knots[j + 1] == c.knots[i]) ++j;
+    if (c.knots[i - 1] == c.knots[i] || j - i != p || j + 1 >= c.knots.size() - p) continue;
+    const Eigen::Index n = c.ctrl.rows();
+    if (i >= n || (c.ctrl.row(i) - c.ctrl.row(i - 1)).norm() > 1e-9 * scale) continue;
+    if (rational) c.weights.tail(n - i) *= c.weights[i - 1] / c.weights[i];
+    auto drop = [](auto& m, Eigen::Index k) {  // remove row k
+      const Eigen::Index rows = m.rows() - k - 1;
+      m.middleRows(k, rows) = m.bottomRows(rows).eval();
+      m.conservativeResize(m.rows() - 1, Eigen::NoChange);
+    };
+    drop(c.ctrl, i);
+    if (rational) {
+      c.weights.segment(i, n - i - 1) = c.weights.tail(n - i - 1).eval();
+      c.weights.conservativeResize(n - 1);
+    }
+    c.knots.segment(i, c.knots.size() - i - 1) = c.knots.tail(c.knots.size() - i - 1).eval();
+    c.knots.conservativeResize(c.knots.size() - 1);
+  }
+}
+
 // Collects the entities dxflib reports; polylines and splines arrive in parts and are completed
 // when the next entity starts (or at the end).
 class Collector : public DL_CreationAdapter {
@@ -354,6 +391,7 @@ class Collector : public DL_CreationAdapter {
       rational = rational || sp.ctrl[i].w != 1.0;
     }
     if (rational) c.weights = w;
+    join_bezier_pieces(c);
     try {
       geo::validate(c, "spline");
       c = geo::clamp(c);

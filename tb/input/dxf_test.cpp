@@ -245,6 +245,54 @@ TEST(DxfReader, RationalSplineQuarterCircle) {
   for (const Eigen::Vector3d& p : samples(f[0]->curve)) EXPECT_NEAR(p.norm(), 10, 1e-12);
 }
 
+// A SPLINE written as a chain of Bezier pieces (every interior knot of
+// multiplicity degree + 1; the dxf library's issue50.dxf has 7 cubic ones) is
+// one curve, C0 at the joins: here a cubic piece and a rational one whose
+// weights start at 2 where the first ends at 1, against both pieces evaluated
+// by de Casteljau here. Pieces that do not meet are refused.
+TEST(DxfReader, SplineOfBezierPieces) {
+  const std::array<Eigen::Vector2d, 8> P = {Eigen::Vector2d(0, 0), {1, 2}, {3, 2}, {4, 0},
+                                            Eigen::Vector2d(4, 0), {5, -2}, {7, -1}, {8, 1}};
+  const std::array<double, 8> W = {1, 1, 1, 1, 2, 3, 1, 2};
+  auto spline = [&](double gap) {
+    Groups g = {{0, "SPLINE"}, {8, "0"}, {70, "12"}, {71, "3"}, {72, "12"}, {73, "8"}, {74, "0"}};
+    for (double k : {0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2}) g.push_back({40, num(k)});
+    for (int i = 0; i < 8; ++i) {
+      g.push_back({10, num(P[i].x() + (i == 4 ? gap : 0))});
+      g.push_back({20, num(P[i].y())});
+      g.push_back({30, "0"});
+      g.push_back({41, num(W[i])});
+    }
+    return g;
+  };
+  // rational de Casteljau of the piece starting at control point k, at t in [0, 1]
+  auto piece = [&](int k, double t) {
+    std::array<Eigen::Vector3d, 4> h;
+    for (int i = 0; i < 4; ++i) h[i] << W[k + i] * P[k + i], W[k + i];
+    for (int r = 1; r < 4; ++r)
+      for (int i = 0; i < 4 - r; ++i) h[i] = (1 - t) * h[i] + t * h[i + 1];
+    return Eigen::Vector2d(h[0].head<2>() / h[0][2]);
+  };
+  Dxf d;
+  d.insunits = 4;
+  d.entities = {spline(0)};
+  const Toolpath tp = d.read();
+  const auto f = feeds(tp);
+  ASSERT_EQ(f.size(), 1u);
+  const BSpline& c = f[0]->curve;
+  EXPECT_EQ(c.n_ctrl(), 7);
+  const Curve cv(c);
+  for (int i = 0; i <= 40; ++i) {
+    const double u = 2.0 * i / 40;
+    const Eigen::Vector2d want = u <= 1 ? piece(0, u) : piece(4, u - 1);
+    EXPECT_LT((cv.point(u).head<2>() - want).norm(), 1e-12) << "u = " << u;
+  }
+  d.entities = {spline(1e-3)};
+  const std::string e = error_of(d);
+  EXPECT_NE(e.find("err.dxf: entity 1 (SPLINE): "), std::string::npos) << e;
+  EXPECT_NE(e.find("multiplicity"), std::string::npos) << e;
+}
+
 TEST(DxfReader, UnitsAnd3D) {
   Dxf d;
   d.insunits = 1;
