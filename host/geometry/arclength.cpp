@@ -127,18 +127,27 @@ ArcLength::ArcLength(const Curve& c, double rel_tol) : c_(&c), rel_tol_(rel_tol)
   }
 }
 
-// Length of [a, b] (a < b, inside the span) by the adaptive rule on each piece between the span's
-// deep speed minima; whole_tol is shared out by the pieces' parameter widths.
-double ArcLength::split_length(int span, double a, double b, double whole_tol) const {
-  double sum = 0, from = a;
-  auto piece = [&](double to) {
-    if (!(to > from)) return;
-    sum += adapt(span, from, to, gl6(span, from, to), whole_tol * (to - from) / (b - a));
-    from = to;
-  };
+// Calls piece(from, to) for the pieces of [a, b] (a < b, inside the span) between the span's deep
+// speed minima, in order; stops at the first that returns false.
+template <class F>
+bool ArcLength::each_piece(int span, double a, double b, F piece) const {
+  double from = a;
   for (double u : dips_[static_cast<size_t>(span)])
-    if (u > a && u < b) piece(u);
-  piece(b);
+    if (u > a && u < b) {
+      if (!piece(from, u)) return false;
+      from = u;
+    }
+  return piece(from, b);
+}
+
+// Length of [a, b] by the adaptive rule on each piece between deep speed minima; whole_tol is
+// shared out by the pieces' parameter widths.
+double ArcLength::split_length(int span, double a, double b, double whole_tol) const {
+  double sum = 0;
+  each_piece(span, a, b, [&](double from, double to) {
+    sum += adapt(span, from, to, gl6(span, from, to), whole_tol * (to - from) / (b - a));
+    return true;
+  });
   return sum;
 }
 
@@ -395,23 +404,16 @@ bool ArcLength::dip_inside(int span, double a, double b) const {
   return false;
 }
 
-// gk_adapt on each piece of [a, b] (a < b) between the span's deep speed minima, the budget shared
-// by the pieces' widths.
+// gk_adapt on each piece of [a, b] between deep speed minima, the budget shared by their widths.
 bool ArcLength::gk_split(int span, double a, double b, double tol, double& val, double& err) const {
   val = err = 0;
-  double from = a;
-  auto piece = [&](double to) {
-    if (!(to > from)) return true;
+  return each_piece(span, a, b, [&](double from, double to) {
     double v, e;
     if (!gk_adapt(span, from, to, tol * (to - from) / (b - a), 0, v, e)) return false;
     val += v;
     err += e;
-    from = to;
     return true;
-  };
-  for (double u : dips_[static_cast<size_t>(span)])
-    if (u > a && u < b && !piece(u)) return false;
-  return piece(b);
+  });
 }
 
 bool ArcLength::fast_advance(int si, double ua, double ds, double s_tol, double& u_out, const double* d_from) const {

@@ -125,6 +125,8 @@ class ArcLength {
   // quadrature splits there
   std::vector<std::vector<double>> dips_;
   double split_length(int span, double a, double b, double whole_tol) const;
+  template <class F>
+  bool each_piece(int span, double a, double b, F piece) const;
   mutable ArcLengthStats stats_;
 };
 
