@@ -102,18 +102,14 @@ void join_bezier_pieces(geo::BSpline& c) {
     const Eigen::Index n = c.ctrl.rows();
     if (i >= n || (c.ctrl.row(i) - c.ctrl.row(i - 1)).norm() > 1e-9 * scale) continue;
     if (rational) c.weights.tail(n - i) *= c.weights[i - 1] / c.weights[i];
-    auto drop = [](auto& m, Eigen::Index k) {  // remove row k
+    auto drop = [](auto& m, Eigen::Index k) {  // remove row k (of the points, the weights, the knots)
       const Eigen::Index rows = m.rows() - k - 1;
       m.middleRows(k, rows) = m.bottomRows(rows).eval();
       m.conservativeResize(m.rows() - 1, Eigen::NoChange);
     };
     drop(c.ctrl, i);
-    if (rational) {
-      c.weights.segment(i, n - i - 1) = c.weights.tail(n - i - 1).eval();
-      c.weights.conservativeResize(n - 1);
-    }
-    c.knots.segment(i, c.knots.size() - i - 1) = c.knots.tail(c.knots.size() - i - 1).eval();
-    c.knots.conservativeResize(c.knots.size() - 1);
+    if (rational) drop(c.weights, i);
+    drop(c.knots, i);
   }
 }
 
