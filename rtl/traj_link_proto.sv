@@ -186,7 +186,9 @@ module traj_link_proto #(
 
   // Decodes of the position in the body, registered (timing): a byte at
   // cycle t sees the position after every earlier byte, since bytes come at
-  // most every other cycle. p = idx - 8 is the payload offset.
+  // most every other cycle. p = idx - 8 is the payload offset. Comparisons
+  // with a constant as logic (traj_ge_const: no carry chain).
+  `include "traj_ge_const.svh"
   logic [11:0] p;
   logic        in_pay;    // a payload byte
   logic        overlong;  // past the CRC
@@ -194,30 +196,33 @@ module traj_link_proto #(
   logic        pd_ctick_q, pd_cshift_q, pd_cpulse_q, pd_cen_q, pd_cres_q;
   logic        pd_cm_q, pd_csmax_q, pd_covr_q, pd_cshl_q, pd_cfl_q, pd_p4_q, pd_fres_q, pd_cscale_q, pd_cfg_q;
   assign p        = idx_q - 12'd8;
+  function automatic logic p_in(input logic [11:0] x, input int lo, input int hi);  // lo <= x < hi
+    p_in = traj_ge_const(32'(x), 32'(lo)) && !traj_ge_const(32'(x), 32'(hi));
+  endfunction
   assign in_pay   = pd_pay_q;
   assign overlong = pd_over_q;
   always_ff @(posedge clk_i) begin
-    pd_pay_q    <= (idx_q >= 12'd8) && (p < len_q);
-    pd_over_q   <= (idx_q >= 12'd8) && (p >= len_q + 12'd4);
-    pd_k_q      <= (p >= 12'd4) && (p < 12'd8);
-    pd_reg_q    <= (p >= 12'd12) && (p < 12'(RecBytes - 4));
+    pd_pay_q    <= traj_ge_const(32'(idx_q), 32'd8) && (p < len_q);
+    pd_over_q   <= traj_ge_const(32'(idx_q), 32'd8) && (p >= len_q + 12'd4);
+    pd_k_q      <= p_in(p, 4, 8);
+    pd_reg_q    <= p_in(p, 12, RecBytes - 4);
     pd_p0_q     <= (p == 12'd0);
-    pd_p13_q    <= (p >= 12'd1) && (p < 12'd4);
-    pd_pseq_q   <= (p >= 12'd8) && (p < 12'd12);
-    pd_ctick_q  <= (p < 12'd4);
-    pd_cshift_q <= (p >= 12'd8) && (p < 12'(8 + Axes));
+    pd_p13_q    <= p_in(p, 1, 4);
+    pd_pseq_q   <= p_in(p, 8, 12);
+    pd_ctick_q  <= p_in(p, 0, 4);
+    pd_cshift_q <= p_in(p, 8, 8 + Axes);
     pd_cpulse_q <= (p == 12'd16) || (p == 12'd17);
     pd_cen_q    <= (p == 12'd20);
-    pd_cres_q   <= ((p > 12'd20) && (p < 12'd24)) || (p == 12'd38) || (p == 12'd39);
-    pd_cm_q     <= (p >= 12'd24) && (p < 12'd28);
-    pd_csmax_q  <= (p >= 12'd28) && (p < 12'd32);
-    pd_covr_q   <= (p >= 12'd32) && (p < 12'd36);
+    pd_cres_q   <= p_in(p, 21, 24) || (p == 12'd38) || (p == 12'd39);
+    pd_cm_q     <= p_in(p, 24, 28);
+    pd_csmax_q  <= p_in(p, 28, 32);
+    pd_covr_q   <= p_in(p, 32, 36);
     pd_cshl_q   <= (p == 12'd36);
     pd_cfl_q    <= (p == 12'd37);
     pd_p4_q     <= (p == 12'd4);
-    pd_fres_q   <= (p >= 12'd5) && (p < 12'd8);
-    pd_cscale_q <= (p >= 12'd24) && (p < 12'd40);
-    pd_cfg_q    <= (p < 12'd40);
+    pd_fres_q   <= p_in(p, 5, 8);
+    pd_cscale_q <= p_in(p, 24, 40);
+    pd_cfg_q    <= p_in(p, 0, 40);
   end
 
   logic known;

@@ -175,6 +175,10 @@ module traj_step_gen #(
   assign pulse_one   = (pulse_i == TimeWidth'(1));
   assign setup_zero  = (setup_i == '0);
   assign hold_zero   = (hold_q == '0);
+  // setup_i - pulse_i, its sign in the top bit: the subtraction's borrow
+  // decides the clamp to 0 (no comparator beside it)
+  logic [TimeWidth:0] hold_d;
+  assign hold_d      = {1'b0, setup_i} - {1'b0, pulse_i};
 
   // the sample bit of q's bit fbit_q of axis fax_q: sign-extended above, 0
   // below; one OutWidth:1 multiplexer per axis, then the axis (a variable
@@ -193,13 +197,15 @@ module traj_step_gen #(
   assign sbit = sbit_axis[fax_q];
 
   // sub-chords per tick = 2^m: the most (m <= SubBits) that divide the period
-  // into intervals of at least 2 PrepClocks clocks
+  // into intervals of at least 2 PrepClocks clocks (P / 2^k >= 2 PrepClocks
+  // <=> P >= 2 PrepClocks 2^k: a comparison with a constant, as logic)
+  `include "traj_ge_const.svh"
   function automatic logic [MW-1:0] sub_bits(input logic [PeriodWidth-1:0] p);
     logic ok;
     sub_bits = '0;
     ok = 1'b1;
     for (int k = 1; k <= SubBits; k++) begin
-      ok = ok && (p[k-1] == 1'b0) && ((32'(p) >> k) >= 32'(2 * PrepClocks));
+      ok = ok && (p[k-1] == 1'b0) && traj_ge_const(32'(p), 32'((2 * PrepClocks) << k));
       if (ok) sub_bits = MW'(k);
     end
   endfunction
@@ -280,7 +286,7 @@ module traj_step_gen #(
 
   // datapath of the pass (not reset)
   always_ff @(posedge clk_i) begin
-    hold_q <= (setup_i > pulse_i) ? setup_i - pulse_i : '0;
+    hold_q <= hold_d[TimeWidth] ? '0 : hold_d[TimeWidth-1:0];
     pm_q   <= sub_bits(period_i);
     ntq_q  <= NW'({nper_q, 1'b0}) << nm_q;
     nlen_q <= nper_q >> nm_q;
