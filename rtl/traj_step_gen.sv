@@ -337,7 +337,7 @@ module traj_step_gen #(
     if (prep_q) pram[{ax_q, bit_q}] <= {ddbit, tickp_q ? dbit : prd_q[1], tickp_q ? sbit_q : prd_q[0]};
   end
 
-  assign pbit      = prd_q[0] && !(reinit_q && 32'(bit_q) < 32'(F));
+  assign pbit      = prd_q[0] && !(reinit_q && !traj_ge_const(32'(bit_q), 32'(F)));
   assign dbit      = sbit_q ^ pbit ^ borrow_q;
   assign borrow_d  = (!sbit_q && pbit) || (!sbit_q && borrow_q) || (pbit && borrow_q);
   assign ppbit     = prd_q[1];
@@ -366,8 +366,9 @@ module traj_step_gen #(
 
   for (genvar a = 0; a < Axes; a++) begin : g_axis
     logic [RW-1:0]        nd_q;      // next interval's D (rotates during the pass)
-    logic [RW-1:0]        d_q, r_q;  // running interval: D, remainder
-    logic [RW-1:F]        alt_q;     // its D -/+ T above bit F (T's low F bits are 0: below, D's)
+    logic [RW-1:0]        r_q;       // running interval's remainder (its D and D -/+ T are
+                                     // the adders' registers, below)
+    logic                 fast_q;    // its |D| > T (more than one step per clock)
     logic                 dpos_q;    // running interval's D >= 0
     logic                 dnz_q;     // running interval's D != 0
     logic                 nnz_q;     // nd_q != 0, formed with it in the pass (no wide OR)
@@ -401,10 +402,16 @@ module traj_step_gen #(
     // each sum one whole carry chain (split at bit F, the low half's carry-out
     // into the upper halves, Yosys mapped those upper halves' carries as a LUT
     // per bit: 25 MHz on the HX8K); in DSP blocks (UseDsp) their low 32 bits
-    // take no logic cells (traj_add)
-    traj_add #(.Width(RW), .UseDsp(UseDsp)) u_sum_d (.a_i(r_q), .b_i(d_q), .ci_i(1'b0), .sum_o(sum_d));
-    traj_add #(.Width(RW), .UseDsp(UseDsp)) u_sum_alt (.a_i(r_q), .b_i({alt_q, d_q[F-1:0]}), .ci_i(1'b0),
-                                             .sum_o(sum_alt));
+    // take no logic cells (traj_add). The running interval's D and D -/+ T
+    // (above bit F; T's low F bits are 0: below, D's) are the adders' own
+    // registers, loaded with the interval (RegB: in a DSP block, the block's
+    // input registers, no logic cells)
+    traj_add #(.Width(RW), .UseDsp(UseDsp), .RegB(1)) u_sum_d (
+      .clk_i, .be_i(load), .a_i(r_q), .b_i(nd_q), .ci_i(1'b0), .sum_o(sum_d)
+    );
+    traj_add #(.Width(RW), .UseDsp(UseDsp), .RegB(1)) u_sum_alt (
+      .clk_i, .be_i(load), .a_i(r_q), .b_i({alt_d, nd_q[F-1:0]}), .ci_i(1'b0), .sum_o(sum_alt)
+    );
     assign steps_now = active_q && (dpos_q ? !sum_alt[RW-1] : sum_d[RW-1]);  // a step this clock
     assign up      = steps_now && dpos_q;
     assign down    = steps_now && !dpos_q;
@@ -417,8 +424,7 @@ module traj_step_gen #(
 
     always_ff @(posedge clk_i) begin
       if (load) begin
-        d_q    <= nd_q;
-        alt_q  <= alt_d;
+        fast_q <= nd_q[RW-1] ? alt_d[RW-1] : (!alt_d[RW-1] && {alt_d, nd_q[F-1:0]} != '0);
         dpos_q <= !nd_q[RW-1];
         dnz_q  <= nnz_q;
       end
@@ -504,7 +510,7 @@ module traj_step_gen #(
     // interval starts), due overflow (flagged at
     // |due| >= 2^(DueWidth-2), before it can wrap: it moves by <= 2 per clock)
     logic too_fast;
-    assign too_fast    = loaded_q && (d_q[RW-1] ? alt_q[RW-1] : (!alt_q[RW-1] && {alt_q, d_q[F-1:0]} != '0));
+    assign too_fast    = loaded_q && fast_q;
     assign err_axis[a] = too_fast || (due_q[DueWidth-1] != due_q[DueWidth-2]);
 
     assign step_o[a] = step_q;

@@ -216,7 +216,9 @@ module traj_time_scale #(
   // the stop's travel + S (S1), or S alone (the move's X: the commit, the
   // apply pass; sum is 0 there, after the plan or a pass)
   logic [SumW-1:0] sadd;
-  traj_add #(.Width(SumW), .UseDsp(UseDsp)) u_sadd (.a_i(sum_q), .b_i(SumW'(ws_q)), .ci_i(1'b0), .sum_o(sadd));
+  traj_add #(.Width(SumW), .UseDsp(UseDsp)) u_sadd (
+    .clk_i, .be_i(1'b0), .a_i(sum_q), .b_i(SumW'(ws_q)), .ci_i(1'b0), .sum_o(sadd)
+  );
 
   // serial pass: the bits of X 2^sh + frac (l) and (av + cin) 2^32 (r)
   logic            xb, in_f, in_a, fb, ab, pl, pr, apply, na;
@@ -248,6 +250,7 @@ module traj_time_scale #(
   logic            msub;
   assign msub = dq_q && sg_q;
   traj_add #(.Width(34), .CarryIn(1), .UseDsp(UseDsp)) u_mt (
+    .clk_i, .be_i(1'b0),
     .a_i({acc_q[32], acc_q}), .b_i({2'b00, dq_q ? frac_q : 32'd0} ^ {34{msub}}), .ci_i(msub), .sum_o(mt)
   );
   assign pb   = mt[0];

@@ -60,6 +60,8 @@ endmodule
 
 // (rtl/traj_add.sv, UseDsp = 1: the iCEBreaker's step generator)
 module SB_MAC16 #(
+  parameter [0:0] C_REG = 1'b0,
+  parameter [0:0] D_REG = 1'b0,
   parameter [1:0] TOPOUTPUT_SELECT = 2'd0,
   parameter [1:0] TOPADDSUB_LOWERINPUT = 2'd0,
   parameter [0:0] TOPADDSUB_UPPERINPUT = 1'b0,

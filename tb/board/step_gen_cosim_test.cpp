@@ -296,3 +296,37 @@ TEST(StepGen, OneMegahertzOnThreeAxes) {
                 static_cast<long long>(dec[a].count), busiest, busiest / 1e3);
   }
 }
+
+TEST(StepGen, MoreThanOneStepPerClockIsAnError) {
+  // Axis 0 at a constant speed of `per_tick` steps per tick of 400 clocks
+  // (shift 0). Above 400 the DDA would need more than one step a clock:
+  // err_o rises the clock after such an interval starts, in both models
+  // (compared every cycle: a late or missing flag in either is a mismatch,
+  // before the pulses could fall behind and raise it for their own reason).
+  // At 150 steps per tick there is no error.
+  auto run = [](int64_t per_tick, bool* err, std::string* why) {
+    Bench b;
+    Model::In in;
+    in.period = 400;
+    in.pulse = 1;
+    in.setup = 0;
+    in.enable = true;
+    if (!b.reset(in, why)) return false;
+    in.rst_n = true;
+    for (int k = 0; k < 6; ++k) {
+      in.sample[0] = static_cast<traj::u128>(k * per_tick);
+      for (uint32_t c = 0; c < in.period; ++c) {
+        in.sample_valid = (c == 0);
+        if (!b.cycle(in, why)) return false;
+      }
+    }
+    *err = b.err();
+    return true;
+  };
+  std::string why;
+  bool err = false;
+  ASSERT_TRUE(run(150, &err, &why)) << why;
+  EXPECT_FALSE(err) << "150 steps per tick of 400 clocks";
+  ASSERT_TRUE(run(1200, &err, &why)) << why;
+  EXPECT_TRUE(err) << "1200 steps per tick of 400 clocks";
+}
