@@ -222,7 +222,7 @@ class StepGen {
       fetch_d = true;
       fax_d = 0;
       fbit_d = 0;
-      reinit_d = period != cur_per_q_;
+      reinit_d = period != nper_q_;
       tickp_d = true;
       nm_d = pm_q_;
       subs_d = first_q_ ? 0 : (1 << nm_d) - 1;
@@ -251,12 +251,11 @@ class StepGen {
     }
     bool active_d = active_q_, last_d = last_q_;
     const bool loaded_d = load;
-    uint32_t cnt_d = cnt_q_, cur_per_d = cur_per_q_;
+    uint32_t cnt_d = cnt_q_;
     if (load) {
       nready_d = false;
       active_d = true;
       cnt_d = nlen_q_;
-      cur_per_d = nper_q_;
       last_d = nlen_q_ == 1;
     } else if (active_q_) {
       cnt_d = (cnt_q_ - 1) & pmask;
@@ -270,7 +269,7 @@ class StepGen {
     bool borrow_dd = borrow_q_, borrow2_dd = borrow2_q_, c1_dd = c1_q_, b2_dd = b2_q_;
     uint32_t dl1_d = dl1_q_, dl2_d = dl2_q_;
     if (take) {
-      nper_d = period;
+      if (!first_q_) nper_d = period;  // the first sample's pass loads no interval
       j_d = jst_q_[0];
     } else if (fetch_q_) {
       j_d = f_last_bit ? jst_q_[fax_inc] : j_q_ + 1;
@@ -324,7 +323,6 @@ class StepGen {
     alt_q_st_ = alt_st_d;
     nready_q_ = nready_d;
     nper_q_ = nper_d;
-    cur_per_q_ = cur_per_d;
     active_q_ = active_d;
     loaded_q_ = loaded_d;
     last_q_ = last_d;
@@ -351,7 +349,7 @@ class StepGen {
       loaded_q_ = false;
       last_q_ = false;
       cnt_q_ = 0;
-      cur_per_q_ = 0;
+      nper_q_ = 0;
       en_q_ = false;
       err_q_ = false;
     }
@@ -393,7 +391,7 @@ class StepGen {
   uint8_t prd_q_ = 0;
   int subs_q_ = 0, nm_q_ = 0;       // sub-chords left to prepare; m of the tick
   int pm_q_ = 0;                    // m of the period in the clock before (the RTL's pm_q)
-  uint32_t nper_q_ = 0, cur_per_q_ = 0, nlen_q_ = 0;
+  uint32_t nper_q_ = 0, nlen_q_ = 0;  // nper_q_: at a take, the period of the last interval loaded
   u128 ntq_q_ = 0;  // kNtW bits: T / 2^F of the next interval
   bool active_q_ = false, loaded_q_ = false, last_q_ = false;
   uint32_t cnt_q_ = 0;

@@ -145,8 +145,8 @@ module traj_step_gen #(
   logic [SubBits:0]       subs_q;     // sub-chords of the tick still to prepare
   logic                   alt_q_st;   // the pass has ended: one clock to nready_q
   logic                   nready_q;   // the next interval's D is ready
-  logic [PeriodWidth-1:0] nper_q;     // its period
-  logic [PeriodWidth-1:0] cur_per_q;  // period of the last interval loaded
+  logic [PeriodWidth-1:0] nper_q;     // its period; at a take, that of the last interval loaded (0: none
+                                      // yet; a take finds every interval prepared before it loaded)
   // DDA (shared interval counter)
   logic                   active_q, last_q;  // last_q == (cnt_q == 1)
   logic [PeriodWidth-1:0] cnt_q;
@@ -228,7 +228,7 @@ module traj_step_gen #(
       loaded_q  <= 1'b0;
       last_q    <= 1'b0;
       cnt_q     <= '0;
-      cur_per_q <= '0;
+      nper_q    <= '0;
       en_q      <= 1'b0;
       err_q     <= 1'b0;
     end else begin
@@ -240,7 +240,9 @@ module traj_step_gen #(
         fbit_q   <= '0;
         // restart from the step boundary when the period differs from the
         // last interval's (0 after reset: the first interval)
-        reinit_q <= (period_i != cur_per_q);
+        reinit_q <= (period_i != nper_q);
+        // (the first sample's pass loads no interval: 0 stays the last period)
+        if (!first_q) nper_q <= period_i;
         tickp_q  <= 1'b1;
         subs_q   <= first_q ? '0 : (SubBits+1)'((1 << pm_q) - 1);
       end else if (subgo) begin
@@ -274,7 +276,6 @@ module traj_step_gen #(
         nready_q  <= 1'b0;
         active_q  <= 1'b1;
         cnt_q     <= nlen_q;
-        cur_per_q <= nper_q;
         last_q    <= (nlen_q == PeriodWidth'(1));
       end else if (active_q) begin
         cnt_q  <= cnt_q - 1'b1;
@@ -292,7 +293,6 @@ module traj_step_gen #(
     nlen_q <= nper_q >> nm_q;
     sbit_q <= sbit;
     if (take) begin
-      nper_q <= period_i;
       nm_q   <= pm_q;
       j_q    <= jst_q[0 +: JW];
     end else if (fetch_q) begin
