@@ -28,6 +28,12 @@ case $board in
   hx8k)       device=hx8k package=ct256 top=traj_hx8k_top       pcf=hx8k_breakout.pcf mhz=60 synth_opts="" ;;
   *) echo "bitstream.sh: unknown board '$board' (icebreaker or hx8k)" >&2; exit 1 ;;
 esac
+# the top's ClkHz when PARAMS set it or pick another default (the iCEBreaker
+# with the time-scale unit: 24 MHz, rtl/board/traj_icebreaker_top.sv)
+case " ${PARAMS:-} " in
+  *" ClkHz="*) mhz=$(( $(echo " $PARAMS " | sed -E 's/.* ClkHz=([0-9_]+) .*/\1/; s/_//g') / 1000000 )) ;;
+  *" TimeScale=1 "*) [ "$board" = icebreaker ] && mhz=24 ;;
+esac
 pcf=$root/constraints/$pcf
 dist=$root/build/bitstreams
 out=${OUT:-$dist/work_$board}

@@ -342,8 +342,8 @@ class Uploader : public FeedPort {
            std::to_string(config_.scale_shift) + " (scale bits " + std::to_string(ts_.bounds.scale_bits) +
            ", servo tick " + num(ts_.servo_period * 1e3) + " ms = 2^" + std::to_string(ts_.p) +
            " engine ticks). A build without the time-scale unit (the loopback board is one) refuses any time "
-           "scaling; a build with it refuses values at or above 2^SW (SW = 20 on the simulated board: a longer "
-           "--servo-period makes the scale bits, m and S_max smaller); or " + other;
+           "scaling; a build with it refuses values at or above 2^SW (SW = 20 on the simulated board and the HX8K, "
+           "16 on the iCEBreaker: a longer --servo-period makes the scale bits, m and S_max smaller); or " + other;
   }
 
   // ---- live feed control (FeedPort) -------------------------------------

@@ -1,7 +1,8 @@
 // trajcore: iCEBreaker (iCE40UP5K-SG48) board top. Pins: constraints/icebreaker.pcf.
 //
-//   12 MHz oscillator -> SB_PLL40_PAD -> ClkHz core clock (icepll -i 12 -o 30:
-//   DIVR 0, DIVF 79, DIVQ 5, FILTER_RANGE 1)
+//   12 MHz oscillator -> SB_PLL40_PAD -> ClkHz core clock: 30 MHz (icepll -i
+//   12 -o 30: DIVR 0, DIVF 79, DIVQ 5, FILTER_RANGE 1), with the time-scale
+//   unit 24 MHz (icepll -i 12 -o 24: DIVF 63)
 //   reset: power-on, PLL lock, user button BTN_N (traj_reset_sync)
 //   feed hold (TimeScale = 1): button BTN1 of the snap-off PMOD2 section
 //   (active high, the section's own pull-down; 2-flop synchroniser)
@@ -15,16 +16,20 @@
 // The portable logic is traj_board (host link, segment FIFO in SPRAM, the
 // time-multiplexed FD engine traj_fd_tm in the main job's format, tick and
 // step generators; the step generator's DDA sums in 6 of the UP5K's 8 DSP
-// blocks, with TimeScale = 1 two of the unit's adders in the other 2). TimeScale = 1 adds the time-scale unit (feed override,
-// feed hold, a stop on the path when data runs out); that build needs more
-// logic cells than the UP5K has (rtl/README.md, "Boards and bitstreams"),
-// so the default is 0: no time scaling (the link refuses it), BTN1 unused.
+// blocks, with TimeScale = 1 two of the unit's adders in the other 2).
+// TimeScale = 1 adds the time-scale unit (feed override, feed hold, a stop
+// on the path when data runs out) with SW = 16 (CONFIG's m, s_max and
+// override below 2^16) at a 24 MHz core clock: that build fills 98 % of the
+// UP5K's logic cells and does not reach 30 MHz (rtl/README.md, "Boards and
+// bitstreams"). The default is 0: no time scaling (the link refuses it),
+// BTN1 unused, 30 MHz.
 `default_nettype none
+`include "traj_check.svh"
 
 module traj_icebreaker_top #(
-  parameter int ClkHz     = 30_000_000,  // must match the PLL settings below
-  parameter int Baud      = 1_000_000,
-  parameter int TimeScale = 0            // 1: the time-scale unit (does not fit the UP5K, above)
+  parameter int TimeScale = 0,           // 1: the time-scale unit (SW 16, 24 MHz, above)
+  parameter int ClkHz     = (TimeScale != 0) ? 24_000_000 : 30_000_000,  // 24 or 30 MHz: the PLL below
+  parameter int Baud      = 1_000_000
 ) (
   input  logic       clk_i,       // 35: 12 MHz oscillator
   input  logic       btn_ni,      // 10: user button BTN_N
@@ -45,10 +50,14 @@ module traj_icebreaker_top #(
   logic hold;  // the hold button, synchronised
   logic run, err, beat;
 
+  `TRAJ_PARAM_CHECK(g_bad_clk, ClkHz == 24_000_000 || ClkHz == 30_000_000,
+                    "traj_icebreaker_top: ClkHz must be 24 or 30 MHz (the PLL's settings)")
+  `TRAJ_PARAM_CHECK(g_bad_ts, TimeScale == 0 || TimeScale == 1, "traj_icebreaker_top: TimeScale must be 0 or 1")
+
   SB_PLL40_PAD #(
     .FEEDBACK_PATH("SIMPLE"),
     .DIVR(4'b0000),
-    .DIVF(7'b1001111),
+    .DIVF((ClkHz == 24_000_000) ? 7'd63 : 7'd79),  // 12 MHz * (DIVF + 1) / 2^DIVQ
     .DIVQ(3'b101),
     .FILTER_RANGE(3'b001)
   ) u_pll (
@@ -91,7 +100,7 @@ module traj_icebreaker_top #(
 
   traj_board #(
     .ClkHz(ClkHz), .Baud(Baud), .Axes(3), .Degree(5), .Width(96), .ChunkWidth(16), .GuardBits(48),
-    .FifoDepth(16384), .FdTimeMux(1'b1), .TimeScale(TimeScale), .ScaleWidth(20), .StatusRam(3),
+    .FifoDepth(16384), .FdTimeMux(1'b1), .TimeScale(TimeScale), .ScaleWidth(16), .StatusRam(3),
     .UseDsp(1)
   ) u_board (
     .clk_i(clk), .rst_ni(rst_n), .rx_i(rx_q[1]), .tx_o,
