@@ -1,11 +1,12 @@
 # SPDX-License-Identifier: Apache-2.0
-# traj_verilate_unit(<target> <prefix> <unit> [TRACE] [FAST] PARAMS Name=Value ...)
+# traj_verilate_unit(<target> <prefix> <unit> [TRACE] [FAST] PARAMS Name=Value ... [EXTRA file ...])
 # Verilates one unit of rtl/ into <target> as class <prefix>, with the
 # parameters given (-G), random initial state and X (the lockstep driver,
 # host/sim/lockstep.hpp, compares from the first reset edge on). FAST: -O3
-# (the tool's builds); TRACE: VCD tracing. Units: the rows of rtl/units.txt.
+# (the tool's builds); TRACE: VCD tracing; EXTRA: more Verilog sources (a
+# device primitive's simulation model). Units: the rows of rtl/units.txt.
 function(traj_verilate_unit target prefix unit)
-  cmake_parse_arguments(V "TRACE;FAST" "" "PARAMS" ${ARGN})
+  cmake_parse_arguments(V "TRACE;FAST" "" "PARAMS;EXTRA" ${ARGN})
   # The unit's files: its row of rtl/units.txt (the one table of units).
   file(STRINGS ${TRAJ_RTL_DIR}/units.txt rows REGEX "^${unit} ")
   if(NOT rows)
@@ -23,7 +24,7 @@ function(traj_verilate_unit target prefix unit)
   if(V_TRACE)
     set(trace TRACE)
   endif()
-  verilate(${target} SOURCES ${sources} TOP_MODULE ${unit} PREFIX ${prefix} INCLUDE_DIRS ${TRAJ_RTL_DIR} ${trace}
+  verilate(${target} SOURCES ${V_EXTRA} ${sources} TOP_MODULE ${unit} PREFIX ${prefix} INCLUDE_DIRS ${TRAJ_RTL_DIR} ${trace}
     VERILATOR_ARGS -Wall ${opt} --x-assign unique --x-initial unique ${gparams})
   target_link_libraries(${target} PRIVATE trajcore_lockstep)
   target_compile_options(${target} PRIVATE -Wno-unused-parameter)  # Verilator's generated code
