@@ -11,6 +11,8 @@
 #        PARAMS         parameters of the top, "Name=Value ..." (e.g. "TimeScale=1")
 #        YOSYS_EXTRA    more synth_ice40 options (e.g. "-abc9 -device u")
 #        NEXTPNR_EXTRA  more nextpnr-ice40 options (e.g. "--opt-timing")
+#        PACK_ONLY      1: only pack (seconds): print the logic cells the design
+#                       needs, also when they exceed the device (no placement)
 #
 # Output: build/bitstreams/BOARD.bin (BOARD_<PARAMS>.bin with PARAMS) from the
 # first seed in SEEDS; one line per seed: logic cells, block RAM, SPRAM, Fmax
@@ -53,6 +55,13 @@ if ! yosys -q -l "$out/yosys.log" -p "read_verilog -sv -I$root/rtl $files; $chpa
 fi
 
 echo "$board: $top on $device-$package, core clock $mhz MHz, pins $(basename "$pcf")${PARAMS:+, $PARAMS}"
+if [ "${PACK_ONLY:-0}" = 1 ]; then
+  nextpnr-ice40 --"$device" --package $package --pcf "$pcf" --json "$json" --pack-only >"$out/nextpnr_pack.log" 2>&1 ||
+    { echo "bitstream.sh: nextpnr-ice40 --pack-only failed, see $out/nextpnr_pack.log" >&2; exit 1; }
+  echo "logic cells needed: $({ grep -E "ICESTORM_LC: *[0-9]+/" "$out/nextpnr_pack.log" || true; } | tail -1 |
+    sed -E 's/.*ICESTORM_LC: *([0-9]+\/ *[0-9]+).*/\1/; s/ //g') (packed, not placed)"
+  exit 0
+fi
 printf '%-5s %6s %5s %6s %4s %10s\n' seed LCs BRAM SPRAM DSP Fmax_MHz
 status=0 shipped=""
 for seed in $SEEDS; do
