@@ -27,6 +27,10 @@ bool stop_is_faster(const corners::CornerCandidate& c, const JobConfig& cfg) {
   plan::PlanOptions po = cfg.plan_options();
   po.caps.clear();
   po.dwells.clear();
+  // here the blend lies between two rests, where the planner would re-time
+  // it with its legs as one move on the tick grid; on the whole path the
+  // legs go on at speed, so the blend is planned as the path's profile plans it
+  po.align_curved_moves = false;
   // a jerk-limited speed-up from rest to the feed covers at most feed (feed / a + a / j)
   const double reach = L.feed * (L.feed / L.a_tan + L.a_tan / L.j_tan);
   const double h_in = std::max(0.5 * c.leg_in, std::min(0.5 * c.run_in, reach));

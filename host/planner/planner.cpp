@@ -459,6 +459,41 @@ void check_grid_size(double points, const std::string& where, double len, double
 }
 
 constexpr double kReversalCos = -0.99984770;  // cos 179 deg: a turn this sharp is a reversal, a stop
+
+// Speed bound where curve ci - 1 (frame e at its end) meets curve ci (frame
+// f at its start): 0 at a cusp or a reversal, the corner speed at a tangent
+// break, the bound of the curvature jump at a join that is tangent but not
+// curvature-continuous (as at a C1 knot), none (the feed) where both agree.
+// station: the join is a station of the profile (all but the last case).
+struct JoinBound {
+  double v = 0;
+  bool tangent = false, station = true;
+};
+
+JoinBound join_bound(const Path& p, size_t ci, const Frame& e, const Frame& f, const Limits& L, const PlanOptions& o) {
+  const int d = p.dim();
+  double dot = 0;
+  for (int a = 0; a < d; ++a) dot += e.T[a] * f.T[a];
+  JoinBound b;
+  if (p.entry(ci - 1).cusp_at_end() || p.entry(ci).cusp_at_start() || dot < kReversalCos) return b;
+  if (std::acos(std::clamp(dot, -1.0, 1.0)) > o.corner_tol) {
+    b.v = corner_speed(e.T, f.T, d, L, o);
+    return b;
+  }
+  b.tangent = true;
+  b.station = false;
+  b.v = L.feed;
+  double kscale = 0;
+  for (int a = 0; a < d; ++a) kscale = std::max({kscale, std::fabs(e.K[a]), std::fabs(f.K[a])});
+  for (int a = 0; a < d; ++a) {
+    const double dk = std::fabs(f.K[a] - e.K[a]);
+    if (dk > 1e-9 * (1 + kscale)) {
+      b.v = std::min(b.v, jump_speed(dk, L.j_axis[a], o));
+      b.station = true;
+    }
+  }
+  return b;
+}
 Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t, double J_t) {
   Grid g;
   const int d = p.dim();
@@ -541,31 +576,16 @@ Grid build_grid(const Path& p, const Limits& L, const PlanOptions& o, double A_t
         } else {
           // tangent break against the previous curve's end
           const Frame e = frame_at(p, ci - 1, p.curve(ci - 1).u_end(), s_off);
-          double dot = 0;
-          for (int a = 0; a < d; ++a) dot += e.T[a] * f.T[a];
-          const double ang = std::acos(std::clamp(dot, -1.0, 1.0));
-          if (p.entry(ci - 1).cusp_at_end() || p.entry(ci).cusp_at_start() || dot < kReversalCos) {
-            vl = 0;  // a cusp at the junction (PathCurve::cusp_at_start) or a reversal: a stop
-            corner = true;
-          } else if (ang > o.corner_tol) {
-            vl = corner_speed(e.T, f.T, d, L, o);
-            corner = true;
-          } else {
+          const JoinBound jb = join_bound(p, ci, e, f, L, o);
+          if (jb.tangent) {
             double A_e = A_t;
-            vl = std::min(vl, speed_limit(e, L, o, A_t, J_t, d, &A_e));
+            vl = std::min({vl, jb.v, speed_limit(e, L, o, A_t, J_t, d, &A_e)});
             A_here = std::min(A_here, A_e);
             e_join = e;
-            // curvature jump at the junction (G1, not G2): same bound as at a C1 knot
-            double kscale = 0;
-            for (int a = 0; a < d; ++a) kscale = std::max({kscale, std::fabs(e.K[a]), std::fabs(f.K[a])});
-            for (int a = 0; a < d; ++a) {
-              const double dk = std::fabs(f.K[a] - e.K[a]);
-              if (dk > 1e-9 * (1 + kscale)) {
-                vl = std::min(vl, jump_speed(dk, L.j_axis[a], o));
-                corner = true;
-              }
-            }
+          } else {
+            vl = jb.v;
           }
+          corner = jb.station;
           if (!g.s.empty() && std::fabs(g.s.back() - (s_off + s)) < 1e-12) {
             g.vlim.back() = std::min(g.vlim.back(), vl);
             g.A.back() = std::min(g.A.back(), A_here);
@@ -891,7 +911,78 @@ bool aligned_move(double len, double h, double V, double Amax, double Jmax, Alig
   return found;
 }
 
-// Straight moves between two stops, re-timed on the tick grid
+// The pieces of a rest-to-rest move aligned on the tick grid (AlignedMove),
+// from arc length sa at time t; returns the end time.
+double append_aligned(std::vector<Piece>& out, double t, double sa, const AlignedMove& m, double h) {
+  const long long N = m.na + 2 * m.nj;
+  const struct {
+    long long n;
+    double j;
+  } phases[7] = {{m.nj, m.J}, {m.na, 0}, {m.nj, -m.J}, {m.nc, 0}, {m.nj, -m.J}, {m.na, 0}, {m.nj, m.J}};
+  double v = 0, a = 0, sc = sa;
+  for (int k = 0; k < 7; ++k) {
+    if (phases[k].n == 0) continue;
+    Piece q;
+    q.t0 = t;
+    q.T = static_cast<double>(phases[k].n) * h;
+    q.s0 = sc;
+    q.v0 = v;
+    q.a0 = a;
+    q.j = phases[k].j;
+    q.on_tick = true;
+    out.push_back(q);
+    t += q.T;
+    sc = q.s(q.T);
+    v = q.v(q.T);
+    a = q.a(q.T);
+    // the ends of the ramps exactly: the cruise at vp, the stop at sb
+    if (k == 2) {
+      sc = sa + 0.5 * m.vp * static_cast<double>(N) * h;
+      v = m.vp;
+      a = 0;
+    }
+    if (k == 3) sc = sa + m.vp * (0.5 * static_cast<double>(N) + static_cast<double>(m.nc)) * h;
+  }
+  return t;
+}
+
+// Whether an aligned move from arc length sa keeps every per-axis and
+// centripetal sum within the share speed_with fills: the exact trajectory's
+// per-axis velocity, acceleration and jerk (dx = T v, ddx = K v^2 + T a,
+// dddx = Q v^3 + 3 K v a + T j, with their signs), the centripetal
+// acceleration and its jerk bound, at every tick and half tick, each side
+// of a jerk switch.
+bool aligned_within_limits(const Path& p, double sa, const AlignedMove& m, double h, const Limits& L,
+                           const PlanOptions& o) {
+  std::vector<Piece> pcs;
+  append_aligned(pcs, 0, sa, m, h);
+  const int d = p.dim();
+  size_t ci = p.curve_at(sa);
+  auto within = [&](double s, double v, double acc, double jerk) {
+    while (ci + 1 < p.size() && s > p.offset(ci + 1)) ++ci;
+    const double off = p.offset(ci), len = p.offset(ci + 1) - off;
+    const Frame f = frame_at(p, ci, p.table(ci).u_at(std::clamp(s - off, 0.0, len)), s);
+    if (f.kappa * v * v > o.cen_a_share * L.a_cen ||
+        f.q_norm * v * v * v + 3 * f.kappa * v * std::fabs(acc) > o.axis_j_share * L.j_cen)
+      return false;
+    for (int x = 0; x < d; ++x)
+      if (std::fabs(f.T[x] * v) > o.axis_v_share * L.v_axis[x] ||
+          std::fabs(f.K[x] * v * v + f.T[x] * acc) > o.axis_a_share * L.a_axis[x] ||
+          std::fabs(f.Q[x] * v * v * v + 3 * f.K[x] * v * acc + f.T[x] * jerk) > o.axis_j_share * L.j_axis[x])
+        return false;
+    return true;
+  };
+  for (const Piece& q : pcs) {
+    const long long n = std::llround(q.T / h);
+    for (long long k = 0; k <= 2 * n; ++k) {
+      const double tau = 0.5 * h * static_cast<double>(k);
+      if (!within(q.s(tau), q.v(tau), q.a(tau), q.j)) return false;
+    }
+  }
+  return true;
+}
+
+// Moves between two stops, re-timed on the tick grid
 // (PlanOptions::align_straight_moves). The profile of a block between two
 // stops switches its jerk anywhere within a tick; a polynomial fitted to the
 // tick's samples then overshoots the jerk (up to about 1.5x), which is why
@@ -904,6 +995,16 @@ bool aligned_move(double len, double h, double V, double Amax, double Jmax, Alig
 // that puts its start on a tick; a move with a speed cap over a part of it
 // (a repair's) or a forced station inside (a window's commit) is left as
 // planned.
+// A curved move between two stops on one curve (align_curved_moves: a run
+// of CAM chords fitted by one smoothing curve, a raster row over a surface)
+// is re-timed the same way where the exact trajectory of the aligned move
+// keeps every per-axis and centripetal sum within its share at every half
+// tick (aligned_excess); its speed, acceleration and jerk are lowered step
+// by step from the tangential limits until it does, and the knots inside
+// cap its speed as in the plan (knot_speed_bound). Between ticks the
+// trajectory is smooth (its jerk switches on ticks), so the quintic of each
+// tick follows it closely; the fit's checks at every tick decide, as for
+// any plan.
 void retime_straight_moves(const Path& p, const Limits& L, const PlanOptions& o, Plan& plan) {
   const double h = o.period, tol = 1e-9 * std::max(1.0, plan.length);
   const int d = p.dim();
@@ -920,19 +1021,77 @@ void retime_straight_moves(const Path& p, const Limits& L, const PlanOptions& o,
       if (fs > sa + tol && fs < sb - tol) return false;
     return true;
   };
+  // the spans of curve ci at both ends of its part of [sa, sb]
+  auto spans = [&](size_t ci, double sa, double sb, int& s0, int& s1) {
+    const ArcTable& tab = p.table(ci);
+    const double off = p.offset(ci), len = p.offset(ci + 1) - off;
+    s0 = p.curve(ci).find_span(tab.u_at(std::clamp(sa - off + tol, 0.0, len)));
+    s1 = p.curve(ci).find_span(tab.u_at(std::clamp(sb - off - tol, 0.0, len)));
+  };
+  // the speed bounds of the knots and of the joins of curves inside [sa, sb]
+  // lower V (as in the plan: knot_speed_bound, join_bound); false where a
+  // join is not tangent (a corner, a cusp: a move ends there)
+  auto joins_allow = [&](double sa, double sb, double& V) {
+    const size_t c0 = p.curve_at(sa + tol), c1 = p.curve_at(sb - tol);
+    for (size_t ci = c0; ci <= c1; ++ci) {
+      if (ci > c0) {
+        const Frame e = frame_at(p, ci - 1, p.curve(ci - 1).u_end(), p.offset(ci));
+        const Frame f = frame_at(p, ci, p.curve(ci).u_begin(), p.offset(ci));
+        const JoinBound jb = join_bound(p, ci, e, f, L, o);
+        if (!jb.tangent) return false;
+        V = std::min(V, jb.v);
+      }
+      int s0 = 0, s1 = 0;
+      spans(ci, sa, sb, s0, s1);
+      for (int sp = s0 + 1; sp <= s1; ++sp) V = std::min(V, knot_speed_bound(p, ci, sp, L, o));
+    }
+    return V > 0;
+  };
   // the unit tangent of the straight span holding [sa, sb], if one does
   auto straight = [&](double sa, double sb, double* T) {
     const size_t ci = p.curve_at(0.5 * (sa + sb));
-    if (p.curve_at(sa + tol) != ci || p.curve_at(sb - tol) != ci) return false;
     const geo::Curve& c = p.curve(ci);
-    if (c.degree() != 1 || c.rational()) return false;
-    const ArcTable& tab = p.table(ci);
-    const double off = p.offset(ci);
-    const double ua = tab.u_at(sa - off + tol), ub = tab.u_at(sb - off - tol), um = tab.u_at(0.5 * (sa + sb) - off);
-    if (c.find_span(ua) != c.find_span(ub)) return false;
-    const Frame f = frame_at(p, ci, um, 0.5 * (sa + sb));
+    int s0 = 0, s1 = 0;
+    if (p.curve_at(sa + tol) != ci || p.curve_at(sb - tol) != ci || c.degree() != 1 || c.rational()) return false;
+    spans(ci, sa, sb, s0, s1);
+    if (s0 != s1) return false;
+    const Frame f = frame_at(p, ci, p.table(ci).u_at(0.5 * (sa + sb) - p.offset(ci)), 0.5 * (sa + sb));
     for (int a = 0; a < d; ++a) T[a] = f.T[a];
     return true;
+  };
+  // the fastest aligned move over [sa, sb] within the limits
+  // (aligned_within_limits) that is shorter than max_T, if one is found: for
+  // each of a few shares of the tangential jerk and acceleration, the
+  // largest speed by bisection (a lower speed lowers every term)
+  auto curved_move = [&](double sa, double sb, double V, double max_T, AlignedMove& best) {
+    const double A0 = o.tan_a_share * L.a_tan, J0 = o.axis_j_share * L.j_tan;
+    bool found = false;
+    for (double jf : {1.0, 0.85, 0.7, 0.55})
+      for (double af : {1.0, 0.75, 0.5}) {
+        const double A = af * A0, J = jf * J0;
+        auto faster = [&](double v, AlignedMove& m) {
+          return aligned_move(sb - sa, h, v, A, J, m) && static_cast<double>(m.ticks()) * h < max_T;
+        };
+        AlignedMove m;
+        if (!faster(V, m)) continue;  // not faster even at the top speed
+        if (aligned_within_limits(p, sa, m, h, L, o)) {
+          best = m, max_T = static_cast<double>(m.ticks()) * h, found = true;
+          continue;
+        }
+        double lo = 0, hi = V;  // hi: beyond the limits; lo: within them, or too slow
+        for (int it = 0; it < 7; ++it) {
+          const double mid = 0.5 * (lo + hi);
+          if (!faster(mid, m)) {
+            lo = mid;
+          } else if (aligned_within_limits(p, sa, m, h, L, o)) {
+            best = m, max_T = static_cast<double>(m.ticks()) * h, found = true;
+            lo = mid;
+          } else {
+            hi = mid;
+          }
+        }
+      }
+    return found;
   };
   std::vector<Piece> out;
   out.reserve(plan.pieces.size());
@@ -948,9 +1107,11 @@ void retime_straight_moves(const Path& p, const Limits& L, const PlanOptions& o,
     double T[kMaxAxes] = {};
     AlignedMove m;
     double V = L.feed;
-    bool use = !q0.dwell && at_rest(q0) && sb - sa > tol && caps_allow(sa, sb, V) && straight(sa, sb, T);
-    double rest = 0;
-    if (use) {
+    bool use = !q0.dwell && at_rest(q0) && sb - sa > tol && caps_allow(sa, sb, V);
+    // the rest that puts the start on a tick (ticks at m h - tick_offset)
+    const double ph = (t_start + o.tick_offset) / h;
+    const double rest = std::max(0.0, (std::ceil(ph - 1e-9) - ph) * h);
+    if (use && straight(sa, sb, T)) {
       double A = o.tan_a_share * L.a_tan, J = o.axis_j_share * L.j_tan;
       for (int a = 0; a < d; ++a) {
         const double ta = std::fabs(T[a]);
@@ -959,10 +1120,9 @@ void retime_straight_moves(const Path& p, const Limits& L, const PlanOptions& o,
         A = std::min(A, o.axis_a_share * L.a_axis[a] / ta);
         J = std::min(J, o.axis_j_share * L.j_axis[a] / ta);
       }
-      // the rest that puts the start on a tick (ticks at m h - tick_offset)
-      const double ph = (t_start + o.tick_offset) / h;
-      rest = std::max(0.0, (std::ceil(ph - 1e-9) - ph) * h);
       use = aligned_move(sb - sa, h, V, A, J, m) && rest + static_cast<double>(m.ticks()) * h < old_T - 1e-12;
+    } else if (use) {
+      use = o.align_curved_moves && joins_allow(sa, sb, V) && curved_move(sa, sb, V, old_T - rest - 1e-12, m);
     }
     if (!use) {
       for (size_t k = i; k < i1; ++k) {
@@ -972,44 +1132,16 @@ void retime_straight_moves(const Path& p, const Limits& L, const PlanOptions& o,
       i = i1;
       continue;
     }
-    double t = t_start, sc = sa;
+    double t = t_start;
     if (rest > 0) {
       Piece r;
       r.t0 = t;
       r.T = rest;
-      r.s0 = sc;
+      r.s0 = sa;
       out.push_back(r);
       t += rest;
     }
-    const long long N = m.na + 2 * m.nj;
-    const struct {
-      long long n;
-      double j;
-    } phases[7] = {{m.nj, m.J}, {m.na, 0}, {m.nj, -m.J}, {m.nc, 0}, {m.nj, -m.J}, {m.na, 0}, {m.nj, m.J}};
-    double v = 0, a = 0;
-    for (int k = 0; k < 7; ++k) {
-      if (phases[k].n == 0) continue;
-      Piece q;
-      q.t0 = t;
-      q.T = static_cast<double>(phases[k].n) * h;
-      q.s0 = sc;
-      q.v0 = v;
-      q.a0 = a;
-      q.j = phases[k].j;
-      q.on_tick = true;
-      out.push_back(q);
-      t += q.T;
-      sc = q.s(q.T);
-      v = q.v(q.T);
-      a = q.a(q.T);
-      // the ends of the ramps exactly: the cruise at vp, the stop at sb
-      if (k == 2) {
-        sc = sa + 0.5 * m.vp * static_cast<double>(N) * h;
-        v = m.vp;
-        a = 0;
-      }
-      if (k == 3) sc = sa + m.vp * (0.5 * static_cast<double>(N) + static_cast<double>(m.nc)) * h;
-    }
+    t = append_aligned(out, t, sa, m, h);
     shift += (t - t_start) - old_T;
     i = i1;
   }

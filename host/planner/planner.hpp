@@ -109,6 +109,10 @@ struct PlanOptions {
   // that the polynomial of each tick reproduces the profile exactly and the
   // jerk may use axis_j_share of the limits instead of tan_j_share.
   bool align_straight_moves = true;
+  // Curved moves between two stops on one curve are re-timed the same way
+  // where the exact trajectory keeps every per-axis and centripetal sum
+  // within its share at every half tick (retime_straight_moves).
+  bool align_curved_moves = true;
   // Plan time of the ticks: t = m period - tick_offset (m integer). A
   // streaming window whose plan starts between two ticks sets it.
   double tick_offset = 0;

@@ -512,6 +512,85 @@ TEST(PlannerCore, StraightMovesBetweenStopsSwitchJerkOnTicks) {
   }
 }
 
+// Curved moves between stops (PlanOptions::align_curved_moves): a raster
+// row over a wavy surface, a wide bend, a tight S-bend, and a line, a bend
+// and a line joined with continuous curvature, in 3-D, each between exact
+// stops, at limits with one acceleration and one jerk for every axis and
+// the path (as bench_toolpaths' set (i)). The row, the bend and the chain
+// are re-timed on the tick grid (every moving piece on a tick) with a jerk
+// above the profile's J_t; where the exact trajectory would break a
+// per-axis or centripetal limit, the re-timing lowers its jerk, acceleration
+// or speed, or leaves the move as planned. The path is faster than with the
+// curved moves left as planned, and every limit holds on the Verilated
+// core's samples (checked apart from the planner, output_check.hpp).
+TEST(PlannerCore, CurvedMovesBetweenStopsSwitchJerkOnTicks) {
+  auto spline = [](const std::vector<std::array<double, 3>>& c) {
+    geo::BSpline sp;
+    sp.degree = 3;
+    const int n = static_cast<int>(c.size());
+    sp.ctrl.resize(n, 3);
+    for (int i = 0; i < n; ++i) sp.ctrl.row(i) << c[i][0], c[i][1], c[i][2];
+    sp.knots.resize(n + 4);
+    for (int i = 0; i < n + 4; ++i) sp.knots[i] = std::clamp(i - 3, 0, n - 3);  // clamped, uniform
+    return sp;
+  };
+  std::vector<std::array<double, 3>> row, bend, sbend;
+  for (int k = 0; k <= 20; ++k) row.push_back({1.5 * k, 0, std::sin(1.5 * k / 6)});
+  for (int k = 0; k <= 8; ++k) {
+    const double a = 0.5 * k / 8;  // a quarter-ish turn of radius 30 about (30, 30)
+    bend.push_back({30 + 30 * std::sin(a), 30 - 30 * std::cos(a), row.back()[2]});
+  }
+  for (int k = 0; k <= 8; ++k)  // an S of amplitude 1.5 over 6 mm
+    sbend.push_back({bend.back()[0] + 0.75 * k, bend.back()[1] + 1.5 * std::sin(k * 3.14159265358979 / 4), bend.back()[2]});
+  // the chain: the bend's first and last three control points in line with
+  // the lines, so that its curvature is zero where it meets them
+  const std::array<double, 3> c0 = sbend.back();
+  auto at = [&](double dx, double dy) { return std::array<double, 3>{c0[0] + dx, c0[1] + dy, c0[2]}; };
+  const std::vector<std::array<double, 3>> chain_bend = {at(4, 0),  at(6, 0),         at(8, 0),
+                                                         at(10, 0), at(11.732, 1), at(13.464, 2)};
+  Path p;
+  p.add(spline(row), "raster row");
+  p.add(spline(bend), "wide bend");
+  p.add(spline(sbend), "tight S-bend");
+  auto vec = [](const std::array<double, 3>& a) { return Eigen::Vector3d(a[0], a[1], a[2]); };
+  p.add(geo::make_line(vec(c0), vec(at(4, 0))), "chain: line in");
+  p.add(spline(chain_bend), "chain: bend");
+  p.add(geo::make_line(vec(at(13.464, 2)), vec(at(17.794, 4.5))), "chain: line out");
+  JobConfig cfg;
+  Limits& L = cfg.limits;
+  L.feed = 100;
+  for (int a = 0; a < kMaxAxes; ++a) L.v_axis[a] = 100, L.a_axis[a] = 3000, L.j_axis[a] = 60000;
+  L.a_tan = L.a_cen = 3000;
+  L.j_tan = L.j_cen = 60000;
+  cfg.machine.period = 5e-4;
+  for (size_t i = 1; i < 4; ++i) cfg.plan.caps.push_back({p.offset(i) - 1e-9, p.offset(i) + 1e-9, 0.0});
+  const RunOut o = run_through_core(p, cfg);
+  expect_guarantees(p, cfg, o, "curved moves between stops");
+  const PlanOptions po = cfg.plan_options();
+  const double h = po.period;
+  // the largest jerk of the pieces on each curve, and whether every moving piece there starts on a tick
+  std::vector<double> jmax(p.size(), 0);
+  std::vector<bool> on_ticks(p.size(), true);
+  for (const Piece& q : o.job.plan.pieces) {
+    if (q.v0 == 0 && q.a0 == 0 && q.j == 0) continue;
+    const size_t ci = p.curve_at(q.s0 + 1e-6);
+    jmax[ci] = std::max(jmax[ci], std::fabs(q.j));
+    const double ph = q.t0 / h;
+    if (std::fabs(ph - std::round(ph)) > 1e-6) on_ticks[ci] = false;
+  }
+  for (size_t ci = 0; ci < p.size(); ++ci)
+    std::printf("  %s: peak jerk %.0f (J_t %.0f), jerk switches %s\n", p.entry(ci).where.c_str(), jmax[ci],
+                o.job.plan.J_t, on_ticks[ci] ? "on ticks" : "anywhere");
+  for (size_t ci : {0, 1, 3, 4, 5}) EXPECT_TRUE(on_ticks[ci]) << p.entry(ci).where;
+  // (the chain's bend is passed at its cruise: no piece starts on it)
+  for (size_t ci : {0, 1, 3}) EXPECT_GT(jmax[ci], 1.2 * o.job.plan.J_t) << p.entry(ci).where;
+  PlanOptions off = po;
+  off.align_curved_moves = false;
+  const double t_off = plan_path(p, L, off).duration();
+  std::printf("  %.4f s (%.4f s with the curved moves as planned)\n", o.job.plan.duration(), t_off);
+  EXPECT_LT(o.job.plan.duration(), t_off);
+}
+
 // A raster U-turn: a 0.5 mm half circle between two passes (curvature jumps
 // at both ends). With the whole tangential acceleration reserved for the
 // coupling terms 3 K v a_t, and a fifth of the axis jerk (half of j_cen) given
