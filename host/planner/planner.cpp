@@ -995,17 +995,18 @@ bool aligned_within_limits(const Path& p, double sa, const AlignedMove& m, doubl
 // that puts its start on a tick; a move with a speed cap over a part of it
 // (a repair's) or a forced station inside (a window's commit) is left as
 // planned.
-// A curved move between two stops on one curve (align_curved_moves: a run
-// of CAM chords fitted by one smoothing curve, a raster row over a surface)
-// is re-timed the same way where the exact trajectory of the aligned move
-// keeps every per-axis and centripetal sum within its share at every half
-// tick (aligned_excess); its speed, acceleration and jerk are lowered step
-// by step from the tangential limits until it does, and the knots inside
-// cap its speed as in the plan (knot_speed_bound). Between ticks the
-// trajectory is smooth (its jerk switches on ticks), so the quintic of each
-// tick follows it closely; the fit's checks at every tick decide, as for
-// any plan.
-void retime_straight_moves(const Path& p, const Limits& L, const PlanOptions& o, Plan& plan) {
+// A curved move between two stops (align_curved_moves: curves joined
+// tangentially, such as a run of CAM chords fitted by one smoothing curve, a
+// raster row over a surface, a leg, a blend and a leg) is re-timed the same
+// way where the exact trajectory of the aligned move keeps every per-axis
+// and centripetal sum within its share at every tick and half tick
+// (aligned_within_limits); of a few shares of the jerk and the acceleration,
+// each with its largest such speed, the fastest move is taken, and the knots
+// and joins inside cap its speed as in the plan (knot_speed_bound,
+// join_bound). Between ticks the trajectory is smooth (its jerk switches on
+// ticks), so the quintic of each tick follows it closely; the fit's checks
+// at every tick decide, as for any plan.
+void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOptions& o, Plan& plan) {
   const double h = o.period, tol = 1e-9 * std::max(1.0, plan.length);
   const int d = p.dim();
   auto at_rest = [](const Piece& q) { return q.v0 == 0 && q.a0 == 0; };
@@ -1224,7 +1225,7 @@ Plan plan_path(const Path& p, const Limits& limits, const PlanOptions& o) {
             dwells.push_back({g.s[i], o.corner_rest});
       }
       insert_dwells(plan, std::move(dwells));
-      if (o.align_straight_moves) retime_straight_moves(p, L, o, plan);
+      if (o.align_straight_moves) retime_moves_between_stops(p, L, o, plan);
       return plan;
     }
     plan.refinements += static_cast<int>(marked.size());

@@ -105,13 +105,13 @@ struct PlanOptions {
   // changes").
   double jerk_phase_ticks = 2;
   // Straight moves between two stops are re-timed on the tick grid
-  // (retime_straight_moves in planner.cpp): every jerk switch on a tick, so
+  // (retime_moves_between_stops in planner.cpp): every jerk switch on a tick, so
   // that the polynomial of each tick reproduces the profile exactly and the
   // jerk may use axis_j_share of the limits instead of tan_j_share.
   bool align_straight_moves = true;
   // Curved moves between two stops on one curve are re-timed the same way
   // where the exact trajectory keeps every per-axis and centripetal sum
-  // within its share at every half tick (retime_straight_moves).
+  // within its share at every half tick (retime_moves_between_stops).
   bool align_curved_moves = true;
   // Plan time of the ticks: t = m period - tick_offset (m integer). A
   // streaming window whose plan starts between two ticks sets it.
