@@ -859,53 +859,85 @@ void insert_dwells(Plan& plan, std::vector<PlanOptions::Dwell> dwells) {
   }
 }
 
-// A rest-to-rest motion over a straight move of length len with every jerk
-// switch on the tick grid (period h): jerk +J for nj ticks, 0 for na, -J for
-// nj, a cruise of nc ticks, then the mirror image. For given counts the peak
-// speed is vp = len / (h (na + 2 nj + nc)) (each speed ramp is
-// point-symmetric, so it covers vp / 2 times its duration), the jerk
-// J = vp / (h^2 nj (nj + na)) and the peak acceleration J nj h. Of the counts
-// near the continuous optimum that keep vp <= V, J <= Jmax and J nj h <= Amax,
-// the fewest ticks win.
+// A rest-to-rest motion over a move of length len with every jerk switch on
+// the tick grid (period h). Each speed ramp (AlignedRamp) holds its jerk for
+// nj ticks, its acceleration for na and the opposite jerk for nj: the ramp
+// up and the ramp down each have their own counts and jerk, with a cruise of
+// nc ticks between them. For given counts the peak speed is
+// vp = len / (h (N_up / 2 + N_down / 2 + nc)) (N = na + 2 nj: each ramp is
+// point-symmetric, so it covers vp / 2 times its duration), a ramp's jerk
+// J = vp / (h^2 nj (nj + na)) and its peak acceleration J nj h. Of the counts
+// near the continuous optimum that keep vp <= V and each ramp within its
+// jerk and acceleration, the fewest ticks win.
+struct AlignedRamp {
+  long long nj = 0, na = 0;
+  double J = 0;
+  long long ticks() const { return na + 2 * nj; }
+};
 struct AlignedMove {
-  long long nj = 0, na = 0, nc = 0;
-  double vp = 0, J = 0;
-  long long ticks() const { return 2 * (na + 2 * nj) + nc; }
+  AlignedRamp up, down;
+  long long nc = 0;
+  double vp = 0;
+  long long ticks() const { return up.ticks() + down.ticks() + nc; }
+};
+// The acceleration and jerk a ramp may use.
+struct RampLimits {
+  double A = 0, J = 0;
+  // duration of a ramp from rest to v (S-curve, continuous)
+  double time_to(double v) const { return v >= A * A / J ? v / A + A / J : 2 * std::sqrt(v / J); }
 };
 
-bool aligned_move(double len, double h, double V, double Amax, double Jmax, AlignedMove& best) {
-  if (!(len > 0 && h > 0 && V > 0 && Amax > 0 && Jmax > 0)) return false;
-  // the continuous optimum (peak v, jerk phase tj, constant-acceleration
-  // phase ta); the counts searched are those next to it (rounding both up
-  // is among them: at most 4 ticks more than the continuous time)
-  double v = V;
-  if (v * (v >= Amax * Amax / Jmax ? v / Amax + Amax / Jmax : 2 * std::sqrt(v / Jmax)) > len) {
-    v = 0.5 * Amax * (std::sqrt(Amax * Amax / (Jmax * Jmax) + 4 * len / Amax) - Amax / Jmax);
-    if (v < Amax * Amax / Jmax) v = std::cbrt(0.25 * len * len * Jmax);
-  }
-  const double tj = std::min(Amax / Jmax, std::sqrt(v / Jmax)), ta = std::max(0.0, v / Amax - Amax / Jmax);
-  if (!(tj / h < 1e9 && ta / h < 1e9)) return false;  // ticks far finer than the motion: left as planned
+// Candidate counts of a ramp to speed v: next to its continuous optimum
+// (rounding both counts up is among them: at most 2 ticks more).
+std::array<AlignedRamp, 16> ramp_counts(double v, double h, const RampLimits& r) {
+  const double tj = std::min(r.A / r.J, std::sqrt(v / r.J)), ta = std::max(0.0, v / r.A - r.A / r.J);
   const long long nj0 = std::max<long long>(1, static_cast<long long>(std::floor(tj / h)) - 1);
   const long long na0 = std::max<long long>(0, static_cast<long long>(std::floor(ta / h)) - 1);
+  std::array<AlignedRamp, 16> out;
+  for (int k = 0; k < 16; ++k) out[static_cast<size_t>(k)] = AlignedRamp{nj0 + k / 4, na0 + k % 4, 0};
+  return out;
+}
+
+// The fastest speed a ramp of these counts allows (its jerk and acceleration at their limits).
+double ramp_speed_cap(const AlignedRamp& c, double h, const RampLimits& r) {
+  const double n = static_cast<double>(c.nj + c.na);
+  return std::min(r.J * h * h * static_cast<double>(c.nj) * n, r.A * h * n);
+}
+
+bool aligned_move(double len, double h, double V, const RampLimits& up, const RampLimits& down,
+                  AlignedMove& best) {
+  if (!(len > 0 && h > 0 && V > 0 && up.A > 0 && up.J > 0 && down.A > 0 && down.J > 0)) return false;
+  // the continuous optimum: the peak speed whose two ramps fit in len
+  auto ramps_length = [&](double v) { return 0.5 * v * (up.time_to(v) + down.time_to(v)); };
+  double v = V;
+  if (ramps_length(v) > len) {
+    double lo = 0;
+    for (int it = 0; it < 60; ++it) (ramps_length(0.5 * (lo + v)) > len ? v : lo) = 0.5 * (lo + v);
+    v = lo;
+  }
+  if (!(std::max(up.time_to(v), down.time_to(v)) / h < 1e9)) return false;  // ticks far finer than the motion
+  const auto cu = ramp_counts(v, h, up), cd = ramp_counts(v, h, down);
   bool found = false;
-  for (long long nj = nj0; nj <= nj0 + 3; ++nj)
-    for (long long na = na0; na <= na0 + 3; ++na) {
-      const double N = static_cast<double>(na + 2 * nj);
-      // vp = len / (h (N + nc)) is at most each of V, Jmax h^2 nj (nj + na) and Amax h (nj + na)
-      const double vcap = std::min({V, Jmax * h * h * static_cast<double>(nj * (nj + na)),
-                                    Amax * h * static_cast<double>(nj + na)});
+  for (const AlignedRamp& ru : cu)
+    for (const AlignedRamp& rd : cd) {
+      const double N2 = 0.5 * static_cast<double>(ru.ticks() + rd.ticks());
+      const double vcap = std::min({V, ramp_speed_cap(ru, h, up), ramp_speed_cap(rd, h, down)});
       const double ticks_at_vcap = len / (h * vcap);
       if (!(ticks_at_vcap < 1e12)) continue;  // a move of more than 1e12 ticks: left as planned
-      AlignedMove m{nj, na, std::max<long long>(0, static_cast<long long>(std::ceil(ticks_at_vcap - N - 1e-9))), 0, 0};
+      AlignedMove m{ru, rd, std::max<long long>(0, static_cast<long long>(std::ceil(ticks_at_vcap - N2 - 1e-9))), 0};
+      if (found && m.ticks() >= best.ticks()) continue;
       bool ok = false;
       for (int more = 0; more < 4; ++more, ++m.nc) {  // a tick more where rounding put vp above a bound
-        m.vp = len / (h * (N + static_cast<double>(m.nc)));
-        m.J = m.vp / (h * h * static_cast<double>(nj * (nj + na)));
-        ok = m.vp <= V && m.J <= Jmax && m.J * static_cast<double>(nj) * h <= Amax;
+        m.vp = len / (h * (N2 + static_cast<double>(m.nc)));
+        auto fits = [&](AlignedRamp& c, const RampLimits& r) {
+          c.J = m.vp / (h * h * static_cast<double>(c.nj * (c.nj + c.na)));
+          return c.J <= r.J && c.J * static_cast<double>(c.nj) * h <= r.A;
+        };
+        ok = m.vp <= V && fits(m.up, up) && fits(m.down, down);
         if (ok) break;
       }
-      if (!ok) continue;
-      if (!found || m.ticks() < best.ticks()) best = m;
+      if (!ok || (found && m.ticks() >= best.ticks())) continue;
+      best = m;
       found = true;
     }
   return found;
@@ -914,11 +946,12 @@ bool aligned_move(double len, double h, double V, double Amax, double Jmax, Alig
 // The pieces of a rest-to-rest move aligned on the tick grid (AlignedMove),
 // from arc length sa at time t; returns the end time.
 double append_aligned(std::vector<Piece>& out, double t, double sa, const AlignedMove& m, double h) {
-  const long long N = m.na + 2 * m.nj;
+  const long long Nu = m.up.ticks();
   const struct {
     long long n;
     double j;
-  } phases[7] = {{m.nj, m.J}, {m.na, 0}, {m.nj, -m.J}, {m.nc, 0}, {m.nj, -m.J}, {m.na, 0}, {m.nj, m.J}};
+  } phases[7] = {{m.up.nj, m.up.J},     {m.up.na, 0},   {m.up.nj, -m.up.J}, {m.nc, 0},
+                 {m.down.nj, -m.down.J}, {m.down.na, 0}, {m.down.nj, m.down.J}};
   double v = 0, a = 0, sc = sa;
   for (int k = 0; k < 7; ++k) {
     if (phases[k].n == 0) continue;
@@ -937,11 +970,11 @@ double append_aligned(std::vector<Piece>& out, double t, double sa, const Aligne
     a = q.a(q.T);
     // the ends of the ramps exactly: the cruise at vp, the stop at sb
     if (k == 2) {
-      sc = sa + 0.5 * m.vp * static_cast<double>(N) * h;
+      sc = sa + 0.5 * m.vp * static_cast<double>(Nu) * h;
       v = m.vp;
       a = 0;
     }
-    if (k == 3) sc = sa + m.vp * (0.5 * static_cast<double>(N) + static_cast<double>(m.nc)) * h;
+    if (k == 3) sc = sa + m.vp * (0.5 * static_cast<double>(Nu) + static_cast<double>(m.nc)) * h;
   }
   return t;
 }
@@ -1062,37 +1095,45 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
   };
   // the fastest aligned move over [sa, sb] within the limits
   // (aligned_within_limits) that is shorter than max_T, if one is found: for
-  // each of a few shares of the tangential jerk and acceleration, the
-  // largest speed by bisection (a lower speed lowers every term)
+  // each of a few shares of the tangential jerk and acceleration, given to
+  // both ramps, the largest speed by bisection (a lower speed lowers every
+  // term); then, at that speed, each ramp on its own takes the share that
+  // makes the move fastest (the geometry where a move speeds up is not
+  // where it slows down)
   auto curved_move = [&](double sa, double sb, double V, double max_T, AlignedMove& best) {
     const double A0 = o.tan_a_share * L.a_tan, J0 = o.axis_j_share * L.j_tan;
+    std::vector<RampLimits> shares;
+    for (double jf : {1.0, 0.95, 0.9, 0.85, 0.7, 0.55})
+      for (double af : {1.0, 0.75, 0.5}) shares.push_back({af * A0, jf * J0});
     bool found = false;
-    for (double jf : {1.0, 0.85, 0.7, 0.55})
-      for (double af : {1.0, 0.75, 0.5}) {
-        const double A = af * A0, J = jf * J0;
-        auto faster = [&](double v, AlignedMove& m) {
-          return aligned_move(sb - sa, h, v, A, J, m) && static_cast<double>(m.ticks()) * h < max_T;
-        };
-        AlignedMove m;
-        if (!faster(V, m)) continue;  // not faster even at the top speed
-        if (aligned_within_limits(p, sa, m, h, L, o)) {
-          best = m, max_T = static_cast<double>(m.ticks()) * h, found = true;
-          continue;
-        }
-        double lo = 0, hi = V;  // hi: beyond the limits; lo: within them, or too slow
-        for (int it = 0; it < 7; ++it) {
-          const double mid = 0.5 * (lo + hi);
-          if (!faster(mid, m)) {
-            lo = mid;
-          } else if (aligned_within_limits(p, sa, m, h, L, o)) {
-            best = m, max_T = static_cast<double>(m.ticks()) * h, found = true;
-            lo = mid;
-          } else {
-            hi = mid;
-          }
-        }
+    RampLimits best_up, best_down;
+    double best_v = 0;
+    auto try_move = [&](double v, const RampLimits& up, const RampLimits& down, bool& faster) {
+      AlignedMove m;
+      faster = aligned_move(sb - sa, h, v, up, down, m) && static_cast<double>(m.ticks()) * h < max_T;
+      if (!faster || !aligned_within_limits(p, sa, m, h, L, o)) return false;
+      best = m, max_T = static_cast<double>(m.ticks()) * h, found = true;
+      best_up = up, best_down = down, best_v = v;
+      return true;
+    };
+    for (const RampLimits& r : shares) {
+      bool faster = false;
+      if (try_move(V, r, r, faster) || !faster) continue;  // within the limits, or not faster even at V
+      double lo = 0, hi = V;  // hi: beyond the limits; lo: within them, or too slow
+      for (int it = 0; it < 10; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (try_move(mid, r, r, faster) || !faster ? lo : hi) = mid;
       }
-    return found;
+    }
+    if (!found) return false;
+    for (int ramp = 0; ramp < 2; ++ramp) {
+      const RampLimits up = best_up, down = best_down;
+      for (const RampLimits& r : shares) {
+        bool faster = false;
+        try_move(best_v, ramp == 0 ? r : up, ramp == 0 ? down : r, faster);
+      }
+    }
+    return true;
   };
   std::vector<Piece> out;
   out.reserve(plan.pieces.size());
@@ -1121,7 +1162,7 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
         A = std::min(A, o.axis_a_share * L.a_axis[a] / ta);
         J = std::min(J, o.axis_j_share * L.j_axis[a] / ta);
       }
-      use = aligned_move(sb - sa, h, V, A, J, m) && rest + static_cast<double>(m.ticks()) * h < old_T - 1e-12;
+      use = aligned_move(sb - sa, h, V, {A, J}, {A, J}, m) && rest + static_cast<double>(m.ticks()) * h < old_T - 1e-12;
     } else if (use) {
       use = o.align_curved_moves && joins_allow(sa, sb, V) && curved_move(sa, sb, V, old_T - rest - 1e-12, m);
     }
