@@ -42,8 +42,9 @@ struct Join {
   bool curved = false;
   double u_in = 0, u_out = 0;
   Eigen::MatrixXd ctrl;
-  // Both legs straight and the wide blend chosen (README.md, "Wide blends"): its curve (each leg
-  // loses 2d = its l0).
+  // Length each leg loses: kReach d (line-line), kCurvedReach d (a curved leg), l0 (wide).
+  double cut = 0;
+  // Both legs straight and the wide blend chosen (README.md, "Wide blends"): its curve (d = l0 / 2).
   bool wide = false;
   geo::BSpline wide_curve;
 };
@@ -173,11 +174,15 @@ double golden_min(F f, double a, double b) {
 }
 
 // One side of a blend at corner v with spacing d: its end point and inner control point, and where a
-// curved leg is cut (u). A segment gives the line-line blend's points v -/+ 2d t and v -/+ d t. A
+// curved leg is cut (u). A segment (the straight leg of a curved corner) gives v -/+ 2d t and v -/+ d t. A
 // curved leg is cut at arc length 2d from v (point a, unit tangent t_a, curvature kappa_a); the inner
 // point is a + e t_a. The blend's curvature at a is h / (3 e^2), h the distance of v (the blend's
 // middle control point) from the tangent line at a, so e = sqrt(h / (3 kappa_a)) makes the join G2
 // where the curve's normal at a points towards v (always for a circular arc); elsewhere e = d (G1).
+// A blend next to a curved leg keeps end points 2d from the corner (not kBlendReach d): its side on a
+// curve is built on the curve's tangent at the cut with its own inner spacing (G2 below), and the
+// deviation budget of fit_curved is derived for this reach.
+constexpr double kCurvedReach = 2;
 struct LegCut {
   Vec end, inner;
   double u = 0;
@@ -186,11 +191,11 @@ struct LegCut {
 LegCut cut_leg(const Element& e, bool arriving, const Vec& v, const Vec& t, double d) {
   const double sign = arriving ? -1 : 1;
   LegCut cut;
-  cut.end = v + sign * 2 * d * t;
+  cut.end = v + sign * kCurvedReach * d * t;
   cut.inner = v + sign * d * t;
   if (e.segment) return cut;
   const geo::Curve& c = *e.curve;
-  cut.u = param_at_length(c, 2 * d, arriving);
+  cut.u = param_at_length(c, kCurvedReach * d, arriving);
   const Eigen::MatrixXd ev = c.eval(cut.u, 2);
   const Vec a = ev.col(0), t_a = ev.col(1).normalized();
   const Vec d2 = ev.col(2);
@@ -277,17 +282,18 @@ CurvedFit fit_curved(const Element& l, const Element& r, double turn, double tol
   CurvedFit f;
   const Vec& v = l.b;
   // A curved leg keeps a little of its length between two cuts (split_at needs u strictly inside).
-  auto cap_of = [&](const Element& e) { return 0.5 * o.share * e.length * (e.segment ? 1 : 0.999); };
+  auto cap_of = [&](const Element& e) { return o.share * e.length * (e.segment ? 1 : 0.999) / kCurvedReach; };
   const double cap = std::min(cap_of(l), cap_of(r));
   if (!(cap > 0)) return f;
   auto piece_curvature = [&](const Element& e, bool arriving) {
     if (e.segment) return 0.0;
-    const double u = param_at_length(*e.curve, 2 * cap, arriving);
+    const double u = param_at_length(*e.curve, kCurvedReach * cap, arriving);
     return arriving ? max_curvature(*e.curve, u, e.curve->u_end()) : max_curvature(*e.curve, e.curve->u_begin(), u);
   };
   const double kappa = std::max(piece_curvature(l, true), piece_curvature(r, false));
   const double s = std::sin(0.5 * turn);
-  const double d_tol = kappa > 0 ? (-(0.5 * s) + std::sqrt(0.25 * s * s + 16 * kappa * tol)) / (8 * kappa)
+  const double c2 = kCurvedReach * kCurvedReach * kappa;  // (d/2) s + c2 d^2 = tol
+  const double d_tol = kappa > 0 ? (-(0.5 * s) + std::sqrt(0.25 * s * s + 4 * c2 * tol)) / (2 * c2)
                                  : blend_spacing_for(tol, turn);
   // the blend at spacing d, measured
   auto at = [&](double d) {
@@ -951,11 +957,11 @@ geo::BSpline corner_blend(const Vec& v, const Vec& t_in, const Vec& t_out, doubl
   geo::BSpline b;
   b.degree = 3;
   b.ctrl.resize(5, v.size());
-  b.ctrl.row(0) = (v - 2 * d * t_in).transpose();
+  b.ctrl.row(0) = (v - kBlendReach * d * t_in).transpose();
   b.ctrl.row(1) = (v - d * t_in).transpose();
   b.ctrl.row(2) = v.transpose();
   b.ctrl.row(3) = (v + d * t_out).transpose();
-  b.ctrl.row(4) = (v + 2 * d * t_out).transpose();
+  b.ctrl.row(4) = (v + kBlendReach * d * t_out).transpose();
   b.knots.resize(9);
   b.knots << 0, 0, 0, 0, 0.5, 1, 1, 1, 1;
   b.name = "corner blend";
@@ -969,11 +975,11 @@ geo::BSpline run_spline(const std::vector<Vec>& v, const Vec& t_in, double d_fir
   geo::BSpline b;
   b.degree = 3;
   b.ctrl.resize(n, v[0].size());
-  b.ctrl.row(0) = (v[0] - 2 * d_first * t_in).transpose();
+  b.ctrl.row(0) = (v[0] - kBlendReach * d_first * t_in).transpose();
   b.ctrl.row(1) = (v[0] - d_first * t_in).transpose();
   for (int i = 0; i < m; ++i) b.ctrl.row(2 + i) = v[i].transpose();
   b.ctrl.row(n - 2) = (v[m - 1] + d_last * t_out).transpose();
-  b.ctrl.row(n - 1) = (v[m - 1] + 2 * d_last * t_out).transpose();
+  b.ctrl.row(n - 1) = (v[m - 1] + kBlendReach * d_last * t_out).transpose();
   b.knots.resize(n + 4);
   for (int i = 0; i < 4; ++i) b.knots[i] = 0, b.knots[n + i] = 1;
   for (int i = 1; i <= m; ++i) b.knots[3 + i] = double(i) / (m + 1);
@@ -1049,8 +1055,9 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
     Blend b;
     if (el[k].segment && el[k + 1].segment) {
       const double d_tol = blend_spacing_for(tol, j.turn);
-      const double d_leg = 0.5 * o.share * std::min(el[k].length, el[k + 1].length);
+      const double d_leg = o.share * std::min(el[k].length, el[k + 1].length) / kBlendReach;
       j.d = std::min(d_tol, d_leg);
+      j.cut = kBlendReach * j.d;
       if (o.stop_if_faster && j.turn > o.stop_turn &&
           o.stop_if_faster(candidate(el, joins, k, tol, std::min(ml.feed, mr.feed), o, wide_cache))) {
         j.kind = JoinKind::kStop;
@@ -1068,6 +1075,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
         continue;
       }
       j.d = f.d;
+      j.cut = kCurvedReach * f.d;
       j.curved = true;
       j.u_in = f.in.u;
       j.u_out = f.out.u;
@@ -1087,7 +1095,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
     ++res.corners_blended;
   }
 
-  // Emit: each segment trimmed by 2d at a blended end, each blend starting where the chain ends.
+  // Emit: each segment trimmed by its join's cut at a blended end, each blend starting where the chain ends.
   Vec last_end;
   // A segment between two blended line-line joins.
   auto between_blends = [&](size_t seg) {
@@ -1121,7 +1129,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       feed = std::min(feed, tp.moves[el[k + i].move].feed);
     }
     feed = std::min(feed, tp.moves[el[k + m].move].feed);
-    const Vec exit = free_out ? el[k + m].b : Vec(v[m - 1] + 2 * joins[k + m - 1].d * el[k + m].t_start);
+    const Vec exit = free_out ? el[k + m].b : Vec(v[m - 1] + joins[k + m - 1].cut * el[k + m].t_start);
     // smoothed first (its spans longer than the chords, the CAM chords' curvature wobble averages out)
     geo::BSpline rs;
     double dev = INFINITY;
@@ -1194,7 +1202,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       if (blend_after) emit_blend(k);
       continue;
     }
-    const double cut0 = blend_before ? 2 * joins[k - 1].d : 0;
+    const double cut0 = blend_before ? joins[k - 1].cut : 0;
     const Vec a = blend_before ? last_end : Vec(e.a);
     // the segment up to its blend's start (a remnant shorter than min_line is dropped: the next blend
     // starts at a, on the same segment line); true when pushed
@@ -1208,7 +1216,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       last_end = a;
       return false;
     };
-    const bool line_pushed = emit_line(blend_after ? 2 * joins[k].d : 0);
+    const bool line_pushed = emit_line(blend_after ? joins[k].cut : 0);
     if (blend_after && o.merge_runs) {
       // the longest run from here that measures within the tolerance (halved until one does)
       size_t m = run_length(k);
@@ -1261,6 +1269,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
         Join& j = joins[k];
         Blend& bl = res.blends[blend_of[k]];
         j.d = 0.5 * w.l0;
+        j.cut = w.l0;
         j.wide = true;
         j.wide_curve = wide_blend(e.b, e.t_end, el[k + 1].t_start, w.l0, w.shape);
         bl.d = j.d;

@@ -172,7 +172,7 @@ TEST(CornerBlend, ShortLegShrinksTheBlend) {
   const BlendResult r = traj::corners::blend_corners(polyline(pts), 0.05, five_point_only());
   ASSERT_EQ(r.corners_blended, 1);
   EXPECT_TRUE(r.blends[0].shortened);
-  EXPECT_DOUBLE_EQ(r.blends[0].d, 0.005);  // 2d = half of 0.02
+  EXPECT_DOUBLE_EQ(r.blends[0].d, 0.01 / traj::corners::kBlendReach);  // each leg loses half of 0.02
   const ref::Spline s = to_ref(r.curves[1].curve);
   EXPECT_NEAR(dist_point_to_curve(s, pts[1]), r.blends[0].deviation, 1e-9 * r.blends[0].deviation);
   EXPECT_LT(r.max_deviation, 0.05);
@@ -244,6 +244,43 @@ Peaks peaks_ref(const ref::Spline& s) {
     p.q = std::max(p.q, jerk_geometry_ref(s, u));
   }
   return p;
+}
+
+// (b1) The reach of the end points (README.md): at kBlendReach = 1.5 the five-point blend is the
+// path of a velocity turn by one bang-bang jerk pulse: by the reference, its second derivative is 0
+// at both ends and its third derivative is one vector along t_out - t_in on the first span and its
+// negative on the second. Its peak |d3x/ds3| at the same deviation is below that of the blend with
+// the end points at 2d (built here from its control points), most at small turns.
+TEST(CornerBlend, FivePointBlendIsABangBangJerkTurn) {
+  const double tol = 0.045;
+  for (double deg : {3.0, 20.0, 45.0, 90.0, 135.0}) {
+    const double turn = deg * kPi / 180;
+    const auto pts = corner_pts(turn, 100);
+    const BlendResult r = traj::corners::blend_corners(polyline(pts), tol, five_point_only());
+    ASSERT_EQ(r.curves.size(), 3u);
+    const geo::BSpline& b = r.curves[1].curve;
+    const ref::Spline s = to_ref(b);
+    const Vec t_in = (pts[1] - pts[0]).normalized(), t_out = (pts[2] - pts[1]).normalized();
+    const double d = r.blends[0].d;
+    for (double u : {0.0, 1.0}) EXPECT_LE(eval_ref(s, u).d2.norm(), 1e-9 * d) << deg;
+    const Vec j = t_out - t_in;
+    for (double u : {0.1, 0.25, 0.4, 0.6, 0.75, 0.9}) {
+      const auto D = ref::cox_de_boor_derivs(s, u, 3);
+      Vec d3(s.dim());
+      for (int k = 0; k < s.dim(); ++k) d3[k] = D[3][k];
+      const Vec expect = (u < 0.5 ? 12 : -12) * d * j;
+      EXPECT_LE((d3 - expect).norm(), 1e-9 * expect.norm()) << deg << " deg, u " << u;
+    }
+    geo::BSpline b2 = b;  // the same blend with its end points at 2d
+    b2.ctrl.row(0) = (pts[1] - 2 * d * t_in).transpose();
+    b2.ctrl.row(4) = (pts[1] + 2 * d * t_out).transpose();
+    const ref::Spline s2 = to_ref(b2);
+    EXPECT_NEAR(dist_point_to_curve(s2, pts[1]), dist_point_to_curve(s, pts[1]), 1e-9 * tol) << deg;
+    const double q = peaks_ref(s).q, q2 = peaks_ref(s2).q;
+    std::printf("turn %5.1f: peak |d3x/ds3| %.4g (reach 1.5) against %.4g (reach 2): speed bound gain %.3f\n", deg, q,
+                q2, std::cbrt(q2 / q));
+    EXPECT_LE(q, (deg <= 20 ? 0.8 : deg <= 90 ? 0.97 : 1.0) * q2) << deg;
+  }
 }
 
 // (b2) Wide blends (README.md, "Wide blends"): where a line-line corner takes the seven-point blend,
@@ -592,9 +629,9 @@ TEST(CornerBlend, Circle360Gon) {
   std::printf("360-gon R20 tol 0.05, separate blends: max deviation %.3e mm; curvature min %.4f max %.4f mean %.4f (1/R = %.4f)\n",
               rs.max_deviation, cs.lo, cs.hi, cs.mean, 1 / 20.0);
   // Every blend takes half of each leg (the tolerance would allow far more): curvature 0 at each
-  // join, (4/3) sin(theta/2) / (d cos^2(theta/2)) with d = L/4 at each vertex.
-  const double L = (pts[1] - pts[0]).norm(), th = 2 * kPi / 360;
-  EXPECT_NEAR(cs.hi, 16.0 / 3.0 * std::sin(th / 2) / (L * std::cos(th / 2) * std::cos(th / 2)), 1e-6);
+  // join, (4/3) sin(theta/2) / (d cos^2(theta/2)) with kBlendReach d = L/2 at each vertex.
+  const double L = (pts[1] - pts[0]).norm(), th = 2 * kPi / 360, d = L / (2 * traj::corners::kBlendReach);
+  EXPECT_NEAR(cs.hi, 4.0 / 3.0 * std::sin(th / 2) / (d * std::cos(th / 2) * std::cos(th / 2)), 1e-6);
   EXPECT_NEAR(cs.mean, 1 / 20.0, 0.01 / 20);
 
   const BlendResult rm = traj::corners::blend_corners(tp, 0.05);
