@@ -42,7 +42,7 @@ struct Join {
   bool curved = false;
   double u_in = 0, u_out = 0;
   Eigen::MatrixXd ctrl;
-  // Length each leg loses: kReach d (line-line), kCurvedReach d (a curved leg), l0 (wide).
+  // Length each leg loses: kBlendReach d (line-line), kCurvedReach d (a curved leg), l0 (wide).
   double cut = 0;
   // Both legs straight and the wide blend chosen (README.md, "Wide blends"): its curve (d = l0 / 2).
   bool wide = false;

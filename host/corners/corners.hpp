@@ -14,7 +14,7 @@
 //   deviation (distance from the corner V to the blend, = Hausdorff distance to the polyline)
 //     delta = (d / 2) sin(theta / 2),
 //   peak curvature (at u = 1/2)   kappa_max = (4/3) sin(theta/2) / (d cos^2(theta/2)).
-// d is the largest value with delta <= tol and 2d <= share * (length of each leg).
+// d is the largest value with delta <= tol and kBlendReach d <= share * (length of each leg).
 #pragma once
 #include <Eigen/Dense>
 #include <cstddef>
@@ -125,7 +125,7 @@ struct CornerStop {
 struct Blend {
   size_t move = 0;          // index of the move that ends at (or contains) the corner
   double turn = 0;          // turning angle, rad
-  double d = 0;             // control-point spacing; each leg loses 2d
+  double d = 0;             // control-point spacing; each leg loses kBlendReach d (2d at a curved leg, l0 = 2d wide)
   double deviation = 0;     // (d/2) sin(turn/2)
   double tol = 0;           // tolerance that applied (the smaller of the two moves')
   bool shortened = false;   // d limited by a leg's share: deviation < tol

@@ -888,7 +888,7 @@ struct RampLimits {
 };
 
 // Candidate counts of a ramp to speed v: next to its continuous optimum
-// (rounding both counts up is among them: at most 2 ticks more).
+// (rounding both counts up is among them).
 std::array<AlignedRamp, 16> ramp_counts(double v, double h, const RampLimits& r) {
   const double tj = std::min(r.A / r.J, std::sqrt(v / r.J)), ta = std::max(0.0, v / r.A - r.A / r.J);
   const long long nj0 = std::max<long long>(1, static_cast<long long>(std::floor(tj / h)) - 1);
