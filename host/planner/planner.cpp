@@ -943,52 +943,85 @@ bool aligned_move(double len, double h, double V, const RampLimits& up, const Ra
   return found;
 }
 
-// The pieces of a rest-to-rest move aligned on the tick grid (AlignedMove),
-// from arc length sa at time t; returns the end time.
-double append_aligned(std::vector<Piece>& out, double t, double sa, const AlignedMove& m, double h) {
-  const long long Nu = m.up.ticks();
-  const struct {
-    long long n;
-    double j;
-  } phases[7] = {{m.up.nj, m.up.J},     {m.up.na, 0},   {m.up.nj, -m.up.J}, {m.nc, 0},
-                 {m.down.nj, -m.down.J}, {m.down.na, 0}, {m.down.nj, m.down.J}};
+// One stretch of a move on the tick grid: n ticks at jerk j. Where `pin`,
+// the state after it is set exactly (acceleration 0, speed v, arc length
+// sa + ds from the move's start sa), so that rounding does not drift over a
+// long move.
+struct TickPhase {
+  long long n = 0;
+  double j = 0;
+  bool pin = false;
+  double v = 0, ds = 0;
+};
+
+// The phases of an AlignedMove: the ramp up, the cruise, the ramp down; the
+// cruise's ends pinned at vp.
+std::vector<TickPhase> phases_of(const AlignedMove& m, double h) {
+  const double Nu = static_cast<double>(m.up.ticks());
+  return {{m.up.nj, m.up.J},
+          {m.up.na, 0},
+          {m.up.nj, -m.up.J, true, m.vp, 0.5 * m.vp * Nu * h},
+          {m.nc, 0, true, m.vp, m.vp * (0.5 * Nu + static_cast<double>(m.nc)) * h},
+          {m.down.nj, -m.down.J},
+          {m.down.na, 0},
+          {m.down.nj, m.down.J}};
+}
+
+long long ticks_of(const std::vector<TickPhase>& ph) {
+  long long n = 0;
+  for (const TickPhase& f : ph) n += f.n;
+  return n;
+}
+
+// The pieces of a move on the tick grid from arc length sa at time t (at
+// rest); returns the end time.
+double append_phases(std::vector<Piece>& out, double t, double sa, const std::vector<TickPhase>& ph, double h) {
   double v = 0, a = 0, sc = sa;
-  for (int k = 0; k < 7; ++k) {
-    if (phases[k].n == 0) continue;
+  for (const TickPhase& f : ph) {
+    if (f.n == 0) continue;
     Piece q;
     q.t0 = t;
-    q.T = static_cast<double>(phases[k].n) * h;
+    q.T = static_cast<double>(f.n) * h;
     q.s0 = sc;
     q.v0 = v;
     q.a0 = a;
-    q.j = phases[k].j;
+    q.j = f.j;
     q.on_tick = true;
     out.push_back(q);
     t += q.T;
     sc = q.s(q.T);
     v = q.v(q.T);
     a = q.a(q.T);
-    // the ends of the ramps exactly: the cruise at vp, the stop at sb
-    if (k == 2) {
-      sc = sa + 0.5 * m.vp * static_cast<double>(Nu) * h;
-      v = m.vp;
-      a = 0;
-    }
-    if (k == 3) sc = sa + m.vp * (0.5 * static_cast<double>(Nu) + static_cast<double>(m.nc)) * h;
+    if (f.pin) sc = sa + f.ds, v = f.v, a = 0;
   }
   return t;
 }
 
-// Whether an aligned move from arc length sa keeps every per-axis and
-// centripetal sum within the share speed_with fills: the exact trajectory's
-// per-axis velocity, acceleration and jerk (dx = T v, ddx = K v^2 + T a,
-// dddx = Q v^3 + 3 K v a + T j, with their signs), the centripetal
-// acceleration and its jerk bound, at every tick and half tick, each side
-// of a jerk switch.
-bool aligned_within_limits(const Path& p, double sa, const AlignedMove& m, double h, const Limits& L,
-                           const PlanOptions& o) {
+// The largest speed at which each per-axis and centripetal term that grows
+// with the speed stays within its share when the speed is constant
+// (acceleration and jerk along the path 0): the bound a cruise through
+// frame f may hold.
+double cruise_speed_bound(const Frame& f, const Limits& L, const PlanOptions& o, int dim) {
+  auto root = [](double lim, double c, double k) { return c > 0 ? std::pow(lim / c, 1.0 / k) : 1e300; };
+  double v = std::min(root(o.cen_a_share * L.a_cen, f.kappa, 2), root(o.axis_j_share * L.j_cen, f.q_norm, 3));
+  for (int x = 0; x < dim; ++x)
+    v = std::min({v, root(o.axis_v_share * L.v_axis[x], std::fabs(f.T[x]), 1),
+                  root(o.axis_a_share * L.a_axis[x], std::fabs(f.K[x]), 2),
+                  root(o.axis_j_share * L.j_axis[x], std::fabs(f.Q[x]), 3)});
+  return v;
+}
+
+// Whether a move on the tick grid from arc length sa keeps every per-axis
+// and centripetal sum within the share speed_with fills: the exact
+// trajectory's per-axis velocity, acceleration and jerk (dx = T v,
+// ddx = K v^2 + T a, dddx = Q v^3 + 3 K v a + T j, with their signs), the
+// centripetal acceleration and its jerk bound, at every tick and half tick,
+// each side of a jerk switch. Where not, *fail_s (if given) receives the
+// first arc length where a sum is exceeded.
+bool phases_within_limits(const Path& p, double sa, const std::vector<TickPhase>& ph, double h, const Limits& L,
+                          const PlanOptions& o, double* fail_s = nullptr) {
   std::vector<Piece> pcs;
-  append_aligned(pcs, 0, sa, m, h);
+  append_phases(pcs, 0, sa, ph, h);
   const int d = p.dim();
   size_t ci = p.curve_at(sa);
   auto within = [&](double s, double v, double acc, double jerk) {
@@ -1009,10 +1042,230 @@ bool aligned_within_limits(const Path& p, double sa, const AlignedMove& m, doubl
     const long long n = std::llround(q.T / h);
     for (long long k = 0; k <= 2 * n; ++k) {
       const double tau = 0.5 * h * static_cast<double>(k);
-      if (!within(q.s(tau), q.v(tau), q.a(tau), q.j)) return false;
+      if (within(q.s(tau), q.v(tau), q.a(tau), q.j)) continue;
+      if (fail_s) *fail_s = q.s(tau);
+      return false;
     }
   }
   return true;
+}
+
+// Fewest ticks of a speed change by dv > 0 within r (AlignedRamp's counts,
+// its jerk for dv).
+AlignedRamp change_ramp(double dv, double h, const RampLimits& r) {
+  AlignedRamp best;
+  for (const AlignedRamp& c : ramp_counts(dv, h, r))
+    if (ramp_speed_cap(c, h, r) >= dv && (best.nj == 0 || c.ticks() < best.ticks())) best = c;
+  best.J = dv / (h * h * static_cast<double>(best.nj * (best.nj + best.na)));
+  return best;
+}
+
+// A speed a move on the tick grid holds over [s0, s1] (arc length from the
+// move's start); a level with s0 > s1 holds it wherever the dips before and
+// after it leave room.
+struct SpeedLevel {
+  double w = 0, s0 = 1, s1 = 0;
+  bool dip() const { return s0 <= s1; }
+};
+
+// The phases of a rest-to-rest move of length len through the levels: each
+// change of speed a ramp (`up` where it rises, `down` where it falls), a
+// fall ending before the lower level's stretch, a rise starting after the
+// lower level's stretch, each cruise whole ticks. The level speeds (and the
+// jerks with them) are then scaled by len / (the length they cover, at least
+// len: the last cruise is rounded up), so that the move ends at len on a
+// tick. Returns the index of a level with no room for its changes (the
+// caller merges it away), or -1.
+long long level_phases(const std::vector<SpeedLevel>& lv, double len, double h, const RampLimits& up,
+                       const RampLimits& down, std::vector<TickPhase>& out) {
+  struct Step {
+    long long n;
+    double dv;  // nominal change over the step (0: a cruise), signed
+    AlignedRamp r;
+    double s_end, v_end;  // nominal
+  };
+  std::vector<Step> steps;
+  double s = 0, v = 0;
+  auto change = [&](double to) {
+    if (to == v) return;
+    const AlignedRamp r = change_ramp(std::fabs(to - v), h, to > v ? up : down);
+    s += 0.5 * (v + to) * static_cast<double>(r.ticks()) * h;
+    steps.push_back({r.ticks(), to - v, r, s, to});
+    v = to;
+  };
+  auto change_length = [&](double from, double to) {
+    return 0.5 * (from + to) * static_cast<double>(change_ramp(std::fabs(to - from), h, to > from ? up : down).ticks()) * h;
+  };
+  for (size_t k = 0; k < lv.size(); ++k) {
+    change(lv[k].w);
+    const bool last = k + 1 == lv.size();
+    const double next = last ? 0 : lv[k + 1].w;
+    double end = 0;  // where the cruise at this level must end (no later where `fall`)
+    bool fall = next < lv[k].w;
+    if (fall) end = (last ? len : lv[k + 1].s0) - change_length(lv[k].w, next);
+    else end = lv[k].s1;
+    const double n_real = (end - s) / (lv[k].w * h);
+    if (fall && n_real < -1e-9 && !last) return static_cast<long long>(k);
+    if (last && n_real < -1e-9) return static_cast<long long>(k);
+    long long n = fall && !last ? static_cast<long long>(std::floor(n_real + 1e-9)) : static_cast<long long>(std::ceil(n_real - 1e-9));
+    n = std::max<long long>(0, n);
+    s += lv[k].w * static_cast<double>(n) * h;
+    steps.push_back({n, 0, {}, s, v});
+  }
+  change(0);
+  const double lambda = len / s;
+  out.clear();
+  for (const Step& st : steps) {
+    if (st.dv == 0) {
+      out.push_back({st.n, 0, true, lambda * st.v_end, lambda * st.s_end});
+      continue;
+    }
+    const double J = lambda * st.dv / (h * h * static_cast<double>(st.r.nj * (st.r.nj + st.r.na)));
+    out.push_back({st.r.nj, J});
+    out.push_back({st.r.na, 0});
+    out.push_back({st.r.nj, -J, true, lambda * st.v_end, lambda * st.s_end});
+  }
+  return -1;
+}
+
+// The levels under the cruise bound g (samples at x, each lowered by its
+// factor in mult): a dip over each run of samples below `high` (widened by
+// pad, overlapping ones joined) at the lowest bound in the run, `high`
+// between the dips and at the ends where a dip does not reach them.
+std::vector<SpeedLevel> levels_below(const std::vector<double>& x, const std::vector<double>& g,
+                                     const std::vector<double>& mult, double high, double pad, double len) {
+  std::vector<SpeedLevel> dips;
+  for (size_t i = 0; i < x.size();) {
+    if (mult[i] * g[i] >= high) {
+      ++i;
+      continue;
+    }
+    SpeedLevel dip{high, std::max(0.0, x[i] - pad), 0};
+    for (; i < x.size() && mult[i] * g[i] < high; ++i) dip.w = std::min(dip.w, mult[i] * g[i]);
+    dip.s1 = std::min(len, x[i - 1] + pad);
+    if (!dips.empty() && dips.back().s1 >= dip.s0) {
+      dips.back().s1 = dip.s1;
+      dips.back().w = std::min(dips.back().w, dip.w);
+    } else {
+      dips.push_back(dip);
+    }
+  }
+  std::vector<SpeedLevel> out;
+  for (const SpeedLevel& dip : dips) {
+    if (dip.s0 > 0) out.push_back({high});
+    out.push_back(dip);
+  }
+  if (out.empty() || out.back().s1 < len) out.push_back({high});
+  return out;
+}
+
+// Removes the level k that has no room for its changes (level_phases):
+// a level at `high` between two dips joins them into one at the lower
+// speed; at either end it gives its place to the dip next to it; a dip at
+// the end gives its place to the ramp down from the level before it.
+// False where nothing is left to remove.
+bool merge_level(std::vector<SpeedLevel>& lv, size_t k, double len) {
+  if (lv.size() < 2) return false;
+  if (lv[k].dip()) {
+    if (k + 1 != lv.size()) return false;
+    lv.pop_back();
+    return true;
+  }
+  if (k == 0) {
+    lv.erase(lv.begin());
+    lv.front().s0 = 0;
+  } else if (k + 1 == lv.size()) {
+    lv.pop_back();
+    lv.back().s1 = len;
+  } else {
+    lv[k - 1].s1 = lv[k + 1].s1;
+    lv[k - 1].w = std::min(lv[k - 1].w, lv[k + 1].w);
+    lv.erase(lv.begin() + static_cast<std::ptrdiff_t>(k), lv.begin() + static_cast<std::ptrdiff_t>(k) + 2);
+  }
+  return true;
+}
+
+// Candidate top levels of level_move, and the rounds of lowering the bound
+// around a place where the check failed, per top level.
+constexpr int kTopLevels = 5, kLevelRounds = 24;
+// The factor by which a level with too little room for its changes is
+// lowered, each time, before it is merged away.
+constexpr double kLevelStep = 0.98;
+
+// A rest-to-rest move on the tick grid over [sa, sb] that cruises at a top
+// level and dips to a lower one over each stretch where the cruise bound
+// (cruise_speed_bound) is below it: faster than one cruise speed for the
+// whole move where that bound is low in a few places only (the tight spots
+// of a smooth lobe, where the move would otherwise crawl from end to end).
+// Checked as any aligned move (phases_within_limits); where the check fails
+// (a change of speed where the curve turns), the bound is lowered around
+// that place and the levels built anew. `single`: the fastest move with one
+// cruise speed if one was found (its ramps lose at least `lost` seconds
+// against cruising), which a result must beat: fewer than max_ticks ticks,
+// a top level above v_floor. Returns whether one does.
+bool level_move(const Path& p, const Limits& L, const PlanOptions& o, double sa, double sb, double V,
+                const RampLimits& up, const RampLimits& down, long long max_ticks, double lost, double v_floor,
+                std::vector<TickPhase>& best) {
+  const double h = o.period, len = sb - sa;
+  const int d = p.dim();
+  const size_t n = static_cast<size_t>(std::clamp(std::ceil(len / (0.5 * V * h)), 8.0, 20000.0));
+  std::vector<double> x(n + 1), g(n + 1);
+  size_t ci = p.curve_at(sa);
+  double t_bound = 0;  // no move is faster than this: cruising at the bound
+  for (size_t i = 0; i <= n; ++i) {
+    x[i] = len * static_cast<double>(i) / static_cast<double>(n);
+    const double s = sa + x[i];
+    while (ci + 1 < p.size() && s > p.offset(ci + 1)) ++ci;
+    const double off = p.offset(ci), cl = p.offset(ci + 1) - off;
+    const Frame f = frame_at(p, ci, p.table(ci).u_at(std::clamp(s - off, 0.0, cl)), s);
+    g[i] = std::min(V, cruise_speed_bound(f, L, o, d));
+    if (i > 0) t_bound += (x[i] - x[i - 1]) / std::max(g[i], g[i - 1]);
+  }
+  // near the ends no move from or to rest within up, down is faster than
+  // speed_after: a bound above that holds whatever the levels
+  for (size_t i = 0; i <= n && g[i] < V; ++i)
+    if (g[i] >= speed_after(0, x[i], up.A, up.J)) g[i] = V;
+    else if (x[i] > 0) break;
+  for (size_t i = n + 1; i-- > 0 && g[i] < V;)
+    if (g[i] >= speed_after(0, len - x[i], down.A, down.J)) g[i] = V;
+    else if (x[i] < len) break;
+  if (static_cast<double>(max_ticks) * h - t_bound - lost < 4 * h) return false;
+  const double top = *std::max_element(g.begin(), g.end()), pad = 2 * top * h;
+  bool found = false;
+  for (int c = 0; c < kTopLevels; ++c) {
+    const double high = top * (1 - 0.05 * c);
+    if (high <= v_floor) break;
+    std::vector<double> mult(n + 1, 1.0);
+    for (int round = 0; round < kLevelRounds; ++round) {
+      std::vector<SpeedLevel> lv = levels_below(x, g, mult, high, pad, len);
+      std::vector<TickPhase> ph;
+      bool built = false;
+      for (long long k; !built;) {
+        k = level_phases(lv, len, h, up, down, ph);
+        built = k < 0;
+        if (built) break;
+        // a level between dips (or a dip and an end) with too little room
+        // for its changes goes lower while it stays above its neighbours
+        const size_t u = static_cast<size_t>(k);
+        double below = 0;
+        if (u > 0) below = lv[u - 1].w;
+        if (u + 1 < lv.size()) below = std::max(below, lv[u + 1].w);
+        if (!lv[u].dip() && kLevelStep * lv[u].w > below) lv[u].w *= kLevelStep;
+        else if (!merge_level(lv, u, len)) break;
+      }
+      if (!built || ticks_of(ph) >= max_ticks) break;  // lowering the bound only slows the move
+      double fail_s = 0;
+      if (phases_within_limits(p, sa, ph, h, L, o, &fail_s)) {
+        best = std::move(ph);
+        max_ticks = ticks_of(best);
+        found = true;
+        break;
+      }
+      for (size_t i = 0; i <= n; ++i)
+        if (std::fabs(x[i] - (fail_s - sa)) <= 2 * pad) mult[i] *= 0.95;
+    }
+  }
+  return found;
 }
 
 // Moves between two stops, re-timed on the tick grid
@@ -1033,7 +1286,7 @@ bool aligned_within_limits(const Path& p, double sa, const AlignedMove& m, doubl
 // raster row over a surface, a leg, a blend and a leg) is re-timed the same
 // way where the exact trajectory of the aligned move keeps every per-axis
 // and centripetal sum within its share at every tick and half tick
-// (aligned_within_limits); of a few shares of the jerk and the acceleration,
+// (phases_within_limits); of a few shares of the jerk and the acceleration,
 // each with its largest such speed, the fastest move is taken, and the knots
 // and joins inside cap its speed as in the plan (knot_speed_bound,
 // join_bound). Between ticks the trajectory is smooth (its jerk switches on
@@ -1094,13 +1347,15 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
     return true;
   };
   // the fastest aligned move over [sa, sb] within the limits
-  // (aligned_within_limits) that is shorter than max_T, if one is found: for
+  // (phases_within_limits) that is shorter than max_T, if one is found: for
   // each of a few shares of the tangential jerk and acceleration, given to
   // both ramps, the largest speed by bisection (a lower speed lowers every
   // term); then, at that speed, each ramp on its own takes the share that
   // makes the move fastest (the geometry where a move speeds up is not
-  // where it slows down)
-  auto curved_move = [&](double sa, double sb, double V, double max_T, AlignedMove& best) {
+  // where it slows down); then a move through speed levels (level_move),
+  // where it is faster still
+  auto curved_move = [&](double sa, double sb, double V, double max_T, std::vector<TickPhase>& phases) {
+    AlignedMove best;
     const double A0 = o.tan_a_share * L.a_tan, J0 = o.axis_j_share * L.j_tan;
     std::vector<RampLimits> shares;
     for (double jf : {1.0, 0.95, 0.9, 0.85, 0.7, 0.55})
@@ -1111,7 +1366,7 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
     auto try_move = [&](double v, const RampLimits& up, const RampLimits& down, bool& faster) {
       AlignedMove m;
       faster = aligned_move(sb - sa, h, v, up, down, m) && static_cast<double>(m.ticks()) * h < max_T;
-      if (!faster || !aligned_within_limits(p, sa, m, h, L, o)) return false;
+      if (!faster || !phases_within_limits(p, sa, phases_of(m, h), h, L, o)) return false;
       best = m, max_T = static_cast<double>(m.ticks()) * h, found = true;
       best_up = up, best_down = down, best_v = v;
       return true;
@@ -1125,15 +1380,25 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
         (try_move(mid, r, r, faster) || !faster ? lo : hi) = mid;
       }
     }
-    if (!found) return false;
-    for (int ramp = 0; ramp < 2; ++ramp) {
-      const RampLimits up = best_up, down = best_down;
-      for (const RampLimits& r : shares) {
-        bool faster = false;
-        try_move(best_v, ramp == 0 ? r : up, ramp == 0 ? down : r, faster);
+    if (found) {
+      for (int ramp = 0; ramp < 2; ++ramp) {
+        const RampLimits up = best_up, down = best_down;
+        for (const RampLimits& r : shares) {
+          bool faster = false;
+          try_move(best_v, ramp == 0 ? r : up, ramp == 0 ? down : r, faster);
+        }
       }
+      phases = phases_of(best, h);
+    } else {
+      best_up = best_down = shares.front();
     }
-    return true;
+    // a level move must take fewer ticks than the single one, or than max_T
+    const long long max_ticks =
+        found ? best.ticks() : static_cast<long long>(std::min(std::ceil(max_T / h - 1e-9), 1e15));
+    const double lost = found ? 0.5 * static_cast<double>(best.up.ticks() + best.down.ticks()) * h : 0;
+    return (o.align_level_moves &&
+            level_move(p, L, o, sa, sb, V, best_up, best_down, max_ticks, lost, found ? best.vp : 0, phases)) ||
+           found;
   };
   std::vector<Piece> out;
   out.reserve(plan.pieces.size());
@@ -1148,6 +1413,7 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
     const double t_start = q0.t0 + shift, old_T = plan.pieces[i1 - 1].t0 + plan.pieces[i1 - 1].T - q0.t0;
     double T[kMaxAxes] = {};
     AlignedMove m;
+    std::vector<TickPhase> phases;
     double V = L.feed;
     bool use = !q0.dwell && at_rest(q0) && sb - sa > tol && caps_allow(sa, sb, V);
     // the rest that puts the start on a tick (ticks at m h - tick_offset)
@@ -1163,8 +1429,9 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
         J = std::min(J, o.axis_j_share * L.j_axis[a] / ta);
       }
       use = aligned_move(sb - sa, h, V, {A, J}, {A, J}, m) && rest + static_cast<double>(m.ticks()) * h < old_T - 1e-12;
+      if (use) phases = phases_of(m, h);
     } else if (use) {
-      use = o.align_curved_moves && joins_allow(sa, sb, V) && curved_move(sa, sb, V, old_T - rest - 1e-12, m);
+      use = o.align_curved_moves && joins_allow(sa, sb, V) && curved_move(sa, sb, V, old_T - rest - 1e-12, phases);
     }
     if (!use) {
       for (size_t k = i; k < i1; ++k) {
@@ -1183,7 +1450,7 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
       out.push_back(r);
       t += rest;
     }
-    t = append_aligned(out, t, sa, m, h);
+    t = append_phases(out, t, sa, phases, h);
     shift += (t - t_start) - old_T;
     i = i1;
   }

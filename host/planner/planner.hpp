@@ -113,6 +113,10 @@ struct PlanOptions {
   // where the exact trajectory keeps every per-axis and centripetal sum
   // within its share at every half tick (retime_moves_between_stops).
   bool align_curved_moves = true;
+  // A curved move between two stops whose cruise bound is low in a few
+  // places only dips there instead of crawling from end to end (level_move
+  // in planner.cpp), where that is faster and within the limits.
+  bool align_level_moves = true;
   // Plan time of the ticks: t = m period - tick_offset (m integer). A
   // streaming window whose plan starts between two ticks sets it.
   double tick_offset = 0;

@@ -591,6 +591,62 @@ TEST(PlannerCore, CurvedMovesBetweenStopsSwitchJerkOnTicks) {
   EXPECT_LT(o.job.plan.duration(), t_off);
 }
 
+// A curved move between stops whose cruise bound is low in one place only:
+// a 40 mm row (one cubic B-spline) with a bump of 1.2 mm in its middle, at
+// limits with one acceleration and one jerk for every axis and the path (as
+// bench_toolpaths' set (i)). With one cruise speed the whole row would run
+// at the bump's bound (the profile, slower on its ramps, is faster here);
+// with speed levels (PlanOptions::align_level_moves) it runs near the feed
+// on either side and dips at the bump only: faster than both by 10 ms at
+// least, every moving piece on a tick, and every limit held on the
+// Verilated core's samples (checked apart from the planner,
+// output_check.hpp).
+TEST(PlannerCore, CurvedMoveBetweenStopsDipsAtItsTightSpot) {
+  geo::BSpline sp;
+  sp.degree = 3;
+  const int n = 21;
+  sp.ctrl.resize(n, 2);
+  for (int i = 0; i < n; ++i) sp.ctrl.row(i) << 2.0 * i, i == n / 2 ? 1.2 : 0.0;
+  sp.knots.resize(n + 4);
+  for (int i = 0; i < n + 4; ++i) sp.knots[i] = std::clamp(i - 3, 0, n - 3);
+  Path p;
+  p.add(sp, "row with a bump");
+  JobConfig cfg;
+  Limits& L = cfg.limits;
+  L.feed = 100;
+  for (int a = 0; a < kMaxAxes; ++a) L.v_axis[a] = 100, L.a_axis[a] = 3000, L.j_axis[a] = 60000;
+  L.a_tan = L.a_cen = 3000;
+  L.j_tan = L.j_cen = 60000;
+  cfg.machine.period = 5e-4;
+  const RunOut o = run_through_core(p, cfg);
+  expect_guarantees(p, cfg, o, "a row with a bump");
+  const PlanOptions po = cfg.plan_options();
+  PlanOptions one = po;
+  one.align_level_moves = false;
+  const Plan single = plan_path(p, L, one);
+  auto peak = [](const Plan& pl) {
+    double v = 0;
+    for (const Piece& q : pl.pieces) v = std::max({v, q.v0, q.v(q.T)});
+    return v;
+  };
+  // the speed where the bump is tightest: the tick nearest x = 20
+  double v_bump = 0, best = 1e300;
+  for (const auto& t : o.job.ticks) {
+    const double dx = std::fabs(p.curve(0).eval(t.u)(0, 0) - 20);
+    if (dx < best) best = dx, v_bump = t.v;
+  }
+  for (const Piece& q : o.job.plan.pieces) {
+    if (q.v0 == 0 && q.a0 == 0 && q.j == 0) continue;
+    const double ph = q.t0 / po.period;
+    EXPECT_NEAR(ph, std::round(ph), 1e-6) << "a jerk switch between ticks at t = " << q.t0;
+  }
+  std::printf("  %.4f s, peak %.2f mm/s, %.2f mm/s at the bump; without levels: %.4f s, peak %.2f mm/s\n",
+              o.job.plan.duration(), peak(o.job.plan), v_bump, single.duration(), peak(single));
+  EXPECT_LT(o.job.plan.duration(), single.duration() - 0.01);
+  EXPECT_GT(peak(o.job.plan), 0.9 * L.feed);
+  EXPECT_LT(v_bump, 0.9 * peak(o.job.plan));
+}
+
 // A raster U-turn: a 0.5 mm half circle between two passes (curvature jumps
 // at both ends). With the whole tangential acceleration reserved for the
 // coupling terms 3 K v a_t, and a fifth of the axis jerk (half of j_cen) given
