@@ -859,16 +859,18 @@ void insert_dwells(Plan& plan, std::vector<PlanOptions::Dwell> dwells) {
   }
 }
 
-// A rest-to-rest motion over a move of length len with every jerk switch on
-// the tick grid (period h). Each speed ramp (AlignedRamp) holds its jerk for
-// nj ticks, its acceleration for na and the opposite jerk for nj: the ramp
-// up and the ramp down each have their own counts and jerk, with a cruise of
-// nc ticks between them. For given counts the peak speed is
-// vp = len / (h (N_up / 2 + N_down / 2 + nc)) (N = na + 2 nj: each ramp is
-// point-symmetric, so it covers vp / 2 times its duration), a ramp's jerk
-// J = vp / (h^2 nj (nj + na)) and its peak acceleration J nj h. Of the counts
-// near the continuous optimum that keep vp <= V and each ramp within its
-// jerk and acceleration, the fewest ticks win.
+// A motion over a move of length len from speed va to speed vb (acceleration
+// 0 at both ends; 0 and 0 for a move from rest to rest) with every jerk
+// switch on the tick grid (period h). Each speed ramp (AlignedRamp) holds
+// its jerk for nj ticks, its acceleration for na and the opposite jerk for
+// nj: the ramp up to the peak speed vp and the ramp down from it each have
+// their own counts and jerk, with a cruise of nc ticks between them. For
+// given counts vp (N_up / 2 + nc + N_down / 2) h = len - (va N_up + vb
+// N_down) h / 2 (N = na + 2 nj: each ramp is point-symmetric, so it covers
+// the mean of its end speeds times its duration), a ramp's jerk
+// J = (vp - v_end) / (h^2 nj (nj + na)) and its peak acceleration J nj h.
+// Of the counts near the continuous optimum that keep vp <= V and each ramp
+// within its jerk and acceleration, the fewest ticks win.
 struct AlignedRamp {
   long long nj = 0, na = 0;
   double J = 0;
@@ -877,7 +879,7 @@ struct AlignedRamp {
 struct AlignedMove {
   AlignedRamp up, down;
   long long nc = 0;
-  double vp = 0;
+  double va = 0, vp = 0, vb = 0;
   long long ticks() const { return up.ticks() + down.ticks() + nc; }
 };
 // The acceleration and jerk a ramp may use.
@@ -904,36 +906,43 @@ double ramp_speed_cap(const AlignedRamp& c, double h, const RampLimits& r) {
   return std::min(r.J * h * h * static_cast<double>(c.nj) * n, r.A * h * n);
 }
 
-bool aligned_move(double len, double h, double V, const RampLimits& up, const RampLimits& down,
-                  AlignedMove& best) {
-  if (!(len > 0 && h > 0 && V > 0 && up.A > 0 && up.J > 0 && down.A > 0 && down.J > 0)) return false;
+bool aligned_move(double len, double h, double va, double vb, double V, const RampLimits& up,
+                  const RampLimits& down, AlignedMove& best) {
+  const double lo_peak = std::max(va, vb);
+  if (!(len > 0 && h > 0 && V > 0 && V >= lo_peak && up.A > 0 && up.J > 0 && down.A > 0 && down.J > 0))
+    return false;
   // the continuous optimum: the peak speed whose two ramps fit in len
-  auto ramps_length = [&](double v) { return 0.5 * v * (up.time_to(v) + down.time_to(v)); };
+  auto ramps_length = [&](double v) {
+    return 0.5 * (va + v) * up.time_to(v - va) + 0.5 * (v + vb) * down.time_to(v - vb);
+  };
+  if (ramps_length(lo_peak) > len) return false;
   double v = V;
   if (ramps_length(v) > len) {
-    double lo = 0;
+    double lo = lo_peak;
     for (int it = 0; it < 60; ++it) (ramps_length(0.5 * (lo + v)) > len ? v : lo) = 0.5 * (lo + v);
     v = lo;
   }
-  if (!(std::max(up.time_to(v), down.time_to(v)) / h < 1e9)) return false;  // ticks far finer than the motion
-  const auto cu = ramp_counts(v, h, up), cd = ramp_counts(v, h, down);
+  if (!(std::max(up.time_to(v - va), down.time_to(v - vb)) / h < 1e9)) return false;  // ticks far finer than the motion
+  const auto cu = ramp_counts(v - va, h, up), cd = ramp_counts(v - vb, h, down);
   bool found = false;
   for (const AlignedRamp& ru : cu)
     for (const AlignedRamp& rd : cd) {
       const double N2 = 0.5 * static_cast<double>(ru.ticks() + rd.ticks());
-      const double vcap = std::min({V, ramp_speed_cap(ru, h, up), ramp_speed_cap(rd, h, down)});
-      const double ticks_at_vcap = len / (h * vcap);
-      if (!(ticks_at_vcap < 1e12)) continue;  // a move of more than 1e12 ticks: left as planned
-      AlignedMove m{ru, rd, std::max<long long>(0, static_cast<long long>(std::ceil(ticks_at_vcap - N2 - 1e-9))), 0};
+      const double rest = len - 0.5 * (va * static_cast<double>(ru.ticks()) + vb * static_cast<double>(rd.ticks())) * h;
+      const double vcap = std::min({V, va + ramp_speed_cap(ru, h, up), vb + ramp_speed_cap(rd, h, down)});
+      const double ticks_at_vcap = rest / (h * vcap);
+      if (!(rest > 0 && ticks_at_vcap < 1e12)) continue;  // a move of more than 1e12 ticks: left as planned
+      AlignedMove m{ru, rd, std::max<long long>(0, static_cast<long long>(std::ceil(ticks_at_vcap - N2 - 1e-9))), va,
+                    0, vb};
       if (found && m.ticks() >= best.ticks()) continue;
       bool ok = false;
       for (int more = 0; more < 4; ++more, ++m.nc) {  // a tick more where rounding put vp above a bound
-        m.vp = len / (h * (N2 + static_cast<double>(m.nc)));
-        auto fits = [&](AlignedRamp& c, const RampLimits& r) {
-          c.J = m.vp / (h * h * static_cast<double>(c.nj * (c.nj + c.na)));
+        m.vp = rest / (h * (N2 + static_cast<double>(m.nc)));
+        auto fits = [&](AlignedRamp& c, double v_end, const RampLimits& r) {
+          c.J = (m.vp - v_end) / (h * h * static_cast<double>(c.nj * (c.nj + c.na)));
           return c.J <= r.J && c.J * static_cast<double>(c.nj) * h <= r.A;
         };
-        ok = m.vp <= V && fits(m.up, up) && fits(m.down, down);
+        ok = m.vp <= V && m.vp >= lo_peak && fits(m.up, va, up) && fits(m.down, vb, down);
         if (ok) break;
       }
       if (!ok || (found && m.ticks() >= best.ticks())) continue;
@@ -954,17 +963,17 @@ struct TickPhase {
   double v = 0, ds = 0;
 };
 
-// The phases of an AlignedMove: the ramp up, the cruise, the ramp down; the
-// cruise's ends pinned at vp.
-std::vector<TickPhase> phases_of(const AlignedMove& m, double h) {
-  const double Nu = static_cast<double>(m.up.ticks());
+// The phases of an AlignedMove: the ramp up, the cruise, the ramp down;
+// the cruise's ends pinned at vp, the end at vb.
+std::vector<TickPhase> phases_of(const AlignedMove& m, double len, double h) {
+  const double s_up = 0.5 * (m.va + m.vp) * static_cast<double>(m.up.ticks()) * h;
   return {{m.up.nj, m.up.J},
           {m.up.na, 0},
-          {m.up.nj, -m.up.J, true, m.vp, 0.5 * m.vp * Nu * h},
-          {m.nc, 0, true, m.vp, m.vp * (0.5 * Nu + static_cast<double>(m.nc)) * h},
+          {m.up.nj, -m.up.J, true, m.vp, s_up},
+          {m.nc, 0, true, m.vp, s_up + m.vp * static_cast<double>(m.nc) * h},
           {m.down.nj, -m.down.J},
           {m.down.na, 0},
-          {m.down.nj, m.down.J}};
+          {m.down.nj, m.down.J, true, m.vb, len}};
 }
 
 long long ticks_of(const std::vector<TickPhase>& ph) {
@@ -973,10 +982,11 @@ long long ticks_of(const std::vector<TickPhase>& ph) {
   return n;
 }
 
-// The pieces of a move on the tick grid from arc length sa at time t (at
-// rest); returns the end time.
-double append_phases(std::vector<Piece>& out, double t, double sa, const std::vector<TickPhase>& ph, double h) {
-  double v = 0, a = 0, sc = sa;
+// The pieces of a move on the tick grid from arc length sa at time t, at
+// speed v0 with acceleration 0; returns the end time.
+double append_phases(std::vector<Piece>& out, double t, double sa, double v0, const std::vector<TickPhase>& ph,
+                     double h) {
+  double v = v0, a = 0, sc = sa;
   for (const TickPhase& f : ph) {
     if (f.n == 0) continue;
     Piece q;
@@ -1011,17 +1021,17 @@ double cruise_speed_bound(const Frame& f, const Limits& L, const PlanOptions& o,
   return v;
 }
 
-// Whether a move on the tick grid from arc length sa keeps every per-axis
+// Whether a move on the tick grid from arc length sa (at speed v0) keeps every per-axis
 // and centripetal sum within the share speed_with fills: the exact
 // trajectory's per-axis velocity, acceleration and jerk (dx = T v,
 // ddx = K v^2 + T a, dddx = Q v^3 + 3 K v a + T j, with their signs), the
 // centripetal acceleration and its jerk bound, at every tick and half tick,
 // each side of a jerk switch. Where not, *fail_s (if given) receives the
 // first arc length where a sum is exceeded.
-bool phases_within_limits(const Path& p, double sa, const std::vector<TickPhase>& ph, double h, const Limits& L,
-                          const PlanOptions& o, double* fail_s = nullptr) {
+bool phases_within_limits(const Path& p, double sa, double v0, const std::vector<TickPhase>& ph, double h,
+                          const Limits& L, const PlanOptions& o, double* fail_s = nullptr) {
   std::vector<Piece> pcs;
-  append_phases(pcs, 0, sa, ph, h);
+  append_phases(pcs, 0, sa, v0, ph, h);
   const int d = p.dim();
   size_t ci = p.curve_at(sa);
   auto within = [&](double s, double v, double acc, double jerk) {
@@ -1186,8 +1196,20 @@ bool merge_level(std::vector<SpeedLevel>& lv, size_t k, double len) {
 }
 
 // Candidate top levels of level_move, and the rounds of lowering the bound
-// around a place where the check failed, per top level.
+// (or the changes' share of the limits) where the check failed, per top
+// level; the lowest share the changes take.
 constexpr int kTopLevels = 5, kLevelRounds = 24;
+constexpr double kMinRamp = 0.4;
+
+// Whether arc length s lies where the phases from sa (at rest) change the
+// speed: in a piece with a jerk or an acceleration.
+bool in_speed_change(double sa, const std::vector<TickPhase>& ph, double h, double s) {
+  std::vector<Piece> pcs;
+  append_phases(pcs, 0, sa, 0, ph, h);
+  for (const Piece& q : pcs)
+    if (s <= q.s(q.T)) return q.j != 0 || q.a0 != 0;
+  return false;
+}
 // The factor by which a level with too little room for its changes is
 // lowered, each time, before it is merged away.
 constexpr double kLevelStep = 0.98;
@@ -1232,16 +1254,22 @@ bool level_move(const Path& p, const Limits& L, const PlanOptions& o, double sa,
   if (static_cast<double>(max_ticks) * h - t_bound - lost < 4 * h) return false;
   const double top = *std::max_element(g.begin(), g.end()), pad = 2 * top * h;
   bool found = false;
-  for (int c = 0; c < kTopLevels; ++c) {
-    const double high = top * (1 - 0.05 * c);
+  // where the check fails in a change of speed, the remedy is either to
+  // lower the bound around the place (the dip moves the change away) or to
+  // lower the changes' share of the limits: each is tried
+  for (int c = 0; c < 2 * kTopLevels; ++c) {
+    const double high = top * (1 - 0.05 * (c / 2));
+    const bool lower_changes = c % 2 == 1;
     if (high <= v_floor) break;
     std::vector<double> mult(n + 1, 1.0);
+    double ramp = 1;  // the share of up and down the changes of level take
     for (int round = 0; round < kLevelRounds; ++round) {
       std::vector<SpeedLevel> lv = levels_below(x, g, mult, high, pad, len);
       std::vector<TickPhase> ph;
       bool built = false;
+      const RampLimits up_r{up.A * ramp, up.J * ramp}, down_r{down.A * ramp, down.J * ramp};
       for (long long k; !built;) {
-        k = level_phases(lv, len, h, up, down, ph);
+        k = level_phases(lv, len, h, up_r, down_r, ph);
         built = k < 0;
         if (built) break;
         // a level between dips (or a dip and an end) with too little room
@@ -1255,11 +1283,17 @@ bool level_move(const Path& p, const Limits& L, const PlanOptions& o, double sa,
       }
       if (!built || ticks_of(ph) >= max_ticks) break;  // lowering the bound only slows the move
       double fail_s = 0;
-      if (phases_within_limits(p, sa, ph, h, L, o, &fail_s)) {
+      if (phases_within_limits(p, sa, 0, ph, h, L, o, &fail_s)) {
         best = std::move(ph);
         max_ticks = ticks_of(best);
         found = true;
         break;
+      }
+      // a change of speed where the curve turns takes a lower jerk and
+      // acceleration; a cruise, a lower bound around the place
+      if (lower_changes && ramp > kMinRamp && in_speed_change(sa, ph, h, fail_s)) {
+        ramp *= 0.85;
+        continue;
       }
       for (size_t i = 0; i <= n; ++i)
         if (std::fabs(x[i] - (fail_s - sa)) <= 2 * pad) mult[i] *= 0.95;
@@ -1289,9 +1323,13 @@ bool level_move(const Path& p, const Limits& L, const PlanOptions& o, double sa,
 // (phases_within_limits); of a few shares of the jerk and the acceleration,
 // each with its largest such speed, the fastest move is taken, and the knots
 // and joins inside cap its speed as in the plan (knot_speed_bound,
-// join_bound). Between ticks the trajectory is smooth (its jerk switches on
-// ticks), so the quintic of each tick follows it closely; the fit's checks
-// at every tick decide, as for any plan.
+// join_bound), or through speed levels where that is faster (level_move).
+// Each block of the profile between two stations (acceleration 0 at both)
+// is re-timed the same way on its own, from its station's speed to the
+// next (align_blocks), and the move as a whole only where it is faster
+// than its blocks. Between ticks the trajectory is smooth (its jerk
+// switches on ticks), so the quintic of each tick follows it closely; the
+// fit's checks at every tick decide, as for any plan.
 void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOptions& o, Plan& plan) {
   const double h = o.period, tol = 1e-9 * std::max(1.0, plan.length);
   const int d = p.dim();
@@ -1347,7 +1385,7 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
     return true;
   };
   // the fastest aligned move over [sa, sb] within the limits
-  // (phases_within_limits) that is shorter than max_T, if one is found: for
+  // (phases_within_limits), if it is shorter than max_T: for
   // each of a few shares of the tangential jerk and acceleration, given to
   // both ramps, the largest speed by bisection (a lower speed lowers every
   // term); then, at that speed, each ramp on its own takes the share that
@@ -1362,12 +1400,12 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
       for (double af : {1.0, 0.75, 0.5}) shares.push_back({af * A0, jf * J0});
     bool found = false;
     RampLimits best_up, best_down;
-    double best_v = 0;
+    double best_v = 0, best_T = std::numeric_limits<double>::infinity();
     auto try_move = [&](double v, const RampLimits& up, const RampLimits& down, bool& faster) {
       AlignedMove m;
-      faster = aligned_move(sb - sa, h, v, up, down, m) && static_cast<double>(m.ticks()) * h < max_T;
-      if (!faster || !phases_within_limits(p, sa, phases_of(m, h), h, L, o)) return false;
-      best = m, max_T = static_cast<double>(m.ticks()) * h, found = true;
+      faster = aligned_move(sb - sa, h, 0, 0, v, up, down, m) && static_cast<double>(m.ticks()) * h < best_T;
+      if (!faster || !phases_within_limits(p, sa, 0, phases_of(m, sb - sa, h), h, L, o)) return false;
+      best = m, best_T = static_cast<double>(m.ticks()) * h, found = true;
       best_up = up, best_down = down, best_v = v;
       return true;
     };
@@ -1388,37 +1426,132 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
           try_move(best_v, ramp == 0 ? r : up, ramp == 0 ? down : r, faster);
         }
       }
-      phases = phases_of(best, h);
+      phases = phases_of(best, sb - sa, h);
     } else {
       best_up = best_down = shares.front();
     }
-    // a level move must take fewer ticks than the single one, or than max_T
+    // a level move must take fewer ticks than the one-speed move, or than max_T
     const long long max_ticks =
         found ? best.ticks() : static_cast<long long>(std::min(std::ceil(max_T / h - 1e-9), 1e15));
     const double lost = found ? 0.5 * static_cast<double>(best.up.ticks() + best.down.ticks()) * h : 0;
-    return (o.align_level_moves &&
-            level_move(p, L, o, sa, sb, V, best_up, best_down, max_ticks, lost, found ? best.vp : 0, phases)) ||
-           found;
+    if (o.align_level_moves &&
+        level_move(p, L, o, sa, sb, V, best_up, best_down, max_ticks, lost, found ? best.vp : 0, phases))
+      found = true;
+    return found && static_cast<double>(ticks_of(phases)) * h < max_T;
   };
-  std::vector<Piece> out;
+  // The time from t to the next tick (ticks at m h - tick_offset).
+  auto rest_to_tick = [&](double t) {
+    const double ph = (t + o.tick_offset) / h;
+    return std::max(0.0, (std::ceil(ph - 1e-9) - ph) * h);
+  };
+  // That rest (at speed v, acceleration 0, from arc length s at time t),
+  // appended to dst; returns its duration.
+  auto to_tick = [&](std::vector<Piece>& dst, double t, double s, double v) {
+    const double rest = rest_to_tick(t);
+    if (rest > 0) {
+      Piece r;
+      r.t0 = t;
+      r.T = rest;
+      r.s0 = s;
+      r.v0 = v;
+      dst.push_back(r);
+    }
+    return rest;
+  };
+  // The fastest phases of a block from va to vb over [sa, sb] within the
+  // limits (phases_within_limits) of fewer than max_ticks ticks: for each of
+  // a few shares of the tangential jerk, the largest peak speed by
+  // bisection.
+  auto curved_block = [&](double sa, double sb, double va, double vb, double V, long long max_ticks,
+                          std::vector<TickPhase>& best) {
+    const double A0 = o.tan_a_share * L.a_tan, J0 = o.axis_j_share * L.j_tan;
+    bool found = false;
+    for (double jf : {1.0, 0.85, 0.7}) {
+      const RampLimits r{A0, jf * J0};
+      std::vector<TickPhase> ph;
+      auto fits = [&](double v) {
+        AlignedMove m;
+        if (!aligned_move(sb - sa, h, va, vb, v, r, r, m) || m.ticks() >= max_ticks) return false;
+        ph = phases_of(m, sb - sa, h);
+        if (!phases_within_limits(p, sa, va, ph, h, L, o)) return false;
+        best = ph, max_ticks = ticks_of(ph), found = true;
+        return true;
+      };
+      if (fits(V)) continue;
+      double lo = std::max(va, vb), hi = V;
+      for (int it = 0; it < 6; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (fits(mid) ? lo : hi) = mid;
+      }
+    }
+    return found;
+  };
+  std::vector<double> station_s;
+  for (const Station& st : plan.stations) station_s.push_back(st.s);
+  std::sort(station_s.begin(), station_s.end());
+  auto at_station = [&](const Piece& q) {
+    if (q.a0 != 0) return false;
+    const auto it = std::lower_bound(station_s.begin(), station_s.end(), q.s0 - tol);
+    return it != station_s.end() && *it <= q.s0 + tol;
+  };
+  // The pieces [i0, i1) (up to the next rest), from time t, into dst, each
+  // block of the profile between two stations (acceleration 0 at both; the
+  // rest at the end) re-timed on the tick grid on its own where that is
+  // faster, after a rest of less than a tick at the station's speed that
+  // puts it on a tick; any other piece as planned. Returns the end time.
+  auto retime_blocks = [&](size_t i0, size_t i1, double t, std::vector<Piece>& dst) {
+    for (size_t k = i0; k < i1;) {
+      const Piece& qa = plan.pieces[k];
+      size_t kb = k + 1;  // the piece that starts the next block
+      while (kb < i1 && !at_station(plan.pieces[kb])) ++kb;
+      const double sa = qa.s0, sb = kb < plan.pieces.size() ? plan.pieces[kb].s0 : plan.length;
+      const double va = qa.v0, vb = kb < plan.pieces.size() ? plan.pieces[kb].v0 : 0;
+      const double t_old = plan.pieces[kb - 1].t0 + plan.pieces[kb - 1].T - qa.t0;
+      double V = L.feed;
+      bool use = o.align_blocks && !qa.dwell && (k == i0 || at_station(qa)) && qa.a0 == 0 && t_old > 6 * h &&
+                 sb - sa > tol && caps_allow(sa, sb, V) && joins_allow(sa, sb, V) && V >= std::max(va, vb);
+      std::vector<TickPhase> ph;
+      if (use) {
+        const double rest = rest_to_tick(t);
+        const long long max_ticks = static_cast<long long>(std::ceil((t_old - rest) / h - 1e-9));
+        use = curved_block(sa + va * rest, sb, va, vb, V, max_ticks, ph);
+      }
+      if (use) {
+        const double rest = to_tick(dst, t, sa, va);
+        t = append_phases(dst, t + rest, sa + va * rest, va, ph, h);
+      } else {
+        for (size_t m = k; m < kb; ++m) {
+          dst.push_back(plan.pieces[m]);
+          dst.back().t0 += t - qa.t0;
+        }
+        t += t_old;
+      }
+      k = kb;
+    }
+    return t;
+  };
+  std::vector<Piece> out, blocks;
   out.reserve(plan.pieces.size());
   double shift = 0;  // time gained (negative) or lost so far
   size_t i = 0;
   while (i < plan.pieces.size()) {
     const Piece& q0 = plan.pieces[i];
     size_t i1 = i + 1;
-    if (!q0.dwell && at_rest(q0))
+    if (!q0.dwell)
       while (i1 < plan.pieces.size() && !plan.pieces[i1].dwell && !at_rest(plan.pieces[i1])) ++i1;
     const double sa = q0.s0, sb = i1 < plan.pieces.size() ? plan.pieces[i1].s0 : plan.length;
     const double t_start = q0.t0 + shift, old_T = plan.pieces[i1 - 1].t0 + plan.pieces[i1 - 1].T - q0.t0;
+    // each block on its own (or the pieces as planned)
+    blocks.clear();
+    double t_end = retime_blocks(i, i1, t_start, blocks);
+    // the whole move from rest to rest at once, where that is faster still
     double T[kMaxAxes] = {};
     AlignedMove m;
     std::vector<TickPhase> phases;
     double V = L.feed;
     bool use = !q0.dwell && at_rest(q0) && sb - sa > tol && caps_allow(sa, sb, V);
-    // the rest that puts the start on a tick (ticks at m h - tick_offset)
-    const double ph = (t_start + o.tick_offset) / h;
-    const double rest = std::max(0.0, (std::ceil(ph - 1e-9) - ph) * h);
+    const double rest = rest_to_tick(t_start);
+    const double max_T = std::min(old_T, t_end - t_start);
     if (use && straight(sa, sb, T)) {
       double A = o.tan_a_share * L.a_tan, J = o.axis_j_share * L.j_tan;
       for (int a = 0; a < d; ++a) {
@@ -1428,30 +1561,19 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
         A = std::min(A, o.axis_a_share * L.a_axis[a] / ta);
         J = std::min(J, o.axis_j_share * L.j_axis[a] / ta);
       }
-      use = aligned_move(sb - sa, h, V, {A, J}, {A, J}, m) && rest + static_cast<double>(m.ticks()) * h < old_T - 1e-12;
-      if (use) phases = phases_of(m, h);
+      use = aligned_move(sb - sa, h, 0, 0, V, {A, J}, {A, J}, m) &&
+            rest + static_cast<double>(m.ticks()) * h < max_T - 1e-12;
+      if (use) phases = phases_of(m, sb - sa, h);
     } else if (use) {
-      use = o.align_curved_moves && joins_allow(sa, sb, V) && curved_move(sa, sb, V, old_T - rest - 1e-12, phases);
+      use = o.align_curved_moves && joins_allow(sa, sb, V) && curved_move(sa, sb, V, max_T - rest - 1e-12, phases);
     }
-    if (!use) {
-      for (size_t k = i; k < i1; ++k) {
-        out.push_back(plan.pieces[k]);
-        out.back().t0 += shift;
-      }
-      i = i1;
-      continue;
+    if (use) {
+      double t = t_start + to_tick(out, t_start, sa, 0);
+      t_end = append_phases(out, t, sa, 0, phases, h);
+    } else {
+      out.insert(out.end(), blocks.begin(), blocks.end());
     }
-    double t = t_start;
-    if (rest > 0) {
-      Piece r;
-      r.t0 = t;
-      r.T = rest;
-      r.s0 = sa;
-      out.push_back(r);
-      t += rest;
-    }
-    t = append_phases(out, t, sa, phases, h);
-    shift += (t - t_start) - old_T;
+    shift += (t_end - t_start) - old_T;
     i = i1;
   }
   plan.pieces = std::move(out);

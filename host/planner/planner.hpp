@@ -117,6 +117,11 @@ struct PlanOptions {
   // places only dips there instead of crawling from end to end (level_move
   // in planner.cpp), where that is faster and within the limits.
   bool align_level_moves = true;
+  // Where a move between two stops is not re-timed as a whole, each block
+  // of its profile between two stations is re-timed on the tick grid on its
+  // own (retime_blocks in planner.cpp), where that is faster and within the
+  // limits.
+  bool align_blocks = true;
   // Plan time of the ticks: t = m period - tick_offset (m integer). A
   // streaming window whose plan starts between two ticks sets it.
   double tick_offset = 0;

@@ -512,6 +512,22 @@ TEST(PlannerCore, StraightMovesBetweenStopsSwitchJerkOnTicks) {
   }
 }
 
+// A fast machine quoted with one acceleration and one jerk (as
+// bench_toolpaths' set (i)): feed 100 mm/s, 3000 mm/s^2 and 60 000 mm/s^3
+// for every axis and along and across the path, 0.5 ms ticks.
+namespace {
+JobConfig fast_machine() {
+  JobConfig cfg;
+  Limits& L = cfg.limits;
+  L.feed = 100;
+  for (int a = 0; a < kMaxAxes; ++a) L.v_axis[a] = 100, L.a_axis[a] = 3000, L.j_axis[a] = 60000;
+  L.a_tan = L.a_cen = 3000;
+  L.j_tan = L.j_cen = 60000;
+  cfg.machine.period = 5e-4;
+  return cfg;
+}
+}  // namespace
+
 // Curved moves between stops (PlanOptions::align_curved_moves): a raster
 // row over a wavy surface, a wide bend, a tight S-bend, and a line, a bend
 // and a line joined with continuous curvature, in 3-D, each between exact
@@ -556,13 +572,8 @@ TEST(PlannerCore, CurvedMovesBetweenStopsSwitchJerkOnTicks) {
   p.add(geo::make_line(vec(c0), vec(at(4, 0))), "chain: line in");
   p.add(spline(chain_bend), "chain: bend");
   p.add(geo::make_line(vec(at(13.464, 2)), vec(at(17.794, 4.5))), "chain: line out");
-  JobConfig cfg;
-  Limits& L = cfg.limits;
-  L.feed = 100;
-  for (int a = 0; a < kMaxAxes; ++a) L.v_axis[a] = 100, L.a_axis[a] = 3000, L.j_axis[a] = 60000;
-  L.a_tan = L.a_cen = 3000;
-  L.j_tan = L.j_cen = 60000;
-  cfg.machine.period = 5e-4;
+  JobConfig cfg = fast_machine();
+  const Limits& L = cfg.limits;
   for (size_t i = 1; i < 4; ++i) cfg.plan.caps.push_back({p.offset(i) - 1e-9, p.offset(i) + 1e-9, 0.0});
   const RunOut o = run_through_core(p, cfg);
   expect_guarantees(p, cfg, o, "curved moves between stops");
@@ -591,60 +602,106 @@ TEST(PlannerCore, CurvedMovesBetweenStopsSwitchJerkOnTicks) {
   EXPECT_LT(o.job.plan.duration(), t_off);
 }
 
-// A curved move between stops whose cruise bound is low in one place only:
-// a 40 mm row (one cubic B-spline) with a bump of 1.2 mm in its middle, at
-// limits with one acceleration and one jerk for every axis and the path (as
-// bench_toolpaths' set (i)). With one cruise speed the whole row would run
-// at the bump's bound (the profile, slower on its ramps, is faster here);
-// with speed levels (PlanOptions::align_level_moves) it runs near the feed
-// on either side and dips at the bump only: faster than both by 10 ms at
-// least, every moving piece on a tick, and every limit held on the
+// A curved move between stops whose cruise bound is low in a few places
+// only: a lobe of a pocket outline (r = 15 (1 + 0.15 sin 3φ + 0.07 cos(5φ +
+// 0.4)) for φ from 2.6 to 4.7 rad, one cubic B-spline whose 41 control
+// points lie on it), at limits with one acceleration and one jerk for
+// every axis and the path (as bench_toolpaths' set (i)). With one cruise
+// speed the whole lobe would run at the bound of its tightest spot; the
+// profile's blocks re-timed on their own (PlanOptions::align_blocks) keep
+// the profile's speed bound, which holds the whole jerk sums with every
+// term's absolute value; with speed levels (PlanOptions::align_level_moves)
+// the lobe runs near the feed and dips at its tight spots only: faster by
+// 10 ms at least, every moving piece on a tick, and every limit held on the
 // Verilated core's samples (checked apart from the planner,
 // output_check.hpp).
-TEST(PlannerCore, CurvedMoveBetweenStopsDipsAtItsTightSpot) {
+TEST(PlannerCore, CurvedMoveBetweenStopsDipsAtItsTightSpots) {
   geo::BSpline sp;
   sp.degree = 3;
-  const int n = 21;
+  const int n = 41;
   sp.ctrl.resize(n, 2);
-  for (int i = 0; i < n; ++i) sp.ctrl.row(i) << 2.0 * i, i == n / 2 ? 1.2 : 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double phi = 2.6 + 2.1 * i / (n - 1);
+    const double r = 15 * (1 + 0.15 * std::sin(3 * phi) + 0.07 * std::cos(5 * phi + 0.4));
+    sp.ctrl.row(i) << r * std::cos(phi), r * std::sin(phi);
+  }
   sp.knots.resize(n + 4);
   for (int i = 0; i < n + 4; ++i) sp.knots[i] = std::clamp(i - 3, 0, n - 3);
   Path p;
-  p.add(sp, "row with a bump");
-  JobConfig cfg;
-  Limits& L = cfg.limits;
-  L.feed = 100;
-  for (int a = 0; a < kMaxAxes; ++a) L.v_axis[a] = 100, L.a_axis[a] = 3000, L.j_axis[a] = 60000;
-  L.a_tan = L.a_cen = 3000;
-  L.j_tan = L.j_cen = 60000;
-  cfg.machine.period = 5e-4;
+  p.add(sp, "lobe");
+  JobConfig cfg = fast_machine();
+  const Limits& L = cfg.limits;
   const RunOut o = run_through_core(p, cfg);
-  expect_guarantees(p, cfg, o, "a row with a bump");
+  expect_guarantees(p, cfg, o, "a lobe");
   const PlanOptions po = cfg.plan_options();
-  PlanOptions one = po;
-  one.align_level_moves = false;
-  const Plan single = plan_path(p, L, one);
-  auto peak = [](const Plan& pl) {
-    double v = 0;
-    for (const Piece& q : pl.pieces) v = std::max({v, q.v0, q.v(q.T)});
-    return v;
+  PlanOptions no_levels = po;
+  no_levels.align_level_moves = false;
+  const Plan without = plan_path(p, L, no_levels);
+  auto speeds = [](const Plan& pl, double& lo, double& hi) {
+    lo = 1e300, hi = 0;
+    for (const Piece& q : pl.pieces)
+      if (q.a0 == 0 && q.v0 > 0) lo = std::min(lo, q.v0), hi = std::max(hi, q.v0);
   };
-  // the speed where the bump is tightest: the tick nearest x = 20
-  double v_bump = 0, best = 1e300;
-  for (const auto& t : o.job.ticks) {
-    const double dx = std::fabs(p.curve(0).eval(t.u)(0, 0) - 20);
-    if (dx < best) best = dx, v_bump = t.v;
-  }
+  double lo = 0, hi = 0, lo0 = 0, hi0 = 0;
+  speeds(o.job.plan, lo, hi);
+  speeds(without, lo0, hi0);
   for (const Piece& q : o.job.plan.pieces) {
     if (q.v0 == 0 && q.a0 == 0 && q.j == 0) continue;
     const double ph = q.t0 / po.period;
     EXPECT_NEAR(ph, std::round(ph), 1e-6) << "a jerk switch between ticks at t = " << q.t0;
   }
-  std::printf("  %.4f s, peak %.2f mm/s, %.2f mm/s at the bump; without levels: %.4f s, peak %.2f mm/s\n",
-              o.job.plan.duration(), peak(o.job.plan), v_bump, single.duration(), peak(single));
-  EXPECT_LT(o.job.plan.duration(), single.duration() - 0.01);
-  EXPECT_GT(peak(o.job.plan), 0.9 * L.feed);
-  EXPECT_LT(v_bump, 0.9 * peak(o.job.plan));
+  std::printf("  %.4f s, cruising at %.2f to %.2f mm/s; without levels %.4f s (%.2f to %.2f)\n",
+              o.job.plan.duration(), lo, hi, without.duration(), lo0, hi0);
+  EXPECT_LT(o.job.plan.duration(), without.duration() - 0.01);
+  EXPECT_GT(hi, 0.95 * L.feed);
+  EXPECT_LT(lo, 0.9 * hi);
+}
+
+// Blocks between stations, on the tick grid (PlanOptions::align_blocks): a
+// path that does not stop between its ends (a line, a tangent arc of R 2 mm
+// turning 90°, a line, a tangent arc turning back, a line) at limits with
+// one acceleration and one jerk for every axis and the path (as
+// bench_toolpaths' set (i)). Its profile's blocks between stations (the
+// arcs' speed bounds) are re-timed on the tick grid with the jerk at up to
+// 0.95 of the limits instead of J_t = 0.6, each after a cruise of less than
+// a tick at its station's speed: faster than the profile as planned, a
+// jerk above 1.2 J_t, every other piece starting on a tick, and every limit
+// held on the Verilated core's samples (checked apart from the planner,
+// output_check.hpp).
+TEST(PlannerCore, BlocksBetweenStationsSwitchJerkOnTicks) {
+  Path p;
+  Eigen::VectorXd a(2), b(2), c(2), d(2), e(2), f(2);
+  a << 0, 0;
+  b << 15, 0;
+  c << 17, 2;
+  d << 17, 12;
+  e << 19, 14;
+  f << 34, 14;
+  p.add(geo::make_line(a, b), "line 1");
+  p.add(geo::make_arc(Eigen::Vector2d(15, 2), 2, -M_PI / 2, 0), "arc 1");
+  p.add(geo::make_line(c, d), "line 2");
+  p.add(geo::make_arc(Eigen::Vector2d(19, 12), 2, M_PI, M_PI / 2), "arc 2");
+  p.add(geo::make_line(e, f), "line 3");
+  JobConfig cfg = fast_machine();
+  const Limits& L = cfg.limits;
+  const RunOut o = run_through_core(p, cfg);
+  expect_guarantees(p, cfg, o, "lines and tangent arcs");
+  const PlanOptions po = cfg.plan_options();
+  PlanOptions off = po;
+  off.align_blocks = false;
+  const Plan planned = plan_path(p, L, off);
+  double jmax = 0;
+  size_t off_tick = 0;
+  for (const Piece& q : o.job.plan.pieces) {
+    jmax = std::max(jmax, std::fabs(q.j));
+    const double ph = q.t0 / po.period;
+    if (std::fabs(ph - std::round(ph)) > 1e-6) ++off_tick;  // the cruises that put a block on a tick
+  }
+  std::printf("  %.4f s (%.4f s with the blocks as planned), peak jerk %.0f (J_t %.0f), %zu of %zu pieces off the ticks\n",
+              o.job.plan.duration(), planned.duration(), jmax, o.job.plan.J_t, off_tick, o.job.plan.pieces.size());
+  EXPECT_LT(o.job.plan.duration(), planned.duration() - 0.01);
+  EXPECT_GT(jmax, 1.2 * o.job.plan.J_t);
+  EXPECT_LE(off_tick, o.job.plan.stations.size());
 }
 
 // A raster U-turn: a 0.5 mm half circle between two passes (curvature jumps
@@ -786,13 +843,11 @@ TEST(PlannerCore, BrakingForAStopTakesTheAccelerationOfItsOwnSpeeds) {
   p.add(geo::make_line(a, b), "line in");
   p.add(geo::make_arc(Eigen::Vector2d(0, 0), 1, -M_PI / 2, 0), "tight arc");
   p.add(geo::make_arc(Eigen::Vector2d(-4, 0), 5, 0, M_PI / 2), "wide arc");
-  JobConfig cfg;
-  auto& L = cfg.limits;
-  L.feed = 100;
-  for (int ax = 0; ax < 2; ++ax) L.v_axis[ax] = 100, L.a_axis[ax] = 3000, L.j_axis[ax] = 60000;
-  L.a_tan = L.a_cen = 3000;
-  L.j_tan = L.j_cen = 60000;
-  cfg.machine.period = 0.5e-3;
+  JobConfig cfg = fast_machine();
+  const Limits& L = cfg.limits;
+  // the profile as planned: the re-timing on the tick grid (step 5) takes
+  // the braking block anew, whatever acceleration the profile gave it
+  cfg.plan.align_straight_moves = false;
   const RunOut o = run_through_core(p, cfg);
   expect_guarantees(p, cfg, o, "two arcs into a stop");
   PlanOptions off = cfg.plan_options();
