@@ -537,7 +537,8 @@ JobConfig fast_machine() {
 // above the profile's J_t; where the exact trajectory would break a
 // per-axis or centripetal limit, the re-timing lowers its jerk, acceleration
 // or speed, or leaves the move as planned. The path is faster than with the
-// curved moves left as planned, and every limit holds on the Verilated
+// curved moves not re-timed as a whole (only their blocks between
+// stations, PlanOptions::align_blocks), and every limit holds on the Verilated
 // core's samples (checked apart from the planner, output_check.hpp).
 TEST(PlannerCore, CurvedMovesBetweenStopsSwitchJerkOnTicks) {
   auto spline = [](const std::vector<std::array<double, 3>>& c) {
@@ -598,7 +599,7 @@ TEST(PlannerCore, CurvedMovesBetweenStopsSwitchJerkOnTicks) {
   PlanOptions off = po;
   off.align_curved_moves = false;
   const double t_off = plan_path(p, L, off).duration();
-  std::printf("  %.4f s (%.4f s with the curved moves as planned)\n", o.job.plan.duration(), t_off);
+  std::printf("  %.4f s (%.4f s with the curved moves not re-timed as a whole)\n", o.job.plan.duration(), t_off);
   EXPECT_LT(o.job.plan.duration(), t_off);
 }
 
