@@ -497,17 +497,22 @@ geo::BSpline fit_run(const std::vector<Vec>& poly, const Vec& t_in, const Vec& t
   const std::vector<double> S = chord_lengths(poly);
   const double L = S.back();
   if (poly.size() < 4 || !(L > 0)) return b;
-  // knots (chord length / L): the first and last at the run's first and last vertex, uniform between
+  // knots (chord length / L): the first and last at the run's first and last vertex, uniform between;
+  // at a free end (a stop) the knot at the first (last) vertex is left out: the span next to the
+  // stop reaches over the first edge, which may be short (a span as short would let the curve bend
+  // hard at the stop, where the machine starts from rest)
   const double a = S[1], z = S[S.size() - 2];
-  const int inner = static_cast<int>(std::ceil((z - a) / span));
-  const int N = inner + 2;  // knot spans
-  const int n = N + 3;
-  if (inner < 2) return b;
+  const int spans = static_cast<int>(std::ceil((z - a) / span));
+  std::vector<double> inner;
+  for (int i = free_in ? 1 : 0; i <= (free_out ? spans - 1 : spans); ++i) inner.push_back((a + (z - a) * i / spans) / L);
+  const int n = static_cast<int>(inner.size()) + 4;  // knot spans + 3
+  const int f0 = free_in ? 1 : 3, f1 = free_out ? n - 2 : n - 4;  // the free control points
+  if (spans < 1 || f1 < f0 || (!free_in && !free_out && spans < 2)) return b;
   const int dim = static_cast<int>(poly[0].size());
   b.degree = 3;
   b.knots.resize(n + 4);
   for (int i = 0; i < 4; ++i) b.knots[i] = 0, b.knots[n + i] = 1;
-  for (int i = 0; i <= inner; ++i) b.knots[4 + i] = (a + (z - a) * i / inner) / L;
+  for (size_t i = 0; i < inner.size(); ++i) b.knots[4 + i] = inner[i];
   b.ctrl.resize(n, dim);
   const Vec& E = poly.front();
   const Vec& X = poly.back();
@@ -516,7 +521,6 @@ geo::BSpline fit_run(const std::vector<Vec>& poly, const Vec& t_in, const Vec& t
   b.ctrl.row(0) = E.transpose();
   b.ctrl.row(1) = (E + greville(1) * t_in).transpose();
   b.ctrl.row(2) = (E + greville(2) * t_in).transpose();
-  const int f0 = free_in ? 1 : 3, f1 = free_out ? n - 2 : n - 4;  // the free control points
   b.ctrl.row(n - 3) = (X - (L - greville(n - 3)) * t_out).transpose();
   b.ctrl.row(n - 2) = (X - (L - greville(n - 2)) * t_out).transpose();
   b.ctrl.row(n - 1) = X.transpose();
@@ -790,11 +794,15 @@ struct CanonicalCorner {
 // |d3x/ds3| over n + 1 samples (the planner's |Q|: the jerk per v^3 of a pass at constant speed,
 // which bounds a blend's speed under a jerk limit J at (J / |Q|)^(1/3)): its largest value and the
 // integral of |Q|^(1/3) ds (the time of a pass at that bound, times J^(1/3); midpoint rule).
+// from_rest: the largest |Q| s^2, s the arc length from the curve's start. A move from rest there at
+// jerk J reaches (J/2)^(1/3) (6 s)^(2/3) (while its acceleration has not reached its limit), within
+// the bound wherever |Q| s^2 <= 1/18: the lower, the more room the curve leaves a start from rest.
 struct JerkGeometry {
-  double peak = 0, pass = 0;
+  double peak = 0, pass = 0, from_rest = 0;
 };
 JerkGeometry jerk_geometry(const geo::Curve& c, int n) {
   JerkGeometry r;
+  double s_prev = 0, g_prev = 0;
   for (int i = 0; i <= n; ++i) {
     const Eigen::MatrixXd e = c.eval(c.u_begin() + (c.u_end() - c.u_begin()) * i / n, 3);
     const Eigen::VectorXd d1 = e.col(1), d2 = e.col(2), d3 = e.col(3);
@@ -806,9 +814,57 @@ JerkGeometry jerk_geometry(const geo::Curve& c, int n) {
     const double g2 = K.dot(d2) * g + T.dot(d3);
     const double q = ((d3 - g2 * T - 3 * g * g1 * K) / (g * g * g)).norm();
     r.peak = std::max(r.peak, q);
-    r.pass += std::cbrt(q) * g * (c.u_end() - c.u_begin()) / n * ((i == 0 || i == n) ? 0.5 : 1.0);
+    const double ds = g * (c.u_end() - c.u_begin()) / n;
+    if (i > 0) s_prev += 0.5 * (g_prev + ds);
+    g_prev = ds;
+    r.from_rest = std::max(r.from_rest, q * s_prev * s_prev);
+    r.pass += std::cbrt(q) * ds * ((i == 0 || i == n) ? 0.5 : 1.0);
   }
   return r;
+}
+
+// A line-line corner V next to a stop S (README.md, "Corners next to a stop"). The machine is at rest
+// at S, where the path's direction may turn, so the near leg (from S to V) need not be followed
+// straight: the corner is blended at a virtual vertex V' = V + c t_far on the far leg, with a
+// five-point blend whose near end point is S: control points S, V' - d1 t', V', V' + d2 t_far,
+// V' + r d2 t_far (t' the unit chord S V', d1 = |V' - S| / r, r = kBlendReach). Its turn is smaller
+// than V's, and its far side may be longer than its near side (d2 >= d1): the turn then spreads
+// over the far side, where the machine moves faster. Of c = |S V| {0, 1/4, ..., 3} (while the
+// deviation from the two legs, measured, stays within tol) and d2 = d1 {1, 1.5, 2, 3, 4, 6}
+// (while the blend's far end stays within far_reach of V), the one that leaves a start from rest
+// at S the most room (the least JerkGeometry::from_rest). The curve runs from S to the far leg.
+struct StopBlend {
+  bool ok = false;
+  geo::BSpline curve;
+  double d = 0, turn = 0, reach = 0, deviation = 0;  // reach: how much of the far leg it takes
+};
+StopBlend stop_blend(const Vec& S, const Vec& V, const Vec& t_far, double far_reach, double tol, int samples) {
+  StopBlend best;
+  double best_q = INFINITY;
+  const double near = (V - S).norm();
+  for (double cf : {0.0, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 2.0, 3.0}) {
+    const double c = cf * near;
+    const Vec vv = V + c * t_far;
+    const double l = (vv - S).norm(), d1 = l / kBlendReach;
+    if (!(l > 0) || c + l > far_reach) break;
+    const Vec t_near = (vv - S) / l;
+    bool within = false;
+    for (double m : {1.0, 1.5, 2.0, 3.0, 4.0, 6.0}) {
+      const double d2 = m * d1, reach = c + kBlendReach * d2;
+      if (reach > far_reach) break;
+      geo::BSpline b = corner_blend(vv, t_near, t_far, d1);
+      b.ctrl.row(0) = S.transpose();
+      b.ctrl.row(3) = (vv + d2 * t_far).transpose();
+      b.ctrl.row(4) = (vv + kBlendReach * d2 * t_far).transpose();
+      const double dev = curved_blend_deviation(b, Piece{nullptr, S, V}, Piece{nullptr, V, Vec(V + reach * t_far)}, samples);
+      if (!(dev <= tol)) continue;
+      within = true;
+      const double q = jerk_geometry(geo::Curve(b, "corner blend"), 64).from_rest;
+      if (q < best_q) best_q = q, best = {true, b, d1, turning_angle(t_near, t_far), reach, dev};
+    }
+    if (!within) break;  // a farther virtual vertex only deviates more
+  }
+  return best;
 }
 
 // A wide blend's shape at one turn, in the corner's plane at unit size (l0 = 1): its deviation (the
@@ -1097,6 +1153,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
 
   // Emit: each segment trimmed by its join's cut at a blended end, each blend starting where the chain ends.
   Vec last_end;
+  double carry = -1;  // >= 0: the next segment starts at last_end, this far along it
   // A segment between two blended line-line joins.
   auto between_blends = [&](size_t seg) {
     return seg > 0 && seg < joins.size() && el[seg].segment && joins[seg - 1].kind == JoinKind::kBlend &&
@@ -1202,8 +1259,10 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       if (blend_after) emit_blend(k);
       continue;
     }
-    const double cut0 = blend_before ? joins[k - 1].cut : 0;
-    const Vec a = blend_before ? last_end : Vec(e.a);
+    // a segment a blend next to a stop ends in (its far leg reaching over joins passed) starts there
+    const double cut0 = carry >= 0 ? carry : blend_before ? joins[k - 1].cut : 0;
+    const Vec a = carry >= 0 || blend_before ? last_end : Vec(e.a);
+    carry = -1;
     // the segment up to its blend's start (a remnant shorter than min_line is dropped: the next blend
     // starts at a, on the same segment line); true when pushed
     auto emit_line = [&](double cut1) {
@@ -1217,6 +1276,56 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       return false;
     };
     const bool line_pushed = emit_line(blend_after ? joins[k].cut : 0);
+    // A corner on its own next to a stop (README.md, "Corners next to a stop"), after the line up to
+    // its plain blend (pushed): 0 not taken; 1 taken from the stop before it; 2 taken to the stop
+    // after it (segment k+1 is in the curve).
+    auto emit_stop_blend = [&](bool pushed) -> size_t {
+      const bool fin = !blend_before && (k == 0 ? o.starts_at_rest : joins[k - 1].kind == JoinKind::kStop);
+      const bool fout = stop_after(k, 1);
+      if (!fin && !fout) return 0;
+      const Element& r = el[k + 1];
+      const bool from_stop = fin && (!fout || e.length <= r.length);  // the near leg: the stop's, the shorter
+      Blend& bl = res.blends[blend_of[k]];
+      // The far leg, from the stop: the segment after the corner and the ones straight on after it
+      // (joins passed), less the share of the last one that its other end's blend may take. Towards a
+      // stop after the corner: what is left of the segment before it.
+      size_t last = k + 1;
+      double far = r.length;
+      if (from_stop) {
+        while (last < joins.size() && joins[last].kind == JoinKind::kPass && el[last + 1].segment)
+          far += el[++last].length;
+        if (last < joins.size() && joins[last].kind == JoinKind::kBlend) far -= o.share * el[last].length;
+      } else {
+        far = e.length - cut0;
+      }
+      far -= o.min_line;
+      StopBlend sb = from_stop ? stop_blend(e.a, e.b, r.t_start, far, bl.tol, o.run_samples)
+                               : stop_blend(r.b, e.b, -e.t_end, far, bl.tol, o.run_samples);
+      if (!sb.ok) return 0;
+      if (pushed) res.curves.pop_back();
+      const input::Move& mr = tp.moves[r.move];
+      bool stop_end = false;
+      size_t skip = 1;  // the element after k the curve ends in (the ones before it it takes whole)
+      if (from_stop) {
+        last_end = a;
+        double rest = sb.reach;
+        while (rest > el[k + skip].length && k + skip < last) rest -= el[k + skip++].length;
+        carry = rest;
+      } else {
+        emit_line(sb.reach);
+        sb.curve.ctrl = sb.curve.ctrl.colwise().reverse().eval();
+        sb.curve.ctrl.row(0) = last_end.transpose();
+        stop_end = r.last_of_move && mr.exact_stop;
+      }
+      res.curves.push_back({sb.curve, blend_where(m, mr, "corner blend at a stop"), std::min(m.feed, mr.feed),
+                            Kind::kFeed, stop_end, true, stop_end ? mr.dwell : 0.0});
+      last_end = sb.curve.ctrl.row(sb.curve.n_ctrl() - 1).transpose();
+      bl.d = sb.d;
+      bl.deviation = sb.deviation;
+      bl.peak_curvature = blend_peak_curvature(sb.d, sb.turn);
+      bl.at_stop = true;
+      return from_stop ? skip : 2;
+    };
     if (blend_after && o.merge_runs) {
       // the longest run from here that measures within the tolerance (halved until one does)
       size_t m = run_length(k);
@@ -1257,6 +1366,14 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       if (m >= 2) {
         // segments k+1 .. k+m-1 are replaced; segment k+m starts at the run's end (or is in the run)
         k += to_stop ? m : m - 1;
+        continue;
+      }
+    }
+    if (blend_after && o.from_stops && !joins[k].curved && el[k + 1].segment) {
+      // the elements the blend takes whole are skipped (towards a stop: the segment after the corner)
+      const size_t taken = emit_stop_blend(line_pushed);
+      if (taken) {
+        k += taken - 1;
         continue;
       }
     }

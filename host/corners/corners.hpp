@@ -86,6 +86,11 @@ struct BlendOptions {
   // A line-line corner takes the seven-point wide blend (README.md, "Wide blends") where its peak
   // |d3x/ds3| is at least 5 % below the five-point blend's; false: the five-point blend always.
   bool wide = true;
+  // A line-line corner blended on its own next to a stop (the chain's start or end where it is at
+  // rest, a corner left a stop, an exact stop) is blended from the stop: at a virtual vertex on the
+  // far leg, the curve starting (ending) at the stop (README.md, "Corners next to a stop"). false:
+  // the five-point or wide blend at the corner.
+  bool from_stops = true;
   // Asked for each line-line corner turning by more than stop_turn that would be blended on its own
   // (a run's corners are not asked): true leaves it an exact stop (StopReason::kFaster). Under a jerk
   // limit a sharp corner's blend is passed slowly over its whole length, and at a high feed that can
@@ -139,6 +144,9 @@ struct Blend {
   // Both legs straight and the seven-point wide blend taken (README.md, "Wide blends"): d is half its
   // l0, deviation and peak_curvature are measured.
   bool wide = false;
+  // Next to a stop, blended at a virtual vertex on the far leg from the stop (README.md, "Corners
+  // next to a stop"): d is that blend's spacing, deviation measured against the two legs.
+  bool at_stop = false;
 };
 
 // A run of corners merged into one curve.

@@ -16,6 +16,7 @@
 #include "input/gcode.hpp"
 #include "planner/planner.hpp"
 #include "ref_deboor.hpp"
+#include "rest_to_rest.hpp"
 
 namespace {
 
@@ -502,6 +503,7 @@ TEST(CornerBlend, RandomPolylinesStayWithinToleranceAndDoNotOverlap) {
     const auto pts = random_polyline(g, 60, dim);
     BlendOptions separate;
     separate.merge_runs = false;
+    separate.from_stops = false;  // the first and last corner too (CornerNextToAStopIsBlendedFromTheStop)
     const BlendResult r = traj::corners::blend_corners(polyline(pts), tol, separate);
     EXPECT_EQ(r.corners_blended, 59);
     EXPECT_LE(r.max_deviation, tol * (1 + 1e-12));
@@ -588,6 +590,62 @@ double plan_time(const BlendResult& r) {
   traj::corners::append_to(p, r);
   const plan::Plan pl = plan::plan_path(p, circle_limits(), plan::PlanOptions{});
   return pl.duration();
+}
+
+// Limits with one acceleration and one jerk for the axes and the path (bench_toolpaths' set (i)).
+plan::Limits one_acceleration_one_jerk() {
+  plan::Limits L;
+  L.feed = 100;
+  for (int a = 0; a < plan::kMaxAxes; ++a) L.v_axis[a] = 100, L.a_axis[a] = 3000, L.j_axis[a] = 60000;
+  L.a_tan = L.a_cen = 3000;
+  L.j_tan = L.j_cen = 60000;
+  L.tol = 0.05;
+  return L;
+}
+
+// Corners next to a stop (README.md, "Corners next to a stop"): a stop S (the chain's start), a
+// 0.2 mm segment, a 20-degree corner V and 20 mm straight on: the pocket outline's corner where its
+// lobe meets its flat side, after the lobe's own corner was left a stop. The corner is blended from
+// S: the curve starts at S, leaves the polyline by at most the tolerance (and V is within it), joins
+// the line after it G2 (tangent equal, curvature 0) and reaches farther along the far leg than the
+// near leg is long. Planned at one acceleration and one jerk (bench_toolpaths' set (i)), the move
+// takes at most 2 % more than the least time of a straight move as long at the re-timed moves'
+// limits (0.95 of each; the continuous S-curve, tb/common/rest_to_rest.hpp), and less than with
+// the corner blended at V (BlendOptions::from_stops off).
+TEST(CornerBlend, CornerNextToAStopIsBlendedFromTheStop) {
+  const double tol = 0.045, turn = 20 * kPi / 180;
+  const std::vector<Vec> pts{v2(0, 0), v2(0.2, 0), v2(0.2 + 20 * std::cos(turn), 20 * std::sin(turn))};
+  const BlendResult r = traj::corners::blend_corners(polyline(pts), tol);
+  ASSERT_EQ(r.blends.size(), 1u);
+  EXPECT_TRUE(r.blends[0].at_stop);
+  ASSERT_EQ(r.curves.size(), 2u);  // the blend from S, the rest of the far leg
+  const ref::Spline s = to_ref(r.curves[0].curve);
+  const Eval e0 = eval_ref(s, 0), e1 = eval_ref(s, 1);
+  const Vec t_far = (pts[2] - pts[1]).normalized();
+  EXPECT_LT((e0.c - pts[0]).norm(), 1e-12) << "starts at the stop";
+  EXPECT_LT((e1.d1.normalized() - t_far).norm(), 1e-9) << "tangent to the far leg";
+  EXPECT_LT(curvature_ref(e1), 1e-9) << "curvature 0 where it joins the far leg";
+  EXPECT_LT((e1.c - r.curves[1].curve.ctrl.row(0).transpose()).norm(), 1e-12) << "the chain is continuous";
+  const double dev = std::max(max_dist_curve_to_polyline(s, pts, 20000), dist_point_to_curve(s, pts[1]));
+  EXPECT_LE(dev, tol);
+  EXPECT_GT((e1.c - pts[1]).norm(), (pts[1] - pts[0]).norm());
+  const plan::Limits L = one_acceleration_one_jerk();
+  auto plan_of = [&](const BlendResult& b, double& len) {
+    plan::Path p;
+    traj::corners::append_to(p, b);
+    len = p.length();
+    return plan::plan_path(p, L, plan::PlanOptions{}).duration();
+  };
+  double len = 0, len_at_v = 0;
+  const double t = plan_of(r, len);
+  BlendOptions at_v;
+  at_v.from_stops = false;
+  const double t_at_v = plan_of(traj::corners::blend_corners(polyline(pts), tol, at_v), len_at_v);
+  const double t_line = traj::test::rest_to_rest_time(len, L.feed, 0.95 * L.a_tan, 0.95 * L.j_tan);
+  std::printf("  deviation %.4f mm; %.4f s (a straight move as long: %.4f s); blended at the corner %.4f s\n", dev, t,
+              t_line, t_at_v);
+  EXPECT_LE(t, 1.02 * t_line);
+  EXPECT_LT(t, t_at_v);
 }
 
 // (c, merged runs) Random polylines with runs merged: the chain is continuous, every curve stays

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <random>
 
+#include "rest_to_rest.hpp"
 #include "test_seed.hpp"
 #include "cusp_cubic.hpp"
 #include "input/path_json.hpp"
@@ -25,6 +26,7 @@ using namespace traj::plan;
 using namespace traj::input;
 using namespace traj::job;
 using namespace traj::report;
+using traj::test::rest_to_rest_time;
 
 #ifndef TRAJ_ASSETS
 #error "TRAJ_ASSETS must name host/assets"
@@ -422,18 +424,6 @@ TEST(PlannerCore, CornerStopsAndLimitsHold) {
   }();
   EXPECT_LT(v_near, 0.5) << "feed near the corner";
   (void)v_corner;
-}
-
-// Rest-to-rest time of a straight move of length len at speed V, acceleration
-// A and jerk J (continuous time, the S-curve's closed form; the peak speed by
-// bisection where the move is too short for V): the least time any motion
-// within these limits takes.
-double rest_to_rest_time(double len, double V, double A, double J) {
-  auto ramp = [&](double v) { return v >= A * A / J ? v / A + A / J : 2 * std::sqrt(v / J); };
-  if (V * ramp(V) <= len) return ramp(V) + len / V;
-  double lo = 0, hi = V;
-  for (int it = 0; it < 200; ++it) ((0.5 * (lo + hi)) * ramp(0.5 * (lo + hi)) <= len ? lo : hi) = 0.5 * (lo + hi);
-  return 2 * ramp(lo);
 }
 
 // Straight moves between stops (corners) switch the jerk only on ticks and
