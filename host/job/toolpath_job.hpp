@@ -41,6 +41,9 @@ struct ToolpathOptions {
   // A line-line corner of more than 20 degrees is left an exact stop where that is faster at the
   // job's limits than its blend (corners::BlendOptions::stop_if_faster; both planned locally).
   bool faster_stops = true;
+  // A corner next to a stop is blended from the stop (corners::BlendOptions::from_stops; host/corners,
+  // "Corners next to a stop").
+  bool stop_blends = true;
 };
 
 struct ToolpathPlan {

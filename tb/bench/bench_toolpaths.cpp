@@ -87,6 +87,7 @@ struct Preparation {
   bool blend = false;  // job::ToolpathOptions::blend: corner blending within blend_share of the tolerance
   bool wide = true;    // job::ToolpathOptions::wide_blends
   bool faster_stops = true;  // job::ToolpathOptions::faster_stops
+  bool stop_blends = true;   // job::ToolpathOptions::stop_blends
 };
 
 // The preparations --prepare can name; corner blending plugs in as one more entry.
@@ -99,6 +100,8 @@ const std::vector<Preparation>& preparations() {
        [](const input::Toolpath& tp, double) { return tp; }, true, false},
       {"blend-all", "as blend, with every corner blended (none left a stop where that is faster)",
        [](const input::Toolpath& tp, double) { return tp; }, true, true, false},
+      {"blend-at-v", "as blend, with a corner next to a stop blended at its vertex (none blended from the stop)",
+       [](const input::Toolpath& tp, double) { return tp; }, true, true, true, false},
   };
   return list;
 }
@@ -541,6 +544,7 @@ Row run_case(const char* name, const LimitSet& ls, const input::Toolpath& progra
     opts.blend = prep.blend;
     opts.wide_blends = prep.wide;
     opts.faster_stops = prep.faster_stops;
+    opts.stop_blends = prep.stop_blends;
     row.traj = run_trajcore(programmed, prepared, ls.cfg, opts, probe);
   } catch (const std::exception& e) {
     row.traj.error = std::string("preparation: ") + e.what();
