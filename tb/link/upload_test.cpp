@@ -258,7 +258,7 @@ TEST(Upload, AheadBoundsWhatTheBoardStoresBeyondWhatItPlays) {
   const auto& path = raster_stream(40);
   auto most_ahead = [&](size_t ahead) {
     BoardOptions bo = fast_board(64);
-    bo.speed = 10;  // paced, so that the tool waits for the board (16 segments ahead: about 50 ms)
+    bo.speed = 5;  // paced, so that the tool waits for the board (16 segments ahead: about 0.1 s)
     Rig rig(bo, {});
     RecordSource src(path);
     UploadOptions o = tool();
@@ -420,7 +420,7 @@ TEST(Upload, InterruptThenResumePlaysEveryRecordOnce) {
 TEST(Upload, KilledToolThenResumeAfterUnderrun) {
   const auto& path = raster_stream(40);
   BoardOptions bo = fast_board(64);
-  bo.speed = 50;  // paced: the board runs dry while no tool feeds it (64 segments: ~40 ms)
+  bo.speed = 20;  // paced: the board runs dry while no tool feeds it (64 segments: ~0.1 s)
   Rig rig(bo, {});
   {
     // a tool that stores 60 records and starts the board, then vanishes
@@ -537,8 +537,8 @@ TEST(Upload, TruncatedStreamStopsTheBoard) {
     std::vector<char> b((std::istreambuf_iterator<char>(in)), {});
     std::ofstream(cut, std::ios::binary).write(b.data(), 64 + 232 * 100 + 50);
   }
-  BoardOptions bo = fast_board(32);
-  bo.speed = 20;  // 100 records stream through in about 0.1 s; a segment lasts about 2 ms
+  BoardOptions bo = fast_board(64);
+  bo.speed = 20;  // 100 records stream through in about 0.2 s; a segment lasts about 2 ms
   Rig rig(bo, {});
   try {
     run(rig, cut);
@@ -777,9 +777,12 @@ class Script : public FeedControl {
   }
 };
 
+// Paced so that the feed changes land while the job plays, with a FIFO deep
+// enough (64 records, about 0.2 s at 10x real time) that a host slowed by the
+// sanitizers and a parallel test run does not underrun it.
 BoardOptions paced_board() {
-  BoardOptions bo = fast_board(16);
-  bo.speed = 20;  // 450 records in about 0.8 s; the board's STATUS every 5 ms
+  BoardOptions bo = fast_board(64);
+  bo.speed = 10;  // 450 records in about 1.6 s; the board's STATUS every 10 ms
   return bo;
 }
 
