@@ -47,6 +47,10 @@ struct Join {
   // Both legs straight and the wide blend chosen (README.md, "Wide blends"): its curve (d = l0 / 2).
   bool wide = false;
   geo::BSpline wide_curve;
+  // The vertex moved outward by this much (mm; README.md, "Offset corners") from `programmed`; 0:
+  // where programmed.
+  double shift = 0;
+  Vec programmed;
 };
 
 // Turning angle between unit tangents, accurate near 0 and near pi.
@@ -242,20 +246,26 @@ double dist_to_piece(const Vec& p, const Piece& q) {
 // Measured deviation of a blend from the two pieces it replaces: the larger of the blend's largest
 // distance from them (sampled, then refined by golden section at the worst sample) and the largest
 // distance of their points (the corner and samples along each) from the blend.
-double curved_blend_deviation(const geo::BSpline& blend, const Piece& in, const Piece& out, int samples) {
-  const geo::Curve c(blend, "corner blend");
-  auto off = [&](double u) {
-    const Vec p = point_at(c, u);
-    return std::min(dist_to_piece(p, in), dist_to_piece(p, out));
-  };
+// Largest distance of curve c from what dist measures (a point's distance), sampled at samples + 1
+// parameters, then refined by golden section around the worst sample.
+template <class F>
+double farthest_point(const geo::Curve& c, const F& dist, int samples) {
+  const double u0 = c.u_begin(), u1 = c.u_end();
+  auto off = [&](double f) { return dist(point_at(c, u0 + f * (u1 - u0))); };
   int arg = 0;
   double worst = -1;
   for (int i = 0; i <= samples; ++i) {
     const double dd = off(double(i) / samples);
     if (dd > worst) worst = dd, arg = i;
   }
-  worst = std::max(worst, -golden_min([&](double u) { return -off(u); }, std::max(0, arg - 1) / double(samples),
-                                      std::min(samples, arg + 1) / double(samples)));
+  return std::max(worst, -golden_min([&](double u) { return -off(u); }, std::max(0, arg - 1) / double(samples),
+                                     std::min(samples, arg + 1) / double(samples)));
+}
+
+double curved_blend_deviation(const geo::BSpline& blend, const Piece& in, const Piece& out, int samples) {
+  const geo::Curve c(blend, "corner blend");
+  double worst = farthest_point(
+      c, [&](const Vec& p) { return std::min(dist_to_piece(p, in), dist_to_piece(p, out)); }, samples);
   auto to_blend = [&](const Vec& p) {
     return dist_sampled(p, [&](double u) { return point_at(c, u); });
   };
@@ -417,6 +427,68 @@ Join classify(const input::Toolpath& tp, const Element& l, const Element& r, con
   if (j.turn > o.max_turn) return stop(StopReason::kReversal);
   j.kind = JoinKind::kBlend;
   return j;
+}
+
+// Shortest leg, in tolerances, next to a vertex that moves outward (README.md, "Offset corners"): the
+// legs then tilt by at most about 1/10 rad where a neighbour stays.
+constexpr double kOffsetLeg = 10;
+
+double join_tol(const input::Toolpath& tp, const std::vector<Element>& el, size_t k, double default_tol) {
+  return std::min(move_tol(tp.moves[el[k].move], default_tol), move_tol(tp.moves[el[k + 1].move], default_tol));
+}
+
+// Moves each vertex that offset_share allows outward, along the bisector of its turn, so far that it
+// lies offset_share tolerances from both its legs' lines (README.md, "Offset corners"); joins[k].shift
+// records it. The elements next to it are re-cut and the turns around it re-measured.
+void offset_vertices(const input::Toolpath& tp, double default_tol, const BlendOptions& o, std::vector<Element>& el,
+                     std::vector<Join>& joins) {
+  const size_t n = joins.size();
+  auto sharp_line_corner = [&](size_t k) {
+    const Join& j = joins[k];
+    if (j.kind != JoinKind::kBlend || !el[k].segment || !el[k + 1].segment || j.turn > o.stop_turn) return false;
+    const double tol = join_tol(tp, el, k, default_tol);
+    return std::min(el[k].length, el[k + 1].length) >= kOffsetLeg * tol &&
+           dist_to_segment(el[k].b, el[k].a, el[k + 1].b) > kRunHeight * tol;
+  };
+  std::vector<char> sharp(n);
+  for (size_t k = 0; k < n; ++k) sharp[k] = sharp_line_corner(k);
+  std::vector<size_t> moved;
+  std::vector<Vec> to;
+  for (size_t k = 1; k + 1 < n; ++k) {
+    if (!(sharp[k - 1] && sharp[k] && sharp[k + 1])) continue;
+    const double e = o.offset_share * join_tol(tp, el, k, default_tol);
+    joins[k].shift = e;
+    joins[k].programmed = el[k].b;
+    moved.push_back(k);
+    to.push_back(el[k].b + e / std::cos(0.5 * joins[k].turn) * (el[k].t_end - el[k + 1].t_start).normalized());
+  }
+  auto recut = [](Element& e) {
+    e.length = (e.b - e.a).norm();
+    e.t_start = e.t_end = (e.b - e.a) / e.length;
+  };
+  for (size_t i = 0; i < moved.size(); ++i) el[moved[i]].b = el[moved[i] + 1].a = to[i];
+  for (size_t k : moved) recut(el[k]), recut(el[k + 1]);
+  for (size_t k : moved)
+    for (size_t jk = k - 1; jk <= k + 1; ++jk) joins[jk].turn = turning_angle(el[jk].t_end, el[jk + 1].t_start);
+}
+
+// Whether join k or a join next to it moved its vertex (README.md, "Offset corners").
+bool shift_near(const std::vector<Join>& joins, size_t k) {
+  for (size_t jk = k > 0 ? k - 1 : 0; jk <= k + 1 && jk < joins.size(); ++jk)
+    if (joins[jk].shift > 0) return true;
+  return false;
+}
+
+// Deviation of a line-line blend from the corner's legs as programmed: the larger of its largest
+// distance from them and the programmed vertex's distance from it.
+double deviation_from_legs(const geo::BSpline& blend, const Element& l, const Element& r, int samples) {
+  const geo::Curve c(blend, "corner blend");
+  const double u0 = c.u_begin(), u1 = c.u_end();
+  return std::max(
+      farthest_point(
+          c, [&](const Vec& p) { return std::min(dist_to_segment(p, l.a, l.b), dist_to_segment(p, r.a, r.b)); },
+          samples),
+      dist_sampled(l.b, [&](double f) { return point_at(c, u0 + f * (u1 - u0)); }));
 }
 
 std::string blend_where(const input::Move& l, const input::Move& r, const std::string& what = "corner blend") {
@@ -1097,6 +1169,14 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
 
   std::vector<Join> joins(el.size() - 1);
   for (size_t k = 0; k + 1 < el.size(); ++k) joins[k] = classify(tp, el[k], el[k + 1], o, res);
+  if (o.offset_share > 0) offset_vertices(tp, default_tol, o, el, joins);
+  // Segment i as programmed, before offset_vertices moved its ends.
+  auto programmed_leg = [&](size_t i) {
+    Element e = el[i];
+    if (i > 0 && joins[i - 1].shift > 0) e.a = joins[i - 1].programmed;
+    if (i < joins.size() && joins[i].shift > 0) e.b = joins[i].programmed;
+    return e;
+  };
 
   // Spacing: the tolerance's, shortened to the share of each leg.
   std::vector<size_t> blend_of(joins.size(), 0);
@@ -1110,17 +1190,30 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
     if (!(tol > 0)) throw std::invalid_argument(ml.where + ": tolerance must be positive");
     Blend b;
     if (el[k].segment && el[k + 1].segment) {
-      const double d_tol = blend_spacing_for(tol, j.turn);
+      const double d_tol = blend_spacing_for(tol + j.shift, j.turn);
       const double d_leg = o.share * std::min(el[k].length, el[k + 1].length) / kBlendReach;
       j.d = std::min(d_tol, d_leg);
-      j.cut = kBlendReach * j.d;
-      if (o.stop_if_faster && j.turn > o.stop_turn &&
+      const bool offset = shift_near(joins, k);
+      if (o.stop_if_faster && j.turn > o.stop_turn && !offset &&
           o.stop_if_faster(candidate(el, joins, k, tol, std::min(ml.feed, mr.feed), o, wide_cache))) {
         j.kind = JoinKind::kStop;
         res.stops.push_back({el[k].move, ml.where, StopReason::kFaster, j.turn});
         continue;
       }
       b.deviation = blend_deviation(j.d, j.turn);
+      if (offset) {
+        // measured against the programmed legs, the spacing shortened by 10 % until within tol (as d
+        // falls the blend closes in on the vertex, at most 0.914 tolerances from the programmed one)
+        const Element pl = programmed_leg(k), pr = programmed_leg(k + 1);
+        for (int it = 0; it < 200; ++it, j.d *= 0.9) {
+          b.deviation = deviation_from_legs(corner_blend(el[k].b, el[k].t_end, el[k + 1].t_start, j.d), pl, pr,
+                                            o.run_samples);
+          if (b.deviation <= tol) break;
+        }
+        if (!(b.deviation <= tol))
+          throw std::logic_error(blend_where(ml, mr) + ": no offset blend within the tolerance");
+      }
+      j.cut = kBlendReach * j.d;
       b.shortened = d_leg < d_tol;
       b.peak_curvature = blend_peak_curvature(j.d, j.turn);
     } else {
@@ -1155,9 +1248,12 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
   Vec last_end;
   double carry = -1;  // >= 0: the next segment starts at last_end, this far along it
   // A segment between two blended line-line joins.
+  // A segment between two blended line-line joins (neither moved nor next to one that moved: a run
+  // measures against the segments as they are).
   auto between_blends = [&](size_t seg) {
     return seg > 0 && seg < joins.size() && el[seg].segment && joins[seg - 1].kind == JoinKind::kBlend &&
-           joins[seg].kind == JoinKind::kBlend && !joins[seg - 1].curved && !joins[seg].curved;
+           joins[seg].kind == JoinKind::kBlend && !joins[seg - 1].curved && !joins[seg].curved &&
+           !shift_near(joins, seg - 1) && !shift_near(joins, seg);
   };
   // Vertices from join k on that can share one curve: consecutive blended joins, each vertex within
   // kRunHeight tolerances of the chord of its two neighbours (on a regular polygon the pulled run's
@@ -1168,6 +1264,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       return dist_to_segment(el[kk].b, el[kk].a, el[kk + 1].b) <= kRunHeight * res.blends[blend_of[kk]].tol;
     };
     size_t m = 1;
+    if (shift_near(joins, k)) return m;
     while (k + m < joins.size() && between_blends(k + m) && smooth_enough(k + m - 1) && smooth_enough(k + m)) ++m;
     return m;
   };
@@ -1282,7 +1379,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
     auto emit_stop_blend = [&](bool pushed) -> size_t {
       const bool fin = !blend_before && (k == 0 ? o.starts_at_rest : joins[k - 1].kind == JoinKind::kStop);
       const bool fout = stop_after(k, 1);
-      if (!fin && !fout) return 0;
+      if ((!fin && !fout) || shift_near(joins, k)) return 0;
       const Element& r = el[k + 1];
       const bool from_stop = fin && (!fout || e.length <= r.length);  // the near leg: the stop's, the shorter
       Blend& bl = res.blends[blend_of[k]];
@@ -1295,6 +1392,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
         while (last < joins.size() && joins[last].kind == JoinKind::kPass && el[last + 1].segment)
           far += el[++last].length;
         if (last < joins.size() && joins[last].kind == JoinKind::kBlend) far -= o.share * el[last].length;
+        if (last < joins.size() && joins[last].shift > 0) return 0;
       } else {
         far = e.length - cut0;
       }
@@ -1380,17 +1478,25 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
     if (blend_after && o.wide && !joins[k].curved && el[k + 1].segment) {
       // a corner blended on its own: the wide blend where it is better, the segment re-cut for it
       const double leg = o.share * std::min(e.length, el[k + 1].length);
-      const WideChoice w = choose_wide(joins[k].turn, res.blends[blend_of[k]].tol, leg, joins[k].d, wide_cache);
+      const bool offset = shift_near(joins, k);
+      const double tol = res.blends[blend_of[k]].tol;
+      const WideChoice w = choose_wide(joins[k].turn, tol + joins[k].shift, leg, joins[k].d, wide_cache);
+      geo::BSpline curve;
+      double deviation = w.deviation;
       if (w.chosen) {
+        curve = wide_blend(e.b, e.t_end, el[k + 1].t_start, w.l0, w.shape);
+        if (offset) deviation = deviation_from_legs(curve, programmed_leg(k), programmed_leg(k + 1), o.run_samples);
+      }
+      if (w.chosen && deviation <= tol) {
         if (line_pushed) res.curves.pop_back();
         Join& j = joins[k];
         Blend& bl = res.blends[blend_of[k]];
         j.d = 0.5 * w.l0;
         j.cut = w.l0;
         j.wide = true;
-        j.wide_curve = wide_blend(e.b, e.t_end, el[k + 1].t_start, w.l0, w.shape);
+        j.wide_curve = std::move(curve);
         bl.d = j.d;
-        bl.deviation = w.deviation;
+        bl.deviation = deviation;
         bl.shortened = w.shortened;
         bl.peak_curvature = w.peak_kappa;
         bl.wide = true;

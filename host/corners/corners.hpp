@@ -91,6 +91,13 @@ struct BlendOptions {
   // far leg, the curve starting (ending) at the stop (README.md, "Corners next to a stop"). false:
   // the five-point or wide blend at the corner.
   bool from_stops = true;
+  // A line-line corner turning by at most stop_turn between two such corners, each vertex more than
+  // kRunHeight tolerances from the chord of its neighbours (too sharp for a run; CAM chords whose sag
+  // exceeds the tolerance), moves outward by offset_share of the tolerance: the legs between such
+  // corners run up to that far outside the programmed polyline, and the blend, measured against the
+  // programmed legs, cuts that much deeper and is that much flatter (README.md, "Offset corners").
+  // 0: every blend at its programmed vertex.
+  double offset_share = 0.9;
   // Asked for each line-line corner turning by more than stop_turn that would be blended on its own
   // (a run's corners are not asked): true leaves it an exact stop (StopReason::kFaster). Under a jerk
   // limit a sharp corner's blend is passed slowly over its whole length, and at a high feed that can

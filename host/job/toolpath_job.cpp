@@ -63,6 +63,7 @@ input::Toolpath blend_toolpath(const input::Toolpath& tp, const JobConfig& cfg, 
   corners::BlendOptions bo;
   bo.wide = o.wide_blends;
   bo.from_stops = o.stop_blends;
+  if (!o.offset_corners) bo.offset_share = 0;
   bo.starts_at_rest = starts_at_rest;
   bo.ends_at_rest = ends_at_rest;
   if (o.faster_stops) bo.stop_if_faster = [&cfg](const corners::CornerCandidate& c) { return stop_is_faster(c, cfg); };

@@ -44,6 +44,9 @@ struct ToolpathOptions {
   // A corner next to a stop is blended from the stop (corners::BlendOptions::from_stops; host/corners,
   // "Corners next to a stop").
   bool stop_blends = true;
+  // Vertices between corners too sharp for a run move outward within the tolerance, so that their
+  // blends cut deeper (corners::BlendOptions::offset_share; host/corners, "Offset corners").
+  bool offset_corners = true;
 };
 
 struct ToolpathPlan {

@@ -88,6 +88,7 @@ struct Preparation {
   bool wide = true;    // job::ToolpathOptions::wide_blends
   bool faster_stops = true;  // job::ToolpathOptions::faster_stops
   bool stop_blends = true;   // job::ToolpathOptions::stop_blends
+  bool offset = true;        // job::ToolpathOptions::offset_corners
 };
 
 // The preparations --prepare can name; corner blending plugs in as one more entry.
@@ -102,6 +103,8 @@ const std::vector<Preparation>& preparations() {
        [](const input::Toolpath& tp, double) { return tp; }, true, true, false},
       {"blend-at-v", "as blend, with a corner next to a stop blended at its vertex (none blended from the stop)",
        [](const input::Toolpath& tp, double) { return tp; }, true, true, true, false},
+      {"blend-unshifted", "as blend, with every blend at its programmed vertex (no offset corners)",
+       [](const input::Toolpath& tp, double) { return tp; }, true, true, true, true, false},
   };
   return list;
 }
@@ -545,6 +548,7 @@ Row run_case(const char* name, const LimitSet& ls, const input::Toolpath& progra
     opts.wide_blends = prep.wide;
     opts.faster_stops = prep.faster_stops;
     opts.stop_blends = prep.stop_blends;
+    opts.offset_corners = prep.offset;
     row.traj = run_trajcore(programmed, prepared, ls.cfg, opts, probe);
   } catch (const std::exception& e) {
     row.traj.error = std::string("preparation: ") + e.what();

@@ -864,6 +864,64 @@ TEST(CornerBlend, CamPolylineRunIsSmoothed) {
   EXPECT_LT(slope_smooth, 0.25 * slope_interp);
 }
 
+// Offset corners (README.md, "Offset corners"): CAM chords of a circle of radius 10 mm whose sag
+// (0.005 mm) is five times the tolerance (0.001 mm), so that no run fits. The vertices between
+// two others move outward by 0.9 tolerances and their blends cut deeper: every point of the chain
+// stays within the tolerance of the programmed polyline and every programmed vertex within the
+// tolerance of the chain (both by dense sampling of the reference de Boor evaluation), the straight
+// pieces between the blends run about 0.9 tolerances outside the chords, the blends' largest
+// curvature is at most 0.6 of the blends' at the programmed vertices (a blend's curvature scales as
+// 1 / its depth: 1 / 1.9 = 0.53 expected) and the chain plans faster.
+TEST(CornerBlend, CamChordsBeyondTheToleranceAreOffsetOutward) {
+  const double R = 10, sag = 0.005, tol = 0.001;
+  const double step = 4 * std::acos(1 - sag / R);  // each chord's angle: its sag is R (1 - cos(step / 2))
+  const int chords = 16;
+  std::vector<Vec> pts;
+  for (int i = 0; i <= chords; ++i) pts.push_back(v2(R * std::cos(i * step), R * std::sin(i * step)));
+  const Toolpath tp = polyline(pts);
+  const BlendResult off = traj::corners::blend_corners(tp, tol);
+  BlendOptions at_vertex;
+  at_vertex.offset_share = 0;
+  const BlendResult plain = traj::corners::blend_corners(tp, tol, at_vertex);
+  EXPECT_TRUE(off.runs.empty());
+  EXPECT_EQ(off.corners_blended, chords - 1);
+  double worst = 0, outside = 0;
+  std::vector<ref::Spline> curves;
+  for (const auto& c : off.curves) {
+    curves.push_back(to_ref(c.curve));
+    const double d = max_dist_curve_to_polyline(curves.back(), pts, 400);
+    EXPECT_LE(d, tol * (1 + 1e-9));
+    worst = std::max(worst, d);
+    if (!c.blend) outside = std::max(outside, d);
+  }
+  for (size_t i = 1; i + 1 < pts.size(); ++i) {
+    double d = INFINITY;
+    for (const auto& s : curves) d = std::min(d, dist_point_to_curve(s, pts[i]));
+    EXPECT_LE(d, tol * (1 + 1e-9)) << "vertex " << i;
+  }
+  EXPECT_LE(off.max_deviation, tol);
+  EXPECT_GE(outside, 0.85 * tol);
+  // largest curvature of the blends away from the chain's ends (the first and last two vertices stay)
+  auto middle_peak = [](const BlendResult& r) {
+    std::vector<const traj::corners::ChainCurve*> blends;
+    for (const auto& c : r.curves)
+      if (c.blend) blends.push_back(&c);
+    double hi = 0;
+    for (size_t i = 3; i + 3 < blends.size(); ++i) {
+      const ref::Spline s = to_ref(blends[i]->curve);
+      for (int j = 0; j <= 200; ++j) hi = std::max(hi, curvature_ref(eval_ref(s, j / 200.0)));
+    }
+    return hi;
+  };
+  const double k_off = middle_peak(off), k_plain = middle_peak(plain);
+  const double t_off = plan_time(off), t_plain = plan_time(plain);
+  std::printf("CAM chords of R %g, sag %g, tol %g: deviation %.6f mm, lines %.6f mm outside; peak curvature %.1f "
+              "offset, %.1f at the vertices; planned %.4f s offset, %.4f s at the vertices\n",
+              R, sag, tol, worst, outside, k_off, k_plain, t_off, t_plain);
+  EXPECT_LE(k_off, 0.6 * k_plain);
+  EXPECT_LT(t_off, t_plain);
+}
+
 // The chain goes into a planner path (its join check) and plans on a random polyline.
 TEST(CornerBlend, ChainPlansThroughThePlanner) {
   std::mt19937 g(7);
