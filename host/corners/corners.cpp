@@ -243,9 +243,6 @@ double dist_to_piece(const Vec& p, const Piece& q) {
   return dist_sampled(p, [&](double s) { return q.at(s); });
 }
 
-// Measured deviation of a blend from the two pieces it replaces: the larger of the blend's largest
-// distance from them (sampled, then refined by golden section at the worst sample) and the largest
-// distance of their points (the corner and samples along each) from the blend.
 // Largest distance of curve c from what dist measures (a point's distance), sampled at samples + 1
 // parameters, then refined by golden section around the worst sample.
 template <class F>
@@ -262,6 +259,9 @@ double farthest_point(const geo::Curve& c, const F& dist, int samples) {
                                      std::min(samples, arg + 1) / double(samples)));
 }
 
+// Measured deviation of a blend from the two pieces it replaces: the larger of the blend's largest
+// distance from them (farthest_point) and the largest distance of their points (the corner and
+// samples along each) from the blend.
 double curved_blend_deviation(const geo::BSpline& blend, const Piece& in, const Piece& out, int samples) {
   const geo::Curve c(blend, "corner blend");
   double worst = farthest_point(
@@ -1247,7 +1247,6 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
   // Emit: each segment trimmed by its join's cut at a blended end, each blend starting where the chain ends.
   Vec last_end;
   double carry = -1;  // >= 0: the next segment starts at last_end, this far along it
-  // A segment between two blended line-line joins.
   // A segment between two blended line-line joins (neither moved nor next to one that moved: a run
   // measures against the segments as they are).
   auto between_blends = [&](size_t seg) {
@@ -1487,7 +1486,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
         curve = wide_blend(e.b, e.t_end, el[k + 1].t_start, w.l0, w.shape);
         if (offset) deviation = deviation_from_legs(curve, programmed_leg(k), programmed_leg(k + 1), o.run_samples);
       }
-      if (w.chosen && deviation <= tol) {
+      if (w.chosen && (!offset || deviation <= tol)) {
         if (line_pushed) res.curves.pop_back();
         Join& j = joins[k];
         Blend& bl = res.blends[blend_of[k]];
