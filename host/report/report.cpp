@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -125,28 +126,31 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
   std::vector<std::array<double, kMaxAxes>> x(n);
   for (size_t k = 0; k < n; ++k)
     for (int a = 0; a < kMaxAxes; ++a) x[k][a] = static_cast<double>(s.v[k][a]) * lsb;
-  // distance to the exact curve: Newton on (C(u) - x).C'(u) = 0 from the planned u
+  // distance to the exact curve: Newton on (C(u) - x).C'(u) = 0 from the planned u, keeping the
+  // nearest point it visits (the planned point is one: a step that overshoots along a curve whose
+  // parametric speed changes fast, as a run over thousands of tiny CAM chords, may land on a far part
+  // of it and converge there)
   for (size_t k = 0; k < n && k < r.ticks.size(); ++k) {
     const geo::Curve& c = p.curve(r.ticks[k].curve);
     double u = r.ticks[k].u;
     double buf[3 * kMaxAxes];
-    for (int it = 0; it < 8; ++it) {
+    double best2 = std::numeric_limits<double>::infinity();
+    for (int it = 0; it <= 8; ++it) {
       c.eval(u, 2, buf);
-      double f = 0, fp = 0;
+      double e2 = 0, f = 0, fp = 0;
       for (int a = 0; a < d; ++a) {
         const double e = buf[a] - x[k][a];
+        e2 += e * e;
         f += e * buf[d + a];
         fp += buf[d + a] * buf[d + a] + e * buf[2 * d + a];
       }
-      if (fp <= 0) break;
+      best2 = std::min(best2, e2);
+      if (it == 8 || fp <= 0) break;
       const double un = std::clamp(u - f / fp, c.u_begin(), c.u_end());
       if (un == u) break;
       u = un;
     }
-    c.eval(u, 0, buf);
-    double e2 = 0;
-    for (int a = 0; a < d; ++a) e2 += (buf[a] - x[k][a]) * (buf[a] - x[k][a]);
-    rep.max_deviation = std::max(rep.max_deviation, std::sqrt(e2));
+    rep.max_deviation = std::max(rep.max_deviation, std::sqrt(best2));
   }
   // per tick where the path moves: feed fluctuation (the output's chord over
   // the planned arc) and feed error (over the planned points' chord)
