@@ -1243,6 +1243,9 @@ bool level_move(const Path& p, const Limits& L, const PlanOptions& o, double sa,
     g[i] = std::min(V, cruise_speed_bound(f, L, o, d));
     if (i > 0) t_bound += (x[i] - x[i - 1]) / std::max(g[i], g[i - 1]);
   }
+  // the top level: the highest bound of the geometry (the ends, lifted to V
+  // below, are ramps from and to rest and never reach it)
+  const double top = *std::max_element(g.begin(), g.end()), pad = 2 * top * h;
   // near the ends no move from or to rest within up, down is faster than
   // speed_after: a bound above that holds whatever the levels
   for (size_t i = 0; i <= n && g[i] < V; ++i)
@@ -1252,7 +1255,6 @@ bool level_move(const Path& p, const Limits& L, const PlanOptions& o, double sa,
     if (g[i] >= speed_after(0, len - x[i], down.A, down.J)) g[i] = V;
     else if (x[i] < len) break;
   if (static_cast<double>(max_ticks) * h - t_bound - lost < 4 * h) return false;
-  const double top = *std::max_element(g.begin(), g.end()), pad = 2 * top * h;
   bool found = false;
   // where the check fails in a change of speed, the remedy is either to
   // lower the bound around the place (the dip moves the change away) or to
@@ -1565,6 +1567,10 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
             rest + static_cast<double>(m.ticks()) * h < max_T - 1e-12;
       if (use) phases = phases_of(m, sb - sa, h);
     } else if (use) {
+      // no curve runs faster than the axes together: a program's F far above them (LinuxCNC's
+      // 3D_Chips.ngc: F2250000) would otherwise leave the bisections and the level move's
+      // samples of the cruise bound a thousand times too coarse
+      V = std::min(V, L.top_speed(d));
       use = o.align_curved_moves && joins_allow(sa, sb, V) && curved_move(sa, sb, V, max_T - rest - 1e-12, phases);
     }
     if (use) {

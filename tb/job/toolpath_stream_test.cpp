@@ -558,3 +558,41 @@ TEST(ToolpathPlan, ReportDistanceOnARunOfThousandsOfChords) {
   EXPECT_LE(rep.max_deviation, to_planned);
   EXPECT_LE(rep.max_deviation, r.fit_tol + 1e-9);
 }
+
+// A raster row of LinuxCNC's 3D_Chips.ngc (30.5 mm over Y and Z, the program's own numbers, its
+// F2250000 mm/min far above the axes), between two corners kept as stops, at bench_toolpaths'
+// set (i). Its move from rest to rest is re-timed whole (host/planner/README.md, step 5): (1) the
+// bisection for its one speed runs up to the axes' top speed, not to the feed (at the feed its 10
+// steps were 37 mm/s apart), so the row plans the same as at F = that top speed; (2) its speed
+// levels take their top from the geometry, not from the speed cap, so it dips at its tight
+// stretch (R 3 mm) and runs faster elsewhere, against one speed for the whole row before.
+TEST(ToolpathPlan, CamRowAtAFeedFarAboveTheAxesDipsAtItsTightStretch) {
+  auto program = [](double f) {
+    std::ostringstream o;
+    o << "G21 G90 G64 P0.1\nG0 X-29.5 Y9.112 Z-19.021\nG1 F" << std::fixed << f << "\n"
+      "Y9.05Z-18.948\nY8.925Z-18.784\nY8.737Z-18.528\nY8.487Z-18.006\nY7.737Z-16.575\nY7.237Z-15.482\n"
+      "Y6.237Z-13.677\nY4.737Z-11.229\nY4.237Z-10.475\nY3.237Z-9.204\nY2.737Z-8.696\nY2.237Z-8.264\n"
+      "Y1.737Z-7.875\nY1.612Z-7.808\nY1.487Z-7.751\nY1.237Z-7.667\nY0.987Z-7.589\nY0.737Z-7.512\n"
+      "Y0.237Z-7.381\nY0.112Z-7.367\nY-0.013Z-7.363\nY-0.263Z-7.387\nY-0.388Z-7.415\nY-0.763Z-7.538\n"
+      "Y-1.263Z-7.712\nY-1.763Z-7.933\nY-1.825Z-7.972\nY-2.013Z-8.116\nY-2.763Z-8.786\nY-3.263Z-9.309\n"
+      "Y-4.263Z-10.601\nY-4.763Z-11.369\nY-5.763Z-12.979\nY-6.763Z-14.71\nY-7.763Z-16.661\n"
+      "Y-8.263Z-17.601\nY-8.513Z-18.098\nY-8.7Z-18.497\nY-8.763Z-18.602\nY-9.083Z-19.015\n"
+      "Y-9.122Z-19.024\n" << "M2\n";
+    std::istringstream in(o.str());
+    return input::read_gcode(in, "row.ngc");
+  };
+  const job::JobConfig cfg = bench::fast_machine();
+  job::JobConfig no_levels = cfg;
+  no_levels.plan.align_level_moves = false;
+  auto motion = [&](double f, const job::JobConfig& c) {
+    const job::ToolpathPlan tpp = job::toolpath_plan(program(f), c);
+    return job::run_job(tpp.path, tpp.cfg).plan.duration();
+  };
+  const double* v = cfg.limits.v_axis;
+  const double top = 60 * std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);  // the axes together, mm/min
+  const double far = motion(2250000, cfg), at_top = motion(top, cfg), one_speed = motion(2250000, no_levels);
+  std::printf("  F2250000: %.4f s; F at the axes' top speed (%.0f): %.4f s; without speed levels %.4f s\n", far, top,
+              at_top, one_speed);
+  EXPECT_NEAR(far, at_top, 1e-9);
+  EXPECT_LT(far, one_speed - 0.02);
+}
