@@ -7,6 +7,9 @@
 //     --prepare   the step applied to each toolpath before trajcore plans it
 //                 (default "none"; an unknown name lists the known ones)
 //     --only      runs the cases whose name contains SUBSTRING
+//     --file      instead of the built-in cases, a program of the user's (G-code,
+//                 SVG or DXF, axes X Y Z; repeatable): its own F and G64 P
+//                 where it has them, the limit set's feed and tolerance elsewhere
 //
 // The toolpaths, generated here, are feed moves only:
 //   outline   a closed irregular pocket outline (a lobed curve cut by a flat
@@ -58,13 +61,16 @@
 #include <functional>
 #include <limits>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "geometry/bspline.hpp"
 #include "geometry/curve.hpp"
 #include "input/toolpath.hpp"
+#include "input/toolpath_file.hpp"
 #include "job/job.hpp"
 #include "job/toolpath_job.hpp"
+#include "limit_sets.hpp"
 #include "report/report.hpp"
 
 namespace {
@@ -252,24 +258,6 @@ struct LimitSet {
   job::JobConfig cfg;
 };
 
-job::JobConfig fast_machine() {
-  job::JobConfig c;
-  auto& L = c.limits;
-  L.feed = 100;
-  for (int a = 0; a < plan::kMaxAxes; ++a) L.v_axis[a] = 100, L.a_axis[a] = 3000, L.j_axis[a] = 60000;
-  L.a_tan = L.a_cen = 3000;
-  L.j_tan = L.j_cen = 60000;
-  L.tol = 0.05;
-  c.machine.period = 0.5e-3;
-  return c;
-}
-
-job::JobConfig main_job() {
-  job::JobConfig c;  // the defaults are the main job's limits
-  c.limits.feed = 50;
-  return c;
-}
-
 // ---------------------------------------------------------------- the reference
 
 // Vertices of a curve: a degree-1 curve's control points; any other curve cut
@@ -315,22 +303,24 @@ double along(const double* axis_limit, const VectorXd& u) {
   return v;
 }
 
-// jerk > 0: the junction speed is also capped by a jerk-limited turn (jerk_turn_speed).
-double junction_speed_sq(const VectorXd& u_in, const VectorXd& u_out, const plan::Limits& L, double jerk = 0) {
+// tol: the junction's path tolerance. jerk > 0: the junction speed is also capped by a jerk-limited
+// turn within it.
+double junction_speed_sq(const VectorXd& u_in, const VectorXd& u_out, const plan::Limits& L, double tol,
+                         double jerk = 0) {
   const double cos_theta = -u_in.dot(u_out);
   if (cos_theta > 0.999999) return 0;                                         // reversal
   if (cos_theta < -0.999999) return std::numeric_limits<double>::infinity();  // straight on
   const VectorXd ju = (u_out - u_in).normalized();
   const double a = std::min(L.a_cen, along(L.a_axis, ju));
   const double sin_half = std::sqrt(0.5 * (1 - cos_theta));
-  const double v2 = a * L.tol * sin_half / (1 - sin_half);
+  const double v2 = a * tol * sin_half / (1 - sin_half);
   if (!(jerk > 0)) return v2;
   // The velocity changes by dw = |u_out - u_in| v across the corner. Done as one bang-bang jerk
   // pulse of jerk J along u_out - u_in (duration 2 sqrt(dw / J), the speed along the bisector
   // unchanged), the path leaves the corner by dw^1.5 / (6 sqrt J) at its middle (integrate the
   // velocity change w(t) = J t^2 / 2 over the first half: dw/2 (T/2) / 3). Within the tolerance:
   // dw <= (6 tol sqrt J)^(2/3).
-  const double dw = std::pow(6 * L.tol * std::sqrt(jerk), 2.0 / 3.0);
+  const double dw = std::pow(6 * tol * std::sqrt(jerk), 2.0 / 3.0);
   const double vj = dw / (u_out - u_in).norm();
   return std::min(v2, vj * vj);
 }
@@ -345,7 +335,9 @@ double trapezoid_time(double len, double v0, double v1, double vn, double a) {
 }
 
 // jerk > 0: every junction also within a jerk-limited turn (junction_speed_sq); still no jerk on
-// the blocks' speed changes.
+// the blocks' speed changes. A move's own tolerance (G64 P) replaces the limits' where it has one,
+// and a junction takes the smaller of its two moves' (as trajcore's blends); a move's dwell (G4)
+// adds its seconds at rest.
 RefResult grbl_reference(const input::Toolpath& tp, const job::JobConfig& cfg, double jerk = 0) {
   const plan::Limits& L = cfg.limits;
   std::vector<RefBlock> blocks;
@@ -354,10 +346,13 @@ RefResult grbl_reference(const input::Toolpath& tp, const job::JobConfig& cfg, d
   VectorXd prev = tp.moves.front().curve.ctrl.row(0).transpose();
   double rapid = L.v_axis[0];
   for (int a = 1; a < tp.axes && a < plan::kMaxAxes; ++a) rapid = std::min(rapid, L.v_axis[a]);
+  double tol_before = L.tol;  // the tolerance of the move before the current one
   for (const input::Move& m : tp.moves) {
     const double speed = m.kind == input::Move::Kind::kRapid ? rapid : (m.feed > 0 ? m.feed : L.feed);
+    const double tol = m.tolerance < 0 ? L.tol : m.tolerance;
     std::vector<VectorXd> pts;
-    append_chords(m.curve, L.tol, pts);
+    append_chords(m.curve, tol, pts);
+    bool first_block = true;
     for (const VectorXd& p : pts) {
       RefBlock b;
       b.len = (p - prev).norm();
@@ -368,14 +363,18 @@ RefResult grbl_reference(const input::Toolpath& tp, const job::JobConfig& cfg, d
       if (!blocks.empty()) {
         const RefBlock& in = blocks.back();
         const double cap = std::min(in.v_nom, b.v_nom);
-        vmax_sq.back() = std::min({vmax_sq.back(), junction_speed_sq(in.u, b.u, L, jerk), cap * cap});
+        const double junction_tol = first_block ? std::min(tol_before, tol) : tol;
+        vmax_sq.back() = std::min({vmax_sq.back(), junction_speed_sq(in.u, b.u, L, junction_tol, jerk), cap * cap});
       }
+      first_block = false;
       blocks.push_back(b);
       vmax_sq.push_back(std::numeric_limits<double>::infinity());
       prev = p;
     }
     if (m.exact_stop) vmax_sq.back() = 0;
     res.move_end_vertex.push_back(blocks.size());
+    res.time += m.dwell;
+    tol_before = tol;
   }
   vmax_sq.back() = 0;  // the end is a stop
   const size_t n = blocks.size();
@@ -403,30 +402,101 @@ int count_corners(const input::Toolpath& tp, double corner_tol) {
   return n;
 }
 
+// Nearest-chord search over a polyline: its chords cut into pieces no longer than a cell of a grid
+// over the first two axes, each piece filed in the cells its ends fall in (a piece spans at most two
+// cells per axis, so the cells of both ends and the ones between them: the bounding box of the
+// cells). A query searches rings of cells around the point's cell until a ring lies farther than
+// the nearest piece found (the distance in x-y bounds the whole distance from below): exact, and
+// programs of thousands of moves against 10^5 samples take well under a second.
+class NearestChord {
+ public:
+  NearestChord(const std::vector<std::array<double, 3>>& poly, int dim) : dim_(dim) {
+    double lo[2] = {poly[0][0], poly[0][1]}, hi[2] = {lo[0], lo[1]}, length = 0;
+    for (size_t i = 0; i < poly.size(); ++i) {
+      for (int k = 0; k < 2; ++k) lo[k] = std::min(lo[k], poly[i][k]), hi[k] = std::max(hi[k], poly[i][k]);
+      if (i > 0) length += distance(poly[i - 1], poly[i]);
+    }
+    const double n = static_cast<double>(std::max<size_t>(poly.size(), 2) - 1);
+    // about one piece per cell over the bounding box, and at most about 4 n pieces in all
+    cell_ = std::max({std::sqrt((hi[0] - lo[0]) * (hi[1] - lo[1]) / n), length / (4 * n), 1e-9});
+    origin_[0] = lo[0], origin_[1] = lo[1];
+    rings_ = 2 + static_cast<long>(std::max(hi[0] - lo[0], hi[1] - lo[1]) / cell_);
+    for (size_t i = 1; i < poly.size(); ++i) {
+      const int parts = std::max(1, static_cast<int>(std::ceil(distance(poly[i - 1], poly[i]) / cell_)));
+      for (int p = 0; p < parts; ++p) {
+        Piece piece{lerp(poly[i - 1], poly[i], static_cast<double>(p) / parts),
+                    lerp(poly[i - 1], poly[i], static_cast<double>(p + 1) / parts)};
+        const long ax = cell_of(piece.a[0], 0), ay = cell_of(piece.a[1], 1);
+        const long bx = cell_of(piece.b[0], 0), by = cell_of(piece.b[1], 1);
+        for (long cx = std::min(ax, bx); cx <= std::max(ax, bx); ++cx)
+          for (long cy = std::min(ay, by); cy <= std::max(ay, by); ++cy) cells_[key(cx, cy)].push_back(pieces_.size());
+        pieces_.push_back(piece);
+      }
+    }
+  }
+
+  double distance_to(const std::array<double, 3>& p) const {
+    const long px = cell_of(p[0], 0), py = cell_of(p[1], 1);
+    double best2 = std::numeric_limits<double>::infinity();
+    for (long r = 0; r <= rings_; ++r) {
+      for (long cx = px - r; cx <= px + r; ++cx)
+        for (long cy = py - r; cy <= py + r; ++cy) {
+          if (std::max(std::abs(cx - px), std::abs(cy - py)) != r) continue;  // the ring only
+          const auto it = cells_.find(key(cx, cy));
+          if (it == cells_.end()) continue;
+          for (size_t i : it->second) best2 = std::min(best2, segment_distance2(p, pieces_[i]));
+        }
+      // every cell beyond ring r is at least r cells from p in x or y
+      if (best2 <= (r * cell_) * (r * cell_)) break;
+    }
+    return std::sqrt(best2);
+  }
+
+ private:
+  struct Piece {
+    std::array<double, 3> a, b;
+  };
+  double distance(const std::array<double, 3>& a, const std::array<double, 3>& b) const {
+    double d2 = 0;
+    for (int k = 0; k < dim_; ++k) d2 += (b[k] - a[k]) * (b[k] - a[k]);
+    return std::sqrt(d2);
+  }
+  std::array<double, 3> lerp(const std::array<double, 3>& a, const std::array<double, 3>& b, double t) const {
+    std::array<double, 3> r{0, 0, 0};
+    for (int k = 0; k < dim_; ++k) r[k] = a[k] + t * (b[k] - a[k]);
+    return r;
+  }
+  double segment_distance2(const std::array<double, 3>& p, const Piece& s) const {
+    double ab2 = 0, t = 0;
+    for (int k = 0; k < dim_; ++k) ab2 += (s.b[k] - s.a[k]) * (s.b[k] - s.a[k]), t += (p[k] - s.a[k]) * (s.b[k] - s.a[k]);
+    t = ab2 > 0 ? std::clamp(t / ab2, 0.0, 1.0) : 0.0;
+    double d2 = 0;
+    for (int k = 0; k < dim_; ++k) d2 += (s.a[k] + t * (s.b[k] - s.a[k]) - p[k]) * (s.a[k] + t * (s.b[k] - s.a[k]) - p[k]);
+    return d2;
+  }
+  long cell_of(double x, int axis) const { return static_cast<long>(std::floor((x - origin_[axis]) / cell_)); }
+  static int64_t key(long cx, long cy) { return (static_cast<int64_t>(cx) << 32) ^ (static_cast<int64_t>(cy) & 0xffffffff); }
+
+  int dim_;
+  double cell_ = 1, origin_[2] = {0, 0};
+  long rings_ = 0;
+  std::vector<Piece> pieces_;
+  std::unordered_map<int64_t, std::vector<size_t>> cells_;
+};
+
 // Largest distance of the output samples to the programmed toolpath (its
 // curves cut into chords within 1e-4 of the tolerance).
 double deviation_from(const input::Toolpath& programmed, const std::vector<std::array<double, 3>>& x, int dim,
                       double tol) {
   std::vector<VectorXd> chords{programmed.moves.front().curve.ctrl.row(0).transpose()};
-  for (const auto& m : programmed.moves) append_chords(m.curve, 1e-4 * tol, chords);
+  for (const auto& m : programmed.moves) append_chords(m.curve, 1e-4 * (m.tolerance < 0 ? tol : m.tolerance), chords);
   std::vector<std::array<double, 3>> poly(chords.size(), {0, 0, 0});
   for (size_t i = 0; i < chords.size(); ++i)
-    for (int a = 0; a < dim; ++a) poly[i][a] = chords[i][a];
-  double worst2 = 0;
-  for (const auto& p : x) {
-    double best2 = std::numeric_limits<double>::infinity();
-    for (size_t i = 1; i < poly.size(); ++i) {
-      const auto &a = poly[i - 1], &b = poly[i];
-      double ab2 = 0, t = 0;
-      for (int k = 0; k < dim; ++k) ab2 += (b[k] - a[k]) * (b[k] - a[k]), t += (p[k] - a[k]) * (b[k] - a[k]);
-      t = ab2 > 0 ? std::clamp(t / ab2, 0.0, 1.0) : 0.0;
-      double d2 = 0;
-      for (int k = 0; k < dim; ++k) d2 += (a[k] + t * (b[k] - a[k]) - p[k]) * (a[k] + t * (b[k] - a[k]) - p[k]);
-      best2 = std::min(best2, d2);
-    }
-    worst2 = std::max(worst2, best2);
-  }
-  return std::sqrt(worst2);
+    for (int a = 0; a < dim && a < 3; ++a) poly[i][a] = chords[i][a];
+  const NearestChord nearest(poly, std::min(dim, 3));
+  double worst = 0;
+  for (const auto& p : x) worst = std::max(worst, nearest.distance_to(p));
+  return worst;
 }
 
 // --dump PREFIX: every tick's t, s, v, a_t, curve (with its kind), the speed bound v_lim there, the
@@ -568,6 +638,21 @@ Row run_case(const char* name, const LimitSet& ls, const input::Toolpath& progra
 
 bool selected(const char* name, const std::string& only) { return only.empty() || std::strstr(name, only.c_str()); }
 
+// A program as a user has it (G-code, SVG, DXF; axes X Y Z): its own feeds (F) and tolerances (G64 P)
+// where it has them, the set's elsewhere; rapids at the set's slowest axis velocity, stopped at their
+// ends in both planners. The case is named by the file. False if trajcore failed on one.
+bool run_files(const std::vector<LimitSet>& sets, const Preparation& prep, const std::vector<std::string>& files) {
+  print_header(prep);
+  bool ok = true;
+  for (const std::string& file : files) {
+    const input::Toolpath tp = input::read_toolpath(file, input::file_kind(file));
+    const std::string name = file.substr(file.find_last_of('/') + 1);
+    std::printf("%s: %zu moves\n", file.c_str(), tp.moves.size());
+    for (const LimitSet& ls : sets) ok &= run_case(name.c_str(), ls, tp, prep).traj.ok;
+  }
+  return ok;
+}
+
 void run_all(const std::vector<LimitSet>& sets, const Preparation& prep, bool small, const std::string& only) {
   print_header(prep);
   const int ngon = small ? 36 : 360;
@@ -642,6 +727,21 @@ bool check_reference() {
   ok &= near("right-angle corner: junction speed", corner.v_vertex[1], vj);
   const double leg = (v - vj) / a + (50 - (v * v - vj * vj) / (2 * a) - v * v / (2 * a)) / v + v / a;
   ok &= near("right-angle corner: time", corner.time, 2 * leg);
+  // A program's own tolerance (G64 P) on both moves replaces the limits'; on one of them, the
+  // junction takes the smaller.
+  input::Toolpath own_tol = line({{0, 0}, {50, 0}, {50, 50}});
+  for (auto& m : own_tol.moves) m.tolerance = 4 * L.tol;
+  ok &= near("right-angle corner, G64 P = 4 delta on both moves: junction speed",
+             grbl_reference(own_tol, cfg).v_vertex[1], 2 * vj);
+  own_tol.moves[0].tolerance = -1;
+  ok &= near("right-angle corner, G64 P = 4 delta on the second move only: junction speed",
+             grbl_reference(own_tol, cfg).v_vertex[1], vj);
+  // A dwell (G4) adds its seconds at rest.
+  input::Toolpath dwell = line({{0, 0}, {100, 0}, {200, 0}});
+  dwell.moves[0].dwell = 0.5;
+  dwell.moves[0].exact_stop = true;
+  ok &= near("two lines of 100 mm, a stop and a dwell of 0.5 s between them: time", grbl_reference(dwell, cfg).time,
+             2 * (100 / v + v / a) + 0.5);
   // A feed below the junction speed caps it.
   L.tol = 10;
   ok &= near("right-angle corner, large delta: junction speed = feed",
@@ -656,14 +756,16 @@ bool check_reference() {
 int main(int argc, char** argv) {
   bool small = false;
   std::string prep_name = "none", only;
+  std::vector<std::string> files;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--short") small = true;
     else if (a == "--prepare" && i + 1 < argc) prep_name = argv[++i];
     else if (a == "--only" && i + 1 < argc) only = argv[++i];
     else if (a == "--dump" && i + 1 < argc) g_dump = argv[++i];
+    else if (a == "--file" && i + 1 < argc) files.push_back(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: bench_toolpaths [--short] [--prepare NAME] [--only SUBSTRING]\n");
+      std::fprintf(stderr, "usage: bench_toolpaths [--short] [--prepare NAME] [--only SUBSTRING] [--file PROGRAM]...\n");
       return 2;
     }
   }
@@ -680,7 +782,15 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "bench_toolpaths: the reference planner disagrees with a closed form\n");
     return 1;
   }
-  const std::vector<LimitSet> sets = {{"i", fast_machine()}, {"ii", main_job()}};
-  run_all(sets, *prep, small, only);
-  return 0;
+  const std::vector<LimitSet> sets = {{"i", bench::fast_machine()}, {"ii", bench::main_job()}};
+  if (files.empty()) {
+    run_all(sets, *prep, small, only);
+    return 0;
+  }
+  try {
+    return run_files(sets, *prep, files) ? 0 : 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_toolpaths: %s\n", e.what());
+    return 1;
+  }
 }
