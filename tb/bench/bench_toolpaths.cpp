@@ -449,6 +449,8 @@ class NearestChord {
       // every cell beyond ring r is at least r cells from p in x or y
       if (best2 <= (r * cell_) * (r * cell_)) break;
     }
+    if (best2 == std::numeric_limits<double>::infinity())  // p farther out than the rings reach
+      for (const Piece& piece : pieces_) best2 = std::min(best2, segment_distance2(p, piece));
     return std::sqrt(best2);
   }
 
