@@ -212,6 +212,7 @@ JobResult run_job(const plan::Path& p, const JobConfig& cfg, const Progress& pro
   for (const plan::TimeSegment& s : fit.segments) engine_pieces(s, kmax, m.period, r.segments);
   r.segments.push_back(hold_segment(last, r.ticks.back().x, p.dim(), m.degree));
   r.engine_tick_count = static_cast<uint64_t>(last) + 1;
+  r.plan_peaks = plan::peaks_of(r.ticks, p.dim());
   if (n > 1 && cfg.engine_ticks) {
     std::vector<plan::TickSample>().swap(r.ticks);  // the fit's samples go before the engine's come
     plan::append_ticks_range(p, r.plan, m.period, 0.0, 0, last, r.ticks);

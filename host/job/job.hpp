@@ -4,6 +4,7 @@
 // the report on what the core outputs is report/report.hpp.
 #pragma once
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -49,6 +50,12 @@ struct JobResult {
   // The plan at every engine tick (JobConfig::engine_ticks), else at every
   // fit tick (Machine::fit_ticks apart); `engine_tick_count` either way.
   std::vector<plan::TickSample> ticks;
+  // The plan's peaks at the samples its tick checks ran on (the fit ticks,
+  // with the engine ticks beside each curvature step): what the plan is held
+  // to. Between fit ticks the plan's bounds are not checked (the fit's
+  // segments are, at every engine tick, and the core's samples are);
+  // unset where the result was not made by run_job.
+  std::optional<plan::Peaks> plan_peaks;
   uint64_t engine_tick_count = 0;
   std::vector<plan::TimeSegment> segments;
   std::vector<fd::Compiled> compiled;

@@ -1027,9 +1027,10 @@ double cruise_speed_bound(const Frame& f, const Limits& L, const PlanOptions& o,
 // ddx = K v^2 + T a, dddx = Q v^3 + 3 K v a + T j, with their signs), the
 // centripetal acceleration and its jerk bound, at every tick and half tick,
 // each side of a jerk switch. Where not, *fail_s (if given) receives the
-// first arc length where a sum is exceeded.
+// first arc length where a sum is exceeded. Adds the frames it evaluates to
+// `frames` (Plan::check_frames).
 bool phases_within_limits(const Path& p, double sa, double v0, const std::vector<TickPhase>& ph, double h,
-                          const Limits& L, const PlanOptions& o, double* fail_s = nullptr) {
+                          const Limits& L, const PlanOptions& o, long long& frames, double* fail_s = nullptr) {
   std::vector<Piece> pcs;
   append_phases(pcs, 0, sa, v0, ph, h);
   const int d = p.dim();
@@ -1052,6 +1053,7 @@ bool phases_within_limits(const Path& p, double sa, double v0, const std::vector
     const long long n = std::llround(q.T / h);
     for (long long k = 0; k <= 2 * n; ++k) {
       const double tau = 0.5 * h * static_cast<double>(k);
+      ++frames;
       if (within(q.s(tau), q.v(tau), q.a(tau), q.j)) continue;
       if (fail_s) *fail_s = q.s(tau);
       return false;
@@ -1195,6 +1197,11 @@ bool merge_level(std::vector<SpeedLevel>& lv, size_t k, double len) {
   return true;
 }
 
+// The slowest one-speed move curved_move checks, in times the move as
+// planned (one slower than planned is not taken, but guides the level
+// move; 4 keeps the Ferris drawing's plan at set (i) as with no bound).
+constexpr double kSlowestCandidate = 4;
+
 // Candidate top levels of level_move, and the rounds of lowering the bound
 // (or the changes' share of the limits) where the check failed, per top
 // level; the lowest share the changes take.
@@ -1227,7 +1234,7 @@ constexpr double kLevelStep = 0.98;
 // a top level above v_floor. Returns whether one does.
 bool level_move(const Path& p, const Limits& L, const PlanOptions& o, double sa, double sb, double V,
                 const RampLimits& up, const RampLimits& down, long long max_ticks, double lost, double v_floor,
-                std::vector<TickPhase>& best) {
+                std::vector<TickPhase>& best, long long& frames) {
   const double h = o.period, len = sb - sa;
   const int d = p.dim();
   const size_t n = static_cast<size_t>(std::clamp(std::ceil(len / (0.5 * V * h)), 8.0, 20000.0));
@@ -1285,7 +1292,7 @@ bool level_move(const Path& p, const Limits& L, const PlanOptions& o, double sa,
       }
       if (!built || ticks_of(ph) >= max_ticks) break;  // lowering the bound only slows the move
       double fail_s = 0;
-      if (phases_within_limits(p, sa, 0, ph, h, L, o, &fail_s)) {
+      if (phases_within_limits(p, sa, 0, ph, h, L, o, frames, &fail_s)) {
         best = std::move(ph);
         max_ticks = ticks_of(best);
         found = true;
@@ -1402,11 +1409,17 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
       for (double af : {1.0, 0.75, 0.5}) shares.push_back({af * A0, jf * J0});
     bool found = false;
     RampLimits best_up, best_down;
-    double best_v = 0, best_T = std::numeric_limits<double>::infinity();
+    // a one-speed move slower than the planned one (max_T) is not taken,
+    // but its shares and speed guide the level move; one slower than
+    // kSlowestCandidate times that is not checked, so that the checks' work
+    // stays within a multiple of the move's planned ticks (host/planner/README.md,
+    // step 5; where no speed passed, the bisection went on down to 1/1024 of V)
+    double best_v = 0, best_T = kSlowestCandidate * max_T;
     auto try_move = [&](double v, const RampLimits& up, const RampLimits& down, bool& faster) {
       AlignedMove m;
       faster = aligned_move(sb - sa, h, 0, 0, v, up, down, m) && static_cast<double>(m.ticks()) * h < best_T;
-      if (!faster || !phases_within_limits(p, sa, 0, phases_of(m, sb - sa, h), h, L, o)) return false;
+      if (!faster || !phases_within_limits(p, sa, 0, phases_of(m, sb - sa, h), h, L, o, plan.check_frames))
+        return false;
       best = m, best_T = static_cast<double>(m.ticks()) * h, found = true;
       best_up = up, best_down = down, best_v = v;
       return true;
@@ -1437,7 +1450,8 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
         found ? best.ticks() : static_cast<long long>(std::min(std::ceil(max_T / h - 1e-9), 1e15));
     const double lost = found ? 0.5 * static_cast<double>(best.up.ticks() + best.down.ticks()) * h : 0;
     if (o.align_level_moves &&
-        level_move(p, L, o, sa, sb, V, best_up, best_down, max_ticks, lost, found ? best.vp : 0, phases))
+        level_move(p, L, o, sa, sb, V, best_up, best_down, max_ticks, lost, found ? best.vp : 0, phases,
+                   plan.check_frames))
       found = true;
     return found && static_cast<double>(ticks_of(phases)) * h < max_T;
   };
@@ -1475,7 +1489,7 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
         AlignedMove m;
         if (!aligned_move(sb - sa, h, va, vb, v, r, r, m) || m.ticks() >= max_ticks) return false;
         ph = phases_of(m, sb - sa, h);
-        if (!phases_within_limits(p, sa, va, ph, h, L, o)) return false;
+        if (!phases_within_limits(p, sa, va, ph, h, L, o, plan.check_frames)) return false;
         best = ph, max_ticks = ticks_of(ph), found = true;
         return true;
       };

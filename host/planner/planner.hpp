@@ -249,6 +249,9 @@ struct Plan {
   double length = 0;
   double duration() const { return pieces.empty() ? 0 : pieces.back().t0 + pieces.back().T; }
   int grid_points = 0, refinements = 0;
+  // Frames evaluated by the exact checks of the moves re-timed on the tick
+  // grid (step 5 of host/planner/README.md): the re-timing's work.
+  long long check_frames = 0;
   double A_t = 0, J_t = 0;    // effective tangential limits used (A_t: the largest; blocks may use less)
 };
 

@@ -111,7 +111,7 @@ Report make_report(const Path& p, const JobConfig& cfg, const JobResult& r, cons
   rep.quant = (0.5 + bound + offset) * lsb;
   rep.quant_diff = (0.5 + bound) * lsb;
   rep.guard_needed = fd::Compiler::guard_bits_needed(r.header.degree, rep.k_max, cfg.machine.format().tol_lsb);
-  rep.plan_peaks = peaks_of(r.ticks, d);
+  rep.plan_peaks = r.plan_peaks ? *r.plan_peaks : peaks_of(r.ticks, d);
   rep.worst_plan = worst_ratio(rep.plan_peaks, cfg.limits, d, &rep.worst_plan_what);
   for (const auto& sg : r.segments) {
     const SegmentPeaks pk = segment_peaks(sg, d, h);
@@ -257,7 +257,9 @@ std::string report_text(const JobConfig& cfg, const Report& rep, const JobResult
     << fmt("%g", cfg.machine.period * 1e3) << " ms)\n";
   o << "  stations             " << r.plan.stations.size() << " (" << r.plan.refinements << " added by refinement, "
     << r.plan.grid_points << " grid points, " << r.repairs << " local speed caps from tick checks and the fit, "
-    << r.rounds << (r.rounds == 1 ? " plan)\n" : " plans)\n");
+    << r.rounds << (r.rounds == 1 ? " plan" : " plans") << "; the last one's exact checks of moves on the tick grid "
+    << fmt("%.3g", static_cast<double>(r.plan.check_frames)) << " frames, "
+    << fmt("%.3g", static_cast<double>(r.plan.check_frames) / std::max<long long>(rep.ticks, 1)) << " per sample)\n";
   o << "  segments             " << rep.segments << " (K " << rep.k_min << ".." << rep.k_max << " ticks, degree "
     << r.header.degree << ")\n";
   o << "  engine format        Width " << r.header.width << ", Guard " << r.header.guard_bits << " (K_max "
@@ -304,7 +306,11 @@ std::string report_text(const JobConfig& cfg, const Report& rep, const JobResult
   row("a_centripetal ", L.a_cen, rep.plan_peaks.a_cen, rep.fit_peaks.a_cen, rep.out_peaks.a_cen, true);
   row("j_centripetal ", L.j_cen, rep.plan_peaks.j_cen, rep.fit_peaks.j_cen, rep.out_peaks.j_cen, jerk);
   o << "  (tangential: chord speed and its differences; centripetal: normal part of the 2nd/3rd difference;\n"
-       "   plan: kappa v^2 and |Q| v^3 + 3 kappa v |a|; fit: the fitted polynomials at the ticks)\n";
+       "   plan: kappa v^2 and |Q| v^3 + 3 kappa v |a|"
+    << (cfg.machine.fit_ticks() > 1 ? ", at the fit ticks (" + std::to_string(cfg.machine.fit_ticks()) +
+                                          " engine ticks apart), where the plan is checked"
+                                    : std::string())
+    << "; fit: the fitted polynomials at the ticks)\n";
   o << "  |a|, |j| of the path (output, for information; the per-axis limits apply) " << fmt("%.4g", rep.out_path_a)
     << ", " << fmt("%.4g", rep.out_path_j) << "\n";
   o << "  quantisation allowance on sample differences (per axis; sqrt(axes) x for path quantities): v "

@@ -413,6 +413,68 @@ TEST(ToolpathPlan, SimpleIconsCuspsAndReversalsPlan) {
   }
 }
 
+// Ferris's shell (tb/job/assets/ferris, from the Rust book's panics.svg) at bench_toolpaths' set
+// (i), 0.5 ms ticks. The plan is checked, and repaired, at its fit ticks (1 ms apart here); between
+// them its centripetal jerk bound reads up to 1.06 of the limit at the engine's ticks. The report
+// held the plan to the engine's ticks, and `trajcore plan` exited 1 while the core's samples kept
+// every limit. The report now gives the plan's peaks at the ticks it is checked on. The guarantee
+// is the samples': checked here apart from the planner, at every engine tick.
+TEST(ToolpathPlan, PlanHeldAtItsFitTicksWhereTheEngineTickIsFiner) {
+  const job::JobConfig cfg = bench::fast_machine();
+  ASSERT_EQ(cfg.machine.fit_ticks(), 2);
+  const std::string file = std::string(TRAJ_JOB_ASSETS) + "/ferris/panics-shell.svg";
+  const job::ToolpathPlan tpp = job::toolpath_plan(input::read_toolpath(file, input::FileKind::kSvg), cfg);
+  const job::JobResult r = job::run_job(tpp.path, tpp.cfg);
+  const int d = tpp.path.dim();
+  const plan::Limits& L = tpp.cfg.limits;
+  std::string what;
+  const double at_engine = plan::worst_ratio(plan::peaks_of(r.ticks, d), L, d, &what);
+  const double at_fit =
+      plan::worst_ratio(plan::peaks_of(plan::sample_ticks(tpp.path, r.plan, tpp.cfg.machine.fit_period()), d), L, d);
+  const report::Samples s = report::predicted_samples(r);
+  const report::Report rep = report::make_report(tpp.path, tpp.cfg, r, s);
+  ASSERT_EQ(r.header.frac_bits, 32) << "to_mm's scale";
+  double q = 0;
+  for (const auto& c : r.compiled) q = std::max(q, (0.5 + c.bound_lsb) * std::ldexp(1.0, -32));
+  const auto out = test::check_output_limits(to_mm(s), d, L, tpp.cfg.machine.period, q, true);
+  std::printf("  Ferris's shell at set (i): plan peak/limit %.4f at the engine ticks (%s), %.4f at the fit ticks, "
+              "report %.4f; output %.4f (%s)\n", at_engine, what.c_str(), at_fit, rep.worst_plan, out.worst,
+              out.what.c_str());
+  EXPECT_GT(at_engine, 1) << "the case this test is for: the plan above a bound between its fit ticks";
+  EXPECT_LE(at_fit, 1 + 1e-9);
+  EXPECT_DOUBLE_EQ(rep.worst_plan, at_fit);
+  EXPECT_LE(out.worst, 1 + 1e-9) << out.what << " at tick " << out.tick;
+  EXPECT_LE(rep.max_deviation, L.tol);
+}
+
+// An eye of the same drawing (panics-eye.svg) at set (i): a curved move between two stops
+// (its cusps) that no one speed re-times within the limits. The bisection for that speed went on
+// down to 1/1024 of the feed, checking ever slower and longer moves whole: 6.2e8 frames, 77 s of
+// planning for 4.1 s of motion. Now a one-speed candidate more than 4 times slower than the move
+// as planned is not checked, and the level move's are no slower than the one-speed move found.
+// The re-timing tries at most 495 candidates per move (curved_move: 18 shares x 11, then 2 x 18;
+// level_move: 10 tops x 24 rounds; curved_block: 3 x 7 per block, each no slower than its block),
+// each evaluating 2 frames per tick and one more per piece: its frames stay within 4000 per tick
+// of the plan before re-timing (with no repair cap: the same plan as re-timing off).
+TEST(ToolpathPlan, RetimingChecksNoMoveFarSlowerThanPlanned) {
+  const job::JobConfig cfg = bench::fast_machine();
+  const std::string file = std::string(TRAJ_JOB_ASSETS) + "/ferris/panics-eye.svg";
+  const job::ToolpathPlan tpp = job::toolpath_plan(input::read_toolpath(file, input::FileKind::kSvg), cfg);
+  job::JobConfig off = tpp.cfg;
+  off.plan.align_straight_moves = false;
+  const job::JobResult r = job::run_job(tpp.path, tpp.cfg);
+  const job::JobResult before = job::run_job(tpp.path, off);
+  ASSERT_EQ(r.repairs, 0);
+  ASSERT_EQ(before.repairs, 0);
+  const double ticks = before.plan.duration() / tpp.cfg.machine.fit_period();
+  std::printf("  Ferris's eye at set (i): %.4f s of motion (%.4f s before re-timing), %lld frames checked, %.3g per "
+              "tick of the plan before re-timing\n", r.plan.duration(), before.plan.duration(), r.plan.check_frames,
+              static_cast<double>(r.plan.check_frames) / ticks);
+  EXPECT_GT(r.plan.check_frames, 0) << "the case this test is for: moves re-timed on the tick grid";
+  EXPECT_LE(static_cast<double>(r.plan.check_frames), 4000 * ticks);
+  EXPECT_LE(r.plan.duration(), before.plan.duration());
+}
+
 namespace {
 
 // The flowsnake curve of LinuxCNC's flowsnake.ngc, computed here: each level
