@@ -352,11 +352,16 @@ void write_plot_pages(const std::string& dir, const PlotSource& src, const JobCo
       return (X(k + 3)[a] - 3 * X(k + 2)[a] + 3 * X(k + 1)[a] - X(k)[a]) / (h * h * h);
     });
   };
-  // plan: the planner's values at the ticks
+  // plan: the planner's values at the ticks its checks run on; where the
+  // fit tick is coarser than the engine's, every fit_ticks-th of the plan's
+  // engine-tick samples (as report.txt's plan column: between fit ticks the
+  // plan is not held to its bounds, the output is)
+  const size_t every = ticks.size() == n ? static_cast<size_t>(cfg.machine.fit_ticks()) : 1;
   auto plan = [&](const std::string& label, std::function<double(const TickSample&)> f) {
     Series q;
-    q.label = label, q.colour = kPlanColour, q.t0 = ticks.empty() ? 0 : ticks.front().t, q.dt = h;
-    q.count = ticks.size(), q.y = [&ticks, f](size_t k) { return f(ticks[k]); };
+    q.label = label, q.colour = kPlanColour, q.t0 = ticks.empty() ? 0 : ticks.front().t, q.dt = every * h;
+    q.count = ticks.empty() ? 0 : (ticks.size() - 1) / every + 1;
+    q.y = [&ticks, f, every](size_t k) { return f(ticks[k * every]); };
     q.width = 2.6, q.opacity = 0.85, q.band = Band::kFill, q.fill = 0.35;
     return q;
   };
@@ -449,7 +454,11 @@ void write_plot_pages(const std::string& dir, const PlotSource& src, const JobCo
       std::string("Speed, acceleration and jerk against time: ") + (src.plan ? "plan and output" : "output") +
           ", with the limits",
       std::to_string(n) + " output samples at " + gfmt(h * 1e3) + " ms, " + gfmt(T) + " s. " +
-          (src.plan ? "plan: the planner at the ticks; " : "") + "output: differences of the core's samples\n"
+          (src.plan ? (every > 1 ? "plan: the planner at the fit ticks (every " + std::to_string(every) +
+                                       " ticks), where it is checked; "
+                                 : std::string("plan: the planner at the ticks; "))
+                    : std::string()) +
+          "output: differences of the core's samples\n"
           "over 1, 2, 3 ticks (as in report.txt), at the centre of their ticks. Dashed: the limits; every y range "
           "covers the data and the limits." +
           (per_col > 1 ? "\nShaded: the min/max of a series over each pixel column (" + gfmt(per_col, 3) +

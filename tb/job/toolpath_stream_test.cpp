@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -417,8 +418,8 @@ TEST(ToolpathPlan, SimpleIconsCuspsAndReversalsPlan) {
 // (i), 0.5 ms ticks. The plan is checked, and repaired, at its fit ticks (1 ms apart here); between
 // them its centripetal jerk bound reads up to 1.06 of the limit at the engine's ticks. The report
 // held the plan to the engine's ticks, and `trajcore plan` exited 1 while the core's samples kept
-// every limit. The report now gives the plan's peaks at the ticks it is checked on. The guarantee
-// is the samples': checked here apart from the planner, at every engine tick.
+// every limit. The report (and the profile plot) now give the plan's peaks at the ticks it is
+// checked on. The guarantee is the samples': checked here apart from the planner, at every engine tick.
 TEST(ToolpathPlan, PlanHeldAtItsFitTicksWhereTheEngineTickIsFiner) {
   const job::JobConfig cfg = bench::fast_machine();
   ASSERT_EQ(cfg.machine.fit_ticks(), 2);
@@ -445,6 +446,14 @@ TEST(ToolpathPlan, PlanHeldAtItsFitTicksWhereTheEngineTickIsFiner) {
   EXPECT_DOUBLE_EQ(rep.worst_plan, at_fit);
   EXPECT_LE(out.worst, 1 + 1e-9) << out.what << " at tick " << out.tick;
   EXPECT_LE(rep.max_deviation, L.tol);
+  // the profile plot draws the plan at the same ticks: no peak flagged above its limit
+  const auto dir = std::filesystem::temp_directory_path() / ("ferris_plots_" + std::to_string(::getpid()));
+  report::write_plots(dir.string(), tpp.path, tpp.cfg, r, s);
+  std::ifstream in(dir / "profile.svg");
+  const std::string prof((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(prof.find("plan: the planner at the fit ticks"), std::string::npos);
+  EXPECT_EQ(prof.find("ABOVE THE LIMIT"), std::string::npos);
+  std::filesystem::remove_all(dir);
 }
 
 // An eye of the same drawing (panics-eye.svg) at set (i): a curved move between two stops
