@@ -206,6 +206,9 @@ JobResult run_job(const plan::Path& p, const JobConfig& cfg, const Progress& pro
   r.plan = std::move(fit.plan);
   r.repairs = static_cast<int>(fit.repairs);
   r.rounds = fit.rounds;
+  r.check_frames = fit.check_frames;
+  r.moves_searched = fit.moves_searched;
+  r.moves_reused = fit.moves_reused;
   const long long last = (static_cast<long long>(r.ticks.size()) - 1) * n;  // the end, on the engine's tick
   const uint32_t kmax = m.longest_segment();
   r.segments.reserve(fit.segments.size() + 1);

@@ -63,6 +63,9 @@ struct JobResult {
   double fit_tol = 0;
   int repairs = 0;  // local speed caps added by the tick-level checks and the fit
   int rounds = 0;   // plans made (each round adds every cap its checks found)
+  // over every round: the exact checks' frames of moves re-timed on the
+  // tick grid, and the curved moves searched or taken from an earlier round
+  long long check_frames = 0, moves_searched = 0, moves_reused = 0;
   double t_plan = 0, t_ticks = 0, t_fit = 0, t_compile = 0;  // seconds
 };
 

@@ -167,6 +167,7 @@ PlanFitResult plan_and_fit(PlanFitRequest& req, std::vector<plan::TickSample>& t
   const double h = req.options.period;
   auto& caps = req.options.caps;
   const size_t given = caps.size();
+  plan::RetimeMemo retimed;  // each round plans the same path with more caps
   for (int attempt = 0;; ++attempt) {
     r.rounds = attempt + 1;
     r.repairs = caps.size() - given;
@@ -175,7 +176,10 @@ PlanFitResult plan_and_fit(PlanFitRequest& req, std::vector<plan::TickSample>& t
                             " local speed caps in " + std::to_string(kMaxAttempts) + " rounds did not suffice");
     if (req.progress) req.progress("plan", 0);
     const auto a0 = Clock::now();
-    r.plan = plan::plan_path(*req.path, *req.limits, req.options);
+    r.plan = plan::plan_path(*req.path, *req.limits, req.options, &retimed);
+    r.check_frames += r.plan.check_frames;
+    r.moves_reused = retimed.reused;
+    r.moves_searched = retimed.searched;
     check_tick_count(r.plan.duration(), h, req.what);
     if (req.progress) req.progress("plan", 1);
     const auto a1 = Clock::now();

@@ -47,6 +47,9 @@ struct PlanFitResult {
   double t_plan = 0, t_ticks = 0, t_fit = 0;  // host seconds
   int rounds = 0;      // plans made (1: no repair needed)
   size_t repairs = 0;  // speed caps added by the tick checks and the fit (beyond the request's own)
+  // the exact checks of moves re-timed on the tick grid, over every round:
+  // frames evaluated, and curved moves searched or taken from an earlier round
+  long long check_frames = 0, moves_searched = 0, moves_reused = 0;
 };
 
 // The tick samples of the accepted plan are left in `ts`. Throws

@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <optional>
 #include <sstream>
 
@@ -1202,6 +1203,45 @@ bool merge_level(std::vector<SpeedLevel>& lv, size_t k, double len) {
 // move; 4 keeps the Ferris drawing's plan at set (i) as with no bound).
 constexpr double kSlowestCandidate = 4;
 
+// One search of curved_move (retime_moves_between_stops) and what its
+// result depended on beyond the path, the limits and the options: the
+// move's ends and speed bound, and max_T, the time the move took as
+// planned. max_T entered in two ways only: while no one-speed move had
+// passed, each candidate's time t was compared with kSlowestCandidate max_T
+// (those compared below it are up to below_max, the others from
+// not_below_min); and where none passed, the level move was given
+// ceil(max_T / h) ticks (level_ticks; -1 where one passed and the level move
+// got its ticks). The last comparison, of the result with max_T, is the
+// caller's.
+struct CurvedSearch {
+  bool found = false;
+  std::vector<TickPhase> phases;
+  double below_max = -std::numeric_limits<double>::infinity();
+  double not_below_min = std::numeric_limits<double>::infinity();
+  long long level_ticks = -1;
+  // the ticks the level move gets where no one-speed move passed
+  static long long level_ticks_of(double max_T, double h) {
+    return static_cast<long long>(std::min(std::ceil(max_T / h - 1e-9), 1e15));
+  }
+  // whether the search would make every comparison the same for max_T
+  bool holds_for(double max_T, double h) const {
+    const double bound = kSlowestCandidate * max_T;
+    return below_max < bound && !(not_below_min < bound) &&
+           (level_ticks < 0 || level_ticks == level_ticks_of(max_T, h));
+  }
+};
+
+}  // namespace
+
+struct RetimeMemo::Searches {
+  // by the move's ends and speed bound; several where max_T changed a comparison
+  std::map<std::array<double, 3>, std::vector<CurvedSearch>> by_move;
+};
+RetimeMemo::RetimeMemo() : searches(std::make_unique<Searches>()) {}
+RetimeMemo::~RetimeMemo() = default;
+
+namespace {
+
 // Candidate top levels of level_move, and the rounds of lowering the bound
 // (or the changes' share of the limits) where the check failed, per top
 // level; the lowest share the changes take.
@@ -1339,7 +1379,7 @@ bool level_move(const Path& p, const Limits& L, const PlanOptions& o, double sa,
 // than its blocks. Between ticks the trajectory is smooth (its jerk
 // switches on ticks), so the quintic of each tick follows it closely; the
 // fit's checks at every tick decide, as for any plan.
-void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOptions& o, Plan& plan) {
+void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOptions& o, Plan& plan, RetimeMemo* memo) {
   const double h = o.period, tol = 1e-9 * std::max(1.0, plan.length);
   const int d = p.dim();
   auto at_rest = [](const Piece& q) { return q.v0 == 0 && q.a0 == 0; };
@@ -1401,7 +1441,8 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
   // makes the move fastest (the geometry where a move speeds up is not
   // where it slows down); then a move through speed levels (level_move),
   // where it is faster still
-  auto curved_move = [&](double sa, double sb, double V, double max_T, std::vector<TickPhase>& phases) {
+  auto search_curved_move = [&](double sa, double sb, double V, double max_T) {
+    CurvedSearch cs;
     AlignedMove best;
     const double A0 = o.tan_a_share * L.a_tan, J0 = o.axis_j_share * L.j_tan;
     std::vector<RampLimits> shares;
@@ -1415,9 +1456,16 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
     // stays within a multiple of the move's planned ticks (host/planner/README.md,
     // step 5; where no speed passed, the bisection went on down to 1/1024 of V)
     double best_v = 0, best_T = kSlowestCandidate * max_T;
+    // a candidate's time against best_T (while none passed, against max_T: recorded)
+    auto faster_than_best = [&](const AlignedMove& m) {
+      const double t = static_cast<double>(m.ticks()) * h;
+      const bool below = t < best_T;
+      if (!found) (below ? cs.below_max = std::max(cs.below_max, t) : cs.not_below_min = std::min(cs.not_below_min, t));
+      return below;
+    };
     auto try_move = [&](double v, const RampLimits& up, const RampLimits& down, bool& faster) {
       AlignedMove m;
-      faster = aligned_move(sb - sa, h, 0, 0, v, up, down, m) && static_cast<double>(m.ticks()) * h < best_T;
+      faster = aligned_move(sb - sa, h, 0, 0, v, up, down, m) && faster_than_best(m);
       if (!faster || !phases_within_limits(p, sa, 0, phases_of(m, sb - sa, h), h, L, o, plan.check_frames))
         return false;
       best = m, best_T = static_cast<double>(m.ticks()) * h, found = true;
@@ -1441,19 +1489,38 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
           try_move(best_v, ramp == 0 ? r : up, ramp == 0 ? down : r, faster);
         }
       }
-      phases = phases_of(best, sb - sa, h);
+      cs.phases = phases_of(best, sb - sa, h);
     } else {
       best_up = best_down = shares.front();
+      cs.level_ticks = CurvedSearch::level_ticks_of(max_T, h);
     }
     // a level move must take fewer ticks than the one-speed move, or than max_T
-    const long long max_ticks =
-        found ? best.ticks() : static_cast<long long>(std::min(std::ceil(max_T / h - 1e-9), 1e15));
+    const long long max_ticks = found ? best.ticks() : cs.level_ticks;
     const double lost = found ? 0.5 * static_cast<double>(best.up.ticks() + best.down.ticks()) * h : 0;
     if (o.align_level_moves &&
-        level_move(p, L, o, sa, sb, V, best_up, best_down, max_ticks, lost, found ? best.vp : 0, phases,
+        level_move(p, L, o, sa, sb, V, best_up, best_down, max_ticks, lost, found ? best.vp : 0, cs.phases,
                    plan.check_frames))
       found = true;
-    return found && static_cast<double>(ticks_of(phases)) * h < max_T;
+    cs.found = found;
+    return cs;
+  };
+  // The search of an earlier plan where it holds (RetimeMemo), else a new one.
+  auto curved_move = [&](double sa, double sb, double V, double max_T, std::vector<TickPhase>& phases) {
+    std::vector<CurvedSearch>* earlier = memo ? &memo->searches->by_move[{sa, sb, V}] : nullptr;
+    const CurvedSearch* cs = nullptr;
+    if (earlier)
+      for (const CurvedSearch& e : *earlier)
+        if (e.holds_for(max_T, h)) cs = &e;
+    CurvedSearch fresh;
+    if (cs) {
+      ++memo->reused;
+    } else {
+      fresh = search_curved_move(sa, sb, V, max_T);
+      if (memo) ++memo->searched;
+      cs = earlier ? &earlier->emplace_back(std::move(fresh)) : &fresh;
+    }
+    phases = cs->phases;
+    return cs->found && static_cast<double>(ticks_of(phases)) * h < max_T;
   };
   // The time from t to the next tick (ticks at m h - tick_offset).
   auto rest_to_tick = [&](double t) {
@@ -1601,7 +1668,7 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
 
 }  // namespace
 
-Plan plan_path(const Path& p, const Limits& limits, const PlanOptions& o) {
+Plan plan_path(const Path& p, const Limits& limits, const PlanOptions& o, RetimeMemo* retimed) {
   limits.validate();
   Limits L = limits;
   L.feed *= o.feed_share;
@@ -1675,7 +1742,11 @@ Plan plan_path(const Path& p, const Limits& limits, const PlanOptions& o) {
             dwells.push_back({g.s[i], o.corner_rest});
       }
       insert_dwells(plan, std::move(dwells));
-      if (o.align_straight_moves) retime_moves_between_stops(p, L, o, plan);
+      if (retimed && retimed->path != &p) {  // searches of another path hold nothing here
+        retimed->searches->by_move.clear();
+        retimed->path = &p;
+      }
+      if (o.align_straight_moves) retime_moves_between_stops(p, L, o, plan, retimed);
       return plan;
     }
     plan.refinements += static_cast<int>(marked.size());

@@ -261,7 +261,32 @@ struct Plan {
 double speed_limit(const Frame& f, const Limits& L, const PlanOptions& o, double A_t, double J_t, int dim,
                    double* A_loc = nullptr);
 
-Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o);
+// The searches of earlier plans for the re-timing of curved moves between
+// stops (README.md, step 5, "Work"), for later plans of the same path with
+// the same limits and options but for `caps`, `force_stations` and
+// `tick_offset`: the
+// repair rounds of job::plan_and_fit, each of which plans the whole path
+// again with a few more caps. Such a search depends on its move's ends, its
+// speed bound and the time the move took as planned (max_T); a later plan
+// takes an earlier search's result where the ends and the bound are the same
+// and every comparison that search made against max_T comes out the same for
+// the new one, so the plan is the one the search would give.
+class RetimeMemo {
+ public:
+  RetimeMemo();
+  ~RetimeMemo();
+  RetimeMemo(const RetimeMemo&) = delete;
+  RetimeMemo& operator=(const RetimeMemo&) = delete;
+  long long reused = 0, searched = 0;  // moves taken from here, and searched
+
+  struct Searches;  // planner.cpp
+  std::unique_ptr<Searches> searches;
+  const Path* path = nullptr;  // the path it holds searches of
+};
+
+// retimed (optional): searches of earlier plans of the same path, limits and
+// options but for caps, force_stations and tick_offset; this plan's are added.
+Plan plan_path(const Path& p, const Limits& L, const PlanOptions& o, RetimeMemo* retimed = nullptr);
 
 // Kinematic state along the path at time t.
 struct PathState {

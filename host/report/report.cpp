@@ -257,9 +257,14 @@ std::string report_text(const JobConfig& cfg, const Report& rep, const JobResult
     << fmt("%g", cfg.machine.period * 1e3) << " ms)\n";
   o << "  stations             " << r.plan.stations.size() << " (" << r.plan.refinements << " added by refinement, "
     << r.plan.grid_points << " grid points, " << r.repairs << " local speed caps from tick checks and the fit, "
-    << r.rounds << (r.rounds == 1 ? " plan" : " plans") << "; the last one's exact checks of moves on the tick grid "
-    << fmt("%.3g", static_cast<double>(r.plan.check_frames)) << " frames, "
-    << fmt("%.3g", static_cast<double>(r.plan.check_frames) / std::max<long long>(rep.ticks, 1)) << " per sample)\n";
+    << r.rounds << (r.rounds == 1 ? " plan" : " plans") << "; exact checks of moves on the tick grid "
+    << fmt("%.3g", static_cast<double>(r.check_frames)) << " frames, "
+    << fmt("%.3g", static_cast<double>(r.check_frames) / std::max<long long>(rep.ticks, 1)) << " per sample"
+    << (r.rounds > 1 ? ", " + std::to_string(r.moves_reused) + " of " +
+                           std::to_string(r.moves_reused + r.moves_searched) +
+                           " curved moves' searches taken from an earlier plan"
+                     : std::string())
+    << ")\n";
   o << "  segments             " << rep.segments << " (K " << rep.k_min << ".." << rep.k_max << " ticks, degree "
     << r.header.degree << ")\n";
   o << "  engine format        Width " << r.header.width << ", Guard " << r.header.guard_bits << " (K_max "

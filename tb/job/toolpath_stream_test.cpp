@@ -484,6 +484,44 @@ TEST(ToolpathPlan, RetimingChecksNoMoveFarSlowerThanPlanned) {
   EXPECT_LE(r.plan.duration(), before.plan.duration());
 }
 
+// The repair rounds of plan_and_fit plan the same path again with more caps,
+// and take a curved move's re-timing search from an earlier plan where every
+// comparison that search made against the move's planned time (max_T) comes
+// out the same (plan::RetimeMemo). Here the same path is planned at sixteen
+// tick offsets, a sixteenth of a tick apart (which move the rests that put
+// moves on ticks), each with the searches of the plans before: every plan
+// must equal, piece for piece, the plan made without them. (The moves here
+// start where the move before ended, on a tick, so their max_T stays the
+// same and every search is taken; pubg.svg at set (i) makes 6 searches again
+// in its repair rounds.)
+TEST(ToolpathPlan, RetimingTakenFromAnEarlierPlanIsTheOneASearchGives) {
+  const job::JobConfig cfg = bench::fast_machine();
+  for (const char* name : {"ferris/panics-eye.svg", "simple-icons/gitea.svg"}) {
+    const std::string file = std::string(TRAJ_JOB_ASSETS) + "/" + name;
+    const job::ToolpathPlan tpp = job::toolpath_plan(input::read_toolpath(file, input::FileKind::kSvg), cfg);
+    plan::PlanOptions o = tpp.cfg.plan_options();
+    plan::RetimeMemo memo;
+    long long first = 0, differ = 0;
+    for (int k = 0; k < 16; ++k) {
+      o.tick_offset = o.period * k / 16;
+      const plan::Plan with = plan::plan_path(tpp.path, tpp.cfg.limits, o, &memo);
+      const plan::Plan fresh = plan::plan_path(tpp.path, tpp.cfg.limits, o);
+      if (k == 0) first = memo.searched;
+      ASSERT_EQ(with.pieces.size(), fresh.pieces.size()) << name << ", offset " << k << "/16";
+      for (size_t i = 0; i < with.pieces.size(); ++i) {
+        const plan::Piece &a = with.pieces[i], &b = fresh.pieces[i];
+        differ += !(a.t0 == b.t0 && a.T == b.T && a.s0 == b.s0 && a.v0 == b.v0 && a.a0 == b.a0 && a.j == b.j &&
+                    a.dwell == b.dwell && a.on_tick == b.on_tick);
+      }
+    }
+    std::printf("  %s: %lld curved moves' searches in the first plan, %lld in the next 15, %lld taken from an "
+                "earlier plan; %lld pieces differ\n", name, first, memo.searched - first, memo.reused, differ);
+    EXPECT_EQ(differ, 0) << name;
+    EXPECT_GT(first, 0) << name << ": the case this test is for: curved moves re-timed";
+    EXPECT_EQ(memo.reused, 15 * first) << name;
+  }
+}
+
 namespace {
 
 // The flowsnake curve of LinuxCNC's flowsnake.ngc, computed here: each level
