@@ -209,6 +209,8 @@ JobResult run_job(const plan::Path& p, const JobConfig& cfg, const Progress& pro
   r.check_frames = fit.check_frames;
   r.moves_searched = fit.moves_searched;
   r.moves_reused = fit.moves_reused;
+  r.fit_ticks = fit.fit_ticks;
+  r.fit_failures = fit.fit_failures;
   const long long last = (static_cast<long long>(r.ticks.size()) - 1) * n;  // the end, on the engine's tick
   const uint32_t kmax = m.longest_segment();
   r.segments.reserve(fit.segments.size() + 1);

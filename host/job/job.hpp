@@ -66,6 +66,7 @@ struct JobResult {
   // over every round: the exact checks' frames of moves re-timed on the
   // tick grid, and the curved moves searched or taken from an earlier round
   long long check_frames = 0, moves_searched = 0, moves_reused = 0;
+  size_t fit_ticks = 0, fit_failures = 0;  // over every round: ticks given to the fit, its failures
   double t_plan = 0, t_ticks = 0, t_fit = 0, t_compile = 0;  // seconds
 };
 

@@ -99,6 +99,10 @@ constexpr size_t kFitPart = 1 << 16;
 // After a failed fit, the search for further failures resumes this many
 // ticks later (the caps already cover about five ticks' travel each side).
 constexpr size_t kResumeAfterFailure = 8;
+// ...in parts of this many ticks: a fit prepares its whole part before it
+// fits the first tick (with fine ticks, the samples between fit ticks), so
+// each resumption after a failure prepared the rest of a kFitPart part anew.
+constexpr size_t kSearchPart = 1 << 12;
 
 // The plan's positions of the (up to 3) ticks before ts[i], relative to
 // ts[i]: the history of a part that follows a failed one (only to look for
@@ -120,8 +124,10 @@ std::vector<std::array<double, plan::kMaxAxes>> plan_history(const std::vector<p
 // where a fit fails (the search goes on after each failure, so one round
 // finds them all: the number of rounds does not grow with the path's length).
 // Returns the number of failures; `segs` is the fit when there were none.
+// `prepared` counts the ticks given to the fit (with each part's preparation).
 size_t fit_all(const PlanFitRequest& req, const plan::Plan& plan, const std::vector<plan::TickSample>& ts,
-               std::vector<plan::TimeSegment>& segs, std::vector<plan::SpeedCap>& caps, const Earlier& earlier) {
+               std::vector<plan::TimeSegment>& segs, std::vector<plan::SpeedCap>& caps, const Earlier& earlier,
+               size_t& prepared) {
   const double h = req.options.period;
   const size_t n = ts.size() - 1;  // ticks to fit: 1..n
   segs.clear();
@@ -129,9 +135,10 @@ size_t fit_all(const PlanFitRequest& req, const plan::Plan& plan, const std::vec
   plan::SegmentOptions so = req.segments;
   std::vector<plan::TickSample> part;
   for (size_t i0 = 0; i0 < n;) {
-    const size_t i1 = std::min(n, i0 + kFitPart);
+    const size_t i1 = std::min(n, i0 + (failures > 0 ? kSearchPart : kFitPart));
     const bool whole = i0 == 0 && i1 == n;
     if (!whole) part.assign(ts.begin() + static_cast<long>(i0), ts.begin() + static_cast<long>(i1) + 1);
+    prepared += i1 - i0;
     try {
       auto s = plan::fit_segments(*req.path, plan, whole ? ts : part, *req.limits, so, h, req.t_offset,
                                   req.k_base + static_cast<long long>(i0));
@@ -196,7 +203,8 @@ PlanFitResult plan_and_fit(PlanFitRequest& req, std::vector<plan::TickSample>& t
     }
     if (req.progress) req.progress("fit", 0);
     const auto a3 = Clock::now();
-    const size_t failures = fit_all(req, r.plan, ts, r.segments, caps, earlier);
+    const size_t failures = fit_all(req, r.plan, ts, r.segments, caps, earlier, r.fit_ticks);
+    r.fit_failures += failures;
     r.t_fit += secs(a3, Clock::now());
     if (failures > 0) continue;
     if (req.progress) req.progress("fit", 1);

@@ -50,6 +50,9 @@ struct PlanFitResult {
   // the exact checks of moves re-timed on the tick grid, over every round:
   // frames evaluated, and curved moves searched or taken from an earlier round
   long long check_frames = 0, moves_searched = 0, moves_reused = 0;
+  // the fits of every round: ticks given to them (each prepared before it is
+  // fitted), and failures (each one a cap or two)
+  size_t fit_ticks = 0, fit_failures = 0;
 };
 
 // The tick samples of the accepted plan are left in `ts`. Throws

@@ -522,6 +522,29 @@ TEST(ToolpathPlan, RetimingTakenFromAnEarlierPlanIsTheOneASearchGives) {
   }
 }
 
+// A round whose fit fails goes on looking for further failures a few ticks
+// past each one (job/plan_fit.cpp), and each fit prepares its whole part of
+// the ticks before it fits the first (at fine ticks, the samples between fit
+// ticks). Where that part went on to the end of a 65 536-tick part, each
+// failure prepared the rest of the path again: pubg.svg at set (i) spent
+// 10.1 s in one round's fit with 68 failures (0.6 s for a fit without any).
+// Now the search goes on in parts of 4 096 ticks, so a round prepares its
+// ticks and at most 4 096 more per failure. simple-icons' ferrari.svg at set
+// (i) (several failures per round): 212 331 ticks prepared before, about
+// 145 000 now, against a bound of 156 000.
+TEST(ToolpathPlan, FitFailuresDoNotPrepareTheRestOfThePathAgain) {
+  const job::JobConfig cfg = bench::fast_machine();
+  const std::string file = std::string(TRAJ_JOB_ASSETS) + "/simple-icons/ferrari.svg";
+  const job::ToolpathPlan tpp = job::toolpath_plan(input::read_toolpath(file, input::FileKind::kSvg), cfg);
+  const job::JobResult r = job::run_job(tpp.path, tpp.cfg);
+  const size_t fit_ticks = (r.ticks.size() - 1) / static_cast<size_t>(tpp.cfg.machine.fit_ticks()) + 1;
+  const size_t bound = static_cast<size_t>(r.rounds) * fit_ticks + r.fit_failures * 4096;
+  std::printf("  ferrari.svg at set (i): %d plans, %zu fit failures, %zu ticks given to the fit (bound %zu: %zu "
+              "fit ticks a plan)\n", r.rounds, r.fit_failures, r.fit_ticks, bound, fit_ticks);
+  EXPECT_GE(r.fit_failures, 5u) << "the case this test is for: fits that fail";
+  EXPECT_LE(r.fit_ticks, bound);
+}
+
 namespace {
 
 // The flowsnake curve of LinuxCNC's flowsnake.ngc, computed here: each level
