@@ -90,11 +90,10 @@ struct Window {
   // The curves' speeds and stops as speed caps on `path` (the window's
   // path), and their dwells (the window's end is a stop of its own plan).
   void add_caps(const Path& path, double feed, plan::PlanOptions& o) const {
-    const double eps = 1e-9 * std::max(1.0, path.length());
     for (size_t i = 0; i < curves.size(); ++i) {
       const double s0 = path.offset(i), s1 = path.offset(i + 1);
       if (speeds[i] > 0 && speeds[i] < feed) o.caps.push_back({s0, s1, speeds[i]});
-      if (stops[i] && i + 1 < curves.size()) o.caps.push_back({s1 - eps, s1 + eps, 0.0});
+      if (stops[i] && i + 1 < curves.size()) o.caps.push_back(plan::stop_cap(s1, path.length()));
       if (dwells[i] > 0) o.dwells.push_back({s1, dwells[i]});
     }
   }

@@ -109,13 +109,12 @@ ToolpathPlan toolpath_plan(const input::Toolpath& original, const JobConfig& cfg
   }
   r.cfg.limits.feed = fastest;
   auto& caps = r.cfg.plan.caps;
-  const double eps = 1e-9 * std::max(1.0, r.path.length());
   for (size_t i = 0; i < tp.moves.size(); ++i) {
     const double s0 = r.path.offset(i), s1 = r.path.offset(i + 1);
     if (speed[i] < fastest) caps.push_back({s0, s1, speed[i]});
     const bool last = i + 1 == tp.moves.size();
     if (tp.moves[i].exact_stop && !last) {  // the path's end is a stop anyway
-      caps.push_back({s1 - eps, s1 + eps, 0.0});
+      caps.push_back(plan::stop_cap(s1, r.path.length()));
       ++r.stops;
     }
     if (tp.moves[i].dwell > 0) r.cfg.plan.dwells.push_back({s1, tp.moves[i].dwell});

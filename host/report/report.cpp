@@ -260,7 +260,7 @@ std::string report_text(const JobConfig& cfg, const Report& rep, const JobResult
     << r.rounds << (r.rounds == 1 ? " plan" : " plans") << "; exact checks of moves on the tick grid "
     << fmt("%.3g", static_cast<double>(r.check_frames)) << " frames, "
     << fmt("%.3g", static_cast<double>(r.check_frames) / std::max<long long>(rep.ticks, 1)) << " per sample"
-    << (r.rounds > 1 ? ", " + std::to_string(r.moves_reused) + " of " +
+    << (r.rounds > 1 && r.moves_searched > 0 ? ", " + std::to_string(r.moves_reused) + " of " +
                            std::to_string(r.moves_reused + r.moves_searched) +
                            " curved moves' searches taken from an earlier plan"
                      : std::string())

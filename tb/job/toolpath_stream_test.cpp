@@ -545,6 +545,32 @@ TEST(ToolpathPlan, FitFailuresDoNotPrepareTheRestOfThePathAgain) {
   EXPECT_LE(r.fit_ticks, bound);
 }
 
+// LinuxCNC's own logo (linuxcnc-uspace's linuxcnc-logo.svg) at the main job's
+// limits: an exact stop at a cusp, and 4.6 µm past it a grid point of the next
+// curve. The stop's speed cap of 0 spanned 1e-9 of the path's length (11 µm)
+// and held that point too; the profile, at speed 0 at both ends of the stretch
+// between, jumped over it, and the fit failed there round after round ("the
+// limits cannot be met: 452 local speed caps in 200 rounds did not suffice").
+// Now a stop's cap spans the rounding of its arc length only
+// (plan::stop_cap): the plan is continuous in arc length, piece to piece, and
+// the job passes.
+TEST(ToolpathPlan, ExactStopHoldsOnlyItsJunction) {
+  const std::string file = "/usr/share/icons/hicolor/scalable/apps/linuxcnc-logo.svg";
+  if (!std::ifstream(file)) GTEST_SKIP() << file << " not installed (linuxcnc-uspace)";
+  const job::JobConfig cfg;
+  const job::ToolpathPlan tpp = job::toolpath_plan(input::read_toolpath(file, input::FileKind::kSvg), cfg);
+  ASSERT_GT(tpp.stops, 0) << "the case this test is for: exact stops";
+  const job::JobResult r = job::run_job(tpp.path, tpp.cfg);
+  double worst_gap = 0;
+  for (size_t i = 1; i < r.plan.pieces.size(); ++i) {
+    const plan::Piece &a = r.plan.pieces[i - 1], &b = r.plan.pieces[i];
+    worst_gap = std::max(worst_gap, std::fabs(b.s0 - a.s(a.T)));
+  }
+  std::printf("  linuxcnc-logo.svg: %.3f s of motion, %d plans, largest jump of s between pieces %.3g mm\n",
+              r.plan.duration(), r.rounds, worst_gap);
+  EXPECT_LE(worst_gap, 1e-9 * tpp.path.length());
+}
+
 namespace {
 
 // The flowsnake curve of LinuxCNC's flowsnake.ngc, computed here: each level
