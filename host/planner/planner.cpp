@@ -152,6 +152,35 @@ size_t Path::curve_at(double s) const {
   return static_cast<size_t>(it - (offsets_.begin() + 1));
 }
 
+namespace {
+
+// How far inside a curve's end with zero parametric speed its frame is
+// taken: at least 1e-9 of the span in u, and at least the rounding of an arc
+// length (`eps`) along the curve. A tick whose s rounds onto such an end lies
+// up to that far from it; nearer the end the curvature grows as the inverse
+// square root of the distance (a handle retracted onto a cubic's end: the
+// curve leaves as s^(3/2)), and a tick 6 us before a stop on LinuxCNC's
+// LatheMacro.svg, at 2e-7 mm/s, read 29 times the jerk limit from the frame
+// at 1e-9 of the span (a curvature of 1e9 mm^-1) round after round.
+double singular_end_step(const geo::Curve& c, int span, double u, bool at_start, double eps) {
+  const geo::PowerSpan& sp = c.spans()[span];
+  const double width = sp.u1 - sp.u0;
+  const int d = c.dim();
+  double at[kMaxAxes], in[kMaxAxes];
+  c.eval_span(span, u, 0, at);
+  double du = 1e-9 * width;
+  while (du > 0 && du < 1e-3 * width) {
+    c.eval_span(span, at_start ? u + du : u - du, 0, in);
+    double d2 = 0;
+    for (int a = 0; a < d; ++a) d2 += (in[a] - at[a]) * (in[a] - at[a]);
+    if (d2 >= eps * eps) break;
+    du *= 2;
+  }
+  return du;
+}
+
+}  // namespace
+
 Frame frame_at(const Path& p, size_t ci, double u, double s, int span) {
   const geo::Curve& c = p.curve(ci);
   const int d = c.dim();
@@ -177,12 +206,11 @@ Frame frame_at(const Path& p, size_t ci, double u, double s, int span) {
     // A curve may start or end with zero parametric speed (a repeated end
     // control point), or one rounding leaves a hair above zero (relative
     // coordinates): its tangent there is the limit from inside, so the
-    // frame is taken a hair inside (at the end itself the curvature of such
-    // a curve is without bound, 1e33 mm^-1 in simple-icons' endeavouros.svg,
+    // frame is taken inside (at the end itself the curvature of such a
+    // curve is without bound, 1e33 mm^-1 in simple-icons' endeavouros.svg,
     // and a tick there at 5e-12 mm/s read 1e28 times a limit; the planner
     // stops there). Inside a curve, zero speed is a cusp.
-    const geo::PowerSpan& sp = c.spans()[span];
-    const double du = 1e-9 * (sp.u1 - sp.u0);
+    const double du = singular_end_step(c, span, u, at_start, arc_length_rounding(p.length()));
     if (at_start && du > 0) return frame_at(p, ci, u + du, s, span);
     if (at_end && du > 0) return frame_at(p, ci, u - du, s, span);
     // Inside, a cusp (PathCurve::cusp_s): the planner stops there, and the

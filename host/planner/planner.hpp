@@ -87,6 +87,9 @@ struct Limits {
 struct SpeedCap {
   double s0 = 0, s1 = 0, v = 0;
 };
+// How far an arc length along a path of the given length may be off by
+// rounding (sums of curve lengths, a plan's s(t)): a few thousand ulps.
+inline double arc_length_rounding(double length) { return 1e-12 * (length > 1 ? length : 1); }
 // An exact stop at arc length s of a path of the given length (the end of
 // a move): speed 0 over the rounding of s only, so that it holds the grid
 // point of the junction and no other. Over 1e-9 of the length (11 µm on
@@ -94,7 +97,7 @@ struct SpeedCap {
 // stop, and the profile, at speed 0 at both ends of the stretch between,
 // jumped over it.
 inline SpeedCap stop_cap(double s, double length) {
-  const double eps = 1e-12 * (length > 1 ? length : 1);
+  const double eps = arc_length_rounding(length);
   return {s - eps, s + eps, 0.0};
 }
 

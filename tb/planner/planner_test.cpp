@@ -768,12 +768,17 @@ TEST(PlannerCore, ReversalIntoACuspJustInsideACurveStopsAtBoth) {
 // the speed bound there came from a curvature of order 1e10 and the profile
 // crawled through at a speed no repair could fit (simple-icons' ferrari.svg,
 // whose near-retracted handles gave 5e28 times a limit).
-TEST(PlannerCore, RetractedHandleAtAJunctionIsAStop) {
+Path line_into_retracted_handle(double line_length) {
   Path p;
   Eigen::MatrixXd P(4, 2);
   P << 0, 0, 1e-12, 0, 3, 0.5, 6, 2;
-  p.add(geo::make_line(Eigen::Vector2d(-10, 0), Eigen::Vector2d(0, 0)), "line");
+  p.add(geo::make_line(Eigen::Vector2d(-line_length, 0), Eigen::Vector2d(0, 0)), "line");
   p.add(geo::make_bezier(P), "cubic");
+  return p;
+}
+
+TEST(PlannerCore, RetractedHandleAtAJunctionIsAStop) {
+  const Path p = line_into_retracted_handle(10);
   EXPECT_TRUE(p.entry(1).cusp_at_start());
   EXPECT_FALSE(p.entry(1).cusp_at_end());
   EXPECT_FALSE(p.entry(0).cusp_at_end());
@@ -783,6 +788,40 @@ TEST(PlannerCore, RetractedHandleAtAJunctionIsAStop) {
   bool stop = false;
   for (const Station& st : o.job.plan.stations) stop = stop || (std::fabs(st.s - 10) < 1e-12 && st.v == 0);
   EXPECT_TRUE(stop);
+}
+
+// The same junction 20 m along a path, where an arc length is known to a few
+// 1e-12 mm only: a tick a few microseconds before or after the stop rounds
+// onto the junction, and is sampled there with the plan's small speed (2e-7
+// mm/s 6 us before a stop at 12 000 mm/s^3). Its frame was taken 1e-9 of the
+// span inside the cubic, where the curvature (as 1/u) is of order 1e9 mm^-1:
+// such a tick read 29 times the jerk limit on LinuxCNC's LatheMacro.svg, and
+// no speed cap could lower a speed already below the repairs' floor. Every
+// sample within 30 us of the stop, on both sides, keeps every limit.
+TEST(PlannerCore, TicksWithinRoundingOfARetractedHandleKeepTheLimits) {
+  const Path p = line_into_retracted_handle(20000);
+  ASSERT_TRUE(p.entry(1).cusp_at_start());
+  JobConfig cfg;
+  const Limits L = cfg.limits;
+  const Plan plan = plan_path(p, L, cfg.plan_options());
+  double t_stop = -1;
+  for (const Piece& q : plan.pieces)
+    if (q.t0 > 0 && q.v0 == 0 && std::fabs(q.s0 - p.offset(1)) < 1e-9) t_stop = q.t0;
+  ASSERT_GT(t_stop, 0) << "a stop at the junction";
+  double worst = 0, worst_dt = 0;
+  int on_junction = 0;
+  SampleHints hints;
+  for (int k = -30; k <= 30; ++k) {
+    const double tp = t_stop + k * 1e-6;
+    const TickSample ts = sample_plan(p, plan, tp, tp, hints);
+    on_junction += ts.s == p.offset(1);
+    const double q = tick_ratio(ts, L, p.dim());
+    if (q > worst) worst = q, worst_dt = k * 1e-6;
+  }
+  std::printf("  %d of 61 samples within 30 us of the stop round onto the junction; worst ratio %.3g (%.0f us)\n",
+              on_junction, worst, worst_dt * 1e6);
+  EXPECT_GT(on_junction, 0) << "the case this test is about";
+  EXPECT_LE(worst, 1.0);
 }
 
 // A local minimum of the speed bound (a bump of one cubic B-spline, v_lim 47.5 mm/s at feed 50,
