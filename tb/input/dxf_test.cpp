@@ -12,6 +12,7 @@
 #include "geometry/arclength.hpp"
 #include "geometry/curve.hpp"
 #include "input/dxf.hpp"
+#include "tmp_file.hpp"
 
 namespace {
 
@@ -41,10 +42,9 @@ struct Dxf {
     return t + "0\nENDSEC\n0\nEOF\n";
   }
   Toolpath read(const std::string& name = "t.dxf") const {
-    // one file per process: ctest runs the cases of this file in parallel
-    const std::string path = ::testing::TempDir() + std::to_string(::getpid()) + "_" + name;
-    std::ofstream(path) << text();
-    return traj::input::read_dxf(path);
+    const traj::test::TmpFile f(name);
+    f.write(text());
+    return traj::input::read_dxf(f.path);
   }
 };
 

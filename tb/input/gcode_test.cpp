@@ -10,6 +10,7 @@
 
 #include "geometry/curve.hpp"
 #include "input/gcode.hpp"
+#include "tmp_file.hpp"
 #include "input/gcode_curves.hpp"
 
 using traj::input::InputError;
@@ -380,11 +381,10 @@ TEST(Gcode, ToolLengthOffsetsFromTheTable) {
 }
 
 TEST(Gcode, ToolTableFile) {
-  const std::string dir = ::testing::TempDir() + std::to_string(::getpid()) + "_";
+  const traj::test::TmpFile file("tools.tbl");
   auto table = [&](const std::string& text) {
-    const std::string f = dir + "tools.tbl";
-    std::ofstream(f) << text;
-    return f;
+    file.write(text);
+    return file.path;
   };
   const std::string ok = table("; LinuxCNC tool table\nT1 P1 Z12.5 D6.0 ;end mill\n\nt2 p5 d3 x0\n");
   const auto t = traj::input::read_tool_table(ok);

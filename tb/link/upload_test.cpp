@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <thread>
 
@@ -19,6 +20,7 @@
 #include "link/board_server.hpp"
 #include "link/upload.hpp"
 #include "stream/segment_stream.hpp"
+#include "tmp_file.hpp"
 
 namespace traj::link {
 namespace {
@@ -34,15 +36,14 @@ struct ScaleHeader {
 // A raster job of `pieces` pieces planned into a stream file once per size
 // (and header).
 const std::string& raster_stream(size_t pieces, const ScaleHeader& ts = {}) {
-  static std::map<std::string, std::string> made;
+  static std::map<std::string, std::unique_ptr<test::TmpFile>> made;  // removed at exit
   const std::string key = std::to_string(pieces) + "_" + std::to_string(ts.scale_max) + "_" +
                           std::to_string(ts.rate) + "_" + std::to_string(ts.accel) + "_" + std::to_string(ts.period);
   auto it = made.find(key);
-  if (it != made.end()) return it->second;
-  const std::string path = (std::filesystem::temp_directory_path() /
-                            ("traj_link_raster_" + std::to_string(made.size()) + "_" + std::to_string(pieces) + "_" +
-                             std::to_string(::getpid()) + ".trj"))
-                               .string();
+  if (it != made.end()) return it->second->path;
+  auto file = std::make_unique<test::TmpFile>("traj_link_raster_" + std::to_string(made.size()) + "_" +
+                                              std::to_string(pieces) + ".trj");
+  const std::string& path = file->path;
   job::JobConfig cfg;
   input::RasterSource src(pieces);
   stream::Header h = cfg.machine.header();
@@ -54,7 +55,7 @@ const std::string& raster_stream(size_t pieces, const ScaleHeader& ts = {}) {
   job::run_streaming(src, cfg, job::StreamOptions{},
                      [&](const fd::Compiled& c, const plan::TimeSegment&) { w.add({c.ticks, c.regs}); });
   w.finish();
-  return made[key] = path;
+  return (made[key] = std::move(file))->path;
 }
 
 std::vector<Bytes> file_records(const std::string& path) {

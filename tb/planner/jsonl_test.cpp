@@ -14,6 +14,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "tmp_file.hpp"
 #include "geometry/json_io.hpp"
 #include "input/path_json.hpp"
 #include "input/jsonl_source.hpp"
@@ -27,21 +28,7 @@ using namespace traj::job;
 
 namespace {
 
-std::string tmp_name(const std::string& stem) {
-  return (std::filesystem::temp_directory_path() /
-          ("jsonl_test_" + std::to_string(::getpid()) + "_" + stem))
-      .string();
-}
-
-struct TmpFile {
-  std::string path;
-  explicit TmpFile(const std::string& stem) : path(tmp_name(stem)) {}
-  ~TmpFile() { std::remove(path.c_str()); }
-  void write(const std::string& text) const {
-    std::ofstream o(path, std::ios::binary);
-    o << text;
-  }
-};
+using traj::test::TmpFile;
 
 // The curves of a loaded path, as main.cpp streams a .json file with --window.
 struct VecSource : CurveSource {
