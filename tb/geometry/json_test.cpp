@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "geometry/geometry.hpp"
+#include "tmp_file.hpp"
 #include "test_util.hpp"
 
 using namespace traj::geo;
@@ -20,11 +21,8 @@ json good() {
 }
 
 std::string write_tmp(const std::string& name, const std::string& text) {
-  const auto dir = std::filesystem::temp_directory_path() / "trajcore_geometry_test";
-  std::filesystem::create_directories(dir);
-  const auto p = dir / name;
-  std::ofstream(p) << text;
-  return p.string();
+  static const traj::test::TmpDir dir("trajcore_geometry_test");
+  return dir.write(name, text);
 }
 
 // Loads `doc` from a file called `name`; expects a GeometryError whose message contains every string

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "cam_program.hpp"
+#include "tmp_file.hpp"
 #include "input/raster.hpp"
 #include "job/streaming.hpp"
 #include "job/toolpath_stream.hpp"
@@ -45,11 +46,8 @@ Streamed stream_gcode(const std::string& file, bool prefetch) {
 }
 
 std::string temp_file(const std::string& name, const std::string& text) {
-  const auto dir = std::filesystem::temp_directory_path() / ("prefetch_test_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string file = (dir / name).string();
-  std::ofstream(file) << text;
-  return file;
+  static const test::TmpDir dir("prefetch_test");
+  return dir.write(name, text);
 }
 
 void expect_same(const Streamed& a, const Streamed& b) {

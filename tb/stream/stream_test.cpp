@@ -17,6 +17,7 @@
 #include <random>
 
 #include "stream/segment_stream.hpp"
+#include "tmp_file.hpp"
 
 #include <zlib.h>
 
@@ -235,7 +236,8 @@ TEST(Stream, ExtremeValuesRoundTrip) {
 TEST(Stream, WriteFileIsAtomic) {
   std::mt19937_64 rng(8);
   const Header h = header();
-  const std::string path = ::testing::TempDir() + "/trajcore_stream_test.trj";
+  const traj::test::TmpFile tmp("trajcore_stream_test.trj");
+  const std::string& path = tmp.path;
   write_file(path, h, records(rng, h, 5));
   auto res = read_file(path);
   EXPECT_TRUE(res.complete) << res.error;
@@ -504,7 +506,8 @@ TEST(StreamV2, WriterAndFileReadMixed) {
   std::mt19937_64 rng(21);
   const Header h = header_v2();
   const auto recs = mixed_records(rng, h, 7);
-  const std::string path = ::testing::TempDir() + "/trajcore_stream_v2.trj";
+  const traj::test::TmpFile tmp("trajcore_stream_v2.trj");
+  const std::string& path = tmp.path;
   {
     StreamWriter w(path, h);
     for (const auto& r : recs) w.add(r);
@@ -692,7 +695,8 @@ TEST(StreamIntegrity, RawBytesAreTheRecordsAsWritten) {
   std::mt19937_64 rng(32);
   const Header h = header_v2();
   const auto recs = mixed_records(rng, h, 7);
-  const std::string path = ::testing::TempDir() + "/trajcore_raw.trj";
+  const traj::test::TmpFile tmp("trajcore_raw.trj");
+  const std::string& path = tmp.path;
   write_file(path, h, recs);
   std::ifstream file(path, std::ios::binary);
   const std::vector<uint8_t> all((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
