@@ -1379,6 +1379,35 @@ bool level_move(const Path& p, const Limits& L, const PlanOptions& o, double sa,
   return found;
 }
 
+// Speed caps sorted by start, with the largest end so far, to visit the
+// caps that overlap an interval without going through all of them (a
+// toolpath has a cap per move: on a drawing of 27 000 moves and 3 600 stops
+// the loop over every cap for every move between stops took a fifth of the
+// planning).
+class CapsByStart {
+ public:
+  explicit CapsByStart(std::vector<SpeedCap> caps) : caps_(std::move(caps)) {
+    std::sort(caps_.begin(), caps_.end(), [](const SpeedCap& a, const SpeedCap& b) { return a.s0 < b.s0; });
+    double m = -std::numeric_limits<double>::infinity();
+    for (const SpeedCap& c : caps_) max_end_.push_back(m = std::max(m, c.s1));
+  }
+  // Calls f(cap) for every cap with s1 > lo and s0 < hi.
+  template <class F>
+  void overlapping(double lo, double hi, F&& f) const {
+    size_t i = static_cast<size_t>(std::lower_bound(caps_.begin(), caps_.end(), hi,
+                                                    [](const SpeedCap& c, double x) { return c.s0 < x; }) -
+                                   caps_.begin());
+    while (i > 0 && max_end_[i - 1] > lo) {
+      --i;
+      if (caps_[i].s1 > lo) f(caps_[i]);
+    }
+  }
+
+ private:
+  std::vector<SpeedCap> caps_;
+  std::vector<double> max_end_;  // the largest s1 of caps_[0..i]
+};
+
 // Moves between two stops, re-timed on the tick grid
 // (PlanOptions::align_straight_moves). The profile of a block between two
 // stops switches its jerk anywhere within a tick; a polynomial fitted to the
@@ -1413,12 +1442,15 @@ void retime_moves_between_stops(const Path& p, const Limits& L, const PlanOption
   auto at_rest = [](const Piece& q) { return q.v0 == 0 && q.a0 == 0; };
   // the speed caps over the whole of [sa, sb] lower V; one over a part of it
   // (a repair's), or a forced station inside (a window's commit), keeps the move as planned
+  const CapsByStart caps(o.caps);
   auto caps_allow = [&](double sa, double sb, double& V) {
-    for (const auto& c : o.caps) {
-      if (!(c.v > 0 && c.s1 > sa + tol && c.s0 < sb - tol)) continue;
-      if (c.s0 > sa + tol || c.s1 < sb - tol) return false;
+    bool whole = true;
+    caps.overlapping(sa + tol, sb - tol, [&](const SpeedCap& c) {
+      if (!(c.v > 0)) return;
+      if (c.s0 > sa + tol || c.s1 < sb - tol) whole = false;
       V = std::min(V, c.v);
-    }
+    });
+    if (!whole) return false;
     for (double fs : o.force_stations)
       if (fs > sa + tol && fs < sb - tol) return false;
     return true;
