@@ -79,7 +79,7 @@ SegmentCompiler::SegmentCompiler(const Machine& m) : comp_(m.format()) {
   const fd::Format f = m.format();
   ps_.h = m.period;
   ps_.coef.assign(f.axes, std::vector<double>(f.degree + 1, 0.0));
-  exact_joints_ = Machine::exact_joints(f);
+  joint_bound_ = Machine::joint_lsb(f);
 }
 
 void SegmentCompiler::load(const plan::TimeSegment& seg) {
@@ -117,10 +117,10 @@ double SegmentCompiler::joint_lsb(const plan::TimeSegment& seg) const {
 
 void SegmentCompiler::compile_joined(const plan::TimeSegment& seg, const std::string& where) {
   const double joint = joint_lsb(seg);
-  if (joint > Machine::kJointLsb)
+  if (joint > joint_bound_)
     throw fd::CompileError(where + ": starts " + util::fmt("%g", joint) +
                            " LSB from where the previous segment's polynomial ends (more than " +
-                           util::fmt("%g", Machine::kJointLsb) + "): the path is not continuous here");
+                           util::fmt("%g", joint_bound_) + "): the path is not continuous here");
   // The start is the previous segment's exact register end: within that
   // segment's Q(K) of its polynomial's end (the blend of its own start is 0
   // there), and that end within `joint` of this polynomial's start. The
@@ -130,7 +130,7 @@ void SegmentCompiler::compile_joined(const plan::TimeSegment& seg, const std::st
   // positions and first differences only.
   const double carried = quant_bound(prev_.K);
   load(seg);
-  comp_.compile(ps_, &c_.end, where, c_, Machine::kJointLsb);
+  comp_.compile(ps_, &c_.end, where, c_, joint_bound_);
   c_.carried_lsb = carried;
   c_.bound_lsb = carried + quant_bound(seg.K);
   c_.offset_lsb = joint;
@@ -139,7 +139,7 @@ void SegmentCompiler::compile_joined(const plan::TimeSegment& seg, const std::st
 const fd::Compiled& SegmentCompiler::compile(const plan::TimeSegment& seg, size_t index) {
   const std::string where = "segment " + std::to_string(index);
   try {
-    if (exact_joints_ && have_end_) {
+    if (have_end_) {
       compile_joined(seg, where);
     } else {
       load(seg);

@@ -91,9 +91,9 @@ class SegmentCompiler {
   const fd::Compiled& compile(const plan::TimeSegment& seg, size_t index);
 
  private:
-  // Machine::exact_joints: the segment starts at the previous one's exact
-  // register end, which may be up to kJointLsb (plus the register error) from
-  // its polynomial's start at formats this fine; the compiler blends the
+  // The segment starts at the previous one's exact register end, which may
+  // be up to Machine::joint_lsb (plus the register error) from its
+  // polynomial's start; the compiler blends the
   // difference out linearly (the target is the polynomial plus
   // delta (1 - t/T)), and the joint |delta| is stated apart
   // (fd::Compiled::offset_lsb).
@@ -107,7 +107,7 @@ class SegmentCompiler {
   fd::PolySegment ps_;
   fd::Compiled c_;
   bool have_end_ = false;
-  bool exact_joints_ = false;
+  double joint_bound_ = 0;  // Machine::joint_lsb of the format
   plan::TimeSegment prev_;  // the last segment compiled (its polynomial's end)
 };
 

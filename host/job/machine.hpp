@@ -4,6 +4,7 @@
 // the planner, the compiler and the stream header take it from here, and it
 // is validated once, in validate().
 #pragma once
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -79,22 +80,26 @@ struct Machine {
   // PlanError if the tool carries no engine of this degree for so many axes.
   static std::vector<fd::Format> carried_formats(int degree, int axes = 3);
   // The fit keeps absolute coordinates in double precision, so consecutive
-  // fitted polynomials meet only to a few ulp (1.4e-14 mm at 100 mm). That is
-  // far below the compiler's continuity budget (tol/2 LSB) at 2^-32 units,
-  // not at 2^-44 (several ulp of a coordinate of 20 mm are 1/2 LSB there):
-  // for formats finer than 2^-40 units the segment compiler joins each
-  // segment exactly to where the previous polynomial ends (SegmentCompiler)
-  // by a linear blend of the mismatch, at most kJointLsb (2^-34 units at
-  // 2^-44: a few ulp of the largest coordinate the 96-bit format holds;
-  // a larger one is a jump and refused), which moves positions and first
-  // differences only (fd::Compiled::offset_lsb).
-  static bool exact_joints(const fd::Format& f) { return f.frac_bits > 40; }
-  static constexpr double kJointLsb = 1024;
+  // fitted polynomials meet only to a few ulp of their terms (the end of a
+  // long segment sums terms several times its travel). The segment compiler
+  // joins each segment exactly to where the previous polynomial ends
+  // (SegmentCompiler) by a linear blend of the mismatch, at most kJointUnits
+  // (2^-34 units: a few ulp of the largest coordinate the 96-bit format
+  // holds; a larger one is a jump and refused), which moves positions and
+  // first differences only (fd::Compiled::offset_lsb). At 2^-44 units that is
+  // 1024 LSB; at 2^-32, 1/4 LSB, which the compiler's own start tolerance
+  // (tol/2, which the register error carried from a segment of the longest
+  // length may fill nearly alone) did not leave room for: on LibreCAD's
+  // architectural library drawing Complete-Lib-V.dxf (segments of up to
+  // 1 761 ticks) a segment started 0.2504 LSB from its polynomial, the
+  // previous segment's register error plus a joint of a few thousandths,
+  // and the compile stopped.
+  static constexpr double kJointUnits = 0x1p-34;
+  static double joint_lsb(const fd::Format& f) { return std::ldexp(kJointUnits, f.frac_bits); }
   // The samples' error about the fitted polynomials, output LSB: 1/2
   // (rounding) + tol_lsb (registers); joint_lsb on top for positions and
   // first differences.
   static double sample_error_lsb(const fd::Format& f) { return 0.5 + f.tol_lsb; }
-  static double joint_lsb(const fd::Format& f) { return exact_joints(f) ? kJointLsb : 0.0; }
   // The format of the chosen build.
   fd::Format format() const;
   // Sets `build` to the narrowest carried format whose allowance share

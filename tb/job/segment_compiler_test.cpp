@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// job::SegmentCompiler's exact joints (formats finer than 2^-40 units, the
-// fine ticks' 128-bit engine) against an independent construction in exact
+// job::SegmentCompiler's exact joints (at every format: the 96-bit engine at
+// 2^-32 units and the fine ticks' 128-bit engine at 2^-44) against an
+// independent construction in exact
 // rationals: the target written out as the polynomial plus the joint's
 // linear blend, delta (1 - t/T) with delta = the previous polynomial's end
 // (mpq) minus this one's start, compiled by the compiler's exact-target path
@@ -37,11 +38,12 @@ mpq_class end_of(const plan::TimeSegment& s, int axis, const mpq_class& h) {
   return v;
 }
 
-job::Machine fine_machine() {
+// The tool's engine at this tick period: 2^-32 units at 1 ms, 2^-44 at 20 us.
+job::Machine machine_at(double period, int frac_bits) {
   job::JobConfig cfg;
-  cfg.machine.period = 20e-6;
+  cfg.machine.period = period;
   cfg.machine.choose_format(cfg.limits);
-  EXPECT_TRUE(job::Machine::exact_joints(cfg.machine.format()));
+  EXPECT_EQ(cfg.machine.format().frac_bits, frac_bits);
   return cfg.machine;
 }
 
@@ -90,24 +92,29 @@ double check_joints(const job::Machine& m, const Segments& r) {
   return worst_joint;
 }
 
-// A planned job's segments (the butterfly at 20 us ticks): joints of a few
-// hundredths of an LSB, as the fit's doubles leave them.
-TEST(SegmentCompiler, ExactJointsOfAJobMatchTheExactTarget) {
+// A planned job's segments (the butterfly at 20 us and at 1 ms ticks):
+// joints of a few hundredths of an LSB at 2^-44, as the fit's doubles leave
+// them.
+void expect_job_joints_exact(double period, int frac_bits) {
   job::JobConfig cfg;
-  cfg.machine = fine_machine();
+  cfg.machine = machine_at(period, frac_bits);
   const job::JobResult r =
       job::run_job(input::load_path(std::string(TRAJ_ASSETS) + "/butterfly_nurbs.json"), cfg);
-  ASSERT_GT(r.segments.size(), 100u);
+  ASSERT_GT(r.segments.size(), 20u);
   EXPECT_GT(check_joints(cfg.machine, {r.segments, r.compiled}), 0.0);
 }
+TEST(SegmentCompiler, ExactJointsOfAJobMatchTheExactTarget) { expect_job_joints_exact(20e-6, 44); }
+TEST(SegmentCompiler, ExactJointsOfAJobMatchTheExactTargetAtTheBoardFormat) { expect_job_joints_exact(1e-3, 32); }
 
 // Quintic segments whose starts are set off from the previous polynomial's
-// end by up to 900 LSB (beyond the compiler's own start tolerance, tol/2):
-// the blend takes them, bit for bit as the exact target does; past
-// kJointLsb the segment is refused as a jump.
-TEST(SegmentCompiler, LargeJointsMatchTheExactTargetAndJumpsAreRefused) {
-  const job::Machine m = fine_machine();
+// end by up to 0.88 of Machine::joint_lsb (900 LSB at 2^-44, 0.22 LSB at
+// 2^-32, where with the carried register error that is beyond the
+// compiler's own start tolerance, tol/2): the blend takes them, bit for bit
+// as the exact target does; past the bound (1.07 of it) the segment is
+// refused as a jump.
+void expect_joints_taken_and_jumps_refused(const job::Machine& m) {
   const double lsb = std::ldexp(1.0, -m.format().frac_bits);
+  const double bound = job::Machine::joint_lsb(m.format());
   job::SegmentCompiler sc(m);
   Segments r;
   double x[3] = {12.5, -40.25, 3.0};
@@ -117,7 +124,7 @@ TEST(SegmentCompiler, LargeJointsMatchTheExactTargetAndJumpsAreRefused) {
     s.degree = 5;
     const double T = s.K * m.period;
     for (int a = 0; a < 3; ++a) {
-      s.coef[a][0] = x[a] + (i == 0 ? 0 : (i % 3 - 1) * 300.0 * (i % 4) * lsb);
+      s.coef[a][0] = x[a] + (i == 0 ? 0 : (i % 3 - 1) * (0.293 * bound) * (i % 4) * lsb);
       s.coef[a][1] = 10.0 + a - 0.5 * i;
       s.coef[a][2] = 200.0 * (a - 1);
       s.coef[a][3] = -1000.0 * (i % 5 - 2);
@@ -126,16 +133,22 @@ TEST(SegmentCompiler, LargeJointsMatchTheExactTargetAndJumpsAreRefused) {
     r.compiled.push_back(sc.compile(s, static_cast<size_t>(i)));
     r.segments.push_back(s);
   }
-  EXPECT_GT(check_joints(m, r), 0.25 * 1.5);
+  EXPECT_GT(check_joints(m, r), 0.8 * bound);
   plan::TimeSegment jump = r.segments.back();
-  jump.coef[0][0] = x[0] + 1100 * lsb;
+  jump.coef[0][0] = x[0] + 1.07 * bound * lsb;
   try {
     sc.compile(jump, 12);
-    ADD_FAILURE() << "a jump of 1100 LSB was compiled";
+    ADD_FAILURE() << "a jump of 1.07 times the joint bound was compiled";
   } catch (const plan::PlanError& e) {
     EXPECT_NE(std::string(e.what()).find("segment 12: starts"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("not continuous"), std::string::npos) << e.what();
   }
+}
+TEST(SegmentCompiler, LargeJointsMatchTheExactTargetAndJumpsAreRefused) {
+  expect_joints_taken_and_jumps_refused(machine_at(20e-6, 44));
+}
+TEST(SegmentCompiler, JointsAtTheBoardFormatMatchTheExactTargetAndJumpsAreRefused) {
+  expect_joints_taken_and_jumps_refused(machine_at(1e-3, 32));
 }
 
 }  // namespace
