@@ -114,7 +114,7 @@ void apply_axes(JobConfig& cfg, const AxisArgs& ax) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // an interrupted command leaves no "<output>.tmp" behind (SIGKILL excepted)
+  // an interrupted command leaves no "<output>.<pid>.tmp" behind (SIGKILL excepted)
   traj::util::remove_temporaries_on_signals();
   CLI::App app{"trajcore: FPGA motion-trajectory core, host toolchain"};
   app.require_subcommand(1);

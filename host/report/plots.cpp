@@ -15,7 +15,7 @@
 // profile stays small whatever the length of the run (a few points per pixel
 // column and series).
 //
-// Both files are written to <name>.tmp in `dir`, then renamed into place;
+// Both files are written to temporaries (util::AtomicFile) in `dir`, then renamed into place;
 // on failure the temporary files are removed (`trajcore run` also stages the
 // whole output in a folder inside out_dir and moves it in place at the end).
 #include <algorithm>
@@ -275,7 +275,7 @@ std::string profile_svg(const std::string& title, const std::string& subtitle, c
 namespace {
 
 
-// Writes every file to <name>.tmp, then renames them all into place; on any
+// Writes every file to its temporary, then renames them all into place; on any
 // failure the temporary files are removed and a PlanError names the plot.
 void write_all(const std::vector<std::pair<std::string, std::string>>& files) {
   std::vector<std::unique_ptr<util::AtomicFile>> out;

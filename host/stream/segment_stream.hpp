@@ -170,7 +170,7 @@ class Continuity {
 // stream that would jump are refused (StreamError) before anything is written.
 void write_file(const std::string& path, const Header& h, const std::vector<Record>& recs);
 
-// Incremental writer for long streams: records go to `path`.tmp as they come;
+// Incremental writer for long streams: records go to a temporary (util::AtomicFile) as they come;
 // finish() appends the end record and renames; a writer destroyed before
 // finish() (an error upstream) removes the temporary file, so no half-written
 // stream is ever left under the final name.

@@ -67,7 +67,9 @@ void check_output_path(const std::string& path) {
     throw std::runtime_error("cannot write " + path + ": it is a directory");
 }
 
-AtomicFile::AtomicFile(const std::string& path, std::ios::openmode mode) : path_(path), tmp_(path + ".tmp") {
+std::string temporary_path(const std::string& path) { return path + "." + std::to_string(::getpid()) + ".tmp"; }
+
+AtomicFile::AtomicFile(const std::string& path, std::ios::openmode mode) : path_(path), tmp_(temporary_path(path)) {
   if (path == "-") {  // a pipe: written as it comes, nothing to rename or remove
     tmp_ = "/dev/stdout";
     to_stdout_ = true;

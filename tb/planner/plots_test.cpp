@@ -23,6 +23,7 @@
 #include "input/path_json.hpp"
 #include "report/plot_svg.hpp"
 #include "report/report.hpp"
+#include "util/atomic_file.hpp"
 
 using namespace traj;
 using namespace traj::plan;
@@ -520,17 +521,18 @@ TEST(Plots, ReplacesEarlierFiles) {
 TEST(Plots, FailedTempFileRemovesTheOthers) {
   Synth y = synth(2000, 20, true);
   const fs::path dir = fresh_dir("tmp_blocked");
-  fs::create_directories(dir / "profile.svg.tmp" / "x");
+  const fs::path blocked = util::temporary_path((dir / "profile.svg").string());
+  fs::create_directories(blocked / "x");
   try {
     write_plots(dir.string(), y.path, y.cfg, y.res, y.s);
     FAIL() << "no error";
   } catch (const PlanError& e) {
     EXPECT_NE(std::string(e.what()).find((dir / "profile.svg").string()), std::string::npos) << e.what();
   }
-  EXPECT_FALSE(fs::exists(dir / "path_feed.svg.tmp"));
+  EXPECT_FALSE(fs::exists(util::temporary_path((dir / "path_feed.svg").string())));
   EXPECT_FALSE(fs::exists(dir / "path_feed.svg"));
   EXPECT_FALSE(fs::exists(dir / "profile.svg"));
-  EXPECT_TRUE(fs::exists(dir / "profile.svg.tmp" / "x"));
+  EXPECT_TRUE(fs::exists(blocked / "x"));
 }
 
 // A helix (radius 10 mm, 3 turns, 6 mm down, 3 axes) is drawn as an

@@ -18,6 +18,7 @@
 
 #include "stream/segment_stream.hpp"
 #include "tmp_file.hpp"
+#include "util/atomic_file.hpp"
 
 #include <zlib.h>
 
@@ -242,7 +243,7 @@ TEST(Stream, WriteFileIsAtomic) {
   auto res = read_file(path);
   EXPECT_TRUE(res.complete) << res.error;
   EXPECT_EQ(res.records.size(), 5u);
-  EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+  EXPECT_FALSE(std::filesystem::exists(traj::util::temporary_path(path)));
   EXPECT_THROW(read_file(path + ".missing"), StreamError);
 }
 
@@ -517,7 +518,7 @@ TEST(StreamV2, WriterAndFileReadMixed) {
   ASSERT_TRUE(res.complete) << res.error;
   ASSERT_EQ(res.records.size(), recs.size());
   for (size_t i = 0; i < recs.size(); ++i) EXPECT_EQ(res.records[i].regs, recs[i].regs);
-  EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+  EXPECT_FALSE(std::filesystem::exists(traj::util::temporary_path(path)));
 }
 
 // ---------------------------------------------------------------------------
