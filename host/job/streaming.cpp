@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <deque>
 #include <memory>
 #include <optional>
@@ -111,39 +112,53 @@ struct PlainSource : StreamSource {
   CurveSource& src;
 };
 
-// True if curves i-1 and i of `path` meet at a tangent break or a curvature
-// step (the planner's test: a jump of d2C/ds2 on an axis).
+// True if curves i-1 and i of `path` meet at a tangent break, a curvature
+// step (the planner's test: a jump of d2C/ds2 on an axis) or a step of
+// d3C/ds3 (a line meeting a curvature-continuous blend): the speed bound's
+// jerk terms (|Q| v^3) differ on the two sides there, and a window that
+// starts at the junction takes the far side's, which may be below the speed
+// the previous window committed with the near side's (a rounded rectangle
+// of the Rust embedded book's rust_layers.svg, streamed in windows of 8:
+// 33.6 mm/s committed at a line's end, 31.1 the next window's bound at its
+// blend's start, and no tick could join the two).
 bool corner_at(const Path& path, size_t i, double corner_tol) {
   const plan::Frame e = plan::frame_at(path, i - 1, path.curve(i - 1).u_end(), path.offset(i));
   const plan::Frame f = plan::frame_at(path, i, path.curve(i).u_begin(), path.offset(i));
-  double dot = 0, kscale = 0, kjump = 0;
+  double dot = 0, kscale = 0, kjump = 0, qscale = 0, qjump = 0;
   for (int a = 0; a < path.dim(); ++a) {
     dot += e.T[a] * f.T[a];
     kscale = std::max({kscale, std::fabs(e.K[a]), std::fabs(f.K[a])});
     kjump = std::max(kjump, std::fabs(f.K[a] - e.K[a]));
+    qscale = std::max({qscale, std::fabs(e.Q[a]), std::fabs(f.Q[a])});
+    qjump = std::max(qjump, std::fabs(f.Q[a] - e.Q[a]));
   }
-  return std::acos(std::clamp(dot, -1.0, 1.0)) > corner_tol || kjump > 1e-9 * (1 + kscale);
+  return std::acos(std::clamp(dot, -1.0, 1.0)) > corner_tol || kjump > 1e-9 * (1 + kscale) ||
+         qjump > 1e-9 * (1 + qscale);
 }
 
-// How many curves of a (not last) window to commit. The commit junction
-// should not be a corner (nor a curvature step, which the planner passes at a
-// station of its own jump speed, like a corner): the next window's first segment must start at the
-// last committed tick, just before the junction, and turn the velocity from
-// there; at a corner (passed at a near-stop within one tick) that can fail
-// where a whole-path fit would have started the turn earlier. The nearest
-// junction without a tangent break is taken (earlier first, then later); where
-// every junction is a corner (a polyline), the curve after the corner is cut
-// in two inside a knot span and the commit ends at the cut, so the corner
-// itself is fitted within this window.
-size_t choose_commit(Window& win, Path& path, size_t ncommit, double corner_tol) {
+// How many curves of a (not last) window to commit, at most `limit`. The
+// commit junction should not be a corner (nor a curvature step, which the
+// planner passes at a station of its own jump speed, like a corner): the next
+// window's first segment must start at the last committed tick, just before
+// the junction, and turn the velocity from there; at a corner (passed at a
+// near-stop within one tick) that can fail where a whole-path fit would have
+// started the turn earlier. The nearest junction without a tangent break is
+// taken (earlier first, then later, up to `limit`); where every junction is
+// a corner (a polyline), the curve after the corner is cut in two inside a
+// knot span and the commit ends at the cut, so the corner itself is fitted
+// within this window; where that would commit more than `limit`, the curve
+// before it is cut instead.
+size_t choose_commit(Window& win, Path& path, size_t ncommit, size_t limit, double corner_tol) {
   if (corner_at(path, ncommit, corner_tol)) {
     for (size_t d = 1; d < win.curves.size(); ++d) {
       if (ncommit > d && !corner_at(path, ncommit - d, corner_tol)) return ncommit - d;
-      if (ncommit + d < win.curves.size() && !corner_at(path, ncommit + d, corner_tol)) return ncommit + d;
+      if (ncommit + d < win.curves.size() && ncommit + d <= limit && !corner_at(path, ncommit + d, corner_tol))
+        return ncommit + d;
     }
-    win.split(ncommit);
+    const size_t cut = ncommit + 1 <= limit ? ncommit : ncommit - 1;
+    win.split(cut);
     path = win.path();
-    return ncommit + 1;
+    return cut + 1;
   }
   return ncommit;
 }
@@ -208,16 +223,16 @@ struct WindowPlan {
   size_t repairs = 0, ticks = 0;
 };
 
-// Plans the window `win` from `in`, committing at most about `commit_max`
-// curves (all if `last`).
+// Plans the window `win` from `in`, committing about `commit_max` curves
+// (all if `last`), never more than `commit_limit`.
 WindowPlan plan_window(Window& win, const Carry& in, size_t commit_max, bool last, const JobConfig& cfg,
-                       size_t index, std::vector<plan::TickSample>& ts) {
+                       size_t index, std::vector<plan::TickSample>& ts, size_t commit_limit = SIZE_MAX) {
   const double h = cfg.machine.fit_period();  // the window is planned and fitted on the fit tick
   WindowPlan wp;
   Path path = win.path();
   check_path_range(path, cfg.machine);
   size_t ncommit = last ? win.curves.size() : std::min(commit_max, win.curves.size() - 1);
-  if (!last) ncommit = choose_commit(win, path, ncommit, cfg.plan.corner_tol);
+  if (!last) ncommit = choose_commit(win, path, ncommit, commit_limit, cfg.plan.corner_tol);
   wp.ncommit = ncommit;
   const double s_commit = last ? path.length() : path.offset(ncommit);
 
@@ -356,7 +371,9 @@ StreamStats run_streaming(StreamSource& src, const JobConfig& cfg, const StreamO
     } catch (const JunctionError&) {
       if (!held || held->ncommit <= 1) throw;
       win.restore_front(std::move(held_curves));
-      held = plan_window(win, held_from, held->ncommit / 2, false, cfg, st.windows - 1, ts);
+      // fewer curves than before, or the same commit (moved off a corner
+      // to where it was) fails the same way again and again
+      held = plan_window(win, held_from, held->ncommit / 2, false, cfg, st.windows - 1, ts, held->ncommit - 1);
       carry = held->next;
       held_curves = win.take_front(held->ncommit);
       ++st.retries;

@@ -31,6 +31,7 @@
 #include "job/toolpath_job.hpp"
 #include "job/toolpath_stream.hpp"
 #include "limit_sets.hpp"
+#include "tmp_file.hpp"
 #include "output_check.hpp"
 #include "report/report.hpp"
 #include "traj_fd_engine.hpp"
@@ -753,4 +754,34 @@ TEST(ToolpathPlan, CamRowAtAFeedFarAboveTheAxesDipsAtItsTightStretch) {
               at_top, one_speed);
   EXPECT_NEAR(far, at_top, 1e-9);
   EXPECT_LT(far, one_speed - 0.02);
+}
+
+// A rounded rectangle (lines meeting tangent arcs, each curvature step
+// blended) streamed in small windows. The blends are curvature-continuous,
+// but at a line's end d3C/ds3 steps, and the speed bound's jerk terms with
+// it: a window committed at such a junction left the next one starting
+// above its own bound there, no tick could join the two, and the held
+// window, planned again with half its commit, moved its commit back off a
+// corner to where it was, again and again (the Rust embedded book's
+// rust_layers.svg hung `trajcore plan --window 64`). Every window must now
+// continue the last without a retry, and the limits hold on the hls
+// engine's samples.
+TEST(ToolpathStream, RoundedRectangleStreamsInSmallWindows) {
+  const traj::test::TmpFile file("rounded_rectangle.ngc");
+  file.write(
+      "G21 G90 G64 P0.001 G17\nG0 X283.4 Y150.5\nG1 X283.4 Y145.2 F3000\nG2 X278.1 Y139.9 I-5.3 J0\n"
+      "G1 X39.7 Y139.9\nG2 X34.4 Y145.2 I0 J5.3\nG1 X34.4 Y155.8\nG2 X39.7 Y161.1 I5.3 J0\n"
+      "G1 X278.1 Y161.1\nG2 X283.4 Y155.8 I0 J-5.3\nG1 X283.4 Y150.5\nM2\n");
+  const job::JobConfig cfg;
+  const job::ToolpathPlan tpp = job::toolpath_plan(input::read_gcode(file.path), cfg);
+  const job::JobResult wr = job::run_job(tpp.path, tpp.cfg);
+  for (const size_t window : {4, 8, 16}) {
+    const Streamed sm = stream_through_hls(file.path, cfg, 64, window, window / 2);
+    std::printf("  window %zu: %zu windows, %zu planned again, %.3f s (whole %.3f s), worst limit ratio %.4f\n",
+                window, sm.st.windows, sm.st.retries, sm.st.motion_time, wr.plan.duration(), sm.limits.worst);
+    EXPECT_EQ(sm.st.retries, 0u) << "window " << window;
+    EXPECT_GE(sm.st.windows, 2u) << "window " << window;
+    EXPECT_LE(sm.limits.worst, 1 + 1e-9) << "window " << window << ": " << sm.limits.what;
+    EXPECT_NEAR(sm.st.motion_time / wr.plan.duration(), 1.0, 0.02) << "window " << window;
+  }
 }
