@@ -146,8 +146,10 @@ bool corner_at(const Path& path, size_t i, double corner_tol) {
 // taken (earlier first, then later, up to `limit`); where every junction is
 // a corner (a polyline), the curve after the corner is cut in two inside a
 // knot span and the commit ends at the cut, so the corner itself is fitted
-// within this window; where that would commit more than `limit`, the curve
-// before it is cut instead.
+// within this window; where that would commit more than `limit` (a retry),
+// the commit ends at the corner. Cutting the curve before it instead had a
+// retry commit half of one curve, the next half of what was left, and so on
+// down to a zero-length piece (LinuxCNC's spiral.ngc in windows of 8).
 size_t choose_commit(Window& win, Path& path, size_t ncommit, size_t limit, double corner_tol) {
   if (corner_at(path, ncommit, corner_tol)) {
     for (size_t d = 1; d < win.curves.size(); ++d) {
@@ -155,10 +157,10 @@ size_t choose_commit(Window& win, Path& path, size_t ncommit, size_t limit, doub
       if (ncommit + d < win.curves.size() && ncommit + d <= limit && !corner_at(path, ncommit + d, corner_tol))
         return ncommit + d;
     }
-    const size_t cut = ncommit + 1 <= limit ? ncommit : ncommit - 1;
-    win.split(cut);
+    if (ncommit + 1 > limit) return ncommit;  // a retry's: at the corner, or fewer curves on the next retry
+    win.split(ncommit);
     path = win.path();
-    return cut + 1;
+    return ncommit + 1;
   }
   return ncommit;
 }
