@@ -317,20 +317,31 @@ void draw_colour_bar(std::ostringstream& o, const Feed& F, double bx, double top
 }
 
 // Title and the two lines under it.
-void draw_heading(std::ostringstream& o, const Feed& F, double left, const std::string& title,
-                  const std::string& how, const std::string& u) {
-  o << text(left, 24, title, " font-size=\"15\" font-weight=\"bold\"");
-  o << text(left, 43,
-            std::to_string(F.n) + " samples at " + gfmt(F.h * 1e3) +
-                " ms; output feed = chord speed |x(k+1) \xE2\x88\x92 x(k)| / h" + how,
-            " fill=\"#444\"");
-  o << text(left, 59,
-            "output feed " + vfmt(F.smin) + " \xE2\x80\xA6 " + vfmt(F.smax) + " " + u + "/s (" +
-                (std::isfinite(F.feed) ? "feed limit " + vfmt(F.feed) + " " + u + "/s" : "no feed limit given") +
-                (F.scale < F.feed ? "; colours up to " + F.scale_what + ", " + vfmt(F.scale) + " " + u + "/s" : "") +
-                ")" +
-                (F.over ? "; " + std::to_string(F.over) + " steps above the feed" : ""),
-            F.over ? " fill=\"#c0392b\" font-weight=\"bold\"" : " fill=\"#444\"");
+struct Heading {
+  std::string title, how, range;
+  bool over = false;  // steps above the feed: the range line in red
+  // Width the lines take from their left edge (a tall, narrow drawing's page
+  // is made at least this wide, or its title is cut).
+  double width() const { return std::max({text_w(title, 15) * 1.08, text_w(how), text_w(range)}); }
+};
+
+Heading make_heading(const Feed& F, const std::string& title, const std::string& how, const std::string& u) {
+  Heading h;
+  h.title = title;
+  h.how = std::to_string(F.n) + " samples at " + gfmt(F.h * 1e3) +
+          " ms; output feed = chord speed |x(k+1) \xE2\x88\x92 x(k)| / h" + how;
+  h.range = "output feed " + vfmt(F.smin) + " \xE2\x80\xA6 " + vfmt(F.smax) + " " + u + "/s (" +
+            (std::isfinite(F.feed) ? "feed limit " + vfmt(F.feed) + " " + u + "/s" : "no feed limit given") +
+            (F.scale < F.feed ? "; colours up to " + F.scale_what + ", " + vfmt(F.scale) + " " + u + "/s" : "") + ")" +
+            (F.over ? "; " + std::to_string(F.over) + " steps above the feed" : "");
+  h.over = F.over > 0;
+  return h;
+}
+
+void draw_heading(std::ostringstream& o, const Heading& h, double left) {
+  o << text(left, 24, h.title, " font-size=\"15\" font-weight=\"bold\"");
+  o << text(left, 43, h.how, " fill=\"#444\"");
+  o << text(left, 59, h.range, h.over ? " fill=\"#c0392b\" font-weight=\"bold\"" : " fill=\"#444\"");
 }
 
 // Data range of each axis, widened to at least 5 % of the largest and by a
@@ -366,11 +377,12 @@ std::string flat_svg(const Feed& F, const std::string& u) {
   const auto r = framed_ranges(F, 2);
   const double sc = std::min(720 / (r[0][1] - r[0][0]), 620 / (r[1][1] - r[1][0]));
   const View v = make_view(0, 1, r, 70, 74, sc);
-  const double W = v.left + v.w() + 120, H = v.top + v.h() + 52;
+  const Heading hd = make_heading(F, "Path (x-y) of the core's output samples, coloured by the output feed",
+                                  std::string(F.d > 2 ? "; projection on x-y" : "") + "; equal scales", u);
+  const double W = std::max(v.left + v.w() + 120, v.left + hd.width() + 20), H = v.top + v.h() + 52;
   std::ostringstream o;
   o << svg_open(W, H);
-  draw_heading(o, F, v.left, "Path (x-y) of the core's output samples, coloured by the output feed",
-               std::string(F.d > 2 ? "; projection on x-y" : "") + "; equal scales", u);
+  draw_heading(o, hd, v.left);
   draw_axes(o, v, nice_ticks(0, std::max(v.hi_a - v.lo_a, v.hi_b - v.lo_b), 8).step, u);
   draw_bands(o, v, feed_bands(F, v, kMaxPoints), "band");
   draw_ends(o, F, v);
@@ -396,12 +408,13 @@ std::string drawing_svg(const Feed& F, const std::string& u) {
   const double step = nice_ticks(0, longest, std::clamp(static_cast<int>(longest * sc / 70), 3, 8)).step;
   const View& side = views[2];
   const double right = std::max(side.left + side.w(), side.left + text_w(side.title, 12));
-  const double W = right + 120, H = side.top + side.h() + 52;
+  const Heading hd = make_heading(
+      F, "Path of the core's output samples in three projections, coloured by the output feed",
+      "; third-angle projection, one scale", u);
+  const double W = std::max(right + 120, left + hd.width() + 20), H = side.top + side.h() + 52;
   std::ostringstream o;
   o << svg_open(W, H);
-  draw_heading(o, F, left,
-               "Path of the core's output samples in three projections, coloured by the output feed",
-               "; third-angle projection, one scale", u);
+  draw_heading(o, hd, left);
   for (const View& v : views) {
     o << "<g id=\"panel-" << v.id << "\" data-axes=\"" << "xyz"[v.a] << " " << "xyz"[v.b] << "\" data-scale=\""
       << gfmt(v.sc, 6) << "\" data-left=\"" << num(v.left, 2) << "\" data-top=\"" << num(v.top, 2)

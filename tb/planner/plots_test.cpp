@@ -672,3 +672,25 @@ TEST(Plots, RapidByThePlanAtAnySpeed) {
   EXPECT_NE(by_kind.find("stroke=\"" + std::string(svg::kRapidColour) + "\""), std::string::npos);
   EXPECT_EQ(by_speed.find("stroke=\"" + std::string(svg::kRapidColour) + "\""), std::string::npos);
 }
+
+// A tall, narrow drawing (a path along y only, its x range 5 % of it): the
+// page is sized to the plot at equal scales, which left it about 200 px wide
+// and cut the title (LibreCAD's Complete-Lib-V.dxf, 4 m by 19 m). The page
+// must hold the title at 15 px bold, taken here at half its size a
+// character, narrower than any font draws it.
+TEST(Plots, TallNarrowPathKeepsItsTitleOnThePage) {
+  Synth y = synth(3000, 50, false);
+  for (auto& v : y.s.v) v = {0, v[0], 0};
+  const fs::path dir = fresh_dir("tall_narrow");
+  write_plots(dir.string(), y.path, y.cfg, y.res, y.s);
+  const std::string svg = slurp(dir / "path_feed.svg");
+  const std::string title = "Path (x-y) of the core's output samples, coloured by the output feed";
+  const size_t at = svg.find(">Path (x-y) of the core");  // the apostrophe is written as an entity
+  ASSERT_NE(at, std::string::npos);
+  const size_t x_at = svg.rfind("x=\"", at);
+  const double left = std::stod(svg.substr(x_at + 3));
+  auto root = attrs_of(svg, "<svg ");
+  const double width = std::stod(root["width"]);
+  std::printf("  page %.0f px wide, title from x = %.0f, %zu characters\n", width, left, title.size());
+  EXPECT_GE(width, left + 0.5 * 15 * static_cast<double>(title.size()));
+}
