@@ -113,15 +113,16 @@ struct PlainSource : StreamSource {
 };
 
 // True if curves i-1 and i of `path` meet at a tangent break, a curvature
-// step (the planner's test: a jump of d2C/ds2 on an axis) or a step of
-// d3C/ds3 (a line meeting a curvature-continuous blend): the speed bound's
+// step (the planner's test: a jump of d2C/ds2 on an axis) or, with
+// `jerk_steps`, a step of d3C/ds3 (a line meeting a curvature-continuous
+// blend): the speed bound's
 // jerk terms (|Q| v^3) differ on the two sides there, and a window that
 // starts at the junction takes the far side's, which may be below the speed
 // the previous window committed with the near side's (a rounded rectangle
 // of the Rust embedded book's rust_layers.svg, streamed in windows of 8:
 // 33.6 mm/s committed at a line's end, 31.1 the next window's bound at its
 // blend's start, and no tick could join the two).
-bool corner_at(const Path& path, size_t i, double corner_tol) {
+bool corner_at(const Path& path, size_t i, double corner_tol, bool jerk_steps) {
   const plan::Frame e = plan::frame_at(path, i - 1, path.curve(i - 1).u_end(), path.offset(i));
   const plan::Frame f = plan::frame_at(path, i, path.curve(i).u_begin(), path.offset(i));
   double dot = 0, kscale = 0, kjump = 0, qscale = 0, qjump = 0;
@@ -133,7 +134,7 @@ bool corner_at(const Path& path, size_t i, double corner_tol) {
     qjump = std::max(qjump, std::fabs(f.Q[a] - e.Q[a]));
   }
   return std::acos(std::clamp(dot, -1.0, 1.0)) > corner_tol || kjump > 1e-9 * (1 + kscale) ||
-         qjump > 1e-9 * (1 + qscale);
+         (jerk_steps && qjump > 1e-9 * (1 + qscale));
 }
 
 // How many curves of a (not last) window to commit, at most `limit`. The
@@ -147,14 +148,20 @@ bool corner_at(const Path& path, size_t i, double corner_tol) {
 // a corner (a polyline), the curve after the corner is cut in two inside a
 // knot span and the commit ends at the cut, so the corner itself is fitted
 // within this window; where that would commit more than `limit` (a retry),
-// the commit ends at the corner. Cutting the curve before it instead had a
+// the commit ends at the corner. A retry takes steps of d3C/ds3 for
+// junctions like any other: where the commits that avoid them fail one
+// after another (cut inside tight blends: bootstrap-icons' gear.svg at
+// --window 32 and 64 ended in the junction error), it commits at them, as
+// a commit did before they were avoided. Cutting the curve before it instead had a
 // retry commit half of one curve, the next half of what was left, and so on
 // down to a zero-length piece (LinuxCNC's spiral.ngc in windows of 8).
 size_t choose_commit(Window& win, Path& path, size_t ncommit, size_t limit, double corner_tol) {
-  if (corner_at(path, ncommit, corner_tol)) {
+  const bool retry = limit != SIZE_MAX;
+  auto corner = [&](size_t i) { return corner_at(path, i, corner_tol, !retry); };
+  if (corner(ncommit)) {
     for (size_t d = 1; d < win.curves.size(); ++d) {
-      if (ncommit > d && !corner_at(path, ncommit - d, corner_tol)) return ncommit - d;
-      if (ncommit + d < win.curves.size() && ncommit + d <= limit && !corner_at(path, ncommit + d, corner_tol))
+      if (ncommit > d && !corner(ncommit - d)) return ncommit - d;
+      if (ncommit + d < win.curves.size() && ncommit + d <= limit && !corner(ncommit + d))
         return ncommit + d;
     }
     if (ncommit + 1 > limit) return ncommit;  // a retry's: at the corner, or fewer curves on the next retry
