@@ -115,13 +115,12 @@ struct PlainSource : StreamSource {
 // True if curves i-1 and i of `path` meet at a tangent break, a curvature
 // step (the planner's test: a jump of d2C/ds2 on an axis) or, with
 // `jerk_steps`, a step of d3C/ds3 (a line meeting a curvature-continuous
-// blend): the speed bound's
-// jerk terms (|Q| v^3) differ on the two sides there, and a window that
-// starts at the junction takes the far side's, which may be below the speed
-// the previous window committed with the near side's (a rounded rectangle
-// of the Rust embedded book's rust_layers.svg, streamed in windows of 8:
-// 33.6 mm/s committed at a line's end, 31.1 the next window's bound at its
-// blend's start, and no tick could join the two).
+// blend): the speed bound's jerk terms (|Q| v^3) differ on the two sides
+// there, and a window that starts at the junction takes the far side's,
+// which may be below the speed the previous window committed with the near
+// side's (a rounded rectangle of the Rust embedded book's rust_layers.svg,
+// streamed in windows of 8: 33.6 mm/s committed at a line's end, 31.1 the
+// next window's bound at its blend's start, and no tick could join the two).
 bool corner_at(const Path& path, size_t i, double corner_tol, bool jerk_steps) {
   const plan::Frame e = plan::frame_at(path, i - 1, path.curve(i - 1).u_end(), path.offset(i));
   const plan::Frame f = plan::frame_at(path, i, path.curve(i).u_begin(), path.offset(i));
@@ -147,14 +146,14 @@ bool corner_at(const Path& path, size_t i, double corner_tol, bool jerk_steps) {
 // taken (earlier first, then later, up to `limit`); where every junction is
 // a corner (a polyline), the curve after the corner is cut in two inside a
 // knot span and the commit ends at the cut, so the corner itself is fitted
-// within this window; where that would commit more than `limit` (a retry),
-// the commit ends at the corner. A retry takes steps of d3C/ds3 for
-// junctions like any other: where the commits that avoid them fail one
-// after another (cut inside tight blends: bootstrap-icons' gear.svg at
-// --window 32 and 64 ended in the junction error), it commits at them, as
-// a commit did before they were avoided. Cutting the curve before it instead had a
-// retry commit half of one curve, the next half of what was left, and so on
-// down to a zero-length piece (LinuxCNC's spiral.ngc in windows of 8).
+// within this window.
+// A retry (`limit` set) commits at the corner where the cut would commit
+// more than `limit`: cutting the curve before it instead would commit half
+// of one curve, then half of what is left, down to a zero-length piece
+// (LinuxCNC's spiral.ngc in windows of 8). A retry also takes steps of
+// d3C/ds3 for junctions like any other: where the commits that avoid them
+// fail one after another (cut inside tight blends: bootstrap-icons' gear.svg
+// at --window 32 and 64), one at such a step continues.
 size_t choose_commit(Window& win, Path& path, size_t ncommit, size_t limit, double corner_tol) {
   const bool retry = limit != SIZE_MAX;
   auto corner = [&](size_t i) { return corner_at(path, i, corner_tol, !retry); };
