@@ -199,16 +199,36 @@ std::vector<std::string> feed_bands(const Feed& F, const View& v, size_t max_poi
   return bands;
 }
 
-// Grid, ticks and labels every `step` units on both axes, the axis names in units.
-void draw_axes(std::ostringstream& o, const View& v, double step, const std::string& u) {
-  const int dec = std::max(0, static_cast<int>(-std::floor(std::log10(step) + 1e-9)));
-  auto ticks = [&](double a, double b) {
-    std::vector<double> t;
-    for (double i = std::ceil(a / step - 1e-9); i * step <= b + 1e-9 * step; i += 1) t.push_back(i * step);
-    return t;
-  };
+std::vector<double> ticks_every(double step, double lo, double hi) {
+  std::vector<double> t;
+  for (double i = std::ceil(lo / step - 1e-9); i * step <= hi + 1e-9 * step; i += 1)
+    t.push_back(std::fabs(i) < 0.5 ? 0.0 : i * step);
+  return t;
+}
+
+int decimals(double step) { return std::max(0, static_cast<int>(-std::floor(std::log10(step) + 1e-9))); }
+
+// The tick step of an axis from `lo` to `hi` drawn at `sc` px per unit: about
+// one tick in 70 px, at least two where their labels fit side by side. Each
+// axis has its own step: one step for both left a 20 mm-wide, 300 mm-tall
+// drawing with a single x label.
+double axis_step(double lo, double hi, double sc) {
+  const int target = std::clamp(static_cast<int>((hi - lo) * sc / 70), 2, 8);
+  double step = nice_ticks(lo, hi, target).step;
+  for (int widen = 0; widen < 30; ++widen) {
+    double widest = 0;
+    for (double x : ticks_every(step, lo, hi)) widest = std::max(widest, text_w(tick_label(x, decimals(step)), 10));
+    if (step * sc >= widest + 8) break;
+    const double mag = std::pow(10.0, std::floor(std::log10(step) + 1e-9));
+    step = (step / mag < 1.5 ? 2 : step / mag < 3.5 ? 5 : 10) * mag;  // the next of 1, 2, 5, 10
+  }
+  return step;
+}
+
+// Grid, ticks and labels every `step_a` units across and `step_b` up, the axis names in units.
+void draw_axes(std::ostringstream& o, const View& v, double step_a, double step_b, const std::string& u) {
   const double left = v.left, top = v.top, Wp = v.w(), Hp = v.h();
-  const auto xt = ticks(v.lo_a, v.hi_a), yt = ticks(v.lo_b, v.hi_b);
+  const auto xt = ticks_every(step_a, v.lo_a, v.hi_a), yt = ticks_every(step_b, v.lo_b, v.hi_b);
   auto XP = [&](double t) { return left + (t - v.lo_a) * v.sc; };
   auto YP = [&](double t) { return top + Hp - (t - v.lo_b) * v.sc; };
   o << "<path stroke=\"#ececec\" d=\"";
@@ -218,9 +238,9 @@ void draw_axes(std::ostringstream& o, const View& v, double step, const std::str
   for (double t : xt) o << "M" << num(XP(t)) << " " << num(top + Hp) << "v4";
   for (double t : yt) o << "M" << num(left) << " " << num(YP(t)) << "h-4";
   o << "\"/>\n<g font-size=\"10\" fill=\"#333\" text-anchor=\"middle\">\n";
-  for (double t : xt) o << text(XP(t), top + Hp + 16, tick_label(t, dec));
+  for (double t : xt) o << text(XP(t), top + Hp + 16, tick_label(t, decimals(step_a)));
   o << "</g>\n<g font-size=\"10\" fill=\"#333\" text-anchor=\"end\">\n";
-  for (double t : yt) o << text(left - 7, YP(t) + 3.5, tick_label(t, dec));
+  for (double t : yt) o << text(left - 7, YP(t) + 3.5, tick_label(t, decimals(step_b)));
   o << "</g>\n";
   const std::string an(1, "xyz"[v.a]), bn(1, "xyz"[v.b]);
   o << text(left + Wp / 2, top + Hp + 36, an + " (" + u + ")", " text-anchor=\"middle\" font-size=\"12\"");
@@ -383,7 +403,7 @@ std::string flat_svg(const Feed& F, const std::string& u) {
   std::ostringstream o;
   o << svg_open(W, H);
   draw_heading(o, hd, v.left);
-  draw_axes(o, v, nice_ticks(0, std::max(v.hi_a - v.lo_a, v.hi_b - v.lo_b), 8).step, u);
+  draw_axes(o, v, axis_step(v.lo_a, v.hi_a, v.sc), axis_step(v.lo_b, v.hi_b, v.sc), u);
   draw_bands(o, v, feed_bands(F, v, kMaxPoints), "band");
   draw_ends(o, F, v);
   draw_colour_bar(o, F, v.left + v.w() + 28, v.top, v.h(), u);
@@ -403,9 +423,9 @@ std::string drawing_svg(const Feed& F, const std::string& u) {
   views[0].id = "xy", views[0].title = "top (x-y)";
   views[1].id = "xz", views[1].title = "front (x-z)";
   views[2].id = "yz", views[2].title = "side (y-z)";
-  // one tick step for all panels, about one tick in 70 px along the longest axis
-  const double longest = std::max({rx, ry, rz});
-  const double step = nice_ticks(0, longest, std::clamp(static_cast<int>(longest * sc / 70), 3, 8)).step;
+  // one tick step per axis, the same in every panel that shows it
+  double step[3];
+  for (int a = 0; a < 3; ++a) step[a] = axis_step(r[a][0], r[a][1], sc);
   const View& side = views[2];
   const double right = std::max(side.left + side.w(), side.left + text_w(side.title, 12));
   const Heading hd = make_heading(
@@ -420,7 +440,7 @@ std::string drawing_svg(const Feed& F, const std::string& u) {
       << gfmt(v.sc, 6) << "\" data-left=\"" << num(v.left, 2) << "\" data-top=\"" << num(v.top, 2)
       << "\" data-width=\"" << num(v.w(), 2) << "\" data-height=\"" << num(v.h(), 2) << "\">\n";
     o << text(v.left, v.top - 9, v.title, " font-size=\"12\" font-weight=\"bold\"");
-    draw_axes(o, v, step, u);
+    draw_axes(o, v, step[v.a], step[v.b], u);
     draw_bands(o, v, feed_bands(F, v, kMaxPoints / 3), v.id + "-band");
     draw_ends(o, F, v);
     o << "</g>\n";

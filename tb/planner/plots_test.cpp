@@ -694,3 +694,32 @@ TEST(Plots, TallNarrowPathKeepsItsTitleOnThePage) {
   std::printf("  page %.0f px wide, title from x = %.0f, %zu characters\n", width, left, title.size());
   EXPECT_GE(width, left + 0.5 * 15 * static_cast<double>(title.size()));
 }
+
+// A tall, narrow drawing (a line 150 mm up and 10 mm across): its x axis
+// gets at least two tick labels, apart by more than their width (one tick
+// step for both axes, from the longer, gave it a single x label, as it gave
+// LibreCAD's Complete-Lib-V.dxf). Label width taken at 6 px a character at
+// font size 10, wider than sans-serif digits are drawn.
+TEST(Plots, TallNarrowPathLabelsItsShortAxis) {
+  Synth y = synth(3000, 50, false);
+  for (auto& v : y.s.v) v = {v[0] / 15, v[0], 0};
+  const fs::path dir = fresh_dir("tall_narrow_ticks");
+  write_plots(dir.string(), y.path, y.cfg, y.res, y.s);
+  const std::string svg = slurp(dir / "path_feed.svg");
+  const std::string group = "<g font-size=\"10\" fill=\"#333\" text-anchor=\"middle\">";
+  const size_t from = svg.find(group), to = svg.find("</g>", from);
+  ASSERT_NE(from, std::string::npos);
+  std::vector<std::pair<double, size_t>> labels;  // centre x, characters
+  for (size_t at = svg.find("<text", from); at < to; at = svg.find("<text", at + 1)) {
+    const double x = std::stod(svg.substr(svg.find("x=\"", at) + 3));
+    const size_t open = svg.find('>', at) + 1;
+    std::string s = svg.substr(open, svg.find('<', open) - open);
+    size_t chars = 0;
+    for (unsigned char c : s) chars += (c & 0xC0) != 0x80;  // UTF-8 characters (the minus sign)
+    labels.push_back({x, chars});
+  }
+  std::printf("  %zu x tick labels\n", labels.size());
+  ASSERT_GE(labels.size(), 2u);
+  for (size_t i = 1; i < labels.size(); ++i)
+    EXPECT_GE(labels[i].first - labels[i - 1].first, 3.0 * double(labels[i].second + labels[i - 1].second)) << i;
+}
