@@ -38,6 +38,27 @@ struct Window {
     stops.push_back(c.stop);
     dwells.push_back(c.dwell);
   }
+  // Curve i's time at its speed, and its dwell: at least the time it takes.
+  double time(size_t i, double feed) const {
+    return curves[i]->al->total() / (speeds[i] > 0 ? speeds[i] : feed) + dwells[i];
+  }
+  double time(double feed) const {
+    double t = 0;
+    for (size_t i = 0; i < curves.size(); ++i) t += time(i, feed);
+    return t;
+  }
+  // The commit of a window that its curves' time ended (at least
+  // `window_time`): the curves within the first three quarters of that time,
+  // so that the look-ahead is a quarter of it, not one short curve;
+  // `commit` otherwise.
+  size_t commit_by_time(size_t commit, double feed, double window_time) const {
+    const double total = time(feed);
+    if (total < window_time) return commit;
+    size_t n = 0;
+    double t = time(0, feed);
+    while (n + 1 < curves.size() && t <= 0.75 * total) t += time(++n, feed);
+    return std::clamp<size_t>(n, 1, commit);
+  }
   Path path() const {
     Path p;
     for (const auto& c : curves) p.add(c);
@@ -110,6 +131,55 @@ struct PlainSource : StreamSource {
     return src.next(c.curve, c.where);
   }
   CurveSource& src;
+};
+
+// The curves of a source, each longer than `piece_time` seconds at its speed
+// (by its control polygon, never shorter than the curve) cut by parameter
+// halves into pieces within it: the pieces join with the curve's own
+// derivatives (exact knot insertion), so the cuts are smooth junctions where
+// a window can commit. The last piece keeps the curve's stop and dwell.
+class LongCurveCutter : public StreamSource {
+ public:
+  LongCurveCutter(StreamSource& src, double feed, double piece_time)
+      : src_(src), feed_(feed), piece_time_(piece_time) {}
+  bool next(StreamCurve& c) override {
+    if (pieces_.empty()) {
+      StreamCurve whole;
+      if (!src_.next(whole)) return false;
+      cut(std::move(whole));
+    }
+    c = std::move(pieces_.front());
+    pieces_.pop_front();
+    return true;
+  }
+
+ private:
+  static double polygon_length(const geo::BSpline& b) {
+    double l = 0;
+    for (int i = 1; i < b.n_ctrl(); ++i) l += (b.ctrl.row(i) - b.ctrl.row(i - 1)).norm();
+    return l;
+  }
+  void cut(StreamCurve&& c) {
+    const double speed = c.speed > 0 ? c.speed : feed_;
+    const double u0 = c.curve.u_begin(), u1 = c.curve.u_end();
+    const double mid = u0 + 0.5 * (u1 - u0);
+    if (polygon_length(c.curve) <= piece_time_ * speed || !(mid > u0 && mid < u1)) {
+      pieces_.push_back(std::move(c));
+      return;
+    }
+    auto halves = geo::split_at(c.curve, mid);
+    StreamCurve first = c;
+    first.curve = std::move(halves.first);
+    first.stop = false;
+    first.dwell = 0;
+    c.curve = std::move(halves.second);
+    cut(std::move(first));
+    cut(std::move(c));
+  }
+
+  StreamSource& src_;
+  const double feed_, piece_time_;
+  std::deque<StreamCurve> pieces_;
 };
 
 // True if curves i-1 and i of `path` meet at a tangent break, a curvature
@@ -356,14 +426,17 @@ StreamStats run_streaming(StreamSource& src, const JobConfig& cfg, const StreamO
   // slow-down is left to the next window), and the next window retried.
   // four windows ahead: about a blend chunk of a toolpath (256 moves), which
   // comes in one burst, so that blending one chunk overlaps planning the last
-  CurvePrefetch ahead(src, 4 * so.window, so.prefetch);
+  const double window_time = static_cast<double>(so.window_ticks) * h;
+  LongCurveCutter cutter(src, cfg.limits.feed, window_time / 4);
+  CurvePrefetch ahead(cutter, 4 * so.window, so.prefetch);
   Carry carry;             // into the window to plan
   Carry held_from;         // into the held window
   std::optional<WindowPlan> held;
   Window held_curves;      // the held window's committed curves
   while (true) {
     CurvePrefetch::Item c;
-    while (!exhausted && win.curves.size() < so.window) {
+    while (!exhausted && win.curves.size() < so.window &&
+           !(win.curves.size() >= 2 && win.time(cfg.limits.feed) >= window_time)) {
       if (ahead.next(c)) {
         win.push_back(std::move(c));
         ++st.curves;
@@ -375,7 +448,8 @@ StreamStats run_streaming(StreamSource& src, const JobConfig& cfg, const StreamO
     const bool last = exhausted;
     WindowPlan wp;
     try {
-      wp = plan_window(win, carry, so.commit, last, cfg, st.windows, ts);
+      wp = plan_window(win, carry, win.commit_by_time(so.commit, cfg.limits.feed, window_time), last, cfg,
+                       st.windows, ts);
     } catch (const JunctionError&) {
       if (!held || held->ncommit <= 1) throw;
       win.restore_front(std::move(held_curves));

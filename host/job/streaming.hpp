@@ -42,6 +42,12 @@ class StreamSource {
 struct StreamOptions {
   size_t window = 64;  // curves held at once
   size_t commit = 48;  // curves committed per window (< window); the rest is look-ahead, planned again
+  // A window also ends once its curves take this many fit ticks at their
+  // speeds (and dwells), and longer curves are cut into pieces of a quarter
+  // of it: a plan holds about 550 bytes a tick, so slow, long moves stream
+  // in about 100 MB (LibreCAD's Complete-Lib-V.dxf through dxf2gcode, 19 m
+  // at 400 mm/min: 2.8 GB with windows of 64 curves alone).
+  size_t window_ticks = 100000;
   // Read, blend and build the curves (arc-length tables) on a second thread,
   // at most a window ahead (prefetch.hpp); the same curves and plan.
   bool prefetch = true;

@@ -185,11 +185,12 @@ struct Streamed {
   test::OutputVerdict limits;
 };
 Streamed stream_through_hls(const std::string& file, const job::JobConfig& cfg, size_t chunk, size_t window,
-                            size_t commit) {
+                            size_t commit, size_t window_ticks = job::StreamOptions{}.window_ticks) {
   job::ToolpathStream src(file, input::FileKind::kGcode, cfg, {}, chunk);
   job::StreamOptions so;
   so.window = window;
   so.commit = commit;
+  so.window_ticks = window_ticks;
   std::vector<fd::Compiled> comp;
   Streamed r;
   r.st = job::run_streaming(src, src.config(), so,
@@ -784,4 +785,33 @@ TEST(ToolpathStream, RoundedRectangleStreamsInSmallWindows) {
     EXPECT_LE(sm.limits.worst, 1 + 1e-9) << "window " << window << ": " << sm.limits.what;
     EXPECT_NEAR(sm.st.motion_time / wr.plan.duration(), 1.0, 0.02) << "window " << window;
   }
+}
+
+// Long, slow moves (a drawing of metres at 400 mm/min, as dxf2gcode writes
+// LibreCAD's plans: 2.8 GB streamed before) stream in windows of bounded
+// ticks: 857 mm of lines and a half circle of R 50 at 600 mm/min, 86 s of
+// motion, with windows of 20 000 ticks. The curves are cut into pieces of
+// at most 5 s, no window commits more than its 20 000 ticks (about 86 000
+// in one window without the bound), the limits hold on the
+// hls engine's samples, the motion is that of the whole path within 1 %,
+// and the stream ends on the program's end point.
+TEST(ToolpathStream, LongSlowMovesStreamInWindowsOfBoundedTicks) {
+  const traj::test::TmpFile file("long_slow.ngc");
+  file.write("G21 G90 G64 P0.01 G17\nG1 X300 F600\nG1 Y100\nG2 X300 Y200 I0 J50\nG1 X0\nM2\n");
+  const job::JobConfig cfg;
+  const job::ToolpathPlan tpp = job::toolpath_plan(input::read_gcode(file.path), cfg);
+  const double whole = job::run_job(tpp.path, tpp.cfg).plan.duration();
+  const Streamed bounded = stream_through_hls(file.path, cfg, 64, 64, 48, 20000);
+  const Streamed unbounded = stream_through_hls(file.path, cfg, 64, 64, 48, 1u << 30);
+  std::printf("  bounded: %zu curves in %zu windows, at most %zu ticks a window, %.3f s; without the bound %zu "
+              "curves, %zu ticks; whole path %.3f s; worst limit ratio %.4f\n",
+              bounded.st.curves, bounded.st.windows, bounded.st.max_window_ticks, bounded.st.motion_time,
+              unbounded.st.curves, unbounded.st.max_window_ticks, whole, bounded.limits.worst);
+  EXPECT_GE(bounded.st.curves, 86000u / 5000);
+  EXPECT_LE(bounded.st.max_window_ticks, 20000u);
+  EXPECT_GT(unbounded.st.max_window_ticks, 80000u);
+  EXPECT_LE(bounded.limits.worst, 1 + 1e-9) << bounded.limits.what;
+  EXPECT_NEAR(bounded.st.motion_time / whole, 1.0, 0.01);
+  ASSERT_FALSE(bounded.xs.empty());
+  EXPECT_LT(dist(bounded.xs.back(), {0, 200, 0}), 1e-6);
 }
