@@ -134,22 +134,41 @@ struct PlainSource : StreamSource {
 };
 
 // The curves of a source, each longer than `piece_time` seconds at its speed
-// (by its control polygon, never shorter than the curve) cut by parameter
-// halves into pieces within it: the pieces join with the curve's own
-// derivatives (exact knot insertion), so the cuts are smooth junctions where
-// a window can commit. The last piece keeps the curve's stop and dwell.
+// (by its control polygon, never shorter than the curve) cut into pieces
+// within it, one at a time (a curve of days at a crawl is not held as
+// millions of pieces): the front piece is the curve's parameter range
+// halved until it fits. The pieces join with the curve's own derivatives
+// (exact knot insertion), so the cuts are smooth junctions where a window
+// can commit. The last piece keeps the curve's stop and dwell.
 class LongCurveCutter : public StreamSource {
  public:
   LongCurveCutter(StreamSource& src, double feed, double piece_time)
       : src_(src), feed_(feed), piece_time_(piece_time) {}
   bool next(StreamCurve& c) override {
-    if (pieces_.empty()) {
+    if (!rest_) {
       StreamCurve whole;
       if (!src_.next(whole)) return false;
-      cut(std::move(whole));
+      rest_ = std::move(whole);
     }
-    c = std::move(pieces_.front());
-    pieces_.pop_front();
+    const double speed = rest_->speed > 0 ? rest_->speed : feed_;
+    geo::BSpline front = rest_->curve;
+    double u = front.u_end();
+    while (polygon_length(front) > piece_time_ * speed) {
+      const double mid = front.u_begin() + 0.5 * (u - front.u_begin());
+      if (!(mid > front.u_begin() && mid < u)) break;
+      front = geo::split_at(front, mid).first;
+      u = mid;
+    }
+    if (u == rest_->curve.u_end()) {
+      c = std::move(*rest_);
+      rest_.reset();
+      return true;
+    }
+    c = *rest_;
+    c.curve = std::move(front);
+    c.stop = false;
+    c.dwell = 0;
+    rest_->curve = geo::split_at(rest_->curve, u).second;
     return true;
   }
 
@@ -159,27 +178,10 @@ class LongCurveCutter : public StreamSource {
     for (int i = 1; i < b.n_ctrl(); ++i) l += (b.ctrl.row(i) - b.ctrl.row(i - 1)).norm();
     return l;
   }
-  void cut(StreamCurve&& c) {
-    const double speed = c.speed > 0 ? c.speed : feed_;
-    const double u0 = c.curve.u_begin(), u1 = c.curve.u_end();
-    const double mid = u0 + 0.5 * (u1 - u0);
-    if (polygon_length(c.curve) <= piece_time_ * speed || !(mid > u0 && mid < u1)) {
-      pieces_.push_back(std::move(c));
-      return;
-    }
-    auto halves = geo::split_at(c.curve, mid);
-    StreamCurve first = c;
-    first.curve = std::move(halves.first);
-    first.stop = false;
-    first.dwell = 0;
-    c.curve = std::move(halves.second);
-    cut(std::move(first));
-    cut(std::move(c));
-  }
 
   StreamSource& src_;
   const double feed_, piece_time_;
-  std::deque<StreamCurve> pieces_;
+  std::optional<StreamCurve> rest_;  // what is left of the curve being cut
 };
 
 // True if curves i-1 and i of `path` meet at a tangent break, a curvature

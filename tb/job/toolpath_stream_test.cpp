@@ -791,8 +791,8 @@ TEST(ToolpathStream, RoundedRectangleStreamsInSmallWindows) {
 // LibreCAD's plans: 2.8 GB streamed before) stream in windows of bounded
 // ticks: 857 mm of lines and a half circle of R 50 at 600 mm/min, 86 s of
 // motion, with windows of 20 000 ticks. The curves are cut into pieces of
-// at most 5 s, no window commits more than its 20 000 ticks (about 86 000
-// in one window without the bound), the limits hold on the
+// at most 5 s, no window commits more than its 20 000 ticks and a piece
+// (about 86 000 in one window without the bound), the limits hold on the
 // hls engine's samples, the motion is that of the whole path within 1 %,
 // and the stream ends on the program's end point.
 TEST(ToolpathStream, LongSlowMovesStreamInWindowsOfBoundedTicks) {
@@ -808,7 +808,7 @@ TEST(ToolpathStream, LongSlowMovesStreamInWindowsOfBoundedTicks) {
               bounded.st.curves, bounded.st.windows, bounded.st.max_window_ticks, bounded.st.motion_time,
               unbounded.st.curves, unbounded.st.max_window_ticks, whole, bounded.limits.worst);
   EXPECT_GE(bounded.st.curves, 86000u / 5000);
-  EXPECT_LE(bounded.st.max_window_ticks, 20000u);
+  EXPECT_LE(bounded.st.max_window_ticks, 25000u);
   EXPECT_GT(unbounded.st.max_window_ticks, 80000u);
   EXPECT_LE(bounded.limits.worst, 1 + 1e-9) << bounded.limits.what;
   EXPECT_NEAR(bounded.st.motion_time / whole, 1.0, 0.01);
