@@ -24,14 +24,10 @@ work=${TRIAL_DIR:-$(mktemp -d)}
 mkdir -p "$work"
 limit=${TRIAL_TIMEOUT:-60}
 
-(cd "$work" && ls librecad-data_*.deb > /dev/null 2>&1 || apt-get download librecad-data > /dev/null 2>&1) ||
-  { echo "trial_dxf_librecad.sh: apt-get download librecad-data failed (no network or no Debian sources?)" >&2; exit 1; }
-deb=$(ls "$work"/librecad-data_*.deb | head -n 1)
-dpkg-deb -x "$deb" "$work/x"
+. "$root/scripts/librecad_data.sh"
 list="$work/files.txt"
-find "$work/x" -iname '*.dxf' | sort > "$list"
+librecad_dxf_list "$work" "$list"
 n=$(wc -l < "$list")
-echo "$(basename "$deb"): $n DXF files"
 
 status=0
 for mode in "${@:-whole streamed}"; do

@@ -67,8 +67,9 @@ void check_tick_count(double duration, double period, const std::string& what) {
   if (!(n <= kMaxPlanTicks))
     throw PlanError(what + ": motion of " + fmt("%.4g", duration) + " s is " + fmt("%.4g", n) + " ticks at " +
                     fmt("%g", period) + " s per tick, more than one plan holds (" + fmt("%.0f", kMaxPlanTicks) +
-                    " ticks, about 2 GB); stream it (plan --window 64: windows of a bounded number of ticks), raise" +
-                    " the feed or the limits, or use a longer tick period");
+                    " ticks, about 2 GB); stream it in windows of bounded ticks (trajcore plan FILE --window 64 -o" +
+                    " plan.trj, then trajcore sim plan.trj --check --plots DIR), raise the feed or the limits, or" +
+                    " use a longer tick period");
 }
 
 void check_path_range(const plan::Path& p, const Machine& m) {

@@ -134,7 +134,7 @@ struct PlainSource : StreamSource {
 };
 
 // The curves of a source, each longer than `piece_time` seconds at its speed
-// (by its control polygon, never shorter than the curve) cut into pieces
+// (by its control polygon, not shorter than a B-spline or an arc) cut into pieces
 // within it, one at a time (a curve of days at a crawl is not held as
 // millions of pieces): the front piece is the curve's parameter range
 // halved until it fits. The pieces join with the curve's own derivatives
