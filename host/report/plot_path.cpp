@@ -199,15 +199,6 @@ std::vector<std::string> feed_bands(const Feed& F, const View& v, size_t max_poi
   return bands;
 }
 
-std::vector<double> ticks_every(double step, double lo, double hi) {
-  std::vector<double> t;
-  for (double i = std::ceil(lo / step - 1e-9); i * step <= hi + 1e-9 * step; i += 1)
-    t.push_back(std::fabs(i) < 0.5 ? 0.0 : i * step);
-  return t;
-}
-
-int decimals(double step) { return std::max(0, static_cast<int>(-std::floor(std::log10(step) + 1e-9))); }
-
 // The tick step of an axis from `lo` to `hi` drawn at `sc` px per unit: about
 // one tick in 70 px, at least two where their labels fit side by side. Each
 // axis has its own step: one step for both left a 20 mm-wide, 300 mm-tall
@@ -216,8 +207,9 @@ double axis_step(double lo, double hi, double sc) {
   const int target = std::clamp(static_cast<int>((hi - lo) * sc / 70), 2, 8);
   double step = nice_ticks(lo, hi, target).step;
   for (int widen = 0; widen < 30; ++widen) {
+    const Ticks t = ticks_at(lo, hi, step);
     double widest = 0;
-    for (double x : ticks_every(step, lo, hi)) widest = std::max(widest, text_w(tick_label(x, decimals(step)), 10));
+    for (double x : t.v) widest = std::max(widest, text_w(tick_label(x, t.dec), 10));
     if (step * sc >= widest + 8) break;
     const double mag = std::pow(10.0, std::floor(std::log10(step) + 1e-9));
     step = (step / mag < 1.5 ? 2 : step / mag < 3.5 ? 5 : 10) * mag;  // the next of 1, 2, 5, 10
@@ -228,19 +220,19 @@ double axis_step(double lo, double hi, double sc) {
 // Grid, ticks and labels every `step_a` units across and `step_b` up, the axis names in units.
 void draw_axes(std::ostringstream& o, const View& v, double step_a, double step_b, const std::string& u) {
   const double left = v.left, top = v.top, Wp = v.w(), Hp = v.h();
-  const auto xt = ticks_every(step_a, v.lo_a, v.hi_a), yt = ticks_every(step_b, v.lo_b, v.hi_b);
+  const Ticks xt = ticks_at(v.lo_a, v.hi_a, step_a), yt = ticks_at(v.lo_b, v.hi_b, step_b);
   auto XP = [&](double t) { return left + (t - v.lo_a) * v.sc; };
   auto YP = [&](double t) { return top + Hp - (t - v.lo_b) * v.sc; };
   o << "<path stroke=\"#ececec\" d=\"";
-  for (double t : xt) o << "M" << num(XP(t)) << " " << num(top) << "V" << num(top + Hp);
-  for (double t : yt) o << "M" << num(left) << " " << num(YP(t)) << "H" << num(left + Wp);
+  for (double t : xt.v) o << "M" << num(XP(t)) << " " << num(top) << "V" << num(top + Hp);
+  for (double t : yt.v) o << "M" << num(left) << " " << num(YP(t)) << "H" << num(left + Wp);
   o << "\"/>\n<path stroke=\"#555\" d=\"";
-  for (double t : xt) o << "M" << num(XP(t)) << " " << num(top + Hp) << "v4";
-  for (double t : yt) o << "M" << num(left) << " " << num(YP(t)) << "h-4";
+  for (double t : xt.v) o << "M" << num(XP(t)) << " " << num(top + Hp) << "v4";
+  for (double t : yt.v) o << "M" << num(left) << " " << num(YP(t)) << "h-4";
   o << "\"/>\n<g font-size=\"10\" fill=\"#333\" text-anchor=\"middle\">\n";
-  for (double t : xt) o << text(XP(t), top + Hp + 16, tick_label(t, decimals(step_a)));
+  for (double t : xt.v) o << text(XP(t), top + Hp + 16, tick_label(t, xt.dec));
   o << "</g>\n<g font-size=\"10\" fill=\"#333\" text-anchor=\"end\">\n";
-  for (double t : yt) o << text(left - 7, YP(t) + 3.5, tick_label(t, decimals(step_b)));
+  for (double t : yt.v) o << text(left - 7, YP(t) + 3.5, tick_label(t, yt.dec));
   o << "</g>\n";
   const std::string an(1, "xyz"[v.a]), bn(1, "xyz"[v.b]);
   o << text(left + Wp / 2, top + Hp + 36, an + " (" + u + ")", " text-anchor=\"middle\" font-size=\"12\"");

@@ -78,15 +78,10 @@ struct Ticks {
   std::vector<double> v;
 };
 
-// 1, 2, 5 x 10^k ticks inside [lo, hi], about `target` of them.
-inline Ticks nice_ticks(double lo, double hi, int target) {
+// Ticks every `step` inside [lo, hi] (at most about 100), with the decimals their labels need.
+inline Ticks ticks_at(double lo, double hi, double step) {
   Ticks t;
-  double span = hi - lo;
-  if (!(span > 0) || !std::isfinite(span)) span = std::max(1.0, std::fabs(lo));
-  const double raw = span / std::max(1, target);
-  const double mag = std::pow(10.0, std::floor(std::log10(raw)));
-  const double f = raw / mag;
-  t.step = (f < 1.5 ? 1 : f < 3.5 ? 2 : f < 7.5 ? 5 : 10) * mag;
+  t.step = step;
   t.dec = std::max(0, static_cast<int>(-std::floor(std::log10(t.step) + 1e-9)));
   const double first = std::ceil(lo / t.step - 1e-9);
   for (double i = first;; i += 1) {
@@ -95,6 +90,16 @@ inline Ticks nice_ticks(double lo, double hi, int target) {
     t.v.push_back(std::fabs(x) < 1e-12 * t.step ? 0.0 : x);
   }
   return t;
+}
+
+// 1, 2, 5 x 10^k ticks inside [lo, hi], about `target` of them.
+inline Ticks nice_ticks(double lo, double hi, int target) {
+  double span = hi - lo;
+  if (!(span > 0) || !std::isfinite(span)) span = std::max(1.0, std::fabs(lo));
+  const double raw = span / std::max(1, target);
+  const double mag = std::pow(10.0, std::floor(std::log10(raw)));
+  const double f = raw / mag;
+  return ticks_at(lo, hi, (f < 1.5 ? 1 : f < 3.5 ? 2 : f < 7.5 ? 5 : 10) * mag);
 }
 
 // Perceptually uniform colour map (viridis stops), f in [0, 1].
