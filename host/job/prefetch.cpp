@@ -22,11 +22,15 @@ CurvePrefetch::~CurvePrefetch() {
 
 bool CurvePrefetch::read(Item& it) {
   if (!src_.next(it.curve)) return false;
-  // (its lazily computed parts, the split points and cusps, are left to the
-  // planner's thread, the only one that touches the curve once it is handed
-  // over: that balances the two threads' work)
+  // (its lazily computed parts, the split points and cusps, are computed by
+  // whichever thread is the faster: see produce())
   it.built = std::make_shared<const plan::PathCurve>(it.curve.curve, it.curve.where);
   return true;
+}
+
+bool CurvePrefetch::planner_behind() {
+  std::lock_guard<std::mutex> lk(m_);
+  return queue_.size() >= capacity_ / 2;
 }
 
 void CurvePrefetch::produce() {
@@ -36,6 +40,15 @@ void CurvePrefetch::produce() {
     std::exception_ptr err;
     try {
       more = read(it);
+      // The reader would wait for room while the planner is the slower
+      // thread, so then it computes the split points and cusps for it (the
+      // same values: only the thread that computes them changes). Left to
+      // the planner, they made it the slower thread on the 100 000-line CAM
+      // program (2 threads: 1.80 s against 1.66 s computed here).
+      if (more && planner_behind()) {
+        it.built->split_s();
+        it.built->cusp_s();
+      }
     } catch (...) {
       err = std::current_exception();
     }

@@ -5,9 +5,11 @@
 // it (the StreamSource) and building what the planner needs of it alone (the
 // plan::PathCurve: arc-length table, curvature split points, cusps); then the
 // windows plan, fit and compile. The first kind does not depend on the
-// second, so CurvePrefetch runs it (all but the PathCurve's lazily computed
-// split points and cusps) on a thread of its own, at most `capacity`
-// curves ahead (memory stays bounded), while run_streaming plans. The curves,
+// second, so CurvePrefetch runs it on a thread of its own, at most `capacity`
+// curves ahead (memory stays bounded), while run_streaming plans. The
+// PathCurve's lazily computed split points and cusps go to whichever thread
+// is the faster: the reader computes them while its queue is at least half
+// full, the planner otherwise. The curves,
 // their order and every computed value are those of the single-threaded
 // reading: only the time changes.
 //
@@ -45,6 +47,7 @@ class CurvePrefetch {
 
  private:
   bool read(Item& it);  // from the source, built (the producer's step)
+  bool planner_behind();  // the queue at least half full: the reader is the faster thread
   void produce();
 
   StreamSource& src_;
