@@ -74,13 +74,14 @@ class Earlier {
   double width_ = 0;
 };
 
-// Caps where a tick exceeds a limit (at most one cap per six ticks); returns how many.
-size_t cap_tick_violations(const PlanFitRequest& req, const std::vector<plan::TickSample>& ts,
+// Caps where a tick of ts[first..] exceeds a limit (at most one cap per six
+// ticks); returns how many.
+size_t cap_tick_violations(const PlanFitRequest& req, const std::vector<plan::TickSample>& ts, size_t first,
                            std::vector<plan::SpeedCap>& caps, const Earlier& earlier) {
   const size_t before = caps.size();
   const int dim = req.path->dim();
   long long last = -1000000;
-  for (size_t k = req.carried ? 1 : 0; k < ts.size(); ++k) {
+  for (size_t k = first; k < ts.size(); ++k) {
     const double q = plan::tick_ratio(ts[k], *req.limits, dim);
     if (q > 1 + 1e-9 && static_cast<long long>(k) > last + 5) {
       caps.push_back(cap_around(ts[k], q, earlier.shrink(ts[k].s), req.options.period, req.path->length(),
@@ -175,6 +176,7 @@ PlanFitResult plan_and_fit(PlanFitRequest& req, std::vector<plan::TickSample>& t
   auto& caps = req.options.caps;
   const size_t given = caps.size();
   plan::RetimeMemo retimed;  // each round plans the same path with more caps
+  std::vector<plan::TickSample> ahead;  // the look-ahead's ticks (sample_ahead)
   for (int attempt = 0;; ++attempt) {
     r.rounds = attempt + 1;
     r.repairs = caps.size() - given;
@@ -196,7 +198,12 @@ PlanFitResult plan_and_fit(PlanFitRequest& req, std::vector<plan::TickSample>& t
     r.t_plan += secs(a0, a1);
     r.t_ticks += secs(a1, a2);
     const Earlier earlier(caps, given);
-    if (cap_tick_violations(req, ts, caps, earlier) > 0) continue;
+    size_t capped = cap_tick_violations(req, ts, req.carried ? 1 : 0, caps, earlier);
+    if (req.sample_ahead) {
+      req.sample_ahead(r.plan, ahead);
+      capped += cap_tick_violations(req, ahead, 0, caps, earlier);
+    }
+    if (capped > 0) continue;
     if (ts.size() < 2) {  // nothing to fit (a window's commit shorter than a tick)
       r.segments.clear();
       return r;

@@ -35,6 +35,11 @@ struct PlanFitRequest {
   // Fills `ts` with the tick samples of `plan` (reusing its storage). A
   // streaming window puts the last tick of the previous window first.
   std::function<void(const plan::Plan&, std::vector<plan::TickSample>&)> sample;
+  // Optional (a streaming window): fills `ahead` with the ticks of `plan`
+  // after those of `sample`, its look-ahead, which the next window plans
+  // again. They are checked as the others, not fitted: a cap the next window
+  // would find there could slow its start below the speed committed here.
+  std::function<void(const plan::Plan&, std::vector<plan::TickSample>&)> sample_ahead;
   bool carried = false;   // ts[0] was carried from a previous window: not checked, cannot be slowed
   double t_offset = 0;    // passed to fit_segments: global time of the plan's start...
   long long k_base = 0;   // ...and the global tick of ts[0]

@@ -344,6 +344,18 @@ WindowPlan plan_window(Window& win, const Carry& in, size_t commit_max, bool las
     if (in.k_last >= 0) out.push_back(in.tick);
     plan::append_ticks_range(path, plan, h, in.T0, in.k_last + 1, k_end, out, in.k_org);
   };
+  if (!last)
+    req.sample_ahead = [&](const plan::Plan& plan, std::vector<plan::TickSample>& out) {
+      // Only a cap within the next window's braking distance from the
+      // committed speed can slow its start: the look-ahead up to twice the
+      // distance of an S-curve stop at the plan's A_t and J_t.
+      const double v = plan::state_at(plan, Tc).v;
+      const double reach = v * (v / plan.A_t + plan.A_t / plan.J_t);
+      const double T = time_at_arc_length(plan, std::min(s_commit + reach, path.length()));
+      const long long k_ahead = in.k_org + static_cast<long long>(std::floor((in.T0 + T) / h + 1e-9));
+      out.clear();
+      plan::append_ticks_range(path, plan, h, in.T0, k_end + 1, k_ahead, out, in.k_org);
+    };
   PlanFitResult fit = plan_and_fit(req, ts);
   wp.repairs = fit.repairs;
   wp.ticks = ts.size();
