@@ -9,8 +9,11 @@
 #   usage: scripts/trial_svg_icons.sh [SET ...]
 #   sets:  simple-icons (simple-icons@13.0.0, 3150 logos, CC0),
 #          bootstrap (bootstrap-icons@1.13.2, 2078 icons, MIT),
-#          tabler (@tabler/icons@3.52.0, 5491 outline + 1054 filled icons, MIT);
-#          default: all three
+#          tabler (@tabler/icons@3.52.0, 5491 outline + 1054 filled icons, MIT),
+#          fontawesome (@fortawesome/fontawesome-free@7.3.1, 2883 solid, regular
+#          and brand icons, CC BY 4.0), mdi (@mdi/svg@7.4.47, 7447 Material
+#          Design icons, Apache-2.0), octicons (@primer/octicons@19.42.0, 784
+#          icons, MIT); default: all six
 #   env:   TRAJ_BUILD_DIR (default build/), TRIAL_DIR (downloads and results,
 #          default a temporary folder, removed at the end)
 set -euo pipefail
@@ -24,13 +27,16 @@ mkdir -p "$work"
 
 # package@version and the folders of its icons inside the package
 declare -A pkg=([simple-icons]="simple-icons@13.0.0" [bootstrap]="bootstrap-icons@1.13.2"
-                [tabler]="@tabler/icons@3.52.0")
-declare -A dirs=([simple-icons]="icons" [bootstrap]="icons" [tabler]="icons/outline icons/filled")
+                [tabler]="@tabler/icons@3.52.0" [fontawesome]="@fortawesome/fontawesome-free@7.3.1"
+                [mdi]="@mdi/svg@7.4.47" [octicons]="@primer/octicons@19.42.0")
+declare -A dirs=([simple-icons]="icons" [bootstrap]="icons" [tabler]="icons/outline icons/filled"
+                 [fontawesome]="svgs/solid svgs/regular svgs/brands" [mdi]="svg" [octicons]="build/svg")
+sets="simple-icons bootstrap tabler fontawesome mdi octicons"
 
 status=0
-for set in "${@:-simple-icons bootstrap tabler}"; do
+for set in "${@:-$sets}"; do
   for s in $set; do
-    [ -n "${pkg[$s]:-}" ] || { echo "trial_svg_icons.sh: unknown set '$s' (simple-icons, bootstrap, tabler)" >&2; exit 1; }
+    [ -n "${pkg[$s]:-}" ] || { echo "trial_svg_icons.sh: unknown set '$s' ($sets)" >&2; exit 1; }
     dest="$work/$s"
     mkdir -p "$dest"
     (cd "$dest" && npm pack --silent "${pkg[$s]}" > pack.txt && tar xzf "$(tail -n 1 pack.txt)")
@@ -51,7 +57,7 @@ for set in "${@:-simple-icons bootstrap tabler}"; do
     bad=$(wc -l < "$refused")
     printf '%-13s %-24s %5d icons, %5d planned, %d refused, %.0f s\n' "$s" "${pkg[$s]}" "$n" $((n - bad)) "$bad" "$secs"
     if [ "$bad" -gt 0 ]; then
-      sed 's/^/    /' "$refused" | head -n 20
+      head -n 20 "$refused" | sed 's/^/    /'
       status=1
     fi
   done
