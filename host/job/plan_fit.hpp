@@ -36,7 +36,8 @@ struct PlanFitRequest {
   // streaming window puts the last tick of the previous window first.
   std::function<void(const plan::Plan&, std::vector<plan::TickSample>&)> sample;
   // Optional (a streaming window): fills `ahead` with the ticks of `plan`
-  // after those of `sample`, its look-ahead, which the next window plans
+  // after those of `sample` (called after it in each round, so it may use
+  // what `sample` found), its look-ahead, which the next window plans
   // again. They are checked as the others, not fitted: a cap the next window
   // would find there could slow its start below the speed committed here.
   std::function<void(const plan::Plan&, std::vector<plan::TickSample>&)> sample_ahead;
