@@ -349,6 +349,63 @@ TEST(ToolpathPlan, SharpCornersStopWhereThatIsFaster) {
   EXPECT_EQ(s_on, s_off);
 }
 
+// The local decision (stop_is_faster plans the corner on legs no longer than two speed-ups to the
+// feed past its blend) against the whole path: one corner between two legs of 60 mm, at turns from
+// 20 to 170 degrees, at feeds of 10 to 100 mm/s on a fast machine and of 10 to 50 mm/s at the main
+// job's limits with a tolerance of 0.25 mm (as LinuxCNC's craftsmancnc.ngc, where legs of one
+// speed-up past the blend turned a 146 degree corner at 23.3 mm/s). The corner is left a stop exactly
+// where the two moves planned whole, stopped at the corner (G61 there), take less time than with the
+// corner blended; where the two differ by less than two ticks either is right. The whole path is
+// planned as the decision assumes the path goes on (a corner inside a program: its blend is not
+// re-timed as one curved move from rest to rest, align_curved_moves off; with it, a lone 170 degree
+// corner at 100 mm/s would be faster blended, 1.284 s against 1.371 s).
+TEST(ToolpathPlan, CornerStopsWhereTheWholePathIsFasterSo) {
+  auto whole_time = [](const input::Toolpath& tp, const job::JobConfig& cfg) {
+    job::ToolpathOptions o;
+    o.faster_stops = false;
+    const job::ToolpathPlan r = job::toolpath_plan(tp, cfg, o);
+    plan::PlanOptions po = r.cfg.plan_options();
+    po.align_curved_moves = false;
+    return plan::plan_path(r.path, r.cfg.limits, po).duration();
+  };
+  job::JobConfig main_job;
+  main_job.limits.tol = 0.25;
+  const std::pair<job::JobConfig, std::vector<double>> sets[] = {{fast_machine(), {10, 30, 100}},
+                                                                  {main_job, {10, 23.3, 50}}};
+  int stops = 0, blends = 0;
+  for (const auto& [cfg, feeds] : sets)
+  for (double feed : feeds) {
+    for (double deg : {20.0, 45.0, 70.0, 90.0, 110.0, 135.0, 146.0, 150.0, 170.0}) {
+      const double th = deg * M_PI / 180;
+      Eigen::VectorXd a(2), v(2), b(2);
+      a << -60, 0;
+      v << 0, 0;
+      b << 60 * std::cos(th), 60 * std::sin(th);
+      input::Toolpath tp;
+      tp.axes = 2;
+      for (const auto& [p, q] : {std::pair{a, v}, std::pair{v, b}}) {
+        input::Move m;
+        m.curve = geo::make_line(p, q);
+        m.feed = feed;
+        m.where = "corner";
+        tp.moves.push_back(m);
+      }
+      size_t decided = 0;
+      planned_time(tp, cfg, true, decided);
+      const double t_blend = whole_time(tp, cfg);
+      tp.moves[0].exact_stop = true;
+      const double t_stop = whole_time(tp, cfg);
+      const std::string at = std::to_string(deg) + " deg at " + std::to_string(feed) + " mm/s: stopped " +
+                             std::to_string(t_stop) + " s, blended " + std::to_string(t_blend) + " s";
+      if (std::abs(t_stop - t_blend) >= 2 * cfg.machine.period) EXPECT_EQ(decided == 1, t_stop < t_blend) << at;
+      (decided == 1 ? stops : blends) += 1;
+    }
+  }
+  // both decisions occur (else the cases test one side only)
+  EXPECT_GT(stops, 3);
+  EXPECT_GT(blends, 3);
+}
+
 // simple-icons' apachecassandra.svg (and audiomack.svg): a cubic whose end
 // handle is retracted (P2 = P3, an SVG cusp) after a corner the blend cuts
 // the curve at. The knot insertion of that cut once moved P2 by an ulp,
