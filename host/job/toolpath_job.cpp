@@ -33,10 +33,12 @@ bool stop_is_faster(const corners::CornerCandidate& c, const JobConfig& cfg) {
   // it with its legs as one move on the tick grid; on the whole path the
   // legs go on at speed, so the blend is planned as the path's profile plans it
   po.align_curved_moves = false;
-  // a jerk-limited speed-up from rest to the feed covers at most feed (feed / a + a / j) at the
-  // tangential jerk the planner gives a path's profile (0.6 j); two of them (speeding up on the leg,
-  // slowing to the blend) at most 2 reach
-  const double reach = L.feed * (L.feed / L.a_tan + L.a_tan / L.j_tan);
+  // a jerk-limited speed-up from rest to the top speed v (the feed, or the axes' velocity limits
+  // together where a program's F is above them) covers at most v (v / a + a / j) at the tangential
+  // jerk the planner gives a path's profile (0.6 j); two of them (speeding up on the leg, slowing to
+  // the blend) at most 2 reach
+  const double v = L.top_speed(static_cast<int>(c.v.size()));
+  const double reach = v * (v / L.a_tan + L.a_tan / L.j_tan);
   const corners::Point b0 = c.blend.ctrl.row(0).transpose(), b1 = c.blend.ctrl.row(c.blend.n_ctrl() - 1).transpose();
   const double blend_in = (c.v - b0).dot(c.t_in), blend_out = (b1 - c.v).dot(c.t_out);
   const double h_in = std::min(std::max(0.5 * c.leg_in, std::min(0.5 * c.run_in, reach)), blend_in + 2 * reach);
