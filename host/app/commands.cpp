@@ -180,23 +180,25 @@ plan::Path load_jsonl(const std::string& file) {
 }
 
 // The G-code reader's options: the machine's axes (--axes: the first
-// Machine::axes of the limits' axis names) and the tool table, if one is given.
-input::GcodeOptions gcode_options(const std::string& tool_table, const job::JobConfig& cfg) {
+// Machine::axes of the limits' axis names), the tool table, if one is given,
+// and what M0/M60 are taken as.
+input::GcodeOptions gcode_options(const GcodeArgs& g, const job::JobConfig& cfg) {
   input::GcodeOptions o;
   o.axes.clear();
   for (char c : cfg.limits.axis_names.substr(0, static_cast<size_t>(cfg.machine.axes)))
     o.axes += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  if (!tool_table.empty()) o.tools = input::read_tool_table(tool_table);
+  if (!g.tool_table.empty()) o.tools = input::read_tool_table(g.tool_table);
+  o.pauses_as_stops = g.pause_as_stop;
   return o;
 }
 
 
-Loaded load(const std::string& file, const std::string& format, const std::string& tool_table,
+Loaded load(const std::string& file, const std::string& format, const GcodeArgs& gcode,
             const job::JobConfig& cfg, bool blend_all) {
   const input::FileKind kind = input::file_kind(file, format);
   if (kind == input::FileKind::kJsonl) return {load_jsonl(file), cfg, {}, 0, {}};
   if (!input::is_toolpath(kind)) return {input::load_path(file), cfg, {}, 0, {}};
-  const input::Toolpath tp = input::read_toolpath(file, kind, gcode_options(tool_table, cfg));
+  const input::Toolpath tp = input::read_toolpath(file, kind, gcode_options(gcode, cfg));
   for (const auto& n : tp.notes) std::fprintf(stderr, "trajcore: note: %s\n", n.c_str());
   job::ToolpathOptions to;
   to.faster_stops = !blend_all;
@@ -237,7 +239,7 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
   } else if (input::is_toolpath(input::file_kind(a.input, a.format))) {
     // G-code read a line at a time as the windows need curves, blended in chunks
     job::ToolpathOptions to;
-    to.gcode = gcode_options(a.tool_table, a.cfg);
+    to.gcode = gcode_options(a.gcode, a.cfg);
     to.faster_stops = !a.blend_all;
     toolpath = std::make_unique<job::ToolpathStream>(a.input, input::file_kind(a.input, a.format), a.cfg, to);
     cfg = toolpath->config();
@@ -292,7 +294,7 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
 
 int plan_whole(const PlanArgs& a) {
   if (a.input.empty()) throw PlanError("give a path file");
-  const Loaded in = load(a.input, a.format, a.tool_table, a.cfg, a.blend_all);
+  const Loaded in = load(a.input, a.format, a.gcode, a.cfg, a.blend_all);
   const plan::Path& path = in.path;
   const job::JobConfig& cfg = in.cfg;
   const auto res = job::run_job(path, cfg, progress);
@@ -380,7 +382,7 @@ int plan_command(const PlanArgs& a) {
 
 int run_command(const RunArgs& a) {
   if (a.input.empty()) throw PlanError("give a path file");
-  const Loaded in = load(a.input, a.format, a.tool_table, a.cfg, a.blend_all);
+  const Loaded in = load(a.input, a.format, a.gcode, a.cfg, a.blend_all);
   const plan::Path& path = in.path;
   const job::JobConfig& cfg = in.cfg;
   const auto res = job::run_job(path, cfg, progress);

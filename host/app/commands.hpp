@@ -10,11 +10,17 @@
 
 namespace traj::app {
 
+// How G-code is read (input::GcodeOptions beside the machine's axes).
+struct GcodeArgs {
+  std::string tool_table;            // LinuxCNC tool table for G43 (empty: none; G43 is then refused)
+  bool pause_as_stop = false;        // M0/M60 taken as exact stops (input::GcodeOptions::pauses_as_stops)
+};
+
 struct PlanArgs {
   job::JobConfig cfg;
   std::string input;                 // path file (empty with raster)
   std::string format;                // "json", "jsonl", "gcode", "svg", "dxf" or empty (by the file name)
-  std::string tool_table;            // LinuxCNC tool table for G43 (empty: none; G43 is then refused)
+  GcodeArgs gcode;
   bool blend_all = false;            // blend every corner, also where a stop is faster (job::ToolpathOptions::faster_stops off)
   std::string output = "out/plan.trj";
   size_t window = 0;                 // > 0: stream with this window
@@ -30,7 +36,7 @@ struct RunArgs {
   job::JobConfig cfg;
   std::string input;
   std::string format;                // as PlanArgs::format
-  std::string tool_table;            // as PlanArgs::tool_table
+  GcodeArgs gcode;                   // as PlanArgs::gcode
   bool blend_all = false;            // as PlanArgs::blend_all
   std::string out_dir = "out";
   TimeScaleArgs scale;               // as PlanArgs::scale

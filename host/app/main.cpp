@@ -73,6 +73,17 @@ void add_limits(CLI::App* c, JobConfig& cfg, AxisArgs& ax) {
                 "(ticks below about 250 us: 128-bit, 2^-44 units)");
 }
 
+// How G-code is read: plan and run alike.
+void add_gcode_options(CLI::App* c, traj::app::GcodeArgs& g) {
+  c->add_option("--tool-table", g.tool_table,
+                "LinuxCNC tool table (\"T1 P1 Z12.5 ;comment\", lengths in mm) for G43 H: the moves are then of the "
+                "tool's holder, the program's Z plus the length; without one G43 is refused")
+      ->check(CLI::ExistingFile);
+  c->add_flag("--pause-as-stop", g.pause_as_stop,
+              "take M0 and M60 (program pause, e.g. before a manual tool change) as exact stops, as M1: the motion "
+              "goes on at once and the machine does NOT wait for an operator; without it such a program is refused");
+}
+
 void add_time_scale(CLI::App* c, traj::app::TimeScaleArgs& t) {
   c->add_option("--time-scale", t.s_max,
                 "plan for time scaling up to this feed override (e.g. 1.2 for 120 %): below the limits by "
@@ -182,10 +193,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 2))
       ->capture_default_str();
   pl->add_option("--format", pa.format, kFormatHelp)->check(CLI::IsMember(kFormats));
-  pl->add_option("--tool-table", pa.tool_table,
-                 "LinuxCNC tool table (\"T1 P1 Z12.5 ;comment\", lengths in mm) for G43 H: the moves are then of the "
-                 "tool's holder, the program's Z plus the length; without one G43 is refused")
-      ->check(CLI::ExistingFile);
+  add_gcode_options(pl, pa.gcode);
 
   pl->add_flag("--blend-all", pa.blend_all,
               "blend every corner within the tolerance, also a sharp one where stopping at it is faster at the limits "
@@ -228,10 +236,7 @@ int main(int argc, char** argv) {
                  "`plan` streams it, `sim --check` measures that stream)")
       ->required();
   rn->add_option("--format", ra.format, kFormatHelp)->check(CLI::IsMember(kFormats));
-  rn->add_option("--tool-table", ra.tool_table,
-                 "LinuxCNC tool table (\"T1 P1 Z12.5 ;comment\", lengths in mm) for G43 H: the moves are then of the "
-                 "tool's holder, the program's Z plus the length; without one G43 is refused")
-      ->check(CLI::ExistingFile);
+  add_gcode_options(rn, ra.gcode);
 
   rn->add_flag("--blend-all", ra.blend_all, "blend every corner within the tolerance, also a sharp one where stopping at it is faster at the limits "
                  "(by default such a corner is an exact stop on the programmed vertex: host/corners/README.md)");

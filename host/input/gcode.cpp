@@ -183,6 +183,14 @@ class Interpreter {
   // Tool length offset (G43): positions are of the tool's holder, the
   // program's Z plus the length (pos_ holds them so).
   double tlo_ = 0;
+  // G43 or G49 in the same block as M6: rs274 re-reads the position after
+  // the tool change, after the block's G43, in program coordinates, so the
+  // program's Z is kept and the next move takes the holder by the change of
+  // the length along Z, with a Z word or without (LinuxCNC's skeleton.ngc:
+  // "T1 M06 G43 H1", then "G0 X1.0 Y1.0" runs one tool length higher). A
+  // G43 in a block of its own keeps the holder where it is (the program's Z
+  // changes). This is that change, until the next move.
+  double tlo_pending_ = 0;
   gcode::Parameters params_;
   bool machine_coords_ = false;  // within a G53 block
   // Canned cycles (G73, G81, G83): the retract mode (G98: to the Z before
@@ -267,20 +275,23 @@ class Interpreter {
       g_by_group[grp] = t;
     }
     std::map<int, std::string> m_by_group;
-    std::string optional_stop;  // the M1 word, if the block has one
+    std::string optional_stop;  // the M1 word (or M0/M60 taken as a stop), if the block has one
+    int stop_m = 1;
     for (const auto& [m, t] : ms) {
       int grp;
       if (m == 2 || m == 30) grp = 4;
-      else if (m == 1) {
+      else if (m == 1 || ((m == 0 || m == 60) && opt_.pauses_as_stops)) {
         grp = 4;
         optional_stop = t;
+        stop_m = m;
       }
       else if (m == 3 || m == 4 || m == 5) grp = 7;
       else if (m == 7 || m == 8 || m == 9) grp = (m == 9 ? 8 : 80 + m);  // M7 and M8 may share a block
       else if (m == 6) grp = 6;
       else if (m == 0 || m == 60)
         fail(t, "program pause (M0/M60) is not supported: the program runs with no operator to resume it "
-                "(M1, the optional stop, is taken as an exact stop)");
+                "(M1, the optional stop, is taken as an exact stop; --pause-as-stop takes M0/M60 so too, and the "
+                "machine then goes on without waiting)");
       else fail(t, "unknown or unsupported M code");
       if (grp == 8 && (m_by_group.count(87) || m_by_group.count(88))) fail(t, "M9 with M7 or M8 in the same block");
       if ((grp == 87 || grp == 88) && m_by_group.count(8)) fail(t, "M7 or M8 with M9 in the same block");
@@ -331,7 +342,7 @@ class Interpreter {
     if (auto g = g_in(2)) plane_ = *g;
     if (auto g = g_in(6)) set_units(*g == 200 ? kInch : 1.0);
     if (g_in(7)) note("G40", g_text(400), "cutter compensation off (none is applied) accepted");
-    if (auto g = g_in(8)) tool_length(*g, g_text(*g));
+    if (auto g = g_in(8)) tool_length(*g, g_text(*g), m_by_group.count(6) > 0);
     if (g_in(12)) note("G54", g_text(540), "work offset G54 (the default, zero) accepted");
     if (auto g = g_in(13)) path_control(*g, g_text(*g));
     if (auto g = g_in(3)) absolute_ = *g == 900;
@@ -352,7 +363,7 @@ class Interpreter {
       motion(mg.has_value());
     }
     check_unused();
-    if (!optional_stop.empty()) stop_after_motion(optional_stop);
+    if (!optional_stop.empty()) stop_after_motion(optional_stop, stop_m);
     return m_by_group.count(4) > 0 && optional_stop.empty();
   }
 
@@ -371,9 +382,9 @@ class Interpreter {
   }
 
   // G43 (H, or the tool of the last M6) and G49.
-  void tool_length(int g, const std::string& t) {
+  void tool_length(int g, const std::string& t, bool with_tool_change) {
     if (g == 490) {
-      tlo_ = 0;
+      set_tool_length(0, with_tool_change);
       return;
     }
     if (!opt_.tools)
@@ -391,12 +402,17 @@ class Interpreter {
       fail(t, "no H word and no tool loaded (T with M6) to take the length of");
     }
     if (tool == 0) {  // LinuxCNC: tool 0 is no tool, of no length
-      tlo_ = 0;
+      set_tool_length(0, with_tool_change);
       return;
     }
     const auto it = opt_.tools->z.find(tool);
     if (it == opt_.tools->z.end()) fail(word, "tool " + std::to_string(tool) + " is not in the tool table " + opt_.tools->file);
-    tlo_ = it->second;
+    set_tool_length(it->second, with_tool_change);
+  }
+
+  void set_tool_length(double z, bool keep_program_z) {
+    if (keep_program_z) tlo_pending_ += z - tlo_;
+    tlo_ = z;
   }
 
   // G28/G30: with axis words a rapid to that point, then for the axes named
@@ -496,15 +512,17 @@ class Interpreter {
   void rapid_to(const Vector3d& e) {
     if (e != pos_ || ext_end_ != ext_) emit(Move::Kind::kRapid, gcode::line3(pos_, e), 0);
     pos_ = e;
+    tlo_pending_ = 0;
     ext_ = ext_end_;
   }
 
   Vector3d end_point() {
     Vector3d e = pos_;
+    e[2] += tlo_pending_;
     const char letters[3] = {'X', 'Y', 'Z'};
     const double z_offset = machine_coords_ ? 0.0 : tlo_;
     for (int i = 0; i < 3; ++i)
-      if (has(letters[i])) e[i] = value(letters[i]) * units_ + (absolute_ ? (i == 2 ? z_offset : 0.0) : pos_[i]);
+      if (has(letters[i])) e[i] = value(letters[i]) * units_ + (absolute_ ? (i == 2 ? z_offset : 0.0) : e[i]);
     if (polar()) polar_end_point(e);
     return e;
   }
@@ -594,6 +612,7 @@ class Interpreter {
       m.feed = programmed * scale;
       m.feed_scale = scale;
     }
+    tlo_pending_ = 0;  // the move ends at the holder's Z under the offset in force
     m.tolerance = tolerance_;
     m.exact_stop = exact_stop_ || kind == Move::Kind::kRapid;
     m.where = where(line_);
@@ -653,6 +672,7 @@ class Interpreter {
       default: break;
     }
     pos_ = e;
+    tlo_pending_ = 0;
     ext_ = ext_end_;
   }
 
@@ -703,7 +723,7 @@ class Interpreter {
         fail(text('L'), "the repeat count L must be a whole number from 1 to " + std::to_string(kMaxCycleRepeats));
       repeats = static_cast<int>(l);
     }
-    if (cycle_fresh_) cycle_level_ = pos_[2];
+    if (cycle_fresh_) cycle_level_ = pos_[2] + tlo_pending_;
     const double r = absolute_ ? *cycle_r_ * units_ + tlo_ : cycle_level_ + *cycle_r_ * units_;
     const double bottom = absolute_ ? *cycle_z_ * units_ + tlo_ : r + *cycle_z_ * units_;
     if (bottom > r) fail(word, "the bottom of the hole (Z) is above the retract plane (R)");
@@ -718,7 +738,8 @@ class Interpreter {
     const double clear = retract_old_z_ ? std::max(cycle_level_, r) : r;
     for (int k = 0; k < repeats; ++k) {
       // to the hole at the tool's Z, or risen to the clear plane when not above R
-      Vector3d hole(pos_[0], pos_[1], pos_[2] <= r ? clear : pos_[2]);
+      const double z = pos_[2] + tlo_pending_;  // the program's Z under a new tool length (end_point)
+      Vector3d hole(pos_[0], pos_[1], z <= r ? clear : z);
       if (has('X')) hole[0] = absolute_ ? x : pos_[0] + x;
       if (has('Y')) hole[1] = absolute_ ? y : pos_[1] + y;
       if (polar()) polar_end_point(hole);  // about the origin, from the last hole
@@ -898,10 +919,15 @@ class Interpreter {
 
   // M1 (after the block's motion, as in LinuxCNC): the machine stops at the
   // end of the move before it and goes on, as LinuxCNC does with its
-  // optional-stop switch off; a pause for an operator is not modelled.
-  void stop_after_motion(const std::string& t) {
+  // optional-stop switch off; a pause for an operator is not modelled. M0 and
+  // M60 (GcodeOptions::pauses_as_stops) likewise.
+  void stop_after_motion(const std::string& t, int m) {
     if (nurbs_) fail(t, "G5.2 NURBS not closed with G5.3");
-    note("M1", t, "optional stop taken as an exact stop, without a pause (LinuxCNC's optional-stop switch off)");
+    if (m == 1)
+      note("M1", t, "optional stop taken as an exact stop, without a pause (LinuxCNC's optional-stop switch off)");
+    else
+      note("M0", t, "program pause taken as an exact stop: the motion goes on without waiting for an operator "
+                    "(--pause-as-stop)");
     if (!out_.moves.empty()) out_.moves.back().exact_stop = true;
   }
 

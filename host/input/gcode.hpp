@@ -67,6 +67,11 @@ struct GcodeOptions {
   // G43 takes its length from here; without a table G43 is refused (a
   // length taken as 0 would move a real tool's tip by its length).
   std::optional<ToolTable> tools;
+  // M0 and M60 (program pause) taken as exact stops, as M1 is: the motion
+  // goes on at once, with no operator to resume it. Off (the default), they
+  // are refused: a program that pauses for a manual tool change would run on
+  // with the wrong tool.
+  bool pauses_as_stops = false;
 };
 
 // The moves one at a time, as the program is read (a line at a time): memory

@@ -117,7 +117,8 @@ Rs274 run_rs274(const std::string& shim, const fs::path& prog, const fs::path& w
       r.moves.back().dwell += numbers(args)[0];
       r.moves.back().dwelled = true;
     }
-    else if (name == "OPTIONAL_PROGRAM_STOP" && !r.moves.empty()) r.moves.back().dwelled = true;  // M1: a stop
+    else if ((name == "OPTIONAL_PROGRAM_STOP" || name == "PROGRAM_STOP") && !r.moves.empty())
+      r.moves.back().dwelled = true;  // M1, and M0/M60 read with pauses_as_stops: a stop
     else if (name == "USE_TOOL_LENGTH_OFFSET") {
       std::istringstream xyz(args);  // "x y z, ..."
       double x = 0, y = 0, z = 0;
@@ -338,6 +339,7 @@ int main(int argc, char** argv) {
   for (const fs::path& prog : progs) {
     traj::input::GcodeOptions opt;
     opt.axes = "XYZABC";
+    opt.pauses_as_stops = true;
     fs::path table = prog;
     table.replace_extension(".tbl");
     opt.tools = fs::exists(table) ? traj::input::read_tool_table(table.string()) : default_tools;

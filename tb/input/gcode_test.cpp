@@ -254,7 +254,11 @@ TEST(Gcode, Refusals) {
       {"F1\nG5.2 X1 Y0 P1 L17\nX2 Y2 P1\nG5.3\nM2\n", "t.ngc:2: L17: the NURBS order must be an integer from 3 to 16"},
       {"F1\nG18 G5 X1 I1 J0 P0 Q1\nM2\n", "t.ngc:2: G5: splines must be in the XY plane (G17)"},
       {"M0\nM2\n", "t.ngc:1: M0: program pause (M0/M60) is not supported: the program runs with no operator to resume it "
-                   "(M1, the optional stop, is taken as an exact stop)"},
+                   "(M1, the optional stop, is taken as an exact stop; --pause-as-stop takes M0/M60 so too, and the "
+                   "machine then goes on without waiting)"},
+      {"F1\nG1 X1\nM60\nM2\n", "t.ngc:3: M60: program pause (M0/M60) is not supported: the program runs with no "
+                               "operator to resume it (M1, the optional stop, is taken as an exact stop; --pause-as-stop "
+                               "takes M0/M60 so too, and the machine then goes on without waiting)"},
       {"F1\nG1 X1 M1 M2\n", "t.ngc:2: M2: two M codes from the same modal group (M1)"},
       {"G1 X#100\nM2\n", "t.ngc:1: X#100: the parameter is not set by the program (trajcore reads no parameter file; "
                           "LinuxCNC would take it from its .var file)"},
@@ -352,6 +356,21 @@ TEST(Gcode, ReferenceMoves) {
   EXPECT_EQ(end_of(tp.moves[4]), Eigen::Vector3d(0, 6, 0));
   EXPECT_EQ(end_of(tp.moves[5]), Eigen::Vector3d(4, 4, 4));
   EXPECT_EQ(end_of(tp.moves[6]), Eigen::Vector3d(0, 0, 0));  // G28 alone: every axis
+}
+
+// G43 (or G49) in the same block as M6, as rs274 runs it (LinuxCNC's
+// skeleton.ngc, cross-checked): the program's Z is kept through the tool
+// change, so the next move takes the holder by the length, with or without
+// a Z word; a G43 in a block of its own leaves the holder where it is.
+TEST(Gcode, ToolLengthSetWithTheToolChangeKeepsTheProgramZ) {
+  traj::input::GcodeOptions opt;
+  opt.tools = traj::input::ToolTable{"tools.tbl", {{1, 40.5}, {2, -3.25}}};
+  const Toolpath tp = read("G0 Z0\nT1 M6 G43 H1\nG0 X1\nG0 X2\nT2 M6\nG43\nG0 X3\nT1 M6 G43 H1\nG91 G0 Z1\nM2\n", opt);
+  ASSERT_EQ(tp.moves.size(), 4u);  // G0 Z0 from the origin is no move
+  EXPECT_EQ(end_of(tp.moves[0]), Eigen::Vector3d(1, 0, 40.5));  // program Z 0, the holder up by the length
+  EXPECT_EQ(end_of(tp.moves[1]), Eigen::Vector3d(2, 0, 40.5));  // once only
+  EXPECT_EQ(end_of(tp.moves[2]), Eigen::Vector3d(3, 0, 40.5));  // G43 alone: the holder stays
+  EXPECT_EQ(end_of(tp.moves[3]), Eigen::Vector3d(3, 0, 40.5 + 43.75 + 1));  // G91 Z1 from the kept program Z
 }
 
 // G43 moves the tool's holder: Z targets get the tool's length from the
@@ -615,6 +634,33 @@ TEST(Gcode, OptionalStopIsAnExactStop) {
   }
   ASSERT_EQ(tp.notes.size(), 1u);  // one note per kind, at its first use (before any move: nothing to stop)
   EXPECT_NE(tp.notes[0].find("t.ngc:2: M1: optional stop taken as an exact stop"), std::string::npos) << tp.notes[0];
+}
+
+// M0 and M60 with pauses_as_stops, as CAM posts write them before a manual
+// tool change (pcb2gcode: "M6 (Tool change.)" then "M0 (Temporary machine
+// stop.)"): exact stops like M1, the program goes on, noted once as a pause
+// that does not wait. Both in one block are two codes of one modal group.
+TEST(Gcode, PauseAsStopIsAnExactStop) {
+  traj::input::GcodeOptions opt;
+  opt.pauses_as_stops = true;
+  const Toolpath tp = read("G21 G90\nM0\nF600\nG1 X10\nT2 M6\nM0 (change the bit)\nG1 X10 Y10\nG1 X20 M60\n"
+                           "G1 X30 Y5\nM1\nG1 X40\nM2\n",
+                           opt);
+  ASSERT_EQ(tp.moves.size(), 5u);
+  const bool expected[5] = {true, false, true, true, false};
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_EQ(tp.moves[i].exact_stop, expected[i]) << tp.moves[i].where;
+    EXPECT_EQ(tp.moves[i].dwell, 0.0);
+  }
+  int pause_notes = 0;
+  for (const std::string& n : tp.notes)
+    if (n.find("program pause taken as an exact stop") != std::string::npos) {
+      ++pause_notes;
+      EXPECT_EQ(n.rfind("t.ngc:2: M0: ", 0), 0u) << n;
+      EXPECT_NE(n.find("without waiting for an operator"), std::string::npos) << n;
+    }
+  EXPECT_EQ(pause_notes, 1);
+  EXPECT_EQ(refusal("F1\nG1 X1 M0 M1\nM2\n", opt), "t.ngc:2: M1: two M codes from the same modal group (M0)");
 }
 
 // One block's pecks are bounded as holes times pecks a hole (its moves are

@@ -397,7 +397,9 @@ TEST(ToolpathPlan, CornerStopsWhereTheWholePathIsFasterSo) {
       const double t_stop = whole_time(tp, cfg);
       const std::string at = std::to_string(deg) + " deg at " + std::to_string(feed) + " mm/s: stopped " +
                              std::to_string(t_stop) + " s, blended " + std::to_string(t_blend) + " s";
-      if (std::abs(t_stop - t_blend) >= 2 * cfg.machine.period) EXPECT_EQ(decided == 1, t_stop < t_blend) << at;
+      if (std::abs(t_stop - t_blend) >= 2 * cfg.machine.period) {
+        EXPECT_EQ(decided == 1, t_stop < t_blend) << at;
+      }
       (decided == 1 ? stops : blends) += 1;
     }
   }
