@@ -211,10 +211,13 @@ Loaded load(const std::string& file, const std::string& format, const GcodeArgs&
                 "tolerance), %zu kept as stops (%zu of them faster so)\n",
                 tp.moves.size(), tpp.feed_moves, tpp.rapids, tpp.stops, tpp.corners_blended, tpp.wide_blends,
                 tpp.blend_deviation, 100 * job::ToolpathOptions{}.blend_share, tpp.corner_stops, tpp.faster_stops);
+  // the reader's notes (words accepted and not acted on, M0 taken as a stop) in the report as well
+  std::string text = b;
+  for (const auto& n : tp.notes) text += "  note                 " + n + "\n";
   double fastest = 0;
   for (const auto& m : tp.moves)
     if (m.kind == input::Move::Kind::kFeed) fastest = std::max(fastest, m.feed > 0 ? m.feed : cfg.limits.feed);
-  return {std::move(tpp.path), std::move(tpp.cfg), b, fastest, std::move(tpp.rapid_curve)};
+  return {std::move(tpp.path), std::move(tpp.cfg), text, fastest, std::move(tpp.rapid_curve)};
 }
 
 // Every check of the report; the output's limit check where the allowance is
