@@ -131,7 +131,8 @@ void ToolpathStream::blend_next_chunk() {
     c.stop = m.exact_stop;
     c.dwell = m.dwell;
     (rapid ? totals_.rapid_curves : totals_.feed_curves)++;
-    if (m.exact_stop) ++totals_.stops;
+    const bool last = ended_ && pending_.empty() && &m == &b.moves.back();
+    if (m.exact_stop && !last) ++totals_.stops;  // the path's end is a stop anyway (as toolpath_plan counts)
     ready_.push_back(std::move(c));
   }
 }

@@ -245,6 +245,7 @@ TEST(ToolpathStream, CamProgramStreamedAgreesWithWholePath) {
   EXPECT_GT(st.windows, 30u);  // runs of short segments are single curves: fewer curves than moves
   EXPECT_GT(sm.totals.chunks, 10u);
   EXPECT_LE(sm.totals.max_pending, 2 * 64u);
+  EXPECT_EQ(sm.totals.stops, tpp.stops);  // the report's count, the path's end left out by both
   const double lsb = std::ldexp(1.0, -32);
   EXPECT_EQ(static_cast<long long>(xs.size()), st.ticks);
 
