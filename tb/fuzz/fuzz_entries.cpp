@@ -78,6 +78,9 @@ int gcode(const uint8_t* data, std::size_t size) {
     std::istringstream in(text(data, size));
     input::GcodeOptions opt;
     opt.axes = "XYZABCUV";  // every axis word a machine may have is read (8 axes: the core's)
+    // what a table and --pause-as-stop open up is read too: G43 (with M6 or without), M0 and M60
+    opt.tools = input::ToolTable{"fuzz.tbl", {{1, 40.5}, {2, -3.25}}};
+    opt.pauses_as_stops = true;
     // Moves are read a block at a time, as the streamed planner reads them. A few bytes may be a
     // legitimate block of 100 000 pecks (seconds under the sanitizers): the reader's cost per move
     // is what is fuzzed, not the length of the program a file expands to, so reading stops after
