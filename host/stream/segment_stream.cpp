@@ -304,6 +304,13 @@ std::vector<uint8_t> encode_end(uint32_t segments, uint64_t total_ticks) {
   return b;
 }
 
+std::vector<uint8_t> encode_pause(const Pause& p) {
+  std::vector<uint8_t> b;
+  put_record_head(b, kPauseType, p.line, static_cast<uint32_t>(p.before));
+  put(b, crc(b.data(), b.size()), 4);
+  return b;
+}
+
 // ---------------------------------------------------------------------------
 // Continuity
 // ---------------------------------------------------------------------------
@@ -372,15 +379,28 @@ std::vector<uint8_t> numbered(const Header& h, const Record& r, uint64_t seq, Co
 }
 }  // namespace
 
-void write_file(const std::string& path, const Header& h, const std::vector<Record>& recs) {
+void write_file(const std::string& path, const Header& h, const std::vector<Record>& recs,
+                const std::vector<Pause>& pauses) {
   std::vector<uint8_t> all = encode_header(h);
   Continuity chain(h);
   uint64_t ticks = 0;
+  size_t next_pause = 0;
   for (size_t i = 0; i < recs.size(); ++i) {
+    if (next_pause < pauses.size() && pauses[next_pause].before <= i) {
+      const Pause& p = pauses[next_pause++];
+      if (p.before != i || i == 0 || (next_pause < pauses.size() && pauses[next_pause].before == i))
+        throw StreamError(path + ": pause before segment " + std::to_string(p.before) +
+                          " out of order, repeated, or before the first segment");
+      const auto b = encode_pause(p);
+      all.insert(all.end(), b.begin(), b.end());
+    }
     const auto b = numbered(h, recs[i], i, chain);
     all.insert(all.end(), b.begin(), b.end());
     ticks += recs[i].ticks;
   }
+  if (next_pause < pauses.size())
+    throw StreamError(path + ": pause before segment " + std::to_string(pauses[next_pause].before) + " of " +
+                      std::to_string(recs.size()) + ": nothing follows it");
   const auto e = encode_end(static_cast<uint32_t>(recs.size()), ticks);
   all.insert(all.end(), e.begin(), e.end());
   try {
@@ -410,7 +430,13 @@ void StreamWriter::put(const std::vector<uint8_t>& bytes) {
   if (!file_.out()) throw StreamError("write failed: " + file_.tmp_path());
 }
 
+void StreamWriter::pause(uint32_t line) {
+  if (count_ > 0) pause_ = Pause{count_, line};
+}
+
 void StreamWriter::add(const Record& r) {
+  if (pause_) put(encode_pause(*pause_));
+  pause_.reset();
   put(numbered(h_, r, count_, chain_));
   ++count_;
   ticks_ += r.ticks;
@@ -597,6 +623,7 @@ std::string StreamReader::record_problem(Record& r, uint64_t& at) {
 bool StreamReader::read_end() {
   raw_.resize(kEndBytes);
   raw_[0] = 0xFF;
+  if (pending_pause_) return fail(off_, "segment " + std::to_string(count_) + ": pause record after the last segment (nothing follows it)");
   if (read_some(in_, raw_.data() + 1, kEndBytes - 1) != size_t(kEndBytes - 1)) return fail(off_, "truncated end record");
   const auto& b = raw_;
   if (get(&b[12], 4) != crc(b.data(), 12)) return fail(off_, "end record checksum mismatch");
@@ -612,12 +639,40 @@ bool StreamReader::read_end() {
   return false;
 }
 
+// A pause record: checked as the end record is, and it must follow a
+// segment (not the start, not another pause).
+bool StreamReader::read_pause() {
+  const std::string rec = "segment " + std::to_string(count_) + ": pause record";
+  raw_.resize(kPauseBytes);
+  raw_[0] = kPauseType;
+  if (read_some(in_, raw_.data() + 1, kPauseBytes - 1) != size_t(kPauseBytes - 1))
+    return fail(off_, "segment " + std::to_string(count_) + ": truncated pause record");
+  const auto& b = raw_;
+  if (get(&b[12], 4) != crc(b.data(), 12)) return fail(off_, rec + " checksum mismatch");
+  if (b[1] != 0) return fail(off_ + 1, rec + ": flags " + hex2(b[1]) + ", must be 0");
+  if (const size_t z = first_nonzero(b, 2, 4); z < 4)
+    return fail(off_ + z, rec + ": reserved byte " + hex2(b[z]) + ", must be 0");
+  if (get(&b[8], 4) != static_cast<uint32_t>(count_))
+    return fail(off_ + 8, rec + " before segment " + std::to_string(get(&b[8], 4)) + ", but " +
+                              std::to_string(count_) + " segments precede it");
+  if (count_ == 0) return fail(off_, rec + " before the first segment");
+  if (pending_pause_) return fail(off_, rec + " after another one");
+  pending_pause_ = Pause{count_, static_cast<uint32_t>(get(&b[4], 4))};
+  off_ += kPauseBytes;
+  return true;
+}
+
 bool StreamReader::next(Record& r) {
   if (done_) return false;
-  const std::string rec = "segment " + std::to_string(count_) + ": ";
+  pause_.reset();
   uint8_t type = 0;
-  if (read_some(in_, &type, 1) != 1)
-    return fail(off_, "truncated: no end record after " + std::to_string(count_) + " segments");
+  for (;;) {
+    if (read_some(in_, &type, 1) != 1)
+      return fail(off_, "truncated: no end record after " + std::to_string(count_) + " segments");
+    if (type != kPauseType) break;
+    if (!read_pause()) return false;
+  }
+  const std::string rec = "segment " + std::to_string(count_) + ": ";
   if (type == 0xFF) return read_end();
   if (type == 2 && !h_.has_bcu())
     return fail(off_, rec + "record type 2 (BCU segment) in a stream whose header has no BCU format");
@@ -634,6 +689,8 @@ bool StreamReader::next(Record& r) {
   ++count_;
   ticks_ += r.ticks;
   off_ += rb;
+  pause_ = pending_pause_;
+  pending_pause_.reset();
   return true;
 }
 
@@ -643,7 +700,10 @@ ReadResult read_all(std::istream& in, const std::string& name) {
   ReadResult res;
   res.header = rd.header();
   Record r;
-  while (rd.next(r)) res.records.push_back(r);
+  while (rd.next(r)) {
+    if (rd.pause()) res.pauses.push_back(*rd.pause());
+    res.records.push_back(r);
+  }
   res.complete = rd.complete();
   res.error = rd.error();
   return res;

@@ -73,6 +73,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <iosfwd>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -131,6 +132,18 @@ constexpr int kVersion = 4;       // the version written and read
 constexpr int kScaleMaxUnit = 4096;  // the header's s_max is a multiple of 1/4096 (written rounded down)
 constexpr int kHeaderBytes = 64;
 constexpr int kEndBytes = 16;
+// The pause record: the same 16 bytes as the end record, type 0xFE.
+constexpr int kPauseBytes = 16;
+constexpr uint8_t kPauseType = 0xFE;
+
+// A program pause (G-code M0/M60 read with --pause-wait): the machine rests
+// after segment `before` - 1 and waits for the operator before segment
+// `before` (`trajcore upload`). Not a segment: it takes no sequence number
+// and changes no register. Written only where the plan is at rest.
+struct Pause {
+  uint64_t before = 0;  // the number of segments before it (> 0)
+  uint32_t line = 0;    // the program's line, 0 if none
+};
 // The FD record's K bound: the compiler's longest segment (fd::Format::max_ticks).
 constexpr uint32_t kMaxTicks = uint32_t(1) << 20;
 
@@ -143,6 +156,7 @@ std::vector<uint8_t> encode_header(const Header& h);
 // hold (K out of bounds, a value beyond its width, the wrong shape).
 std::vector<uint8_t> encode_record(const Header& h, const Record& r);
 std::vector<uint8_t> encode_end(uint32_t segments, uint64_t total_ticks);
+std::vector<uint8_t> encode_pause(const Pause& p);
 
 // Continuity: each segment starts exactly where the exact prediction of the
 // previous one ends. FD -> FD: r[0] = the previous r[0] after K ticks
@@ -168,7 +182,10 @@ class Continuity {
 // Writes a whole stream to `path` atomically (temporary file, then rename),
 // the records numbered 0, 1, 2, ...; content the format cannot hold and a
 // stream that would jump are refused (StreamError) before anything is written.
-void write_file(const std::string& path, const Header& h, const std::vector<Record>& recs);
+// Pauses (in order, each after at least one segment and before the last
+// segment ends) go between the records they name.
+void write_file(const std::string& path, const Header& h, const std::vector<Record>& recs,
+                const std::vector<Pause>& pauses = {});
 
 // Incremental writer for long streams: records go to a temporary (util::AtomicFile) as they come;
 // finish() appends the end record and renames; a writer destroyed before
@@ -178,6 +195,9 @@ class StreamWriter {
  public:
   StreamWriter(const std::string& path, const Header& h);
   void add(const Record& r);
+  // A program pause after the records added so far: written before the next
+  // record (none after the last one: there is nothing left to wait for).
+  void pause(uint32_t line);
   void finish();
   uint64_t records() const { return count_; }
   uint64_t ticks() const { return ticks_; }
@@ -188,6 +208,7 @@ class StreamWriter {
   util::AtomicFile file_;
   Continuity chain_;
   uint64_t count_ = 0, ticks_ = 0;
+  std::optional<Pause> pause_;
 };
 
 // Incremental reader (bounded memory): the header on construction, then one
@@ -202,6 +223,8 @@ class StreamReader {
   bool next(Record& r);
   bool complete() const { return complete_; }
   const std::string& error() const { return error_; }
+  // The pause record just before the record last accepted by next(), if any.
+  const std::optional<Pause>& pause() const { return pause_; }
   // The exact bytes of the record last accepted by next() (a link frame's payload).
   const std::vector<uint8_t>& raw() const { return raw_; }
   uint64_t records() const { return count_; }
@@ -211,6 +234,7 @@ class StreamReader {
   std::string header_problem(const std::vector<uint8_t>& b, size_t n, uint64_t& at);
   std::string record_problem(Record& r, uint64_t& at);
   bool read_end();
+  bool read_pause();
   std::istream& in_;
   std::string name_;
   Header h_;
@@ -219,11 +243,13 @@ class StreamReader {
   uint64_t off_ = 0, count_ = 0, ticks_ = 0;
   bool complete_ = false, done_ = false;
   std::string error_;
+  std::optional<Pause> pause_, pending_pause_;
 };
 
 struct ReadResult {
   Header header;
   std::vector<Record> records;  // every record accepted before any error
+  std::vector<Pause> pauses;    // the pause records before them
   bool complete = false;        // end record seen and consistent
   std::string error;            // empty if complete
 };

@@ -727,3 +727,77 @@ TEST(StreamIntegrity, EndRecordCarriesTheCount) {
   EXPECT_EQ(decode(b, "plan.trj").error,
             "plan.trj: byte " + std::to_string(e + 8) + ": end record counts 4 segments, stream has 5");
 }
+
+// Pause records (program pauses): written between the records they name by
+// both writers, read back in place, and every misplaced or damaged one
+// refused with its place. The records and their bytes are those of the
+// stream without the pauses.
+TEST(StreamPause, WrittenAndReadBackInPlace) {
+  Fixture f;
+  const std::vector<Pause> pauses = {{2, 17}, {4, 0}};
+  traj::test::TmpFile a("pause_a.trj"), b("pause_b.trj");
+  write_file(a.path, f.h, f.recs, pauses);
+  {
+    StreamWriter w(b.path, f.h);
+    for (size_t i = 0; i < f.recs.size(); ++i) {
+      w.add(f.recs[i]);
+      if (i == 1) w.pause(17);
+      if (i == 3) w.pause(0);
+      if (i == 4) w.pause(99);  // after the last record: nothing to wait for, not written
+    }
+    w.finish();
+  }
+  for (const std::string& path : {a.path, b.path}) {
+    std::ifstream in(path, std::ios::binary);
+    const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(bytes.size(), f.good.size() + 2 * kPauseBytes) << path;
+    const ReadResult r = decode(bytes, "p.trj");
+    ASSERT_TRUE(r.complete) << r.error;
+    ASSERT_EQ(r.pauses.size(), 2u);
+    EXPECT_EQ(r.pauses[0].before, 2u);
+    EXPECT_EQ(r.pauses[0].line, 17u);
+    EXPECT_EQ(r.pauses[1].before, 4u);
+    EXPECT_EQ(r.pauses[1].line, 0u);
+    ASSERT_EQ(r.records.size(), f.recs.size());
+    for (size_t i = 0; i < f.recs.size(); ++i) EXPECT_EQ(r.records[i].regs, f.recs[i].regs);
+    // the pause record's bytes, as LINK.md and the stream README give them
+    const size_t at = f.off(2);
+    const std::vector<uint8_t> want = {0xFE, 0, 0, 0, 17, 0, 0, 0, 2, 0, 0, 0};
+    EXPECT_TRUE(std::equal(want.begin(), want.end(), bytes.begin() + static_cast<long>(at)));
+    EXPECT_EQ(uint32_t(bytes[at + 12] | bytes[at + 13] << 8 | bytes[at + 14] << 16 | uint32_t(bytes[at + 15]) << 24),
+              uint32_t(crc32(0, bytes.data() + at, 12)));
+  }
+  EXPECT_THROW(write_file(a.path, f.h, f.recs, {{0, 1}}), StreamError);
+  EXPECT_THROW(write_file(a.path, f.h, f.recs, {{3, 1}, {2, 1}}), StreamError);
+  EXPECT_THROW(write_file(a.path, f.h, f.recs, {{2, 1}, {2, 1}}), StreamError);
+  EXPECT_THROW(write_file(a.path, f.h, f.recs, {{5, 1}}), StreamError);
+}
+
+TEST(StreamPause, MisplacedOrDamagedPausesAreRefusedWithTheirPlace) {
+  Fixture f;
+  // the good stream with a pause record of `before` inserted at record i's place
+  auto with_pause = [&](size_t i, uint32_t before, int copies = 1) {
+    auto b = f.good;
+    for (int c = 0; c < copies; ++c) {
+      const auto p = encode_pause({before, 5});
+      b.insert(b.begin() + static_cast<long>(f.off(i)), p.begin(), p.end());
+    }
+    return b;
+  };
+  EXPECT_EQ(decode(with_pause(2, 2), "p.trj").error, "");
+  EXPECT_EQ(decode(with_pause(0, 0), "p.trj").error, "p.trj: byte 64: segment 0: pause record before the first segment");
+  EXPECT_EQ(decode(with_pause(2, 3), "p.trj").error,
+            "p.trj: byte " + std::to_string(f.off(2) + 8) + ": segment 2: pause record before segment 3, but 2 segments precede it");
+  EXPECT_EQ(decode(with_pause(2, 2, 2), "p.trj").error,
+            "p.trj: byte " + std::to_string(f.off(2) + kPauseBytes) + ": segment 2: pause record after another one");
+  EXPECT_EQ(decode(with_pause(5, 5), "p.trj").error,
+            "p.trj: byte " + std::to_string(f.off(5) + kPauseBytes) +
+                ": segment 5: pause record after the last segment (nothing follows it)");
+  auto bad = with_pause(2, 2);
+  bad[f.off(2) + 4] ^= 1;  // the line, under the checksum
+  EXPECT_EQ(decode(bad, "p.trj").error, "p.trj: byte " + std::to_string(f.off(2)) + ": segment 2: pause record checksum mismatch");
+  const auto cut = with_pause(2, 2);
+  const auto truncated = decode(std::vector<uint8_t>(cut.begin(), cut.begin() + static_cast<long>(f.off(2) + 9)), "p.trj");
+  EXPECT_EQ(truncated.error, "p.trj: byte " + std::to_string(f.off(2)) + ": segment 2: truncated pause record");
+  EXPECT_EQ(truncated.records.size(), 2u);
+}
