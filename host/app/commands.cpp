@@ -189,9 +189,17 @@ input::GcodeOptions gcode_options(const GcodeArgs& g, const job::JobConfig& cfg)
     o.axes += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   if (!g.tool_table.empty()) o.tools = input::read_tool_table(g.tool_table);
   o.pauses_as_stops = g.pause_as_stop;
+  o.pauses_wait = g.pause_wait;
   return o;
 }
 
+
+// The toolpath report's line on program pauses (none: no line).
+std::string pauses_line(size_t pauses) {
+  if (pauses == 0) return "";
+  return "  program pauses       " + std::to_string(pauses) +
+         " (pause records in the stream: `trajcore upload` waits at each for the operator)\n";
+}
 
 Loaded load(const std::string& file, const std::string& format, const GcodeArgs& gcode,
             const job::JobConfig& cfg, bool blend_all) {
@@ -213,6 +221,7 @@ Loaded load(const std::string& file, const std::string& format, const GcodeArgs&
                 tpp.blend_deviation, 100 * job::ToolpathOptions{}.blend_share, tpp.corner_stops, tpp.faster_stops);
   // the reader's notes (words accepted and not acted on, M0 taken as a stop) in the report as well
   std::string text = b;
+  text += pauses_line(tpp.cfg.pauses.size());
   for (const auto& n : tp.notes) text += "  note                 " + n + "\n";
   double fastest = 0;
   for (const auto& m : tp.moves)
@@ -259,7 +268,7 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
   stream::StreamWriter w(a.output, a.cfg.machine.header());
   job::StreamStats st;
   try {
-    const job::SegmentSink sink = [&](const fd::Compiled& c, const plan::TimeSegment&) { w.add({c.ticks, c.regs}); };
+    const job::SegmentSink sink = job::write_to(w);
     const job::Progress prog = [](const std::string&, double curves) {
       show_progress("stream", util::fmt("%.0f curves", curves));
     };
@@ -287,10 +296,11 @@ int plan_streamed(const PlanArgs& a, bool jsonl) {
                 "stops\n"
                 "  corners              %d blended, %d of them wide (largest blend deviation %.4g mm, within %g %% of "
                 "the tolerance), %zu kept as stops (%zu of them faster so)\n"
-                "  local speed caps     %zu from tick checks and the fit\n",
+                "  local speed caps     %zu from tick checks and the fit\n%s",
                 t.chunks, t.max_pending, t.split_moves, t.moves, t.feed_curves, t.rapid_curves, t.stops,
                 t.corners_blended, t.wide_blends, t.blend_deviation, 100 * job::ToolpathOptions{}.blend_share,
-                t.corner_stops, t.faster_stops, st.caps);
+                t.corner_stops, t.faster_stops, st.caps,
+                pauses_line(t.pauses).c_str());
   }
   return 0;
 }
@@ -308,7 +318,7 @@ int plan_whole(const PlanArgs& a) {
   const auto rep = report::make_report(path, cfg, res, report::predicted_samples(res));
   stream::Header header = res.header;
   const std::string scale_text = a.scale.on() ? time_scale_text(a.scale, rep, res, header) : std::string();
-  stream::write_file(a.output, header, job::records_of(res));
+  stream::write_file(a.output, header, job::records_of(res), job::pauses_of(res));
   std::FILE* text = a.output == "-" ? stderr : stdout;  // the stream may go to standard output
   std::fprintf(text, "%s: %zu segments, %zu ticks (%.3f s of motion) -> %s\n", a.input.c_str(), res.segments.size(),
               res.ticks.size(), res.plan.duration(), a.output.c_str());
@@ -372,8 +382,18 @@ std::string core_line(const sim::SimResult& sr) {
 
 }  // namespace
 
+// A time-scaled board holds on the path (a starved hold) once its segments
+// ahead no longer cover a stop: at a pause it would halt short of the pause's
+// stop, with the plan not at rest there.
+void check_pause_wait(const GcodeArgs& g, const TimeScaleArgs& t, const char* cmd) {
+  if (g.pause_wait && t.on())
+    throw PlanError(std::string(cmd) + ": --pause-wait with --time-scale is not supported: the board's time-scale unit "
+                    "would hold short of the pause's stop (a starved hold), not at it");
+}
+
 int plan_command(const PlanArgs& a) {
   util::check_output_path(a.output);
+  check_pause_wait(a.gcode, a.scale, "plan");
   const bool jsonl = !a.input.empty() && a.raster == 0 && input::file_kind(a.input, a.format) == input::FileKind::kJsonl;
   if (jsonl && a.window_given && a.window == 0)
     throw PlanError("plan: a JSON Lines path is always streamed: --window must be at least 2");
@@ -385,6 +405,7 @@ int plan_command(const PlanArgs& a) {
 
 int run_command(const RunArgs& a) {
   if (a.input.empty()) throw PlanError("give a path file");
+  check_pause_wait(a.gcode, a.scale, "run");
   const Loaded in = load(a.input, a.format, a.gcode, a.cfg, a.blend_all);
   const plan::Path& path = in.path;
   const job::JobConfig& cfg = in.cfg;
@@ -400,7 +421,8 @@ int run_command(const RunArgs& a) {
   Staging stage{a.out_dir + "/.trajcore-run-" + std::to_string(::getpid())};
   fs::create_directories(stage.dir);
   const auto records = job::records_of(res);
-  stream::write_file(stage.dir + "/plan.trj", res.header, records);
+  const auto pauses = job::pauses_of(res);
+  stream::write_file(stage.dir + "/plan.trj", res.header, records, pauses);
   std::printf("%s: %zu segments, %zu ticks (%.3f s of motion)\n", a.input.c_str(), res.segments.size(),
               res.ticks.size(), res.plan.duration());
   const auto sr = sim::simulate(res.header, records, 0, [](double f) { progress("sim", f); });
@@ -413,7 +435,7 @@ int run_command(const RunArgs& a) {
   if (a.scale.on()) {  // the stream again, with the time-scaling fields in its header
     stream::Header header = res.header;
     scale_text = time_scale_text(a.scale, rep, res, header);
-    stream::write_file(stage.dir + "/plan.trj", header, records);
+    stream::write_file(stage.dir + "/plan.trj", header, records, pauses);
   }
   const std::string text = in.toolpath_text + report::report_text(cfg, rep, res) + core_line(sr) + scale_text;
   {

@@ -14,6 +14,7 @@ namespace traj::app {
 struct GcodeArgs {
   std::string tool_table;            // LinuxCNC tool table for G43 (empty: none; G43 is then refused)
   bool pause_as_stop = false;        // M0/M60 taken as exact stops (input::GcodeOptions::pauses_as_stops)
+  bool pause_wait = false;           // M0/M60 as pauses the upload waits at (input::GcodeOptions::pauses_wait)
 };
 
 struct PlanArgs {

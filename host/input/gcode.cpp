@@ -16,11 +16,17 @@
 #include "input/gcode_lexer.hpp"
 
 namespace traj::input {
+
 namespace {
 
 using gcode::Block;
 using gcode::Word;
 using Eigen::Vector3d;
+
+// What the refusal of M0/M60 offers.
+constexpr const char* kPauseOptions =
+    "--pause-wait (a pause at which `trajcore upload` waits for the operator) or --pause-as-stop (an exact stop: "
+    "the machine goes on without waiting); M1, the optional stop, is taken as an exact stop";
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kInch = 25.4;
@@ -280,7 +286,7 @@ class Interpreter {
     for (const auto& [m, t] : ms) {
       int grp;
       if (m == 2 || m == 30) grp = 4;
-      else if (m == 1 || ((m == 0 || m == 60) && opt_.pauses_as_stops)) {
+      else if (m == 1 || ((m == 0 || m == 60) && (opt_.pauses_as_stops || opt_.pauses_wait))) {
         grp = 4;
         optional_stop = t;
         stop_m = m;
@@ -289,9 +295,7 @@ class Interpreter {
       else if (m == 7 || m == 8 || m == 9) grp = (m == 9 ? 8 : 80 + m);  // M7 and M8 may share a block
       else if (m == 6) grp = 6;
       else if (m == 0 || m == 60)
-        fail(t, "program pause (M0/M60) is not supported: the program runs with no operator to resume it "
-                "(M1, the optional stop, is taken as an exact stop; --pause-as-stop takes M0/M60 so too, and the "
-                "machine then goes on without waiting)");
+        fail(t, std::string("program pause (M0/M60) is not supported without ") + kPauseOptions);
       else fail(t, "unknown or unsupported M code");
       if (grp == 8 && (m_by_group.count(87) || m_by_group.count(88))) fail(t, "M9 with M7 or M8 in the same block");
       if ((grp == 87 || grp == 88) && m_by_group.count(8)) fail(t, "M7 or M8 with M9 in the same block");
@@ -923,12 +927,22 @@ class Interpreter {
   // M60 (GcodeOptions::pauses_as_stops) likewise.
   void stop_after_motion(const std::string& t, int m) {
     if (nurbs_) fail(t, "G5.2 NURBS not closed with G5.3");
+    const bool pause = m != 1 && opt_.pauses_wait;
+    if (pause && out_.moves.empty()) {
+      note("M0 first", t, "program pause before the first move ignored (the machine has not moved)");
+      return;
+    }
     if (m == 1)
       note("M1", t, "optional stop taken as an exact stop, without a pause (LinuxCNC's optional-stop switch off)");
+    else if (pause)
+      note("M0", t, "program pause: the stream holds a pause record there, at which `trajcore upload` waits for the "
+                    "operator (--pause-wait)");
     else
       note("M0", t, "program pause taken as an exact stop: the motion goes on without waiting for an operator "
                     "(--pause-as-stop)");
-    if (!out_.moves.empty()) out_.moves.back().exact_stop = true;
+    if (out_.moves.empty()) return;
+    out_.moves.back().exact_stop = true;
+    if (pause) out_.moves.back().pause_line = line_;
   }
 
   // G4 P: the machine stops at the end of the move before it and rests P

@@ -72,6 +72,10 @@ struct GcodeOptions {
   // are refused: a program that pauses for a manual tool change would run on
   // with the wrong tool.
   bool pauses_as_stops = false;
+  // M0 and M60 as program pauses (Move::pause): exact stops where the
+  // stream holds a pause record, at which `trajcore upload` waits for the
+  // operator. Not with pauses_as_stops.
+  bool pauses_wait = false;
 };
 
 // The moves one at a time, as the program is read (a line at a time): memory

@@ -29,6 +29,9 @@ struct Move {
   double tolerance = -1;   // path tolerance for this move, mm (G64 P); < 0: the job's --tol
   bool exact_stop = false; // the machine stops at the end of this move (G61, G61.1, rapids, a dwell, M1)
   double dwell = 0;        // seconds at rest at the end of this move (G4), after its exact stop
+  // > 0: a program pause follows (M0/M60 with --pause-wait; its line): the
+  // machine stops exactly (exact_stop) and waits there for the operator
+  int pause_line = 0;
   std::string where;       // "<file>:<line>" (G-code), "<file>: path <id>" (SVG), "<file>: entity <n>" (DXF)
 };
 

@@ -154,6 +154,37 @@ const fd::Compiled& SegmentCompiler::compile(const plan::TimeSegment& seg, size_
   return c_;
 }
 
+void mark_pauses(std::vector<plan::TimeSegment>& segs, const std::vector<plan::TickSample>& ts, long long k_base,
+                 int n, const std::vector<JobConfig::PauseAt>& pauses, double length) {
+  const double tol = 1e-9 * std::max(1.0, length);
+  auto rests_at = [&](size_t i, double s) { return std::fabs(ts[i].v) < 1e-9 && std::fabs(ts[i].s - s) <= tol; };
+  for (const JobConfig::PauseAt& pz : pauses) {
+    size_t i = 0;
+    while (i < ts.size() && !rests_at(i, pz.s)) ++i;
+    size_t j = i;
+    while (j + 1 < ts.size() && rests_at(j + 1, pz.s)) ++j;
+    // the segment's last sample (the one the board holds while it waits)
+    // and the next segment's first both within the rest
+    const long long lo = (k_base + static_cast<long long>(i)) * n, hi = (k_base + static_cast<long long>(j)) * n;
+    auto ends_in_rest = [&](const plan::TimeSegment& sg) {
+      const long long e = sg.k0 + static_cast<long long>(sg.K);
+      return e - 1 >= lo && e <= hi;
+    };
+    const auto it = i < ts.size() ? std::find_if(segs.begin(), segs.end(), ends_in_rest) : segs.end();
+    if (it == segs.end())
+      throw PlanError("program pause at line " + std::to_string(pz.line) + " (arc length " + util::num(pz.s) +
+                      "): no segment of the fit ends where the plan rests there");
+    it->pause_line = pz.line;
+  }
+}
+
+std::vector<stream::Pause> pauses_of(const JobResult& r) {
+  std::vector<stream::Pause> v;
+  for (size_t i = 0; i + 1 < r.segments.size(); ++i)
+    if (r.segments[i].pause_line > 0) v.push_back({i + 1, static_cast<uint32_t>(r.segments[i].pause_line)});
+  return v;
+}
+
 void engine_pieces(const plan::TimeSegment& seg, uint32_t kmax, double h, std::vector<plan::TimeSegment>& out) {
   const uint64_t K = seg.K;
   const uint64_t pieces = (K + kmax - 1) / kmax;
@@ -163,6 +194,7 @@ void engine_pieces(const plan::TimeSegment& seg, uint32_t kmax, double h, std::v
     plan::TimeSegment p = seg;
     p.k0 = seg.k0 + static_cast<long long>(a);
     p.K = static_cast<uint32_t>(b - a);
+    if (i + 1 < pieces) p.pause_line = 0;  // the pause follows the last piece
     if (a > 0) {
       // Taylor shift to tau0 = a h by repeated synthetic division
       const double tau0 = static_cast<double>(a) * h;
@@ -212,6 +244,7 @@ JobResult run_job(const plan::Path& p, const JobConfig& cfg, const Progress& pro
   r.moves_reused = fit.moves_reused;
   r.fit_ticks = fit.fit_ticks;
   r.fit_failures = fit.fit_failures;
+  mark_pauses(fit.segments, r.ticks, 0, m.fit_ticks(), cfg.pauses, p.length());
   const long long last = (static_cast<long long>(r.ticks.size()) - 1) * n;  // the end, on the engine's tick
   const uint32_t kmax = m.longest_segment();
   r.segments.reserve(fit.segments.size() + 1);

@@ -37,6 +37,14 @@ struct JobConfig {
   // fit ticks' samples only, and the job's memory does not grow with the
   // tick rate (`trajcore plan` without a report, the benchmarks).
   bool engine_ticks = true;
+  // Program pauses (run_job): at each, the path has a stop and a rest (a
+  // dwell of at least kPauseRest fit ticks), and the segment that ends there
+  // carries the pause (TimeSegment::pause_line; the stream's pause record).
+  struct PauseAt {
+    double s = 0;  // arc length of the stop
+    int line = 0;  // the program's line
+  };
+  std::vector<PauseAt> pauses;
   // Validates the limits and the machine; PlanError naming the field.
   void validate() const;
   // The planner options with the machine's tick period.
@@ -115,6 +123,20 @@ class SegmentCompiler {
 // most `kmax` ticks, each the polynomial re-expanded at its start (Taylor
 // shift: the pieces join where the polynomial does, up to rounding, which
 // the segment compiler's joints take). Appended to `out`.
+// The least rest at a program pause, in fit ticks: a segment of the fit
+// ends within it (mark_pauses).
+constexpr int kPauseRest = 2;
+
+// Marks, for each pause, the first segment of `segs` (k0 on the engine's
+// tick, `n` engine ticks a fit tick) that ends where the plan rests at the
+// pause's arc length; `ts[i]` is the plan at fit tick k_base + i. PlanError
+// naming the pause if no segment ends there.
+void mark_pauses(std::vector<plan::TimeSegment>& segs, const std::vector<plan::TickSample>& ts, long long k_base,
+                 int n, const std::vector<JobConfig::PauseAt>& pauses, double length);
+// The pause records of a run_job result: one before the record after each
+// marked segment.
+std::vector<stream::Pause> pauses_of(const JobResult& r);
+
 void engine_pieces(const plan::TimeSegment& seg, uint32_t kmax, double h, std::vector<plan::TimeSegment>& out);
 
 // One tick at `x`: the last segment of a motion, so that the core's last

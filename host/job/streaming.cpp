@@ -29,6 +29,7 @@ struct Window {
   std::deque<double> speeds;
   std::deque<bool> stops;
   std::deque<double> dwells;
+  std::deque<int> pause_lines;
 
   void push_back(CurvePrefetch::Item&& it) {
     curves.push_back(std::move(it.built));
@@ -37,6 +38,7 @@ struct Window {
     speeds.push_back(c.speed);
     stops.push_back(c.stop);
     dwells.push_back(c.dwell);
+    pause_lines.push_back(c.pause_line);
   }
   // Curve i's time at its speed, and its dwell: at least the time it takes.
   double time(size_t i, double feed) const {
@@ -73,11 +75,13 @@ struct Window {
       w.speeds.push_back(speeds.front());
       w.stops.push_back(stops.front());
       w.dwells.push_back(dwells.front());
+      w.pause_lines.push_back(pause_lines.front());
       curves.pop_front();
       splines.pop_front();
       speeds.pop_front();
       stops.pop_front();
       dwells.pop_front();
+      pause_lines.pop_front();
     }
     return w;
   }
@@ -88,6 +92,7 @@ struct Window {
     speeds.insert(speeds.begin(), w.speeds.begin(), w.speeds.end());
     stops.insert(stops.begin(), w.stops.begin(), w.stops.end());
     dwells.insert(dwells.begin(), w.dwells.begin(), w.dwells.end());
+    pause_lines.insert(pause_lines.begin(), w.pause_lines.begin(), w.pause_lines.end());
   }
   // Cuts curve i in two inside the knot span that holds its parameter middle
   // (a smooth place: no knot there).
@@ -108,6 +113,8 @@ struct Window {
     stops[i] = false;
     dwells.insert(dwells.begin() + at, dwells[i]);
     dwells[i] = 0;
+    pause_lines.insert(pause_lines.begin() + at, pause_lines[i]);
+    pause_lines[i] = 0;
   }
   // The curves' speeds and stops as speed caps on `path` (the window's
   // path), and their dwells (the window's end is a stop of its own plan).
@@ -128,6 +135,7 @@ struct PlainSource : StreamSource {
     c.speed = 0;
     c.stop = false;
     c.dwell = 0;
+    c.pause_line = 0;
     return src.next(c.curve, c.where);
   }
   CurveSource& src;
@@ -139,7 +147,7 @@ struct PlainSource : StreamSource {
 // millions of pieces): the front piece is the curve's parameter range
 // halved until it fits. The pieces join with the curve's own derivatives
 // (exact knot insertion), so the cuts are smooth junctions where a window
-// can commit. The last piece keeps the curve's stop and dwell.
+// can commit. The last piece keeps the curve's stop, dwell and pause.
 class LongCurveCutter : public StreamSource {
  public:
   LongCurveCutter(StreamSource& src, double feed, double piece_time)
@@ -168,6 +176,7 @@ class LongCurveCutter : public StreamSource {
     c.curve = std::move(front);
     c.stop = false;
     c.dwell = 0;
+    c.pause_line = 0;
     rest_->curve = geo::split_at(rest_->curve, u).second;
     return true;
   }
@@ -270,6 +279,13 @@ double time_at_arc_length(const plan::Plan& plan, double s) {
 
 }  // namespace
 
+SegmentSink write_to(stream::StreamWriter& w) {
+  return [&w](const fd::Compiled& c, const plan::TimeSegment& seg) {
+    w.add({c.ticks, c.regs});
+    if (seg.pause_line > 0) w.pause(static_cast<uint32_t>(seg.pause_line));
+  };
+}
+
 StreamStats run_streaming(CurveSource& src, const JobConfig& cfg, const StreamOptions& so, const SegmentSink& sink,
                           const Progress& progress) {
   PlainSource plain(src);
@@ -357,6 +373,10 @@ WindowPlan plan_window(Window& win, const Carry& in, size_t commit_max, bool las
       plan::append_ticks_range(path, plan, h, in.T0, k_end + 1, k_ahead, out, in.k_org);
     };
   PlanFitResult fit = plan_and_fit(req, ts);
+  std::vector<JobConfig::PauseAt> pauses;  // of the committed curves: their rests are committed with them
+  for (size_t i = 0; i < ncommit; ++i)
+    if (win.pause_lines[i] > 0) pauses.push_back({path.offset(i + 1), win.pause_lines[i]});
+  mark_pauses(fit.segments, ts, req.k_base, cfg.machine.fit_ticks(), pauses, path.length());
   wp.repairs = fit.repairs;
   wp.ticks = ts.size();
 

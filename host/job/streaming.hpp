@@ -30,6 +30,7 @@ struct StreamCurve {
   double speed = 0;   // the speed over this curve, units/s; 0: the feed limit (Limits::feed)
   bool stop = false;  // the machine stops exactly at its end
   double dwell = 0;   // and rests there this many seconds (G4)
+  int pause_line = 0; // > 0: a program pause follows (its line): the segment that ends in the rest carries it
 };
 
 class StreamSource {
@@ -65,6 +66,8 @@ struct StreamStats {
 
 // Called for every compiled segment, in order.
 using SegmentSink = std::function<void(const fd::Compiled&, const plan::TimeSegment&)>;
+// The sink that writes each segment to `w`, and the program pause after it.
+SegmentSink write_to(stream::StreamWriter& w);
 
 // Each window plans its curves with their speeds as speed caps and their
 // stops as caps of speed 0 (as toolpath_plan does for a whole toolpath).

@@ -124,7 +124,12 @@ ToolpathPlan toolpath_plan(const input::Toolpath& original, const JobConfig& cfg
       caps.push_back(plan::stop_cap(s1, r.path.length()));
       ++r.stops;
     }
-    if (tp.moves[i].dwell > 0) r.cfg.plan.dwells.push_back({s1, tp.moves[i].dwell});
+    // a pause rests at least kPauseRest fit ticks, so that a segment ends within the rest (mark_pauses)
+    const double dwell = tp.moves[i].pause_line > 0 && !last
+                             ? std::max(tp.moves[i].dwell, kPauseRest * cfg.machine.fit_period())
+                             : tp.moves[i].dwell;
+    if (dwell > 0) r.cfg.plan.dwells.push_back({s1, dwell});
+    if (tp.moves[i].pause_line > 0 && !last) r.cfg.pauses.push_back({s1, tp.moves[i].pause_line});
   }
   return r;
 }

@@ -96,6 +96,7 @@ void ToolpathStream::blend_next_chunk() {
       first.curve = std::move(halves.first);
       first.exact_stop = false;
       first.dwell = 0;
+      first.pause_line = 0;
       m.curve = std::move(halves.second);
       for (size_t i = 0; i < j; ++i) part.moves.push_back(std::move(pending_[i]));
       part.moves.push_back(std::move(first));
@@ -130,8 +131,13 @@ void ToolpathStream::blend_next_chunk() {
     c.speed = std::min(v, cfg_.limits.feed);
     c.stop = m.exact_stop;
     c.dwell = m.dwell;
-    (rapid ? totals_.rapid_curves : totals_.feed_curves)++;
     const bool last = ended_ && pending_.empty() && &m == &b.moves.back();
+    if (m.pause_line > 0 && !last) {  // a rest of kPauseRest fit ticks at least (mark_pauses)
+      c.pause_line = m.pause_line;
+      ++totals_.pauses;
+      c.dwell = std::max(c.dwell, kPauseRest * cfg_.machine.fit_period());
+    }
+    (rapid ? totals_.rapid_curves : totals_.feed_curves)++;
     if (m.exact_stop && !last) ++totals_.stops;  // the path's end is a stop anyway (as toolpath_plan counts)
     ready_.push_back(std::move(c));
   }

@@ -47,6 +47,7 @@ class ToolpathStream : public StreamSource {
   struct Totals {
     size_t moves = 0, chunks = 0, split_moves = 0;  // moves read; chunks blended; moves cut between chunks
     size_t feed_curves = 0, rapid_curves = 0, stops = 0;
+    size_t pauses = 0;  // program pauses (--pause-wait), each a pause record in the stream
     int corners_blended = 0, wide_blends = 0;
     double blend_deviation = 0;  // largest, mm
     size_t corner_stops = 0, faster_stops = 0;  // corners left as stops; of them, faster so

@@ -253,12 +253,12 @@ TEST(Gcode, Refusals) {
        "t.ngc:2: L4111111111111111111111: the NURBS order must be an integer from 3 to 16"},
       {"F1\nG5.2 X1 Y0 P1 L17\nX2 Y2 P1\nG5.3\nM2\n", "t.ngc:2: L17: the NURBS order must be an integer from 3 to 16"},
       {"F1\nG18 G5 X1 I1 J0 P0 Q1\nM2\n", "t.ngc:2: G5: splines must be in the XY plane (G17)"},
-      {"M0\nM2\n", "t.ngc:1: M0: program pause (M0/M60) is not supported: the program runs with no operator to resume it "
-                   "(M1, the optional stop, is taken as an exact stop; --pause-as-stop takes M0/M60 so too, and the "
-                   "machine then goes on without waiting)"},
-      {"F1\nG1 X1\nM60\nM2\n", "t.ngc:3: M60: program pause (M0/M60) is not supported: the program runs with no "
-                               "operator to resume it (M1, the optional stop, is taken as an exact stop; --pause-as-stop "
-                               "takes M0/M60 so too, and the machine then goes on without waiting)"},
+      {"M0\nM2\n", "t.ngc:1: M0: program pause (M0/M60) is not supported without --pause-wait (a pause at which "
+                   "`trajcore upload` waits for the operator) or --pause-as-stop (an exact stop: the machine goes on "
+                   "without waiting); M1, the optional stop, is taken as an exact stop"},
+      {"F1\nG1 X1\nM60\nM2\n", "t.ngc:3: M60: program pause (M0/M60) is not supported without --pause-wait (a pause "
+                               "at which `trajcore upload` waits for the operator) or --pause-as-stop (an exact stop: "
+                               "the machine goes on without waiting); M1, the optional stop, is taken as an exact stop"},
       {"F1\nG1 X1 M1 M2\n", "t.ngc:2: M2: two M codes from the same modal group (M1)"},
       {"G1 X#100\nM2\n", "t.ngc:1: X#100: the parameter is not set by the program (trajcore reads no parameter file; "
                           "LinuxCNC would take it from its .var file)"},
@@ -661,6 +661,40 @@ TEST(Gcode, PauseAsStopIsAnExactStop) {
     }
   EXPECT_EQ(pause_notes, 1);
   EXPECT_EQ(refusal("F1\nG1 X1 M0 M1\nM2\n", opt), "t.ngc:2: M1: two M codes from the same modal group (M0)");
+}
+
+// --pause-wait: M0 and M60 are exact stops with a pause (the line of the M
+// word) on the move before them; M1 stays a plain exact stop; an M0 before
+// any move has nothing to stop and is noted.
+TEST(Gcode, PauseWaitMarksThePauseOnTheMoveBefore) {
+  traj::input::GcodeOptions opt;
+  opt.pauses_wait = true;
+  const Toolpath tp = read("G21 G90\nM0\nF600\nG1 X10\nT2 M6\nM0 (change the bit)\nG1 X10 Y10\nG1 X20 M60\n"
+                           "G1 X30 Y5\nM1\nG1 X40\nM2\n",
+                           opt);
+  ASSERT_EQ(tp.moves.size(), 5u);
+  const bool stop[5] = {true, false, true, true, false};
+  const int pause[5] = {6, 0, 8, 0, 0};
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_EQ(tp.moves[i].exact_stop, stop[i]) << tp.moves[i].where;
+    EXPECT_EQ(tp.moves[i].pause_line, pause[i]) << tp.moves[i].where;
+  }
+  int pause_notes = 0, first_notes = 0;
+  for (const std::string& n : tp.notes) {
+    if (n.find("`trajcore upload` waits for the operator") != std::string::npos) {
+      ++pause_notes;
+      EXPECT_EQ(n.rfind("t.ngc:6: M0: ", 0), 0u) << n;
+    }
+    if (n.find("program pause before the first move ignored") != std::string::npos) {
+      ++first_notes;
+      EXPECT_EQ(n.rfind("t.ngc:2: M0: ", 0), 0u) << n;
+    }
+  }
+  EXPECT_EQ(pause_notes, 1);
+  EXPECT_EQ(first_notes, 1);
+  const std::string refused = refusal("F1\nG1 X1\nM0\nM2\n");
+  EXPECT_NE(refused.find("without --pause-wait (a pause at which `trajcore upload` waits"), std::string::npos)
+      << refused;
 }
 
 // One block's pecks are bounded as holes times pecks a hole (its moves are
