@@ -1,5 +1,7 @@
 #include "link_cmds.hpp"
 
+#include <fcntl.h>
+#include <poll.h>
 #include <signal.h>
 #include <unistd.h>
 
@@ -201,6 +203,52 @@ link::UploadOptions upload_options(const UploadArgs& a) {
   return o;
 }
 
+// The operator's go-ahead at a program pause: a line (Enter) on standard
+// input, or on the terminal when the stream comes from standard input. One
+// byte at a time, so that lines typed ahead answer one pause each.
+class PausePrompt {
+ public:
+  PausePrompt(bool stream_on_stdin, StatusLine& line) : line_(line) {
+    if (!stream_on_stdin) return;
+    fd_ = ::open("/dev/tty", O_RDONLY | O_CLOEXEC);
+    owned_ = fd_ >= 0;
+  }
+  ~PausePrompt() {
+    if (owned_) ::close(fd_);
+  }
+  PausePrompt(const PausePrompt&) = delete;
+  PausePrompt& operator=(const PausePrompt&) = delete;
+
+  bool operator()(const link::PauseAt& p) {
+    const std::string where = "program pause " + std::to_string(p.index) + " (line " + std::to_string(p.pause.line) + ")";
+    if (fd_ < 0)
+      throw link::UploadError(where + ": the board holds at rest, but the stream comes from standard input and there "
+                              "is no terminal to confirm on; `--resume` continues the job");
+    if (asked_ != p.index) {
+      asked_ = p.index;
+      line_.say(where + ": the machine holds at rest (" + (::isatty(fd_) ? "press Enter" : "a line on standard input") +
+                " to go on; Ctrl-C stops, `--resume` continues later)");
+    }
+    for (;;) {
+      pollfd q{fd_, POLLIN, 0};
+      if (::poll(&q, 1, 0) <= 0) return false;
+      char c = 0;
+      const ssize_t n = ::read(fd_, &c, 1);
+      if (n == 0)
+        throw link::UploadError(where + ": input ended before the operator's go-ahead; the board holds at rest, "
+                                "`--resume` continues the job");
+      if (n < 0) return false;
+      if (c == '\n') return true;
+    }
+  }
+
+ private:
+  StatusLine& line_;
+  int fd_ = 0;
+  bool owned_ = false;
+  uint64_t asked_ = 0;
+};
+
 // Keys only from a terminal this process has in the foreground, and not when
 // the stream comes from standard input.
 bool keyboard_wanted(const UploadArgs& a) {
@@ -245,19 +293,23 @@ int upload_command(const UploadArgs& a) {
                  "upload: note: tick period %g ms: the board's step edges are within 10 us of the motion's "
                  "boundary crossings only for engine ticks up to 1 ms (leave out --max-engine-tick 0)\n",
                  h.period * 1e3);
+  PausePrompt prompt(a.input == "-", line);
+  o.pause_confirmed = [&](const link::PauseAt& p) { return prompt(p); };
   const auto r = link::upload(*port, src, o, [&](const link::UploadProgress& p) { line.show(p, false); });
   line.show(r.progress, true);
   std::fprintf(stderr, "\n");
   // STATUS counts servo ticks: with time scaling 2^p engine ticks each at s = 1
   const double motion = double(r.progress.status.ticks_played) * (ts.on ? ts.servo_period : h.period);
   std::printf("upload: %llu segments%s to %s in %.2f s (%.0f segments/s), %u played, %.3f s of motion; re-sends "
-              "%llu, NAKs %llu, timeouts %llu; board: bad frames %u, out of order %u, underruns %u\n",
+              "%llu, NAKs %llu, timeouts %llu; board: bad frames %u, out of order %u, underruns %u (%llu at program "
+              "pauses)\n",
               static_cast<unsigned long long>(r.records - r.first_seq),
               r.first_seq ? strf(" (resumed at %llu)", static_cast<unsigned long long>(r.first_seq)).c_str() : "",
               port->name().c_str(), r.seconds, double(r.records - r.first_seq) / std::max(r.seconds, 1e-9),
               r.progress.status.segments_played, motion, static_cast<unsigned long long>(r.progress.resends),
               static_cast<unsigned long long>(r.progress.naks), static_cast<unsigned long long>(r.progress.timeouts),
-              r.progress.status.bad_frames, r.progress.status.out_of_order, r.progress.status.underruns);
+              r.progress.status.bad_frames, r.progress.status.out_of_order, r.progress.status.underruns,
+              static_cast<unsigned long long>(r.progress.pauses));
   return 0;
 }
 

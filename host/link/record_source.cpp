@@ -35,9 +35,11 @@ bool RecordSource::read_coarse() {
 }
 
 bool RecordSource::next(Bytes& rec) {
+  pause_.reset();
   if (!retick_) {
     if (!read_coarse()) return false;
     rec = reader_->raw();
+    pause_ = reader_->pause();
     return true;
   }
   while (pending_next_ == pending_.size()) {
@@ -49,7 +51,9 @@ bool RecordSource::next(Bytes& rec) {
     } catch (const stream::StreamError& e) {
       throw LinkError(name_ + ": " + e.what());
     }
+    coarse_pause_ = reader_->pause();
   }
+  if (pending_next_ == 0) pause_ = coarse_pause_;  // before the first fine record of the paused one
   rec = stream::encode_record(retick_->header(), pending_[pending_next_++]);
   ++given_;
   return true;

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "link/frame.hpp"
@@ -36,6 +37,9 @@ class RecordSource {
   // (the reader's message: byte and segment) for a damaged or refused record.
   bool next(Bytes& rec);
   uint64_t records() const { return retick_ ? given_ : reader_->records(); }
+  // The program pause before the record next() gave last (the stream's pause
+  // record; its `before` is the stream's own segment number, not the link's).
+  const std::optional<stream::Pause>& pause() const { return pause_; }
 
  private:
   bool read_coarse();  // the stream's next record into rec_; false at its end
@@ -48,6 +52,7 @@ class RecordSource {
   std::vector<stream::Record> pending_;  // fine records of the last coarse one, not yet given
   size_t pending_next_ = 0;
   uint64_t given_ = 0;
+  std::optional<stream::Pause> pause_, coarse_pause_;
 };
 
 }  // namespace traj::link

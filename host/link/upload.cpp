@@ -270,6 +270,7 @@ class Uploader : public FeedPort {
     }
     if (!watching_) return;
     if (s.flags & status_flag::kTickError) fail("the board reports a tick error (ticks faster than the engine)");
+    if (holds_at_pause(s)) return;
     if ((s.flags & status_flag::kUnderrunHalt) || s.underruns != underruns_at_start_)
       fail("the board underran after " + std::to_string(s.segments_played) + " segments played (FIFO empty before "
            "the job's end: the host or the link was too slow; " + std::to_string(s.underruns) + " underruns, " +
@@ -416,6 +417,7 @@ class Uploader : public FeedPort {
         prog_.stream_done = true;
         return false;
       }
+      if (src_.pause()) note_pause(*src_.pause(), base_ + uint32_t(window_.size()));
       window_.push_back(std::move(rec));
       prog_.read = src_.records();
     }
@@ -434,13 +436,66 @@ class Uploader : public FeedPort {
     bool sent = false;
     const uint32_t cap = seq_diff(limit, allowed_end_) < 0 ? limit : allowed_end_;
     while (seq_diff(cap, send_next_) > 0) {
-      if (!fill_window(send_next_ + 1)) break;
+      if (!fill_window(send_next_ + 1) || at_barrier()) break;
       port_.write(encode_frame(Type::kSegment, send_next_, window_[send_next_ - base_]));
       ++send_next_;
       if (seq_diff(send_next_, sent_end_) > 0) sent_end_ = send_next_;
       sent = true;
     }
     return sent;
+  }
+
+  // ---- program pauses ------------------------------------------------
+
+  // The record at `seq` follows a pause: nothing from it on is sent before
+  // the board has played up to the pause and the operator said go.
+  void note_pause(const stream::Pause& p, uint32_t seq) {
+    if (ts_.on)
+      stream_failed("the stream has a program pause (line " + std::to_string(p.line) + ") and time scaling: the "
+                    "board's time-scale unit would hold short of the pause's stop");
+    pause_ = PauseAt{p, seq, prog_.pauses + 1};
+  }
+
+  // Sending has reached a pause the board has not yet held at.
+  bool at_barrier() const { return pause_ && send_next_ == pause_->link_seq; }
+
+  // The board holds at the pause: it played every segment before it and ran
+  // dry there (the underrun halt), at rest.
+  bool holds_at_pause(const Status& s) const {
+    return pause_ && s.next_seq == pause_->link_seq && s.segments_played == pause_->link_seq &&
+           (s.flags & status_flag::kUnderrunHalt) && !(s.flags & status_flag::kPlaying);
+  }
+
+  // Everything before the pause is stored: waits until the board holds
+  // there, then for the operator, then refills the FIFO and resumes.
+  void wait_at_pause() {
+    for (;;) {
+      check_interrupt();
+      const Status s = query_status();
+      report();
+      if (holds_at_pause(s)) break;
+      pump(20);
+    }
+    const std::string line = std::to_string(pause_->pause.line);
+    if (!o_.pause_confirmed)
+      fail("the board holds at rest at the program pause at line " + line + " and no one is here to confirm it; "
+           "`--resume` continues the job");
+    prog_.at_pause = true;
+    report();
+    while (!o_.pause_confirmed(*pause_)) {
+      check_interrupt();
+      pump(20);  // the board's periodic STATUS, kept current
+      report();
+    }
+    prog_.at_pause = false;
+    ++prog_.pauses;
+    // STATUS frames still show the halt until the RESUME: not watched until
+    // the board plays again (as a --resume from an underrun halt)
+    watching_ = false;
+    underruns_at_start_ = prog_.status.underruns;  // the pause's own underrun is no failure
+    pause_.reset();
+    prefill();
+    start_playback(Type::kResume);
   }
 
   bool all_sent_and_stored() const { return prog_.stream_done && window_.empty() && send_next_ == base_; }
@@ -627,7 +682,7 @@ class Uploader : public FeedPort {
       check_interrupt();
       poll_controls();
       send_allowed(limit);
-      const bool full = seq_diff(send_next_, limit) >= 0 || seq_diff(send_next_, allowed_end_) >= 0;
+      const bool full = seq_diff(send_next_, limit) >= 0 || seq_diff(send_next_, allowed_end_) >= 0 || at_barrier();
       if (send_next_ == base_ && (full || prog_.stream_done)) break;
       wait_answers(last);
       report();
@@ -658,6 +713,10 @@ class Uploader : public FeedPort {
     while (!all_sent_and_stored()) {
       check_interrupt();
       poll_controls();
+      if (at_barrier() && send_next_ == base_) {
+        wait_at_pause();
+        continue;
+      }
       send_allowed(ahead_limit());
       wait_answers(last);
       // blocked by credits (or --ahead) and nothing in flight: ask, the board may have made room (or played on)
@@ -719,6 +778,7 @@ class Uploader : public FeedPort {
   UploadProgress prog_;
   Config config_;
   TimeScaleSetup ts_;
+  std::optional<PauseAt> pause_;  // the next pause, once its record was read
 };
 
 }  // namespace

@@ -23,6 +23,13 @@
 
 namespace traj::link {
 
+// A program pause the board holds at.
+struct PauseAt {
+  stream::Pause pause;    // as the stream holds it (its segment number, the program's line)
+  uint32_t link_seq = 0;  // the link's sequence number of the segment after it (re-ticked: the fine one)
+  uint64_t index = 0;     // 1 for the job's first pause, 2 for the next...
+};
+
 struct UploadOptions {
   double clock_hz = 0;             // the board's core clock, Hz; 0: as its STATUS reports (given: checked against it)
   std::vector<int> step_shift;     // per axis (one value: every axis); empty: 0
@@ -40,6 +47,13 @@ struct UploadOptions {
   std::optional<double> servo_period_s;  // --servo-period: engine tick x 2^p (default: the largest <= 1 ms)
   bool auto_resume = true;               // resume by itself after a starved hold (--no-auto-resume)
   FeedControl* feed_control = nullptr;   // live controls (keyboard, --control), polled every turn
+  // Program pauses (the stream's pause records): called about every 20 ms
+  // while the board holds at one (it played every segment before the pause
+  // and stands at rest, in its underrun halt) until it returns true: the
+  // operator's go-ahead. It may throw UploadError (no one to confirm). Unset:
+  // a stream with a pause is refused at the pause, before the board reaches
+  // it.
+  std::function<bool(const PauseAt&)> pause_confirmed;
 };
 
 // Thrown with a message naming what failed; the board is left stopped or
@@ -96,6 +110,8 @@ struct UploadProgress {
   Status status;              // the latest STATUS
   bool time_scaling = false;
   FeedState feed;             // time scaling: the feed sent and the board's (from `status`)
+  uint64_t pauses = 0;        // program pauses the board held at and went on from
+  bool at_pause = false;      // the board holds at a pause, waiting for the operator
 };
 
 struct UploadResult {

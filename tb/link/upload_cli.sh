@@ -11,6 +11,11 @@
 #   loopback board (no time-scale unit): its NAK 4 to CONFIG named with the
 #   values, nothing played, the control socket removed; the time-scaling
 #   options refused by name.
+# pauses (upload.cli.program_pauses): a G-code program with two M0 planned
+#   with --pause-wait (whole and streamed; refused with --time-scale), uploaded to a
+#   paced loopback board with the operator's two go-aheads on standard input:
+#   both pauses named with their lines, their underruns no failure, every
+#   record played once; with no go-ahead left the tool stops at the pause.
 set -euo pipefail
 T=$1
 dir=$2
@@ -18,6 +23,51 @@ mode=${3:-pipe}
 assets=$(cd "$(dirname "$0")/../../host/assets" && pwd)
 rm -rf "$dir" && mkdir -p "$dir" && cd "$dir"
 
+if [ "$mode" = pauses ]; then
+  prog=$(cd "$(dirname "$0")/../input/gcode" && pwd)/tool_change_pause.ngc
+  if "$T" plan "$prog" --pause-wait --time-scale 1.2 -o bad.trj > /dev/null 2> bad.txt; then
+    echo "accepted: plan --pause-wait --time-scale"
+    exit 1
+  fi
+  grep -q -- "--pause-wait with --time-scale is not supported" bad.txt && test ! -e bad.trj
+  "$T" plan "$prog" --pause-wait -o plan.trj > plan.txt 2>&1
+  # the records without the two 16-byte pause records (type 0xFE)
+  records() {
+    od -An -v -tu1 -w1 "$1" | LC_ALL=C awk 'NR > 64 { b[n++] = $1 } END {
+      for (i = 0; i < n - 16; ) { if (b[i] == 254) { i += 16; p++; continue } for (k = 0; k < 232; k++) printf "%c", b[i++] }
+      print p > "/dev/stderr" }'
+  }
+  records plan.trj > records.bin 2> pauses.txt
+  test "$(cat pauses.txt)" = 2 || { echo "pause records: $(cat pauses.txt)"; exit 1; }
+  "$T" plan "$prog" --pause-wait --window 16 -o streamed.trj > streamed.txt 2>&1
+  records streamed.trj > /dev/null 2> pauses.txt
+  test "$(cat pauses.txt)" = 2 || { echo "pause records, streamed: $(cat pauses.txt)"; exit 1; }
+  board=
+  trap '[ -n "$board" ] && kill "$board" 2>/dev/null; true' EXIT
+  "$T" board --loopback --speed 20 --once --played played.bin > port 2> board.txt &
+  board=$!
+  for _ in $(seq 50); do [ -s port ] && break; sleep 0.1; done
+  (sleep 0.5; echo; sleep 0.5; echo) | "$T" upload plan.trj --port "$(cat port)" > up.txt 2> up.err ||
+    { cat up.err; exit 1; }
+  wait "$board"
+  board=
+  cat up.txt
+  grep -q "underruns 2 (2 at program pauses)" up.txt
+  grep -q "program pause 1 (line 12): the machine holds at rest" up.err
+  grep -q "program pause 2 (line 24): the machine holds at rest" up.err
+  cmp records.bin played.bin
+  # one go-ahead only: the tool stops at the second pause, the board holding
+  "$T" board --loopback --speed 20 --played played2.bin > port2 2> board2.txt &
+  board=$!
+  for _ in $(seq 50); do [ -s port2 ] && break; sleep 0.1; done
+  if echo | "$T" upload plan.trj --port "$(cat port2)" > up2.txt 2> up2.err; then
+    echo "the upload went past a pause with no go-ahead"
+    exit 1
+  fi
+  grep -q "program pause 2 (line 24): input ended before the operator's go-ahead; the board holds at rest" up2.err
+  echo "pauses: both pauses held and confirmed, the board played the $(($(stat -c %s records.bin) / 232)) records"
+  exit 0
+fi
 if [ "$mode" = time_scale ]; then
   "$T" plan "$assets/butterfly_nurbs.json" --time-scale 1.2 --period 3.125e-5 -o ts.trj > ts.txt 2>&1
   "$T" plan --raster 5 -o plain.trj > plain.txt 2>&1

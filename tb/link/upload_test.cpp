@@ -16,6 +16,10 @@
 #include <thread>
 
 #include "input/raster.hpp"
+#include "input/toolpath_file.hpp"
+#include "job/toolpath_job.hpp"
+#include "job/toolpath_stream.hpp"
+#include "job/job.hpp"
 #include "job/streaming.hpp"
 #include "link/board_server.hpp"
 #include "link/upload.hpp"
@@ -52,8 +56,7 @@ const std::string& raster_stream(size_t pieces, const ScaleHeader& ts = {}) {
   h.scale_accel = ts.accel;
   if (ts.period > 0) h.period = ts.period;  // records count ticks: any tick period plays them
   stream::StreamWriter w(path, h);
-  job::run_streaming(src, cfg, job::StreamOptions{},
-                     [&](const fd::Compiled& c, const plan::TimeSegment&) { w.add({c.ticks, c.regs}); });
+  job::run_streaming(src, cfg, job::StreamOptions{}, job::write_to(w));
   w.finish();
   return (made[key] = std::move(file))->path;
 }
@@ -907,6 +910,133 @@ TEST(Upload, ResumeWithTimeScalingOnABoardWithoutItIsNamed) {
   }
   rig.disconnect();
   EXPECT_EQ(rig.played().size(), before);
+}
+
+// ---- program pauses ------------------------------------------------------
+
+// A G-code program with two program pauses (M0 and M60), read with
+// --pause-wait and planned as `trajcore plan` does, whole or streamed in
+// windows of 4 curves, into a stream file.
+const std::string& pause_stream(bool streamed) {
+  static test::TmpFile files[2] = {test::TmpFile("traj_link_pauses.trj"), test::TmpFile("traj_link_pauses_w4.trj")};
+  static bool made[2] = {false, false};
+  const std::string& path = files[streamed].path;
+  if (made[streamed]) return path;
+  test::TmpFile prog("traj_link_pauses.ngc");
+  prog.write("G21 G90 G17\nG1 X10 F600\nM0 (tool change)\nG1 X10 Y10\nG1 X20 Y10\nM60\nG1 X0 Y0\nM2\n");
+  input::GcodeOptions go;
+  go.pauses_wait = true;
+  const input::Toolpath tp = input::read_toolpath(prog.path, input::FileKind::kGcode, go);
+  job::JobConfig cfg;
+  if (streamed) {
+    job::ToolpathStream src(tp, cfg);
+    job::StreamOptions so;
+    so.window = 4;
+    so.commit = 2;
+    stream::StreamWriter w(path, cfg.machine.header());
+    job::run_streaming(src, src.config(), so, job::write_to(w));
+    w.finish();
+  } else {
+    const job::ToolpathPlan tpp = job::toolpath_plan(tp, cfg);
+    const job::JobResult res = job::run_job(tpp.path, tpp.cfg);
+    stream::write_file(path, res.header, job::records_of(res), job::pauses_of(res));
+  }
+  made[streamed] = true;
+  return path;
+}
+
+// The position step from the last sample of record `before - 1` (the one the
+// board holds while it waits) to the first of record `before`, in units,
+// from the exact registers: r1 after K - 1 ticks, sum C(K-1, i) r[i+1].
+double step_at(const stream::ReadResult& rd, size_t before, int axis) {
+  const stream::Record& r = rd.records.at(before - 1);
+  const auto& reg = r.regs.at(static_cast<size_t>(axis));
+  mpz_class d = 0, c = 1;  // C(K-1, i)
+  const unsigned long n = r.ticks - 1;
+  for (size_t i = 0; i + 1 < reg.size(); ++i) {
+    d += c * reg[i + 1];
+    c = c * static_cast<unsigned long>(n - i) / static_cast<unsigned long>(i + 1);
+  }
+  return std::ldexp(d.get_d(), -(rd.header.frac_bits + rd.header.guard_bits));
+}
+
+// The stream holds both pauses where the machine rests (the step from the
+// held sample to the next is below 1e-9 mm, where the feed moves 0.01 mm a
+// tick); the board plays up to each and holds there, stores nothing beyond
+// it, until the operator says go; then every record is played once, and the
+// two underruns of the pauses are no failure.
+class UploadPauses : public ::testing::TestWithParam<bool> {};  // streamed
+
+TEST_P(UploadPauses, HoldTheBoardAtRestUntilTheOperatorSaysGo) {
+  const std::string& path = pause_stream(GetParam());
+  const stream::ReadResult rd = stream::read_file(path);
+  ASSERT_TRUE(rd.complete) << rd.error;
+  ASSERT_EQ(rd.pauses.size(), 2u);
+  EXPECT_EQ(rd.pauses[0].line, 3u);
+  EXPECT_EQ(rd.pauses[1].line, 6u);
+  for (const auto& p : rd.pauses)
+    for (int a = 0; a < rd.header.axes; ++a) EXPECT_LT(std::fabs(step_at(rd, p.before, a)), 1e-9) << p.before;
+
+  BoardOptions bo = fast_board(64);
+  bo.speed = 20;  // paced: an unpaced board plays only when its FIFO fills
+  Rig rig(bo, {});
+  RecordSource src(path);
+  UploadOptions o = tool();
+  o.status_period_s = 0.01;
+  Status latest;
+  std::vector<std::pair<uint32_t, int>> asked;  // link seq, calls
+  o.pause_confirmed = [&](const PauseAt& p) {
+    EXPECT_EQ(latest.segments_played, p.link_seq);
+    EXPECT_EQ(latest.next_seq, p.link_seq);
+    EXPECT_TRUE(latest.flags & status_flag::kUnderrunHalt);
+    EXPECT_EQ(rig.played().size(), p.link_seq);
+    if (asked.empty() || asked.back().first != p.link_seq) asked.push_back({p.link_seq, 0});
+    return ++asked.back().second >= 10;  // about 0.2 s of waiting
+  };
+  const auto r = upload(rig.port(), src, o, [&](const UploadProgress& p) {
+    if (p.have_status) latest = p.status;
+  });
+  rig.disconnect();
+  ASSERT_EQ(asked.size(), 2u);
+  EXPECT_EQ(asked[0].first, rd.pauses[0].before);
+  EXPECT_EQ(asked[1].first, rd.pauses[1].before);
+  EXPECT_EQ(r.progress.pauses, 2u);
+  EXPECT_EQ(r.progress.status.underruns, 2u);
+  EXPECT_TRUE(rig.played() == file_records(path));
+}
+
+INSTANTIATE_TEST_SUITE_P(WholeAndStreamed, UploadPauses, ::testing::Values(false, true),
+                         [](const ::testing::TestParamInfo<bool>& i) { return i.param ? "Streamed" : "Whole"; });
+
+// With no one to confirm, the tool stops at the first pause, the board
+// holding there at rest, and says so; --resume then waits at the same pause.
+TEST(Upload, ProgramPauseWithNoOneToConfirmIsNamed) {
+  const std::string& path = pause_stream(false);
+  const stream::ReadResult rd = stream::read_file(path);
+  BoardOptions bo = fast_board(64);
+  bo.speed = 20;
+  Rig rig(bo, {});
+  try {
+    run(rig, path);
+    FAIL() << "went past a pause with no one to confirm it";
+  } catch (const UploadError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("holds at rest at the program pause at line 3 and no one is here to confirm it"),
+              std::string::npos) << m;
+  }
+  EXPECT_EQ(rig.played().size(), rd.pauses.at(0).before);
+  rig.connect();
+  UploadOptions again = tool();
+  again.resume = true;
+  int calls = 0;
+  again.pause_confirmed = [&](const PauseAt& p) {
+    EXPECT_EQ(rig.played().size(), p.link_seq);
+    return ++calls % 3 == 0;
+  };
+  run(rig, path, again);
+  rig.disconnect();
+  EXPECT_EQ(calls, 6);
+  EXPECT_TRUE(rig.played() == file_records(path));
 }
 
 }  // namespace
