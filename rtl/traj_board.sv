@@ -129,8 +129,9 @@ module traj_board #(
   logic [15:0]              ts_count;
   logic                     ts_starved, ts_held, ts_err;
   // engine
-  logic                     tick, underrun, seg_done, tick_err;
+  logic                     tick, seg_done, tick_err;
   logic                     sample_valid /* verilator public_flat_rd */;  // the engine's (the simulated board times it)
+  logic                     underrun /* verilator public_flat_rd */;      // with sample_valid: a held sample, no new one
   logic [Axes*OutWidth-1:0] sample, status_sample;
   logic [Axes*OutWidth-1:0] eng_we, eng_wd;  // traj_fd_tm's sample write port (the shared output register)
   logic [TsAddrW-1:0]       ts_word_addr;  // the unit's word of the engine's sample RAM

@@ -37,6 +37,7 @@ struct SimulatedBoard::Rtl {
   bool unit_busy() const { return top->rootp->traj_board__DOT__g_scale__DOT__ts_busy; }
   bool engine_tick() const { return top->rootp->traj_board__DOT__g_scale__DOT__ts_eng_tick; }
   bool engine_valid() const { return top->rootp->traj_board__DOT__sample_valid; }
+  bool engine_underrun() const { return top->rootp->traj_board__DOT__underrun; }
   // axis a of the output sample, sign-extended (OutWidth = Width - GuardBits bits)
   int64_t out_sample(int a) const {
     const int w = BoardBuild::kWidth - BoardBuild::kGuardBits;
@@ -86,6 +87,10 @@ void SimulatedBoard::clock(link::Bytes& out) {
   t.clk_i = 0;
   t.eval();
   if (rtl_->tick() && t.rst_ni) ticks_.push_back(cycle_);
+  // the tick each engine sample answers (a tick that finds the FIFO empty
+  // at a segment end, an underrun, answers none)
+  if (rtl_->engine_valid() && !rtl_->engine_underrun() && t.rst_ni && !ticks_.empty() && !time_scaling())
+    sample_ticks_.push_back(ticks_.back());
   if (keep_samples_ && rtl_->out_valid() && t.rst_ni) {
     for (int a = 0; a < BoardBuild::kAxes; ++a) samples_.push_back(rtl_->out_sample(a));
     sample_cycles_.push_back(cycle_);

@@ -66,6 +66,9 @@ class SimulatedBoard : public link::Board {
   void set_step_timing(StepTiming t);
   // The cycle of every tick strobe the engine received (its samples' times).
   const std::vector<uint64_t>& tick_cycles() const { return ticks_; }
+  // Without time scaling: the cycle of the tick each engine sample answered,
+  // one per sample (a tick at an underrun gives none: a program pause).
+  const std::vector<uint64_t>& sample_tick_cycles() const { return sample_ticks_; }
   // The board's hold pin (a button; with time scaling it holds as FEED's hold does).
   void set_hold_pin(bool on) { hold_pin_ = on; }
   bool hold_pin() const { return hold_pin_; }
@@ -114,7 +117,7 @@ class SimulatedBoard : public link::Board {
   UartPinWriter rx_;
   UartPinReader tx_;
   std::vector<StepDecoder> decoders_;
-  std::vector<uint64_t> ticks_;
+  std::vector<uint64_t> ticks_, sample_ticks_;
   link::FrameDecoder answers_, requests_;
   link::Config config_;
   link::Status status_;

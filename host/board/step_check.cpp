@@ -141,19 +141,22 @@ class AxisChecker {
 StepCheck check_steps(const stream::ReadResult& expected, const std::vector<int>& shifts,
                       const SimulatedBoard& board) {
   StepCheck c;
-  c.ticks_seen = board.tick_cycles().size();
+  // sample n at the tick it answered: a tick at an underrun (a program
+  // pause) answers none, and the ticks before and after it are its neighbours
+  const std::vector<uint64_t>& ticks = board.sample_tick_cycles();
+  c.ticks_seen = ticks.size();
   const int axes = std::min(expected.header.axes, BoardBuild::kAxes);
   c.axes.resize(axes);
   for (int a = 0; a < axes; ++a) {
     const auto s = predicted_samples(expected, a);
     c.ticks_expected = s.size();
-    AxisChecker(board.tick_cycles(), board.axis(a), shifts.at(a), c, c.axes[a]).run(s);
+    AxisChecker(ticks, board.axis(a), shifts.at(a), c, c.axes[a]).run(s);
     c.violations += board.axis(a).violations();
     if (board.axis(a).violations() && c.first_problem.empty())
       c.first_problem = "axis " + std::to_string(a) + ": " + board.axis(a).first_violation();
   }
   if (c.ticks_seen < c.ticks_expected && c.first_problem.empty())
-    c.first_problem = "the board ticked " + std::to_string(c.ticks_seen) + " times, the stream has " +
+    c.first_problem = "the board's engine gave " + std::to_string(c.ticks_seen) + " samples, the stream has " +
                       std::to_string(c.ticks_expected) + " ticks";
   return c;
 }
@@ -318,7 +321,7 @@ std::string describe(const StepCheck& c) {
                                  std::to_string(c.ticks_seen) + " servo ticks): " + (c.ok() ? "identical" : "DIFFERENT") +
                                  "\n"
                            : "step/dir pins decoded against the exact prediction of " + std::to_string(c.ticks_expected) +
-                                 " ticks (" + std::to_string(c.ticks_seen) + " ticks seen): " +
+                                 " ticks (" + std::to_string(c.ticks_seen) + " samples seen): " +
                                  (c.ok() ? "identical" : "DIFFERENT") + "\n";
   for (size_t a = 0; a < c.axes.size(); ++a) {
     const auto& x = c.axes[a];

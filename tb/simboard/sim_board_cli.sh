@@ -21,6 +21,12 @@
 #           equal the path through its re-timed output, which lies on the
 #           stream's exact prediction and ends on its last sample, and a
 #           starved hold happened and resumed.
+#   pauses: a G-code program with two M0 planned with --pause-wait: the
+#           board plays up to each pause and holds there at rest until the
+#           operator's go-ahead (a line on the tool's standard input), then
+#           goes on: the pins equal the prediction, the step edges as soon
+#           after their crossings as without pauses (each sample timed by
+#           the tick it answered, the pause's underrun tick none).
 set -euo pipefail
 T=$1
 dir=$2
@@ -32,6 +38,9 @@ if [ "$mode" = timescale ]; then
   printf 'G21 G90 G64 P0.01 F3000\nG1 X0 Y0\nG1 X20 Y5\nG1 X5 Y15\nG1 X30 Y20\nG1 X10 Y35\nG1 X40 Y40\nG1 X0 Y45\nG1 X25 Y60\nM2\n' \
     > zigzag.ngc
   "$T" plan zigzag.ngc --period 1.25e-4 --engine-width 96 --time-scale 1.2 -o plan.trj > plan.txt
+elif [ "$mode" = pauses ]; then
+  printf 'G21 G90\nG1 X2 F1200\nM0 (change the bit)\nG1 X2 Y2\nG1 X0 Y0\nM0\nG1 X-1\nM2\n' > pauses.ngc
+  "$T" plan pauses.ngc --pause-wait --engine-width 96 -o plan.trj > plan.txt
 else
   "$T" plan --raster 2 --period $period -o plan.trj > plan.txt
 fi
@@ -114,6 +123,22 @@ timescale)
   grep -q "time scaling: S [0-9]* at the end, [1-9][0-9]* starved holds" board.txt
   grep -q "pins decoded against the board's time-scaled output samples .*: identical" board.txt
   grep -q "on the path of the exact prediction (re-timed): yes: .* ending on the last sample" board.txt
+  ;;
+pauses)
+  start_board --once
+  (sleep 1; echo; sleep 1; echo) | upload || { cat upload.err board.txt; exit 1; }
+  rc=0
+  wait "$board" || rc=$?
+  board=
+  cat upload.txt board.txt
+  [ "$rc" -eq 0 ] || { echo "the board's check failed (exit $rc)"; exit 1; }
+  grep -q "underruns 2 (2 at program pauses)" upload.txt
+  grep -q "program pause 1 (line 3): the machine holds at rest" upload.err
+  grep -q "program pause 2 (line 6): the machine holds at rest" upload.err
+  ticks=$(sed -n 's/.* \([0-9]*\) ticks (.*/\1/p' plan.txt)
+  grep -q "pins decoded against the exact prediction of $ticks ticks ($ticks samples seen): identical" board.txt
+  # every edge within 20 us of its crossing (a sample timed by the wrong tick is 1 ms or a pause late)
+  ! grep "edge after its path crossing" board.txt | grep -qv "\.\. [0-9]\.[0-9]* us\|\.\. 1[0-9]\.[0-9]* us"
   ;;
 reset)
   start_board --reset-after 10
