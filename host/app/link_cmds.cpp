@@ -133,7 +133,9 @@ void add_upload(CLI::App& app, LinkCommands& lc) {
   c->footer("Exit status 0 once the board has played the whole job; otherwise a message names what failed. Ctrl-C "
             "sends STOP: the board stops at the end of the segment it plays (time scaling: on the path). A stream "
             "planned with --time-scale on a terminal (not read from standard input): keys h or space hold/resume, "
-            "+ / - feed +/-10 %, 1 feed 100 %, q stop.");
+            "+ / - feed +/-10 %, 1 feed 100 %, q stop. A stream with program pauses (`plan --pause-wait`: M0/M60) "
+            "stops at each: the board holds at rest until a line (Enter) on standard input, or on the terminal when "
+            "the stream comes from standard input.");
 }
 
 void add_board(CLI::App& app, LinkCommands& lc) {
