@@ -929,7 +929,8 @@ class Interpreter {
     if (nurbs_) fail(t, "G5.2 NURBS not closed with G5.3");
     const bool pause = m != 1 && opt_.pauses_wait;
     if (pause && out_.moves.empty()) {
-      note("M0 first", t, "program pause before the first move ignored (the machine has not moved)");
+      note("M0 first", t, "program pause before the first move: no pause record (the stream holds none before its "
+                          "first segment); starting the job (`trajcore upload`) is the go-ahead");
       return;
     }
     if (m == 1)

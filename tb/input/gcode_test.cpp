@@ -685,7 +685,7 @@ TEST(Gcode, PauseWaitMarksThePauseOnTheMoveBefore) {
       ++pause_notes;
       EXPECT_EQ(n.rfind("t.ngc:6: M0: ", 0), 0u) << n;
     }
-    if (n.find("program pause before the first move ignored") != std::string::npos) {
+    if (n.find("program pause before the first move: no pause record") != std::string::npos) {
       ++first_notes;
       EXPECT_EQ(n.rfind("t.ngc:2: M0: ", 0), 0u) << n;
     }
