@@ -55,12 +55,12 @@ class StatusLine {
       for (size_t a = 0; a < p.status.sample.size(); ++a)
         pos += strf("%s%.4f", a ? " " : "", double(p.status.sample[a]) * lsb_);
     const std::string line = strf(
-        "[upload] %llu segments stored%s, %u played, FIFO %u, position %s %s, underruns %u, re-sends %llu%s",
+        "[upload] %llu segments stored%s, %u played, FIFO %u, position %s %s, underruns %u, re-sends %llu%s%s",
         static_cast<unsigned long long>(p.acked),
         p.stream_done ? strf(" of %llu", static_cast<unsigned long long>(p.read)).c_str() : "",
         p.status.segments_played, p.status.fifo_level, pos.empty() ? "?" : pos.c_str(), units_.c_str(),
         p.status.underruns, static_cast<unsigned long long>(p.resends),
-        p.time_scaling ? feed_text(p.feed).c_str() : "");
+        p.time_scaling ? feed_text(p.feed).c_str() : "", p.at_pause ? ", holding at a program pause" : "");
     std::fprintf(stderr, tty_ ? "\r%s   " : "%s\n", line.c_str());
     shown_ = true;
   }
