@@ -51,8 +51,8 @@ struct UploadOptions {
   // while the board holds at one (it played every segment before the pause
   // and stands at rest, in its underrun halt) until it returns true: the
   // operator's go-ahead. It may throw UploadError (no one to confirm). Unset:
-  // a stream with a pause is refused at the pause, before the board reaches
-  // it.
+  // the upload stops with UploadError once the board holds at the first
+  // pause (at rest; --resume waits there again).
   std::function<bool(const PauseAt&)> pause_confirmed;
 };
 
