@@ -265,15 +265,21 @@ double snap_to_junction(const Path& path, double s) {
 }
 
 // Time at which `plan` reaches arc length s (bisection on the profile), or
-// leaves it when it dwells there (a commit takes the dwell with it).
+// leaves it when it dwells there (a commit takes the dwell with it: a pause's
+// rest, a G4). The dwell is found by its place, not by the bisection's time:
+// an S-curve stop reaches s to within rounding micro-seconds before it stops
+// (s - s(t) ~ j (t_stop - t)^3 / 6 falls below s's last bit 3 us early at
+// j = 1000 mm/s^3, s = 20 mm), and a commit there without its rest dropped
+// the rest and left the pause without a segment ending in it.
 double time_at_arc_length(const plan::Plan& plan, double s) {
+  const double eps = 1e-9 * std::max(1.0, std::fabs(s));
+  for (const plan::Piece& q : plan.pieces)
+    if (q.dwell && std::fabs(plan::state_at(plan, q.t0).s - s) <= eps) return q.t0 + q.T;
   double lo = 0, hi = plan.duration();
   for (int it = 0; it < 200 && hi - lo > 1e-15 * (1 + hi); ++it) {
     const double mid = 0.5 * (lo + hi);
     (plan::state_at(plan, mid).s < s ? lo : hi) = mid;
   }
-  for (const plan::Piece& q : plan.pieces)
-    if (q.dwell && std::fabs(q.t0 - hi) <= 1e-9 * (1 + hi)) return q.t0 + q.T;
   return hi;
 }
 
@@ -282,7 +288,7 @@ double time_at_arc_length(const plan::Plan& plan, double s) {
 SegmentSink write_to(stream::StreamWriter& w) {
   return [&w](const fd::Compiled& c, const plan::TimeSegment& seg) {
     w.add({c.ticks, c.regs});
-    if (seg.pause_line > 0) w.pause(static_cast<uint32_t>(seg.pause_line));
+    if (seg.pause_line > 0) w.pause(static_cast<uint32_t>(seg.pause_line), seg.pause_text);
   };
 }
 
