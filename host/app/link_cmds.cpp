@@ -228,7 +228,9 @@ class PausePrompt {
                               "is no terminal to confirm on; `--resume` continues the job");
     if (asked_ != p.index) {
       asked_ = p.index;
-      line_.say(where + ": the machine holds at rest (" + (::isatty(fd_) ? "press Enter" : "a line on standard input") +
+      const std::string what = p.pause.text.empty() ? "" : " \"" + p.pause.text + "\";";
+      line_.say(where + ":" + what + " the machine holds at rest (" +
+                (::isatty(fd_) ? "press Enter" : "a line on standard input") +
                 " to go on; Ctrl-C stops, `--resume` continues later)");
     }
     for (;;) {

@@ -121,6 +121,7 @@ struct ChainCurve {
   bool blend = false;       // a corner transition (a single corner's blend or a run's curve)
   double dwell = 0;         // seconds at rest after it (the move's G4, on its last curve)
   int pause_line = 0;       // the move's program pause (input::Move::pause_line), on its last curve
+  std::string pause_text{};   // and its text (input::Move::pause_text)
 };
 
 enum class StopReason { kRapid, kExactStop, kReversal, kCurvedMove, kFaster };

@@ -146,6 +146,7 @@ class Interpreter {
       if (text_.find_first_not_of(" \t") != std::string::npos) seen_content_ = true;
       if (b.block_delete && opt_.block_delete) continue;
       params_.apply(b.settings);  // after the line is read, before it runs (as LinuxCNC)
+      if (!b.message.empty()) message_ = b.message;  // shown before the line's motion (as LinuxCNC)
       if (b.words.empty()) continue;
       if (execute(b)) finish(line_no_, true);
     }
@@ -220,6 +221,8 @@ class Interpreter {
     int line = 0;
   };
   std::optional<Nurbs> nurbs_;
+  // The last operator message ("(MSG, ...)") since the last move: the next pause's text.
+  std::string message_;
 
   // The block being executed.
   int line_ = 0;
@@ -620,6 +623,7 @@ class Interpreter {
     m.tolerance = tolerance_;
     m.exact_stop = exact_stop_ || kind == Move::Kind::kRapid;
     m.where = where(line_);
+    message_.clear();  // a message before a move (even one left out below) is not the next pause's
     // A move of 1e-9 mm or less (X[0.1+0.2] after X0.3: 6e-17) is left out, as the drawings' pieces
     // (cuts.hpp); the next move starts where the last one kept ends (it moves by as little).
     if (negligible(m.curve)) return;
@@ -943,7 +947,10 @@ class Interpreter {
                     "(--pause-as-stop)");
     if (out_.moves.empty()) return;
     out_.moves.back().exact_stop = true;
-    if (pause) out_.moves.back().pause_line = line_;
+    if (!pause) return;
+    out_.moves.back().pause_line = line_;
+    out_.moves.back().pause_text = message_;
+    message_.clear();
   }
 
   // G4 P: the machine stops at the end of the move before it and rests P

@@ -407,8 +407,34 @@ std::vector<double> o_values(const OLine& o, int line, const std::string& file, 
   return LineParser(o.values, line, file, params).values();
 }
 
+// LinuxCNC's operator message: a comment whose text, after blanks, starts
+// with "MSG," (any case); the message is the rest, blanks at its ends
+// removed and control characters (tabs) made blanks. Of several on a line,
+// the last.
+std::string message_of(const std::string& text) {
+  std::string msg;
+  for (size_t i = 0; i < text.size() && text[i] != ';'; ++i) {
+    if (text[i] != '(') continue;
+    const size_t close = text.find(')', i);  // there is one: strip() refuses an open comment
+    const size_t b = text.find_first_not_of(" \t", i + 1);
+    std::string head = b + 4 <= close ? text.substr(b, 4) : "";
+    for (char& c : head) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (head == "msg,") {
+      msg = text.substr(b + 4, close - b - 4);
+      for (char& c : msg)  // a terminal shows it: no control bytes
+        if (static_cast<unsigned char>(c) < 0x20 || c == 0x7F) c = ' ';
+      const size_t first = msg.find_first_not_of(' ');
+      msg = first == std::string::npos ? "" : msg.substr(first, msg.find_last_not_of(' ') - first + 1);
+    }
+    i = close;
+  }
+  return msg;
+}
+
 Block lex_line(const std::string& text, int line, const std::string& file, const Parameters& params) {
-  return LineParser(strip(text, line, file), line, file, params).parse();
+  Block b = LineParser(strip(text, line, file), line, file, params).parse();
+  b.message = message_of(text);
+  return b;
 }
 
 }  // namespace traj::input::gcode

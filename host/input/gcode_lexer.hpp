@@ -59,6 +59,7 @@ struct Block {
   bool block_delete = false;     // the line starts with '/'
   std::vector<Word> words;       // without the line number N
   std::vector<Setting> settings; // parameter settings, in the order written
+  std::string message;           // the operator message of a "(MSG, ...)" comment (message_of), or ""
 };
 
 enum class OKeyword {

@@ -32,6 +32,7 @@ struct Move {
   // > 0: a program pause follows (M0/M60 with --pause-wait; its line): the
   // machine stops exactly (exact_stop) and waits there for the operator
   int pause_line = 0;
+  std::string pause_text{};  // and what the operator is to do there: the "(MSG, ...)" since the last move, or ""
   std::string where;       // "<file>:<line>" (G-code), "<file>: path <id>" (SVG), "<file>: entity <n>" (DXF)
 };
 

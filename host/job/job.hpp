@@ -43,6 +43,7 @@ struct JobConfig {
   struct PauseAt {
     double s = 0;  // arc length of the stop
     int line = 0;  // the program's line
+    std::string text{};  // what the operator is to do there (input::Move::pause_text)
   };
   std::vector<PauseAt> pauses;
   // Validates the limits and the machine; PlanError naming the field.

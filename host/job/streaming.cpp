@@ -30,6 +30,7 @@ struct Window {
   std::deque<bool> stops;
   std::deque<double> dwells;
   std::deque<int> pause_lines;
+  std::deque<std::string> pause_texts;
 
   void push_back(CurvePrefetch::Item&& it) {
     curves.push_back(std::move(it.built));
@@ -39,6 +40,7 @@ struct Window {
     stops.push_back(c.stop);
     dwells.push_back(c.dwell);
     pause_lines.push_back(c.pause_line);
+    pause_texts.push_back(std::move(c.pause_text));
   }
   // Curve i's time at its speed, and its dwell: at least the time it takes.
   double time(size_t i, double feed) const {
@@ -76,12 +78,14 @@ struct Window {
       w.stops.push_back(stops.front());
       w.dwells.push_back(dwells.front());
       w.pause_lines.push_back(pause_lines.front());
+      w.pause_texts.push_back(std::move(pause_texts.front()));
       curves.pop_front();
       splines.pop_front();
       speeds.pop_front();
       stops.pop_front();
       dwells.pop_front();
       pause_lines.pop_front();
+      pause_texts.pop_front();
     }
     return w;
   }
@@ -93,6 +97,7 @@ struct Window {
     stops.insert(stops.begin(), w.stops.begin(), w.stops.end());
     dwells.insert(dwells.begin(), w.dwells.begin(), w.dwells.end());
     pause_lines.insert(pause_lines.begin(), w.pause_lines.begin(), w.pause_lines.end());
+    pause_texts.insert(pause_texts.begin(), w.pause_texts.begin(), w.pause_texts.end());
   }
   // Cuts curve i in two inside the knot span that holds its parameter middle
   // (a smooth place: no knot there).
@@ -115,6 +120,8 @@ struct Window {
     dwells[i] = 0;
     pause_lines.insert(pause_lines.begin() + at, pause_lines[i]);
     pause_lines[i] = 0;
+    pause_texts.insert(pause_texts.begin() + at, std::move(pause_texts[i]));
+    pause_texts[i].clear();
   }
   // The curves' speeds and stops as speed caps on `path` (the window's
   // path), and their dwells (the window's end is a stop of its own plan).
@@ -136,6 +143,7 @@ struct PlainSource : StreamSource {
     c.stop = false;
     c.dwell = 0;
     c.pause_line = 0;
+    c.pause_text.clear();
     return src.next(c.curve, c.where);
   }
   CurveSource& src;
@@ -177,6 +185,7 @@ class LongCurveCutter : public StreamSource {
     c.stop = false;
     c.dwell = 0;
     c.pause_line = 0;
+    c.pause_text.clear();
     rest_->curve = geo::split_at(rest_->curve, u).second;
     return true;
   }
@@ -381,7 +390,7 @@ WindowPlan plan_window(Window& win, const Carry& in, size_t commit_max, bool las
   PlanFitResult fit = plan_and_fit(req, ts);
   std::vector<JobConfig::PauseAt> pauses;  // of the committed curves: their rests are committed with them
   for (size_t i = 0; i < ncommit; ++i)
-    if (win.pause_lines[i] > 0) pauses.push_back({path.offset(i + 1), win.pause_lines[i]});
+    if (win.pause_lines[i] > 0) pauses.push_back({path.offset(i + 1), win.pause_lines[i], win.pause_texts[i]});
   mark_pauses(fit.segments, ts, req.k_base, cfg.machine.fit_ticks(), pauses, path.length());
   wp.repairs = fit.repairs;
   wp.ticks = ts.size();

@@ -31,6 +31,7 @@ struct StreamCurve {
   bool stop = false;  // the machine stops exactly at its end
   double dwell = 0;   // and rests there this many seconds (G4)
   int pause_line = 0; // > 0: a program pause follows (its line): the segment that ends in the rest carries it
+  std::string pause_text{};  // and what the operator is to do there (input::Move::pause_text)
 };
 
 class StreamSource {

@@ -129,7 +129,7 @@ ToolpathPlan toolpath_plan(const input::Toolpath& original, const JobConfig& cfg
                              ? std::max(tp.moves[i].dwell, kPauseRest * cfg.machine.fit_period())
                              : tp.moves[i].dwell;
     if (dwell > 0) r.cfg.plan.dwells.push_back({s1, dwell});
-    if (tp.moves[i].pause_line > 0 && !last) r.cfg.pauses.push_back({s1, tp.moves[i].pause_line});
+    if (tp.moves[i].pause_line > 0 && !last) r.cfg.pauses.push_back({s1, tp.moves[i].pause_line, tp.moves[i].pause_text});
   }
   return r;
 }

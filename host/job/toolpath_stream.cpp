@@ -97,6 +97,7 @@ void ToolpathStream::blend_next_chunk() {
       first.exact_stop = false;
       first.dwell = 0;
       first.pause_line = 0;
+      first.pause_text.clear();
       m.curve = std::move(halves.second);
       for (size_t i = 0; i < j; ++i) part.moves.push_back(std::move(pending_[i]));
       part.moves.push_back(std::move(first));
@@ -134,6 +135,7 @@ void ToolpathStream::blend_next_chunk() {
     const bool last = ended_ && pending_.empty() && &m == &b.moves.back();
     if (m.pause_line > 0 && !last) {  // a rest of kPauseRest fit ticks at least (mark_pauses)
       c.pause_line = m.pause_line;
+      c.pause_text = m.pause_text;
       ++totals_.pauses;
       c.dwell = std::max(c.dwell, kPauseRest * cfg_.machine.fit_period());
     }

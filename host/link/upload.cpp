@@ -476,10 +476,10 @@ class Uploader : public FeedPort {
       if (holds_at_pause(s)) break;
       pump(20);
     }
-    const std::string line = std::to_string(pause_->pause.line);
+    const std::string& text = pause_->pause.text;
     if (!o_.pause_confirmed)
-      fail("the board holds at rest at the program pause at line " + line + " and no one is here to confirm it; "
-           "`--resume` continues the job");
+      fail("the board holds at rest at the program pause at line " + std::to_string(pause_->pause.line) +
+           (text.empty() ? "" : " (\"" + text + "\")") + " and no one is here to confirm it; `--resume` continues the job");
     prog_.at_pause = true;
     report();
     while (!o_.pause_confirmed(*pause_)) {

@@ -30,6 +30,11 @@ uint64_t get(const uint8_t* p, int bytes) {
   for (int i = 0; i < bytes; ++i) v |= uint64_t(p[i]) << (8 * i);
   return v;
 }
+std::string hex2(unsigned v) {
+  char b[8];
+  std::snprintf(b, sizeof b, "0x%02X", v & 0xFF);
+  return b;
+}
 
 // Two's complement of v in `bytes` bytes, little-endian (v must fit).
 // No temporaries: the magnitude's bytes (mpz_export, least significant
@@ -304,9 +309,24 @@ std::vector<uint8_t> encode_end(uint32_t segments, uint64_t total_ticks) {
   return b;
 }
 
+std::string pause_text_problem(const std::string& text) {
+  if (text.size() > kMaxPauseText)
+    return "text of " + std::to_string(text.size()) + " bytes, at most " + std::to_string(kMaxPauseText);
+  // no control bytes: the text is printed to the operator's terminal as it is
+  for (size_t i = 0; i < text.size(); ++i) {
+    const auto c = static_cast<uint8_t>(text[i]);
+    if (c < 0x20 || c == 0x7F) return "control byte " + hex2(c) + " at " + std::to_string(i) + " of its text";
+  }
+  return "";
+}
+
 std::vector<uint8_t> encode_pause(const Pause& p) {
+  if (const std::string why = pause_text_problem(p.text); !why.empty())
+    throw StreamError("pause at line " + std::to_string(p.line) + ": " + why);
   std::vector<uint8_t> b;
   put_record_head(b, kPauseType, p.line, static_cast<uint32_t>(p.before));
+  b[2] = static_cast<uint8_t>(p.text.size());
+  b.insert(b.end(), p.text.begin(), p.text.end());
   put(b, crc(b.data(), b.size()), 4);
   return b;
 }
@@ -430,8 +450,11 @@ void StreamWriter::put(const std::vector<uint8_t>& bytes) {
   if (!file_.out()) throw StreamError("write failed: " + file_.tmp_path());
 }
 
-void StreamWriter::pause(uint32_t line) {
-  if (count_ > 0) pause_ = Pause{count_, line};
+void StreamWriter::pause(uint32_t line, const std::string& text) {
+  if (count_ == 0) return;
+  if (const std::string why = pause_text_problem(text); !why.empty())
+    throw StreamError(file_.tmp_path() + ": pause at line " + std::to_string(line) + ": " + why);
+  pause_ = Pause{count_, line, text};
 }
 
 void StreamWriter::add(const Record& r) {
@@ -458,11 +481,6 @@ namespace {
 size_t read_some(std::istream& in, uint8_t* p, size_t n) {
   in.read(reinterpret_cast<char*>(p), static_cast<std::streamsize>(n));
   return static_cast<size_t>(in.gcount());
-}
-std::string hex2(unsigned v) {
-  char b[8];
-  std::snprintf(b, sizeof b, "0x%02X", v & 0xFF);
-  return b;
 }
 // Offset of the first nonzero byte in b[from, to), or `to`.
 size_t first_nonzero(const std::vector<uint8_t>& b, size_t from, size_t to) {
@@ -643,22 +661,27 @@ bool StreamReader::read_end() {
 // segment (not the start, not another pause).
 bool StreamReader::read_pause() {
   const std::string rec = "segment " + std::to_string(count_) + ": pause record";
-  raw_.resize(kPauseBytes);
+  raw_.resize(12);
   raw_[0] = kPauseType;
-  if (read_some(in_, raw_.data() + 1, kPauseBytes - 1) != size_t(kPauseBytes - 1))
-    return fail(off_, "segment " + std::to_string(count_) + ": truncated pause record");
+  const std::string truncated = "segment " + std::to_string(count_) + ": truncated pause record";
+  if (read_some(in_, raw_.data() + 1, 11) != 11) return fail(off_, truncated);
+  const size_t n = get(&raw_[2], 2);
+  if (n > kMaxPauseText)  // before reading it: a damaged length would read up to 64 KiB
+    return fail(off_ + 2, rec + ": text of " + std::to_string(n) + " bytes, at most " + std::to_string(kMaxPauseText));
+  raw_.resize(kPauseBytes + n);
+  if (read_some(in_, raw_.data() + 12, n + 4) != n + 4) return fail(off_, truncated);
   const auto& b = raw_;
-  if (get(&b[12], 4) != crc(b.data(), 12)) return fail(off_, rec + " checksum mismatch");
+  if (get(&b[12 + n], 4) != crc(b.data(), 12 + n)) return fail(off_, rec + " checksum mismatch");
   if (b[1] != 0) return fail(off_ + 1, rec + ": flags " + hex2(b[1]) + ", must be 0");
-  if (const size_t z = first_nonzero(b, 2, 4); z < 4)
-    return fail(off_ + z, rec + ": reserved byte " + hex2(b[z]) + ", must be 0");
+  const std::string text(b.begin() + 12, b.begin() + 12 + static_cast<std::ptrdiff_t>(n));
+  if (const std::string why = pause_text_problem(text); !why.empty()) return fail(off_ + 12, rec + ": " + why);
   if (get(&b[8], 4) != static_cast<uint32_t>(count_))
     return fail(off_ + 8, rec + " before segment " + std::to_string(get(&b[8], 4)) + ", but " +
                               std::to_string(count_) + " segments precede it");
   if (count_ == 0) return fail(off_, rec + " before the first segment");
   if (pending_pause_) return fail(off_, rec + " after another one");
-  pending_pause_ = Pause{count_, static_cast<uint32_t>(get(&b[4], 4))};
-  off_ += kPauseBytes;
+  pending_pause_ = Pause{count_, static_cast<uint32_t>(get(&b[4], 4)), text};
+  off_ += kPauseBytes + n;
   return true;
 }
 

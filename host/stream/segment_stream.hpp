@@ -132,9 +132,12 @@ constexpr int kVersion = 4;       // the version written and read
 constexpr int kScaleMaxUnit = 4096;  // the header's s_max is a multiple of 1/4096 (written rounded down)
 constexpr int kHeaderBytes = 64;
 constexpr int kEndBytes = 16;
-// The pause record: the same 16 bytes as the end record, type 0xFE.
+// The pause record: the end record's 16 bytes, type 0xFE, and the pause's
+// text (its length at offset 2) before the CRC.
 constexpr int kPauseBytes = 16;
 constexpr uint8_t kPauseType = 0xFE;
+// The longest pause text, bytes (a G-code line holds at most 256 characters).
+constexpr size_t kMaxPauseText = 255;
 
 // A program pause (G-code M0/M60 read with --pause-wait): the machine rests
 // after segment `before` - 1 and waits for the operator before segment
@@ -143,7 +146,10 @@ constexpr uint8_t kPauseType = 0xFE;
 struct Pause {
   uint64_t before = 0;  // the number of segments before it (> 0)
   uint32_t line = 0;    // the program's line, 0 if none
+  std::string text{};   // what the operator is to do (G-code "(MSG, ...)"): printable, at most kMaxPauseText bytes
 };
+// "" if `text` can stand in a pause record, else why not.
+std::string pause_text_problem(const std::string& text);
 // The FD record's K bound: the compiler's longest segment (fd::Format::max_ticks).
 constexpr uint32_t kMaxTicks = uint32_t(1) << 20;
 
@@ -156,6 +162,7 @@ std::vector<uint8_t> encode_header(const Header& h);
 // hold (K out of bounds, a value beyond its width, the wrong shape).
 std::vector<uint8_t> encode_record(const Header& h, const Record& r);
 std::vector<uint8_t> encode_end(uint32_t segments, uint64_t total_ticks);
+// Throws StreamError for a text pause_text_problem refuses.
 std::vector<uint8_t> encode_pause(const Pause& p);
 
 // Continuity: each segment starts exactly where the exact prediction of the
@@ -197,7 +204,8 @@ class StreamWriter {
   void add(const Record& r);
   // A program pause after the records added so far: written before the next
   // record (none after the last one: there is nothing left to wait for).
-  void pause(uint32_t line);
+  // The text is checked here (StreamError).
+  void pause(uint32_t line, const std::string& text = "");
   void finish();
   uint64_t records() const { return count_; }
   uint64_t ticks() const { return ticks_; }

@@ -9,7 +9,9 @@
 // kind, end points, for arcs every sampled point on rs274's circle (centre,
 // radius) and the swept angle (direction and turns), the control-point count
 // of splines, feed rates, path tolerance and exact-stop mode, to 1e-9 (in mm;
-// rs274 prints in the program's units, the shim makes it print all digits).
+// rs274 prints in the program's units, the shim makes it print all digits),
+// and the program pauses (M0/M60, read with --pause-wait) with their texts
+// (the last MESSAGE since the move before the pause).
 // Programs are read with the axes X Y Z A B C (rs274's, standalone): the
 // rotary axes' end points, their progress along arcs (linear in the angle)
 // and the feed as programmed (Move::feed / Move::feed_scale) are compared too.
@@ -61,6 +63,8 @@ struct Canon {
   double feed_raw = 0;   // F as programmed
   double dwell = 0;      // DWELLs after it, seconds
   bool dwelled = false;  // a DWELL (even of 0 s) or an M1 follows it: the machine stops there
+  bool paused = false;   // a PROGRAM_STOP (M0, M60) follows it: a program pause (--pause-wait)
+  std::string pause_text;  // and the last MESSAGE between it and the pause, blanks at its ends removed
   double tolerance = -1; // mm, -1 none
   bool exact = false;
 };
@@ -88,6 +92,15 @@ fs::path inch_tool_table(const traj::input::ToolTable& t, const fs::path& work) 
   return f;
 }
 
+// MESSAGE("  text ")'s text, tabs made blanks and blanks at its ends removed (read_gcode's pause text).
+std::string trimmed_message(const std::string& args) {
+  std::string t = args.size() >= 2 && args.front() == '"' && args.back() == '"' ? args.substr(1, args.size() - 2) : args;
+  for (char& c : t)
+    if (c == '\t') c = ' ';
+  const size_t b = t.find_first_not_of(' ');
+  return b == std::string::npos ? "" : t.substr(b, t.find_last_not_of(' ') - b + 1);
+}
+
 Rs274 run_rs274(const std::string& shim, const fs::path& prog, const fs::path& work,
                 const std::optional<traj::input::ToolTable>& tools) {
   Rs274 r;
@@ -105,6 +118,7 @@ Rs274 run_rs274(const std::string& shim, const fs::path& prog, const fs::path& w
   std::ifstream in(out);
   static const std::regex call(R"(([A-Z_]+)\((.*)\)\s*$)");
   double unit = 1, feed = 0, tol = -1, tlo = 0;
+  std::string message;  // the last MESSAGE since the last motion
   bool exact = false;
   int plane = 0;
   while (std::getline(in, line)) {
@@ -117,8 +131,15 @@ Rs274 run_rs274(const std::string& shim, const fs::path& prog, const fs::path& w
       r.moves.back().dwell += numbers(args)[0];
       r.moves.back().dwelled = true;
     }
-    else if ((name == "OPTIONAL_PROGRAM_STOP" || name == "PROGRAM_STOP") && !r.moves.empty())
-      r.moves.back().dwelled = true;  // M1, and M0/M60 read with pauses_as_stops: a stop
+    else if ((name == "OPTIONAL_PROGRAM_STOP" || name == "PROGRAM_STOP") && !r.moves.empty()) {
+      r.moves.back().dwelled = true;  // M1, and M0/M60: a stop
+      if (name == "PROGRAM_STOP") {
+        r.moves.back().paused = true;
+        r.moves.back().pause_text = message;
+      }
+      message.clear();
+    }
+    else if (name == "MESSAGE") message = trimmed_message(args);
     else if (name == "USE_TOOL_LENGTH_OFFSET") {
       std::istringstream xyz(args);  // "x y z, ..."
       double x = 0, y = 0, z = 0;
@@ -159,6 +180,7 @@ Rs274 run_rs274(const std::string& shim, const fs::path& prog, const fs::path& w
         c.end[2] += tlo;
       }
       r.moves.push_back(c);
+      message.clear();
     }
   }
   return r;
@@ -224,9 +246,14 @@ std::string check_arc(const Move& m, const Canon& c, const Point& start) {
 // A move's stop and dwell against rs274's DWELLs after its canonical call
 // (and after the zero-length calls that follow it, which make no Move): a
 // dwell stops the machine, so the move ends in an exact stop.
-std::string check_dwell(const Move& m, double dwell, bool dwelled, bool exact) {
+// A PROGRAM_STOP there is a program pause, with the last MESSAGE since the move as its text.
+std::string check_dwell(const Move& m, double dwell, bool dwelled, bool exact, const Canon* pause) {
   if (!near(m.dwell, dwell)) return m.where + ": dwell " + std::to_string(m.dwell) + " s, rs274 " + std::to_string(dwell);
   if (m.kind != Move::Kind::kRapid && m.exact_stop != (exact || dwelled)) return m.where + ": exact-stop mode differs";
+  if ((m.pause_line > 0) != (pause != nullptr))
+    return m.where + ": " + (pause ? "no program pause after it; rs274 has one" : "a program pause rs274 does not have");
+  if (pause && m.pause_text != pause->pause_text)
+    return m.where + ": pause text \"" + m.pause_text + "\", rs274 \"" + pause->pause_text + "\"";
   return "";
 }
 
@@ -236,14 +263,16 @@ std::string compare(const traj::input::Toolpath& tp, const Rs274& r) {
   const Move* last = nullptr;  // the last move matched, with its DWELLs so far
   double dwell = 0;
   bool dwelled = false, exact = false;
+  const Canon* pause = nullptr;  // the last PROGRAM_STOP since the last move matched
   for (const Canon& c : r.moves) {
     if (c.kind != Canon::kArc && c.kind != Canon::kNurbs && near(c.end, pos)) {  // zero-length: no Move
       dwell += c.dwell;
       dwelled = dwelled || c.dwelled;
+      if (c.paused) pause = &c;
       continue;
     }
     if (last) {
-      const std::string why = check_dwell(*last, dwell, dwelled, exact);
+      const std::string why = check_dwell(*last, dwell, dwelled, exact, pause);
       if (!why.empty()) return why;
     }
     if (i >= tp.moves.size()) return "rs274 has more moves than read_gcode (" + std::to_string(tp.moves.size()) + ")";
@@ -275,9 +304,10 @@ std::string compare(const traj::input::Toolpath& tp, const Rs274& r) {
     dwell = c.dwell;
     dwelled = c.dwelled;
     exact = c.exact;
+    pause = c.paused ? &c : nullptr;
   }
   if (last) {
-    const std::string why = check_dwell(*last, dwell, dwelled, exact);
+    const std::string why = check_dwell(*last, dwell, dwelled, exact, pause);
     if (!why.empty()) return why;
   }
   if (i != tp.moves.size()) return "read_gcode has " + std::to_string(tp.moves.size() - i) + " more moves than rs274";
@@ -333,13 +363,13 @@ int main(int argc, char** argv) {
   fs::create_directories(work);
 
   int accepted = 0, agree = 0, refused = 0, malformed = 0, only_here = 0;
-  size_t moves = 0;
+  size_t moves = 0, pauses = 0, texts = 0;
   std::map<std::string, int> reasons;
   std::vector<std::string> disagreements;
   for (const fs::path& prog : progs) {
     traj::input::GcodeOptions opt;
     opt.axes = "XYZABC";
-    opt.pauses_as_stops = true;
+    opt.pauses_wait = true;  // M0/M60 as program pauses, with their texts
     fs::path table = prog;
     table.replace_extension(".tbl");
     opt.tools = fs::exists(table) ? traj::input::read_tool_table(table.string()) : default_tools;
@@ -356,6 +386,10 @@ int main(int argc, char** argv) {
       if (why.empty()) {
         ++agree;
         moves += tp.moves.size();
+        for (const Move& m : tp.moves) {
+          pauses += m.pause_line > 0;
+          texts += !m.pause_text.empty();
+        }
       } else {
         disagreements.push_back(prog.string() + ": " + why);
       }
@@ -373,7 +407,8 @@ int main(int argc, char** argv) {
   fs::remove_all(work);
 
   std::cout << "G-code cross-check against rs274: " << progs.size() << " programs\n"
-            << "  accepted: " << accepted << " (agree move for move: " << agree << ", " << moves << " moves)\n"
+            << "  accepted: " << accepted << " (agree move for move: " << agree << ", " << moves << " moves, "
+            << pauses << " program pauses, " << texts << " with a message)\n"
             << "  refused:  " << refused << " (malformed messages: " << malformed << ")\n";
   for (const auto& [why, n] : reasons) std::cout << "    " << n << "  " << why << "\n";
   std::cout << "  disagreements: " << disagreements.size() << " (of which accepted here, refused by rs274: "

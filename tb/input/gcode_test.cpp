@@ -697,6 +697,30 @@ TEST(Gcode, PauseWaitMarksThePauseOnTheMoveBefore) {
       << refused;
 }
 
+// A pause's text is LinuxCNC's operator message, "(MSG, ...)" (any case,
+// blanks after '(' and around the text, tabs), the last one since the move
+// before the pause: on the pause's own line too, not one before a move
+// (LinuxCNC shows it before that line's motion), not one in a ';' comment.
+TEST(Gcode, PauseTextIsTheMessageSinceTheLastMove) {
+  traj::input::GcodeOptions opt;
+  opt.pauses_wait = true;
+  const Toolpath tp = read("G21 G90 F600\n(MSG, before any move)\nG1 X10\n( msg,  Change tool bit to drill 0.8mm )\n"
+                           "M6 T1\nM0\n"                       // 6: the message of line 4
+                           "G1 Y10\n(MSG, first)\n(Msg,\tsecond\t)\nM0 (Temporary machine stop.)\n"  // 10: the last
+                           "G1 X0\nM0 (MSG,on the line)\n"      // 12: its own line's
+                           "(MSG, passed)\nG1 Y0 (MSG, with the move)\nM0\n"  // 15: none since the move
+                           "G1 X5\nM0 ; (MSG, not a comment that counts)\n"  // 17: none
+                           "G1 X6\n(MSG,)\nM60\nG1 X7\nM2\n",  // 20: an empty message
+                           opt);
+  ASSERT_EQ(tp.moves.size(), 7u);
+  const int line[7] = {6, 10, 12, 15, 17, 20, 0};
+  const char* text[7] = {"Change tool bit to drill 0.8mm", "second", "on the line", "", "", "", ""};
+  for (int i = 0; i < 7; ++i) {
+    EXPECT_EQ(tp.moves[i].pause_line, line[i]) << tp.moves[i].where;
+    EXPECT_EQ(tp.moves[i].pause_text, text[i]) << tp.moves[i].where;
+  }
+}
+
 // One block's pecks are bounded as holes times pecks a hole (its moves are
 // held until taken): 100 holes of 999 pecks are read, each peck a feed of Q
 // (after the first, from LinuxCNC's clearance of 0.254 mm above the last).

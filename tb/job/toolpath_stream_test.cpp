@@ -34,6 +34,7 @@
 #include "tmp_file.hpp"
 #include "output_check.hpp"
 #include "report/report.hpp"
+#include "stream/segment_stream.hpp"
 #include "traj_fd_engine.hpp"
 
 using namespace traj;
@@ -904,4 +905,47 @@ TEST(ToolpathStream, LongSlowMovesStreamInWindowsOfBoundedTicks) {
   EXPECT_NEAR(bounded.st.motion_time / whole, 1.0, 0.01);
   ASSERT_FALSE(bounded.xs.empty());
   EXPECT_LT(dist(bounded.xs.back(), {0, 200, 0}), 1e-6);
+}
+
+// Program pauses with their operator messages (tb/input/gcode/operator_messages.ngc,
+// --pause-wait: six M0/M60 after moves of 1-10 mm, three with a "(MSG, ...)"),
+// whole and streamed in windows of 4, 8 and 16: every pause record in place,
+// with the program's line and text, read back from the stream file; the
+// streamed motion keeps every pause's rest (no shorter than the whole plan's
+// but for a tick). At a window of 4 a commit fell on a pause whose stop the
+// plan reaches, to within s's last bit, microseconds before it stops: the
+// commit left the rest out and the pause had no segment ending in it.
+TEST(ToolpathStream, PausesAndTheirMessagesInEveryWindow) {
+  const std::string file = std::string(TRAJ_SOURCE_DIR) + "/tb/input/gcode/operator_messages.ngc";
+  input::GcodeOptions go;
+  go.pauses_wait = true;
+  const std::vector<uint32_t> lines = {9, 13, 15, 18, 20, 23};
+  const std::vector<std::string> texts = {"Change tool bit to drill 0.8mm", "second", "on the line", "", "", ""};
+  auto check = [&](const std::vector<stream::Pause>& got, const std::string& what) {
+    ASSERT_EQ(got.size(), lines.size()) << what;
+    for (size_t i = 0; i < got.size(); ++i) {
+      EXPECT_EQ(got[i].line, lines[i]) << what << " pause " << i;
+      EXPECT_EQ(got[i].text, texts[i]) << what << " pause " << i;
+    }
+  };
+  const job::JobConfig cfg;
+  const job::ToolpathPlan tpp = job::toolpath_plan(input::read_gcode(file, go), cfg);
+  const job::JobResult wr = job::run_job(tpp.path, tpp.cfg);
+  check(job::pauses_of(wr), "whole");
+  job::ToolpathOptions to;
+  to.gcode = go;
+  for (const size_t window : {4, 8, 16}) {
+    const traj::test::TmpFile out("pauses_" + std::to_string(window) + ".trj");
+    job::ToolpathStream src(file, input::FileKind::kGcode, cfg, to);
+    job::StreamOptions so;
+    so.window = window;
+    so.commit = window / 2;
+    stream::StreamWriter w(out.path, cfg.machine.header());
+    const job::StreamStats st = job::run_streaming(src, src.config(), so, job::write_to(w));
+    w.finish();
+    const stream::ReadResult rr = stream::read_file(out.path);
+    ASSERT_TRUE(rr.complete) << rr.error;
+    check(rr.pauses, "window " + std::to_string(window));
+    EXPECT_GE(st.motion_time, wr.plan.duration() - cfg.machine.period) << "window " << window;
+  }
 }

@@ -14,7 +14,7 @@
 # pauses (upload.cli.program_pauses): a G-code program with two M0 planned
 #   with --pause-wait (whole and streamed; refused with --time-scale), uploaded to a
 #   paced loopback board with the operator's two go-aheads on standard input:
-#   both pauses named with their lines, their underruns no failure, every
+#   both pauses named with their lines and messages, their underruns no failure, every
 #   record played once; with no go-ahead left the tool stops at the pause.
 set -euo pipefail
 T=$1
@@ -31,10 +31,10 @@ if [ "$mode" = pauses ]; then
   fi
   grep -q -- "--pause-wait with --time-scale is not supported" bad.txt && test ! -e bad.trj
   "$T" plan "$prog" --pause-wait -o plan.trj > plan.txt 2>&1
-  # the records without the two 16-byte pause records (type 0xFE)
+  # the records without the two pause records (type 0xFE, 16 bytes and the text's, its length at byte 2)
   records() {
     od -An -v -tu1 -w1 "$1" | LC_ALL=C awk 'NR > 64 { b[n++] = $1 } END {
-      for (i = 0; i < n - 16; ) { if (b[i] == 254) { i += 16; p++; continue } for (k = 0; k < 232; k++) printf "%c", b[i++] }
+      for (i = 0; i < n - 16; ) { if (b[i] == 254) { i += 16 + b[i + 2]; p++; continue } for (k = 0; k < 232; k++) printf "%c", b[i++] }
       print p > "/dev/stderr" }'
   }
   records plan.trj > records.bin 2> pauses.txt
@@ -53,8 +53,9 @@ if [ "$mode" = pauses ]; then
   board=
   cat up.txt
   grep -q "underruns 2 (2 at program pauses)" up.txt
-  grep -q "program pause 1 (line 12): the machine holds at rest" up.err
-  grep -q "program pause 2 (line 24): the machine holds at rest" up.err
+  # each with the program's message for it (its "(MSG, ...)" line)
+  grep -q 'program pause 1 (line 12): "Change tool bit to drill size 0.8mm"; the machine holds at rest' up.err
+  grep -q 'program pause 2 (line 24): "Change tool bit to cutter diameter 1.0mm"; the machine holds at rest' up.err
   cmp records.bin played.bin
   # one go-ahead only: the tool stops at the second pause, the board holding
   "$T" board --loopback --speed 20 --played played2.bin > port2 2> board2.txt &

@@ -734,7 +734,7 @@ TEST(StreamIntegrity, EndRecordCarriesTheCount) {
 // stream without the pauses.
 TEST(StreamPause, WrittenAndReadBackInPlace) {
   Fixture f;
-  const std::vector<Pause> pauses = {{2, 17}, {4, 0}};
+  const std::vector<Pause> pauses = {{2, 17, ""}, {4, 0, ""}};
   traj::test::TmpFile a("pause_a.trj"), b("pause_b.trj");
   write_file(a.path, f.h, f.recs, pauses);
   {
@@ -767,10 +767,85 @@ TEST(StreamPause, WrittenAndReadBackInPlace) {
     EXPECT_EQ(uint32_t(bytes[at + 12] | bytes[at + 13] << 8 | bytes[at + 14] << 16 | uint32_t(bytes[at + 15]) << 24),
               uint32_t(crc32(0, bytes.data() + at, 12)));
   }
-  EXPECT_THROW(write_file(a.path, f.h, f.recs, {{0, 1}}), StreamError);
-  EXPECT_THROW(write_file(a.path, f.h, f.recs, {{3, 1}, {2, 1}}), StreamError);
-  EXPECT_THROW(write_file(a.path, f.h, f.recs, {{2, 1}, {2, 1}}), StreamError);
-  EXPECT_THROW(write_file(a.path, f.h, f.recs, {{5, 1}}), StreamError);
+  EXPECT_THROW(write_file(a.path, f.h, f.recs, {{0, 1, ""}}), StreamError);
+  EXPECT_THROW(write_file(a.path, f.h, f.recs, {{3, 1, ""}, {2, 1, ""}}), StreamError);
+  EXPECT_THROW(write_file(a.path, f.h, f.recs, {{2, 1, ""}, {2, 1, ""}}), StreamError);
+  EXPECT_THROW(write_file(a.path, f.h, f.recs, {{5, 1, ""}}), StreamError);
+}
+
+// A pause's text (G-code "(MSG, ...)"): its length at offset 2, its bytes
+// from offset 12, the CRC after them; round trip through both writers.
+TEST(StreamPause, TextTravelsWithThePause) {
+  Fixture f;
+  const std::string text = "Change tool bit to mill diameter 1.25000mm";
+  traj::test::TmpFile a("pause_ta.trj"), b("pause_tb.trj");
+  write_file(a.path, f.h, f.recs, {{2, 19, text}, {3, 20, ""}});
+  {
+    StreamWriter w(b.path, f.h);
+    for (size_t i = 0; i < f.recs.size(); ++i) {
+      w.add(f.recs[i]);
+      if (i == 1) w.pause(19, text);
+      if (i == 2) w.pause(20);
+    }
+    w.finish();
+  }
+  for (const std::string& path : {a.path, b.path}) {
+    std::ifstream in(path, std::ios::binary);
+    const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(bytes.size(), f.good.size() + 2 * kPauseBytes + text.size()) << path;
+    const ReadResult r = decode(bytes, "p.trj");
+    ASSERT_TRUE(r.complete) << r.error;
+    ASSERT_EQ(r.pauses.size(), 2u);
+    EXPECT_EQ(r.pauses[0].text, text);
+    EXPECT_EQ(r.pauses[1].text, "");
+    EXPECT_EQ(r.pauses[1].line, 20u);
+    const size_t at = f.off(2);
+    EXPECT_EQ(bytes[at + 2], text.size());
+    EXPECT_EQ(bytes[at + 3], 0);
+    EXPECT_EQ(std::string(bytes.begin() + static_cast<long>(at + 12), bytes.begin() + static_cast<long>(at + 12 + text.size())),
+              text);
+    const size_t c = at + 12 + text.size();
+    EXPECT_EQ(uint32_t(bytes[c] | bytes[c + 1] << 8 | bytes[c + 2] << 16 | uint32_t(bytes[c + 3]) << 24),
+              uint32_t(crc32(0, bytes.data() + at, static_cast<uInt>(c - at))));
+  }
+  // what a terminal would act on, or the record cannot hold, is refused by both writers
+  for (const std::string& bad : {std::string("tool\tbit"), std::string("\x1b[2J"), std::string(256, 'x')}) {
+    EXPECT_THROW(write_file(a.path, f.h, f.recs, {{2, 19, bad}}), StreamError) << bad;
+    StreamWriter w(b.path, f.h);
+    w.add(f.recs[0]);
+    EXPECT_THROW(w.pause(19, bad), StreamError) << bad;
+  }
+  EXPECT_NO_THROW(write_file(a.path, f.h, f.recs, {{2, 19, std::string(255, 'x')}}));
+  EXPECT_NO_THROW(write_file(a.path, f.h, f.recs, {{2, 19, "Werkzeug wechseln: Fr\xC3\xA4ser 3 mm"}}));  // UTF-8
+}
+
+TEST(StreamPause, DamagedTextIsRefusedWithItsPlace) {
+  Fixture f;
+  auto with_text = [&](const std::string& text) {
+    auto b = f.good;
+    const auto p = encode_pause({2, 5, "ok"});
+    std::vector<uint8_t> q(p.begin(), p.begin() + 12);
+    q[2] = static_cast<uint8_t>(text.size());
+    q[3] = static_cast<uint8_t>(text.size() >> 8);
+    q.insert(q.end(), text.begin(), text.end());
+    const auto sum = uint32_t(crc32(0, q.data(), static_cast<uInt>(q.size())));
+    for (int i = 0; i < 4; ++i) q.push_back(static_cast<uint8_t>(sum >> (8 * i)));
+    b.insert(b.begin() + static_cast<long>(f.off(2)), q.begin(), q.end());
+    return b;
+  };
+  const ReadResult good = decode(with_text("Load tool 2"), "p.trj");
+  ASSERT_TRUE(good.complete) << good.error;
+  EXPECT_EQ(good.pauses.at(0).text, "Load tool 2");
+  EXPECT_EQ(decode(with_text("a\nb"), "p.trj").error,
+            "p.trj: byte " + std::to_string(f.off(2) + 12) + ": segment 2: pause record: control byte 0x0A at 1 of its text");
+  EXPECT_EQ(decode(with_text(std::string(300, 'x')), "p.trj").error,
+            "p.trj: byte " + std::to_string(f.off(2) + 2) + ": segment 2: pause record: text of 300 bytes, at most 255");
+  auto bad = with_text("Load tool 2");
+  bad[f.off(2) + 14] ^= 1;  // the text, under the checksum
+  EXPECT_EQ(decode(bad, "p.trj").error, "p.trj: byte " + std::to_string(f.off(2)) + ": segment 2: pause record checksum mismatch");
+  const auto cut = with_text("Load tool 2");
+  EXPECT_EQ(decode(std::vector<uint8_t>(cut.begin(), cut.begin() + static_cast<long>(f.off(2) + 20)), "p.trj").error,
+            "p.trj: byte " + std::to_string(f.off(2)) + ": segment 2: truncated pause record");
 }
 
 TEST(StreamPause, MisplacedOrDamagedPausesAreRefusedWithTheirPlace) {
@@ -779,7 +854,7 @@ TEST(StreamPause, MisplacedOrDamagedPausesAreRefusedWithTheirPlace) {
   auto with_pause = [&](size_t i, uint32_t before, int copies = 1) {
     auto b = f.good;
     for (int c = 0; c < copies; ++c) {
-      const auto p = encode_pause({before, 5});
+      const auto p = encode_pause({before, 5, ""});
       b.insert(b.begin() + static_cast<long>(f.off(i)), p.begin(), p.end());
     }
     return b;
