@@ -934,7 +934,9 @@ class Interpreter {
     const bool pause = m != 1 && opt_.pauses_wait;
     if (pause && out_.moves.empty()) {
       note("M0 first", t, "program pause before the first move: no pause record (the stream holds none before its "
-                          "first segment); starting the job (`trajcore upload`) is the go-ahead");
+                          "first segment); starting the job (`trajcore upload`) is the go-ahead" +
+                          (message_.empty() ? std::string() : " (its message: \"" + message_ + "\")"));
+      message_.clear();
       return;
     }
     if (m == 1)

@@ -669,12 +669,12 @@ TEST(Gcode, PauseAsStopIsAnExactStop) {
 TEST(Gcode, PauseWaitMarksThePauseOnTheMoveBefore) {
   traj::input::GcodeOptions opt;
   opt.pauses_wait = true;
-  const Toolpath tp = read("G21 G90\nM0\nF600\nG1 X10\nT2 M6\nM0 (change the bit)\nG1 X10 Y10\nG1 X20 M60\n"
+  const Toolpath tp = read("G21 G90\n(MSG, Load tool 1)\nM0\nF600\nG1 X10\nT2 M6\nM0 (change the bit)\nG1 X10 Y10\nG1 X20 M60\n"
                            "G1 X30 Y5\nM1\nG1 X40\nM2\n",
                            opt);
   ASSERT_EQ(tp.moves.size(), 5u);
   const bool stop[5] = {true, false, true, true, false};
-  const int pause[5] = {6, 0, 8, 0, 0};
+  const int pause[5] = {7, 0, 9, 0, 0};
   for (int i = 0; i < 5; ++i) {
     EXPECT_EQ(tp.moves[i].exact_stop, stop[i]) << tp.moves[i].where;
     EXPECT_EQ(tp.moves[i].pause_line, pause[i]) << tp.moves[i].where;
@@ -683,11 +683,12 @@ TEST(Gcode, PauseWaitMarksThePauseOnTheMoveBefore) {
   for (const std::string& n : tp.notes) {
     if (n.find("`trajcore upload` waits for the operator") != std::string::npos) {
       ++pause_notes;
-      EXPECT_EQ(n.rfind("t.ngc:6: M0: ", 0), 0u) << n;
+      EXPECT_EQ(n.rfind("t.ngc:7: M0: ", 0), 0u) << n;
     }
     if (n.find("program pause before the first move: no pause record") != std::string::npos) {
       ++first_notes;
-      EXPECT_EQ(n.rfind("t.ngc:2: M0: ", 0), 0u) << n;
+      EXPECT_EQ(n.rfind("t.ngc:3: M0: ", 0), 0u) << n;
+      EXPECT_NE(n.find("(its message: \"Load tool 1\")"), std::string::npos) << n;  // shown where it is planned
     }
   }
   EXPECT_EQ(pause_notes, 1);
