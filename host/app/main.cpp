@@ -83,9 +83,9 @@ void add_gcode_options(CLI::App* c, traj::app::GcodeArgs& g) {
               "take M0 and M60 (program pause, e.g. before a manual tool change) as exact stops, as M1: the motion "
               "goes on at once and the machine does NOT wait for an operator; without it such a program is refused");
   c->add_flag("--pause-wait", g.pause_wait,
-              "take M0 and M60 (program pause) as exact stops with a pause record in the stream: `trajcore upload` "
-              "stops there and waits for the operator (Enter) before it goes on; the whole path is planned at once "
-              "(no --window, no --time-scale)")
+              "take M0 and M60 (program pause) as exact stops with a pause record in the stream, carrying the "
+              "program's last (MSG, ...) before it: `trajcore upload` stops there, shows the message and waits for "
+              "the operator (Enter) before it goes on; whole or streamed (--window), not with --time-scale")
       ->excludes("--pause-as-stop");
 }
 
