@@ -1320,8 +1320,8 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
     const input::Move& last = tp.moves[el[k + m].move];
     const bool stop_end = free_out && el[k + m].last_of_move && last.exact_stop;
     res.curves.push_back({rs, blend_where(tp.moves[el[k].move], last, "run of " + std::to_string(m) + " corners"),
-                          feed, Kind::kFeed, stop_end, true, stop_end ? last.dwell : 0.0, stop_end ? last.pause_line : 0,
-                          stop_end ? last.pause_text : ""});
+                          feed, Kind::kFeed, stop_end, true, stop_end ? last.dwell : 0.0,
+                          stop_end ? last.pause : plan::ProgramPause{}});
     last_end = rs.ctrl.row(rs.n_ctrl() - 1).transpose();
     return true;
   };
@@ -1352,7 +1352,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
         s.ctrl.row(0) = last_end.transpose();
       }
       res.curves.push_back({s, m.where, m.feed, m.kind, stop_here, false, stop_here ? m.dwell : 0.0,
-                            stop_here ? m.pause_line : 0, stop_here ? m.pause_text : ""});
+                            stop_here ? m.pause : plan::ProgramPause{}});
       last_end = s.ctrl.row(s.n_ctrl() - 1).transpose();
       if (blend_after) emit_blend(k);
       continue;
@@ -1367,7 +1367,7 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
       const Vec b = e.b - cut1 * e.t_end;
       if (e.length - cut0 - cut1 >= o.min_line || !blend_after) {
         res.curves.push_back({geo::make_line(a, b), m.where, m.feed, m.kind, stop_here, false,
-                              stop_here ? m.dwell : 0.0, stop_here ? m.pause_line : 0, stop_here ? m.pause_text : ""});
+                              stop_here ? m.dwell : 0.0, stop_here ? m.pause : plan::ProgramPause{}});
         last_end = b;
         return true;
       }
@@ -1418,8 +1418,8 @@ BlendResult blend_corners(const input::Toolpath& tp, double default_tol, const B
         stop_end = r.last_of_move && mr.exact_stop;
       }
       res.curves.push_back({sb.curve, blend_where(m, mr, "corner blend at a stop"), std::min(m.feed, mr.feed),
-                            Kind::kFeed, stop_end, true, stop_end ? mr.dwell : 0.0, stop_end ? mr.pause_line : 0,
-                            stop_end ? mr.pause_text : ""});
+                            Kind::kFeed, stop_end, true, stop_end ? mr.dwell : 0.0,
+                            stop_end ? mr.pause : plan::ProgramPause{}});
       last_end = sb.curve.ctrl.row(sb.curve.n_ctrl() - 1).transpose();
       bl.d = sb.d;
       bl.deviation = sb.deviation;
@@ -1524,8 +1524,7 @@ input::Toolpath to_toolpath(const BlendResult& r, const input::Toolpath& origina
     m.feed = c.feed;
     m.exact_stop = c.exact_stop;
     m.dwell = c.dwell;
-    m.pause_line = c.pause_line;
-    m.pause_text = c.pause_text;
+    m.pause = c.pause;
     m.where = c.where;
     tp.moves.push_back(std::move(m));
   }

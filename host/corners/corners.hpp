@@ -120,8 +120,7 @@ struct ChainCurve {
   bool exact_stop = false;  // stop at the end of this curve (the move's exact_stop, on its last curve)
   bool blend = false;       // a corner transition (a single corner's blend or a run's curve)
   double dwell = 0;         // seconds at rest after it (the move's G4, on its last curve)
-  int pause_line = 0;       // the move's program pause (input::Move::pause_line), on its last curve
-  std::string pause_text{};   // and its text (input::Move::pause_text)
+  plan::ProgramPause pause{};  // the move's program pause (input::Move::pause), on its last curve
 };
 
 enum class StopReason { kRapid, kExactStop, kReversal, kCurvedMove, kFaster };

@@ -950,8 +950,7 @@ class Interpreter {
     if (out_.moves.empty()) return;
     out_.moves.back().exact_stop = true;
     if (!pause) return;
-    out_.moves.back().pause_line = line_;
-    out_.moves.back().pause_text = message_;
+    out_.moves.back().pause = {line_, message_};
     message_.clear();
   }
 

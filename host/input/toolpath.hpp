@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "geometry/bspline.hpp"
+#include "planner/program_pause.hpp"
 
 namespace traj::input {
 
@@ -29,10 +30,9 @@ struct Move {
   double tolerance = -1;   // path tolerance for this move, mm (G64 P); < 0: the job's --tol
   bool exact_stop = false; // the machine stops at the end of this move (G61, G61.1, rapids, a dwell, M1)
   double dwell = 0;        // seconds at rest at the end of this move (G4), after its exact stop
-  // > 0: a program pause follows (M0/M60 with --pause-wait; its line): the
-  // machine stops exactly (exact_stop) and waits there for the operator
-  int pause_line = 0;
-  std::string pause_text{};  // and what the operator is to do there: the "(MSG, ...)" since the last move, or ""
+  // a program pause follows (M0/M60 with --pause-wait): the machine stops
+  // exactly (exact_stop) and waits there for the operator
+  plan::ProgramPause pause{};
   std::string where;       // "<file>:<line>" (G-code), "<file>: path <id>" (SVG), "<file>: entity <n>" (DXF)
 };
 

@@ -172,17 +172,17 @@ void mark_pauses(std::vector<plan::TimeSegment>& segs, const std::vector<plan::T
     };
     const auto it = i < ts.size() ? std::find_if(segs.begin(), segs.end(), ends_in_rest) : segs.end();
     if (it == segs.end())
-      throw PlanError("program pause at line " + std::to_string(pz.line) + " (arc length " + util::num(pz.s) +
+      throw PlanError("program pause at line " + std::to_string(pz.pause.line) + " (arc length " + util::num(pz.s) +
                       "): no segment of the fit ends where the plan rests there");
-    it->pause_line = pz.line;
-    it->pause_text = pz.text;
+    it->pause = pz.pause;
   }
 }
 
 std::vector<stream::Pause> pauses_of(const JobResult& r) {
   std::vector<stream::Pause> v;
   for (size_t i = 0; i + 1 < r.segments.size(); ++i)
-    if (r.segments[i].pause_line > 0) v.push_back({i + 1, static_cast<uint32_t>(r.segments[i].pause_line), r.segments[i].pause_text});
+    if (const plan::ProgramPause& p = r.segments[i].pause)
+      v.push_back({i + 1, static_cast<uint32_t>(p.line), p.text});
   return v;
 }
 
@@ -196,8 +196,7 @@ void engine_pieces(const plan::TimeSegment& seg, uint32_t kmax, double h, std::v
     p.k0 = seg.k0 + static_cast<long long>(a);
     p.K = static_cast<uint32_t>(b - a);
     if (i + 1 < pieces) {  // the pause follows the last piece
-      p.pause_line = 0;
-      p.pause_text.clear();
+      p.pause = {};
     }
     if (a > 0) {
       // Taylor shift to tau0 = a h by repeated synthetic division

@@ -39,11 +39,10 @@ struct JobConfig {
   bool engine_ticks = true;
   // Program pauses (run_job): at each, the path has a stop and a rest (a
   // dwell of at least kPauseRest fit ticks), and the segment that ends there
-  // carries the pause (TimeSegment::pause_line; the stream's pause record).
+  // carries the pause (TimeSegment::pause; the stream's pause record).
   struct PauseAt {
     double s = 0;  // arc length of the stop
-    int line = 0;  // the program's line
-    std::string text{};  // what the operator is to do there (input::Move::pause_text)
+    plan::ProgramPause pause{};
   };
   std::vector<PauseAt> pauses;
   // Validates the limits and the machine; PlanError naming the field.

@@ -29,8 +29,7 @@ struct Window {
   std::deque<double> speeds;
   std::deque<bool> stops;
   std::deque<double> dwells;
-  std::deque<int> pause_lines;
-  std::deque<std::string> pause_texts;
+  std::deque<plan::ProgramPause> pauses;
 
   void push_back(CurvePrefetch::Item&& it) {
     curves.push_back(std::move(it.built));
@@ -39,8 +38,7 @@ struct Window {
     speeds.push_back(c.speed);
     stops.push_back(c.stop);
     dwells.push_back(c.dwell);
-    pause_lines.push_back(c.pause_line);
-    pause_texts.push_back(std::move(c.pause_text));
+    pauses.push_back(std::move(c.pause));
   }
   // Curve i's time at its speed, and its dwell: at least the time it takes.
   double time(size_t i, double feed) const {
@@ -77,15 +75,13 @@ struct Window {
       w.speeds.push_back(speeds.front());
       w.stops.push_back(stops.front());
       w.dwells.push_back(dwells.front());
-      w.pause_lines.push_back(pause_lines.front());
-      w.pause_texts.push_back(std::move(pause_texts.front()));
+      w.pauses.push_back(std::move(pauses.front()));
       curves.pop_front();
       splines.pop_front();
       speeds.pop_front();
       stops.pop_front();
       dwells.pop_front();
-      pause_lines.pop_front();
-      pause_texts.pop_front();
+      pauses.pop_front();
     }
     return w;
   }
@@ -96,8 +92,7 @@ struct Window {
     speeds.insert(speeds.begin(), w.speeds.begin(), w.speeds.end());
     stops.insert(stops.begin(), w.stops.begin(), w.stops.end());
     dwells.insert(dwells.begin(), w.dwells.begin(), w.dwells.end());
-    pause_lines.insert(pause_lines.begin(), w.pause_lines.begin(), w.pause_lines.end());
-    pause_texts.insert(pause_texts.begin(), w.pause_texts.begin(), w.pause_texts.end());
+    pauses.insert(pauses.begin(), w.pauses.begin(), w.pauses.end());
   }
   // Cuts curve i in two inside the knot span that holds its parameter middle
   // (a smooth place: no knot there).
@@ -118,10 +113,8 @@ struct Window {
     stops[i] = false;
     dwells.insert(dwells.begin() + at, dwells[i]);
     dwells[i] = 0;
-    pause_lines.insert(pause_lines.begin() + at, pause_lines[i]);
-    pause_lines[i] = 0;
-    pause_texts.insert(pause_texts.begin() + at, std::move(pause_texts[i]));
-    pause_texts[i].clear();
+    pauses.insert(pauses.begin() + at, std::move(pauses[i]));
+    pauses[i] = {};
   }
   // The curves' speeds and stops as speed caps on `path` (the window's
   // path), and their dwells (the window's end is a stop of its own plan).
@@ -142,8 +135,7 @@ struct PlainSource : StreamSource {
     c.speed = 0;
     c.stop = false;
     c.dwell = 0;
-    c.pause_line = 0;
-    c.pause_text.clear();
+    c.pause = {};
     return src.next(c.curve, c.where);
   }
   CurveSource& src;
@@ -184,8 +176,7 @@ class LongCurveCutter : public StreamSource {
     c.curve = std::move(front);
     c.stop = false;
     c.dwell = 0;
-    c.pause_line = 0;
-    c.pause_text.clear();
+    c.pause = {};
     rest_->curve = geo::split_at(rest_->curve, u).second;
     return true;
   }
@@ -297,7 +288,7 @@ double time_at_arc_length(const plan::Plan& plan, double s) {
 SegmentSink write_to(stream::StreamWriter& w) {
   return [&w](const fd::Compiled& c, const plan::TimeSegment& seg) {
     w.add({c.ticks, c.regs});
-    if (seg.pause_line > 0) w.pause(static_cast<uint32_t>(seg.pause_line), seg.pause_text);
+    if (seg.pause) w.pause(static_cast<uint32_t>(seg.pause.line), seg.pause.text);
   };
 }
 
@@ -390,7 +381,7 @@ WindowPlan plan_window(Window& win, const Carry& in, size_t commit_max, bool las
   PlanFitResult fit = plan_and_fit(req, ts);
   std::vector<JobConfig::PauseAt> pauses;  // of the committed curves: their rests are committed with them
   for (size_t i = 0; i < ncommit; ++i)
-    if (win.pause_lines[i] > 0) pauses.push_back({path.offset(i + 1), win.pause_lines[i], win.pause_texts[i]});
+    if (win.pauses[i]) pauses.push_back({path.offset(i + 1), win.pauses[i]});
   mark_pauses(fit.segments, ts, req.k_base, cfg.machine.fit_ticks(), pauses, path.length());
   wp.repairs = fit.repairs;
   wp.ticks = ts.size();

@@ -30,8 +30,7 @@ struct StreamCurve {
   double speed = 0;   // the speed over this curve, units/s; 0: the feed limit (Limits::feed)
   bool stop = false;  // the machine stops exactly at its end
   double dwell = 0;   // and rests there this many seconds (G4)
-  int pause_line = 0; // > 0: a program pause follows (its line): the segment that ends in the rest carries it
-  std::string pause_text{};  // and what the operator is to do there (input::Move::pause_text)
+  plan::ProgramPause pause{};  // a program pause follows: the segment that ends in the rest carries it
 };
 
 class StreamSource {

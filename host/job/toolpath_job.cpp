@@ -125,11 +125,11 @@ ToolpathPlan toolpath_plan(const input::Toolpath& original, const JobConfig& cfg
       ++r.stops;
     }
     // a pause rests at least kPauseRest fit ticks, so that a segment ends within the rest (mark_pauses)
-    const double dwell = tp.moves[i].pause_line > 0 && !last
+    const double dwell = tp.moves[i].pause && !last
                              ? std::max(tp.moves[i].dwell, kPauseRest * cfg.machine.fit_period())
                              : tp.moves[i].dwell;
     if (dwell > 0) r.cfg.plan.dwells.push_back({s1, dwell});
-    if (tp.moves[i].pause_line > 0 && !last) r.cfg.pauses.push_back({s1, tp.moves[i].pause_line, tp.moves[i].pause_text});
+    if (tp.moves[i].pause && !last) r.cfg.pauses.push_back({s1, tp.moves[i].pause});
   }
   return r;
 }

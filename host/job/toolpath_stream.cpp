@@ -96,8 +96,7 @@ void ToolpathStream::blend_next_chunk() {
       first.curve = std::move(halves.first);
       first.exact_stop = false;
       first.dwell = 0;
-      first.pause_line = 0;
-      first.pause_text.clear();
+      first.pause = {};
       m.curve = std::move(halves.second);
       for (size_t i = 0; i < j; ++i) part.moves.push_back(std::move(pending_[i]));
       part.moves.push_back(std::move(first));
@@ -133,9 +132,8 @@ void ToolpathStream::blend_next_chunk() {
     c.stop = m.exact_stop;
     c.dwell = m.dwell;
     const bool last = ended_ && pending_.empty() && &m == &b.moves.back();
-    if (m.pause_line > 0 && !last) {  // a rest of kPauseRest fit ticks at least (mark_pauses)
-      c.pause_line = m.pause_line;
-      c.pause_text = m.pause_text;
+    if (m.pause && !last) {  // a rest of kPauseRest fit ticks at least (mark_pauses)
+      c.pause = m.pause;
       ++totals_.pauses;
       c.dwell = std::max(c.dwell, kPauseRest * cfg_.machine.fit_period());
     }

@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "planner/planner.hpp"
+#include "planner/program_pause.hpp"
 
 namespace traj::plan {
 
@@ -37,8 +38,7 @@ struct TimeSegment {
   int degree = 5;
   std::array<std::array<double, 6>, kMaxAxes> coef{};  // per axis, coefficient of tau^j, tau = t - k0 h (seconds)
   double max_dev = 0;                       // max |fit - plan| at the ticks inside
-  int pause_line = 0;  // > 0: a program pause follows (its line): the plan rests at this segment's end
-  std::string pause_text{};  // and what the operator is to do there
+  ProgramPause pause{};  // a program pause follows: the plan rests at this segment's end
   double eval(int axis, double tau, int deriv = 0) const;
   // eval(axis, tau) - eval(axis, 0), rounded at the scale of the travel, not of the coordinate.
   double travel(int axis, double tau) const;

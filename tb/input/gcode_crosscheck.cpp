@@ -250,10 +250,10 @@ std::string check_arc(const Move& m, const Canon& c, const Point& start) {
 std::string check_dwell(const Move& m, double dwell, bool dwelled, bool exact, const Canon* pause) {
   if (!near(m.dwell, dwell)) return m.where + ": dwell " + std::to_string(m.dwell) + " s, rs274 " + std::to_string(dwell);
   if (m.kind != Move::Kind::kRapid && m.exact_stop != (exact || dwelled)) return m.where + ": exact-stop mode differs";
-  if ((m.pause_line > 0) != (pause != nullptr))
+  if (static_cast<bool>(m.pause) != (pause != nullptr))
     return m.where + ": " + (pause ? "no program pause after it; rs274 has one" : "a program pause rs274 does not have");
-  if (pause && m.pause_text != pause->pause_text)
-    return m.where + ": pause text \"" + m.pause_text + "\", rs274 \"" + pause->pause_text + "\"";
+  if (pause && m.pause.text != pause->pause_text)
+    return m.where + ": pause text \"" + m.pause.text + "\", rs274 \"" + pause->pause_text + "\"";
   return "";
 }
 
@@ -387,8 +387,8 @@ int main(int argc, char** argv) {
         ++agree;
         moves += tp.moves.size();
         for (const Move& m : tp.moves) {
-          pauses += m.pause_line > 0;
-          texts += !m.pause_text.empty();
+          pauses += static_cast<bool>(m.pause);
+          texts += !m.pause.text.empty();
         }
       } else {
         disagreements.push_back(prog.string() + ": " + why);

@@ -677,7 +677,7 @@ TEST(Gcode, PauseWaitMarksThePauseOnTheMoveBefore) {
   const int pause[5] = {7, 0, 9, 0, 0};
   for (int i = 0; i < 5; ++i) {
     EXPECT_EQ(tp.moves[i].exact_stop, stop[i]) << tp.moves[i].where;
-    EXPECT_EQ(tp.moves[i].pause_line, pause[i]) << tp.moves[i].where;
+    EXPECT_EQ(tp.moves[i].pause.line, pause[i]) << tp.moves[i].where;
   }
   int pause_notes = 0, first_notes = 0;
   for (const std::string& n : tp.notes) {
@@ -717,8 +717,8 @@ TEST(Gcode, PauseTextIsTheMessageSinceTheLastMove) {
   const int line[7] = {6, 10, 12, 15, 17, 20, 0};
   const char* text[7] = {"Change tool bit to drill 0.8mm", "second", "on the line", "", "", "", ""};
   for (int i = 0; i < 7; ++i) {
-    EXPECT_EQ(tp.moves[i].pause_line, line[i]) << tp.moves[i].where;
-    EXPECT_EQ(tp.moves[i].pause_text, text[i]) << tp.moves[i].where;
+    EXPECT_EQ(tp.moves[i].pause.line, line[i]) << tp.moves[i].where;
+    EXPECT_EQ(tp.moves[i].pause.text, text[i]) << tp.moves[i].where;
   }
 }
 
